@@ -1,0 +1,1 @@
+//! GNU `as` compatible assembler for SPU (under construction).

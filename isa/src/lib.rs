@@ -1,0 +1,13 @@
+//! The SPU instruction set: the instruction table, encoding and decoding, disassembly,
+//! the bit-exact semantics, the simulated SPU core and its timing model.
+//!
+//! [`table`] is the single declaration every other module derives from.
+
+pub mod analysis;
+pub mod codec;
+pub mod disasm;
+pub mod float;
+pub mod table;
+
+pub use codec::{decode, encode, operand_values, Inst};
+pub use table::{Format, FormInfo, Op, OperandKind, Pipe, Unit, Visitor, FORMS, OP_INFO};
