@@ -1,0 +1,1 @@
+//! Bit-exact SPU floating point (under construction).

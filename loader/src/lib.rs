@@ -1,0 +1,1 @@
+//! The PPE host: scenes, BVH, staging and the SPE runtime (under construction).
