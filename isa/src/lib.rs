@@ -4,10 +4,17 @@
 //! [`table`] is the single declaration every other module derives from.
 
 pub mod analysis;
+pub mod channel;
 pub mod codec;
 pub mod disasm;
+pub mod exec;
 pub mod float;
+pub mod memory;
+pub mod mfc;
+pub mod profile;
+pub mod spu;
 pub mod table;
+pub mod timing;
 
 pub use codec::{decode, encode, operand_values, Inst};
 pub use table::{Format, FormInfo, Op, OperandKind, Pipe, Unit, Visitor, FORMS, OP_INFO};

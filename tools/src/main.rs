@@ -2,7 +2,13 @@
 //!
 //! Each subcommand lives in its own module so that the commands can grow independently.
 
+mod cmd_as;
+mod cmd_bench;
 mod cmd_dis;
+mod cmd_prof;
+mod cmd_render;
+mod cmd_run;
+mod cmd_timing;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -16,14 +22,32 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Assemble GNU-as SPU assembly into an SPU ELF or a flat image.
+    As(cmd_as::Args),
     /// Disassemble an SPU ELF or a raw image, in GNU objdump's format.
     Dis(cmd_dis::Args),
+    /// Run a program on one simulated SPU and print how it stopped.
+    Run(cmd_run::Args),
+    /// Run a program with the timing model and print an annotated profile.
+    Prof(cmd_prof::Args),
+    /// Static timing of straight-line code per basic block, like IBM's spu_timing.
+    Timing(cmd_timing::Args),
+    /// Ray-trace a scene on 1 to 16 simulated SPEs.
+    Render(cmd_render::Args),
+    /// Measure simulator speed: simulated instructions per host second.
+    Bench(cmd_bench::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::As(args) => cmd_as::run(args),
         Command::Dis(args) => cmd_dis::run(args),
+        Command::Run(args) => cmd_run::run(args),
+        Command::Prof(args) => cmd_prof::run(args),
+        Command::Timing(args) => cmd_timing::run(args),
+        Command::Render(args) => cmd_render::run(args),
+        Command::Bench(args) => cmd_bench::run(args),
     };
     match result {
         Ok(code) => code,
