@@ -1,0 +1,272 @@
+//! The contract between the host and the ray-tracing kernel (`kernels/raytrace.s`): the
+//! parameter block the kernel fetches at start, the statistics block it writes at the end,
+//! and the packet-major frame buffer it fills.
+//!
+//! The kernel reads every offset below from the `.set` lines of [`spu_include`], so this
+//! module is the single source of truth for both sides. All records are big-endian.
+
+use crate::camera::CameraBasis;
+
+/// Pixels per tile side (the paper's 64x64 image tiles, section 8).
+pub const TILE_SIZE: u32 = 64;
+/// Pixels per packet side (8x8 rays, section 3.2).
+pub const PACKET_SIZE: u32 = 8;
+/// Packets per tile.
+pub const PACKETS_PER_TILE: u32 = (TILE_SIZE / PACKET_SIZE) * (TILE_SIZE / PACKET_SIZE);
+/// Bytes of one packet's result block: triangle ids, distances, shades, reserved.
+pub const PACKET_BLOCK_BYTES: u32 = 1024;
+/// Triangle id written for rays that hit nothing.
+pub const MISS: u32 = u32::MAX;
+
+/// The 128-byte parameter block, at an effective address passed in `$4`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ParamBlock {
+    pub ea_nodes: u32,
+    pub ea_triangles: u32,
+    pub ea_frame_buffer: u32,
+    /// A 128-byte lock line whose first word is the next tile to render.
+    pub ea_tile_counter: u32,
+    pub width: u32,
+    pub height: u32,
+    pub tiles_x: u32,
+    pub num_tiles: u32,
+    pub origin: [f32; 4],
+    pub dir00: [f32; 4],
+    pub du: [f32; 4],
+    pub dv: [f32; 4],
+    /// log2 of the number of 64-byte lines in the BVH-node and triangle caches.
+    pub bvh_cache_log2: u32,
+    pub tri_cache_log2: u32,
+    /// Base of the statistics blocks, one of [`STATS_BYTES`] per SPU.
+    pub ea_stats: u32,
+    pub flags: u32,
+    pub reserved: [u32; 4],
+}
+const _: () = assert!(std::mem::size_of::<ParamBlock>() == 128);
+
+pub const PARAM_EA_NODES: usize = std::mem::offset_of!(ParamBlock, ea_nodes);
+pub const PARAM_WIDTH: usize = std::mem::offset_of!(ParamBlock, width);
+pub const PARAM_ORIGIN: usize = std::mem::offset_of!(ParamBlock, origin);
+pub const PARAM_DIR00: usize = std::mem::offset_of!(ParamBlock, dir00);
+pub const PARAM_DU: usize = std::mem::offset_of!(ParamBlock, du);
+pub const PARAM_DV: usize = std::mem::offset_of!(ParamBlock, dv);
+pub const PARAM_BVH_LOG2: usize = std::mem::offset_of!(ParamBlock, bvh_cache_log2);
+
+impl ParamBlock {
+    pub fn new(basis: &CameraBasis, width: u32, height: u32) -> Self {
+        let v = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
+        let tiles_x = width.div_ceil(TILE_SIZE);
+        let tiles_y = height.div_ceil(TILE_SIZE);
+        ParamBlock {
+            width,
+            height,
+            tiles_x,
+            num_tiles: tiles_x * tiles_y,
+            origin: v(basis.origin),
+            dir00: v(basis.dir00),
+            du: v(basis.du),
+            dv: v(basis.dv),
+            bvh_cache_log2: 8,
+            tri_cache_log2: 8,
+            ..Default::default()
+        }
+    }
+
+    /// The block as the kernel reads it (big-endian words).
+    pub fn to_be_bytes(&self) -> [u8; 128] {
+        let mut words = vec![
+            self.ea_nodes,
+            self.ea_triangles,
+            self.ea_frame_buffer,
+            self.ea_tile_counter,
+            self.width,
+            self.height,
+            self.tiles_x,
+            self.num_tiles,
+        ];
+        for v in [self.origin, self.dir00, self.du, self.dv] {
+            words.extend(v.iter().map(|f| f.to_bits()));
+        }
+        words.extend([self.bvh_cache_log2, self.tri_cache_log2, self.ea_stats, self.flags]);
+        words.extend(self.reserved);
+        let mut out = [0u8; 128];
+        for (chunk, w) in out.chunks_exact_mut(4).zip(words) {
+            chunk.copy_from_slice(&w.to_be_bytes());
+        }
+        out
+    }
+}
+
+/// Bytes of one SPU's statistics block.
+pub const STATS_BYTES: usize = 128;
+
+/// What the kernel counted, as it writes it: pairs of words at the start of quadwords.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KernelStats {
+    pub packets: u64,
+    /// BVH traversal steps (nodes visited, each a BVH-cache lookup).
+    pub traversal_steps: u64,
+    /// Steps decided by the first active ray hitting the box.
+    pub early_hits: u64,
+    /// Steps decided by the packet frustum missing the box.
+    pub early_exits: u64,
+    /// Packet-triangle tests after frustum culling.
+    pub triangle_tests: u64,
+    pub triangles_culled: u64,
+    pub bvh_cache_misses: u64,
+    pub leaves: u64,
+    pub triangle_lookups: u64,
+    pub triangle_cache_misses: u64,
+}
+
+pub const STAT_PACKETS: usize = 0;
+pub const STAT_M1SUM: usize = 16;
+pub const STAT_TRIS: usize = 32;
+pub const STAT_BMISS: usize = 48;
+pub const STAT_TLOOK: usize = 64;
+
+impl KernelStats {
+    /// Decodes one SPU's block (see the kernel's `frame_done`).
+    pub fn from_be_bytes(block: &[u8]) -> Self {
+        let word = |off: usize| {
+            block
+                .get(off..off + 4)
+                .map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+                .unwrap_or(0)
+        };
+        let steps = word(STAT_PACKETS + 4) as u64;
+        // The kernel sums the all-ones masks of first-ray misses and early exits.
+        let first_ray_misses = (word(STAT_M1SUM) as i32).unsigned_abs() as u64;
+        KernelStats {
+            packets: word(STAT_PACKETS) as u64,
+            traversal_steps: steps,
+            early_hits: steps.saturating_sub(first_ray_misses),
+            early_exits: (word(STAT_M1SUM + 4) as i32).unsigned_abs() as u64,
+            triangle_tests: word(STAT_TRIS) as u64,
+            triangles_culled: word(STAT_TRIS + 4) as u64,
+            bvh_cache_misses: word(STAT_BMISS) as u64,
+            leaves: word(STAT_BMISS + 4) as u64,
+            triangle_lookups: word(STAT_TLOOK) as u64,
+            triangle_cache_misses: word(STAT_TLOOK + 4) as u64,
+        }
+    }
+
+    pub fn merge(&mut self, other: &KernelStats) {
+        self.packets += other.packets;
+        self.traversal_steps += other.traversal_steps;
+        self.early_hits += other.early_hits;
+        self.early_exits += other.early_exits;
+        self.triangle_tests += other.triangle_tests;
+        self.triangles_culled += other.triangles_culled;
+        self.bvh_cache_misses += other.bvh_cache_misses;
+        self.leaves += other.leaves;
+        self.triangle_lookups += other.triangle_lookups;
+        self.triangle_cache_misses += other.triangle_cache_misses;
+    }
+}
+
+/// The `.set` lines of the parameter and statistics offsets, for `layout.inc`.
+pub fn spu_include() -> String {
+    let mut out = String::from("# kernel ABI: generated by spu_loader::kernel_abi\n");
+    for (name, value) in [
+        ("PARAM_EA_NODES", PARAM_EA_NODES),
+        ("PARAM_WIDTH", PARAM_WIDTH),
+        ("PARAM_ORIGIN", PARAM_ORIGIN),
+        ("PARAM_DIR00", PARAM_DIR00),
+        ("PARAM_DU", PARAM_DU),
+        ("PARAM_DV", PARAM_DV),
+        ("PARAM_BVH_LOG2", PARAM_BVH_LOG2),
+        ("STAT_PACKETS", STAT_PACKETS),
+        ("STAT_M1SUM", STAT_M1SUM),
+        ("STAT_TRIS", STAT_TRIS),
+        ("STAT_BMISS", STAT_BMISS),
+        ("STAT_TLOOK", STAT_TLOOK),
+    ] {
+        out.push_str(&format!("        .set {name}, {value}\n"));
+    }
+    out
+}
+
+/// One decoded pixel of the frame buffer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelResult {
+    pub triangle: u32,
+    pub t: f32,
+    /// 0xRRGGBBAA.
+    pub rgba: u32,
+}
+
+/// Bytes of the packet-major frame buffer for a `width x height` image.
+pub fn frame_buffer_bytes(width: u32, height: u32) -> usize {
+    let tiles = (width.div_ceil(TILE_SIZE) * height.div_ceil(TILE_SIZE)) as usize;
+    tiles * PACKETS_PER_TILE as usize * PACKET_BLOCK_BYTES as usize
+}
+
+/// Where pixel `(x, y)` lives in the packet-major frame buffer: the block and the index.
+pub fn pixel_location(x: u32, y: u32, tiles_x: u32) -> (usize, usize) {
+    let tile = (y / TILE_SIZE) * tiles_x + x / TILE_SIZE;
+    let packet = ((y % TILE_SIZE) / PACKET_SIZE) * (TILE_SIZE / PACKET_SIZE) + (x % TILE_SIZE) / PACKET_SIZE;
+    let index = (y % PACKET_SIZE) * PACKET_SIZE + x % PACKET_SIZE;
+    let block = (tile * PACKETS_PER_TILE + packet) as usize * PACKET_BLOCK_BYTES as usize;
+    (block, index as usize)
+}
+
+/// Decodes the frame buffer into row-major pixels.
+pub fn decode_frame_buffer(fb: &[u8], width: u32, height: u32) -> Vec<PixelResult> {
+    let tiles_x = width.div_ceil(TILE_SIZE);
+    let word = |off: usize| {
+        fb.get(off..off + 4).map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]])).unwrap_or(0)
+    };
+    let mut out = Vec::with_capacity((width * height) as usize);
+    for y in 0..height {
+        for x in 0..width {
+            let (block, i) = pixel_location(x, y, tiles_x);
+            out.push(PixelResult {
+                triangle: word(block + 4 * i),
+                t: f32::from_bits(word(block + 256 + 4 * i)),
+                rgba: word(block + 512 + 4 * i),
+            });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn param_block_bytes() {
+        let mut p = ParamBlock { ea_nodes: 0x1000, width: 1024, ..Default::default() };
+        p.origin = [1.0, 2.0, 3.0, 0.0];
+        let b = p.to_be_bytes();
+        assert_eq!(&b[0..4], &[0, 0, 0x10, 0]);
+        assert_eq!(&b[PARAM_WIDTH..PARAM_WIDTH + 4], &1024u32.to_be_bytes());
+        assert_eq!(&b[PARAM_ORIGIN + 4..PARAM_ORIGIN + 8], &2.0f32.to_be_bytes());
+        assert_eq!(PARAM_BVH_LOG2, 96);
+    }
+
+    #[test]
+    fn pixel_locations_are_packet_major() {
+        // Pixel (9, 0): tile 0, packet 1 (second packet of the first row), index 1.
+        assert_eq!(pixel_location(9, 0, 16), (1024, 1));
+        // Pixel (0, 8): packet 8 (first of the second packet row).
+        assert_eq!(pixel_location(0, 8, 16), (8 * 1024, 0));
+        // Pixel (64, 0): tile 1.
+        assert_eq!(pixel_location(64, 0, 16), (64 * 1024, 0));
+        // Pixel (3, 65) with 2 tiles per row: tile 2, packet 0, index 8 + 3.
+        assert_eq!(pixel_location(3, 65, 2), (2 * 64 * 1024, 11));
+    }
+
+    #[test]
+    fn stats_decode_the_mask_sums() {
+        let mut b = vec![0u8; 128];
+        b[0..4].copy_from_slice(&3u32.to_be_bytes());
+        b[4..8].copy_from_slice(&100u32.to_be_bytes());
+        b[16..20].copy_from_slice(&(-40i32).to_be_bytes());
+        b[20..24].copy_from_slice(&(-25i32).to_be_bytes());
+        let s = KernelStats::from_be_bytes(&b);
+        assert_eq!((s.packets, s.traversal_steps, s.early_hits, s.early_exits), (3, 100, 60, 25));
+    }
+}
