@@ -1,14 +1,40 @@
-//! `spu timing` (under construction).
+//! `spu timing`: static timing of assembly source per basic block, in the layout of IBM's
+//! `spu_timing` (see `docs/timing.md`).
 
+use spu_isa::profile::{analyze_source, render_static, static_json};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Arguments (not yet defined).
-    #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
-    rest: Vec<String>,
+    /// Assembly source (GNU as syntax, e.g. `spu-gcc -S` output).
+    file: PathBuf,
+    /// Analyse only the basic block starting at this label, from an idle pipeline.
+    #[arg(long)]
+    label: Option<String>,
+    /// Print JSON: per instruction addr, text, pipe, issue, cycle, stall, dual, mark.
+    #[arg(long)]
+    json: bool,
+    /// Start each instruction line with its issue cycle (spu_timing's -running-count).
+    #[arg(long = "running-count")]
+    running_count: bool,
+    /// Write the listing here instead of standard output.
+    #[arg(short = 'o', long)]
+    output: Option<PathBuf>,
 }
 
-pub fn run(_args: Args) -> Result<ExitCode, String> {
-    Err("`spu timing` is not implemented yet".into())
+pub fn run(args: Args) -> Result<ExitCode, String> {
+    let src =
+        std::fs::read_to_string(&args.file).map_err(|e| format!("{}: {e}", args.file.display()))?;
+    let t = analyze_source(&src, args.label.as_deref())?;
+    let text = if args.json {
+        static_json(&t)
+    } else {
+        render_static(&t, args.running_count)
+    };
+    match &args.output {
+        Some(path) => std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?,
+        None => print!("{text}"),
+    }
+    Ok(ExitCode::SUCCESS)
 }
