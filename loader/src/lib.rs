@@ -1,1 +1,28 @@
-//! The PPE host: scenes, BVH, staging and the SPE runtime (under construction).
+//! The PPE host side of the ray tracer: everything the SPU kernels need prepared in main
+//! memory before a frame starts, and the plain-Rust reference they are checked against.
+//!
+//! - [`scene`], [`obj`], [`ply`]: triangle scenes loaded from files (optionally gzip'd).
+//! - [`procedural`]: deterministic built-in stand-ins for the paper's ERW6, Conference and
+//!   VW Beetle scenes, so everything works where the shared scene files are absent.
+//! - [`camera`]: the pinhole camera and the exact primary-ray convention the kernels share.
+//! - [`bvh`]: the binned-SAH bounding volume hierarchy (paper section 3.2).
+//! - [`layout`]: the big-endian DMA records (32-byte nodes, 64-byte triangle and vertex
+//!   records, paper section 5.1) and the staged main-memory image.
+//! - [`reference`]: a scalar ray caster over the same records that defines the expected
+//!   kernel output.
+
+pub mod bvh;
+pub mod camera;
+pub mod error;
+pub mod layout;
+pub mod obj;
+pub mod ply;
+pub mod procedural;
+pub mod reference;
+pub mod scene;
+
+pub use bvh::{Bvh, BvhConfig, BvhNode};
+pub use camera::{Camera, CameraBasis};
+pub use error::LoadError;
+pub use layout::StagedScene;
+pub use scene::{Material, Scene, Triangle};

@@ -1,0 +1,718 @@
+//! The bounding volume hierarchy the kernels traverse (paper section 3.2: a binary BVH over
+//! triangles, traversed with 8x8 ray packets), built with the binned surface area heuristic.
+//!
+//! # Build
+//!
+//! At each node the triangles' centroids are sorted into [`BIN_COUNT`] = 16 equal-width bins
+//! per axis; the 15 planes between bins on each of the 3 axes are split candidates, scored
+//! with the SAH
+//!
+//! ```text
+//! cost(split) = C_trav + C_isect * (A(left) * N(left) + A(right) * N(right)) / A(node)
+//! cost(leaf)  = C_isect * N(node)
+//! ```
+//!
+//! with `C_trav = 1` and `C_isect = 1` per triangle by default ([`BvhConfig`]): on the SPU a
+//! packet-box step costs ~51 cycles and a packet-triangle test of 64 rays ~520 (paper 4.1,
+//! 4.2), but a box step touches a 64-byte node pair for two boxes while a triangle touches one
+//! 64-byte record that mostly misses the cache (Table 1), so per memory line they are of the
+//! same order. A node becomes a leaf when `cost(leaf) <= best cost(split)` and it has at most
+//! `max_leaf_size` (default 4) triangles. Where the centroids do not separate (all equal) or
+//! below [`SAH_DEPTH_LIMIT`] levels, the node is split at the object median of its longest
+//! centroid axis instead, which bounds the depth by `SAH_DEPTH_LIMIT + log2(N)` — the kernels'
+//! traversal stack can be sized from [`Bvh::max_depth`].
+//!
+//! The top levels build their two subtrees on separate threads (`std::thread::scope`); every
+//! subtree is a pure function of its triangle set, and the flat array is laid out afterwards
+//! in one deterministic pass, so the result is bit-identical whatever the thread count.
+//!
+//! # Flat layout
+//!
+//! `nodes[0]` is the root and `nodes[1]` an unused padding node, so that the two children of
+//! every inner node sit at an even index `c` and `c + 1` — one 64-byte line, fetched by a
+//! single DMA and cached as a pair (paper section 5.1). Pairs are allocated in depth-first
+//! pre-order. For an inner node, child `c` holds the triangles whose centroids are lower along
+//! `axis`. A leaf's `link` is the index of its first triangle in [`Bvh::triangle_order`]
+//! (= its first triangle record), its triangles being the contiguous range
+//! `link .. link + count`.
+
+use glam::Vec3A;
+
+use crate::scene::Scene;
+
+/// Number of SAH bins per axis.
+pub const BIN_COUNT: usize = 16;
+
+/// Depth below which the builder stops using the SAH and splits at the object median.
+pub const SAH_DEPTH_LIMIT: usize = 48;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BvhConfig {
+    /// Leaves hold at most this many triangles (at least 1).
+    pub max_leaf_size: usize,
+    /// `C_trav` in the SAH: the cost of visiting an inner node.
+    pub traversal_cost: f32,
+    /// `C_isect` in the SAH: the cost of one triangle test.
+    pub intersection_cost: f32,
+    /// Threads for the top levels of the build (1 = sequential; the result does not depend on it).
+    pub threads: usize,
+}
+
+impl Default for BvhConfig {
+    fn default() -> Self {
+        BvhConfig {
+            max_leaf_size: 4,
+            traversal_cost: 1.0,
+            intersection_cost: 1.0,
+            threads: std::thread::available_parallelism()
+                .map(|n| n.get())
+                .unwrap_or(1),
+        }
+    }
+}
+
+/// One node of the flat hierarchy (host form of [`crate::layout::NodeRecord`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BvhNode {
+    pub min: Vec3A,
+    pub max: Vec3A,
+    /// Inner node: index of the first child (even). Leaf: index of the first triangle record.
+    pub link: u32,
+    /// Number of triangles; 0 for an inner node.
+    pub count: u32,
+    /// Inner node: the axis (0, 1, 2) along which the children are ordered. Leaf: 0.
+    pub axis: u32,
+}
+
+impl BvhNode {
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+
+    fn empty() -> Self {
+        BvhNode {
+            min: Vec3A::ZERO,
+            max: Vec3A::ZERO,
+            link: 0,
+            count: 0,
+            axis: 0,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bvh {
+    /// `nodes[0]` root, `nodes[1]` padding, then sibling pairs.
+    pub nodes: Vec<BvhNode>,
+    /// `triangle_order[i]` is the scene triangle stored as triangle record `i`.
+    pub triangle_order: Vec<u32>,
+    pub config: BvhConfig,
+    /// SAH cost of the whole tree: `sum_inner A/A_root * C_trav + sum_leaf A/A_root * N * C_isect`.
+    pub sah_cost: f32,
+}
+
+/// Summary figures for logs and tests.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BvhStats {
+    pub inner_nodes: usize,
+    pub leaves: usize,
+    pub max_depth: usize,
+    pub max_leaf_triangles: usize,
+    pub mean_leaf_triangles: f64,
+}
+
+/// The build-time tree, before it is laid out flat.
+enum BuildNode {
+    Leaf {
+        min: Vec3A,
+        max: Vec3A,
+        start: usize,
+        count: usize,
+    },
+    Inner {
+        min: Vec3A,
+        max: Vec3A,
+        axis: u32,
+        children: Box<[BuildNode; 2]>,
+    },
+}
+
+impl BuildNode {
+    fn bounds(&self) -> (Vec3A, Vec3A) {
+        match self {
+            BuildNode::Leaf { min, max, .. } | BuildNode::Inner { min, max, .. } => (*min, *max),
+        }
+    }
+}
+
+struct Primitives {
+    min: Vec<Vec3A>,
+    max: Vec<Vec3A>,
+    centroid: Vec<Vec3A>,
+}
+
+#[derive(Clone, Copy)]
+struct Bin {
+    min: Vec3A,
+    max: Vec3A,
+    count: usize,
+}
+
+impl Bin {
+    const EMPTY: Bin = Bin {
+        min: Vec3A::splat(f32::INFINITY),
+        max: Vec3A::splat(f32::NEG_INFINITY),
+        count: 0,
+    };
+
+    fn grow(&mut self, min: Vec3A, max: Vec3A, count: usize) {
+        self.min = self.min.min(min);
+        self.max = self.max.max(max);
+        self.count += count;
+    }
+}
+
+/// Half the surface area of a box (the SAH only uses ratios); 0 for an empty box.
+fn half_area(min: Vec3A, max: Vec3A) -> f32 {
+    let d = (max - min).max(Vec3A::ZERO);
+    d.x * d.y + d.y * d.z + d.z * d.x
+}
+
+/// Subtrees smaller than this are not worth a thread.
+const PARALLEL_THRESHOLD: usize = 20_000;
+
+impl Bvh {
+    /// Builds the hierarchy over all triangles of `scene`.
+    pub fn build(scene: &Scene, config: &BvhConfig) -> Bvh {
+        let config = BvhConfig {
+            max_leaf_size: config.max_leaf_size.max(1),
+            threads: config.threads.max(1),
+            ..*config
+        };
+        let n = scene.triangles.len();
+        let mut primitives = Primitives {
+            min: Vec::with_capacity(n),
+            max: Vec::with_capacity(n),
+            centroid: Vec::with_capacity(n),
+        };
+        for index in 0..n {
+            let [a, b, c] = scene.triangle_positions(index).map(Vec3A::from);
+            let min = a.min(b).min(c);
+            let max = a.max(b).max(c);
+            primitives.min.push(min);
+            primitives.max.push(max);
+            primitives.centroid.push((min + max) * 0.5);
+        }
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        let parallel_depth = (usize::BITS - 1 - config.threads.leading_zeros()) as usize
+            + usize::from(!config.threads.is_power_of_two());
+        let root = if n == 0 {
+            // An inverted (min > max) box that every ray misses: the root of an empty scene.
+            // Its count is 0, so it reads as an inner node, but it is never entered.
+            BuildNode::Leaf {
+                min: Vec3A::splat(f32::MAX),
+                max: Vec3A::splat(-f32::MAX),
+                start: 0,
+                count: 0,
+            }
+        } else {
+            build_recursive(&primitives, &config, &mut order, 0, 0, parallel_depth)
+        };
+
+        let mut nodes = vec![BvhNode::empty(); 2];
+        flatten(&root, 0, &mut nodes);
+        let (root_min, root_max) = root.bounds();
+        let root_area = if n == 0 {
+            0.0
+        } else {
+            half_area(root_min, root_max)
+        };
+        let mut sah_cost = 0.0f64;
+        if root_area > 0.0 {
+            for (index, node) in nodes.iter().enumerate() {
+                if index == 1 {
+                    continue;
+                }
+                let weight = half_area(node.min, node.max) as f64 / root_area as f64;
+                sah_cost += if node.is_leaf() {
+                    weight * node.count as f64 * config.intersection_cost as f64
+                } else {
+                    weight * config.traversal_cost as f64
+                };
+            }
+        }
+        Bvh {
+            nodes,
+            triangle_order: order,
+            config,
+            sah_cost: sah_cost as f32,
+        }
+    }
+
+    pub fn root(&self) -> &BvhNode {
+        &self.nodes[0]
+    }
+
+    /// Node and leaf counts, depth (root = depth 1) and leaf sizes.
+    pub fn stats(&self) -> BvhStats {
+        let mut stats = BvhStats {
+            inner_nodes: 0,
+            leaves: 0,
+            max_depth: 0,
+            max_leaf_triangles: 0,
+            mean_leaf_triangles: 0.0,
+        };
+        let mut stack = vec![(0usize, 1usize)];
+        let mut leaf_triangles = 0usize;
+        while let Some((index, depth)) = stack.pop() {
+            let node = &self.nodes[index];
+            stats.max_depth = stats.max_depth.max(depth);
+            if node.is_leaf() || (index == 0 && self.triangle_order.is_empty()) {
+                stats.leaves += 1;
+                stats.max_leaf_triangles = stats.max_leaf_triangles.max(node.count as usize);
+                leaf_triangles += node.count as usize;
+            } else {
+                stats.inner_nodes += 1;
+                stack.push((node.link as usize, depth + 1));
+                stack.push((node.link as usize + 1, depth + 1));
+            }
+        }
+        stats.mean_leaf_triangles = leaf_triangles as f64 / stats.leaves.max(1) as f64;
+        stats
+    }
+
+    /// Levels from the root to the deepest leaf (root alone = 1).
+    pub fn max_depth(&self) -> usize {
+        self.stats().max_depth
+    }
+
+    /// Checks the structural invariants against `scene`: every triangle in exactly one leaf,
+    /// leaves are contiguous ranges covering `triangle_order` in order, children pairs at even
+    /// indices, boxes containing their children and triangles, children ordered along `axis`.
+    pub fn validate(&self, scene: &Scene) -> Result<(), String> {
+        let n = scene.triangles.len();
+        if self.triangle_order.len() != n {
+            return Err(format!(
+                "{} triangles ordered for {n} in the scene",
+                self.triangle_order.len()
+            ));
+        }
+        let mut seen = vec![false; n];
+        for &t in &self.triangle_order {
+            if t as usize >= n || std::mem::replace(&mut seen[t as usize], true) {
+                return Err(format!("triangle {t} out of range or referenced twice"));
+            }
+        }
+        if n == 0 {
+            return Ok(());
+        }
+        let mut next_triangle = 0usize;
+        let mut visited = vec![false; self.nodes.len()];
+        // Depth-first, children in order, so leaves must appear in triangle order.
+        let mut stack = vec![0usize];
+        while let Some(index) = stack.pop() {
+            let node = self
+                .nodes
+                .get(index)
+                .ok_or_else(|| format!("node {index} out of range"))?;
+            if std::mem::replace(&mut visited[index], true) {
+                return Err(format!("node {index} reached twice"));
+            }
+            if node.is_leaf() {
+                if node.link as usize != next_triangle {
+                    return Err(format!(
+                        "leaf {index} starts at {} but {next_triangle} expected",
+                        node.link
+                    ));
+                }
+                if node.count as usize > self.config.max_leaf_size {
+                    return Err(format!("leaf {index} has {} triangles", node.count));
+                }
+                for slot in node.link as usize..(node.link + node.count) as usize {
+                    for p in scene.triangle_positions(self.triangle_order[slot] as usize) {
+                        let p = Vec3A::from(p);
+                        if p.cmplt(node.min).any() || p.cmpgt(node.max).any() {
+                            return Err(format!(
+                                "leaf {index} does not contain triangle slot {slot}"
+                            ));
+                        }
+                    }
+                }
+                next_triangle += node.count as usize;
+            } else {
+                let c = node.link as usize;
+                if c % 2 != 0 || c < 2 || c + 1 >= self.nodes.len() {
+                    return Err(format!("inner node {index} has bad child index {c}"));
+                }
+                if node.axis > 2 {
+                    return Err(format!("inner node {index} has axis {}", node.axis));
+                }
+                for child in [&self.nodes[c], &self.nodes[c + 1]] {
+                    if child.min.cmplt(node.min).any() || child.max.cmpgt(node.max).any() {
+                        return Err(format!("inner node {index} does not contain its child"));
+                    }
+                }
+                stack.push(c + 1);
+                stack.push(c);
+            }
+        }
+        if next_triangle != n {
+            return Err(format!("leaves cover {next_triangle} of {n} triangles"));
+        }
+        Ok(())
+    }
+}
+
+fn build_recursive(
+    primitives: &Primitives,
+    config: &BvhConfig,
+    order: &mut [u32],
+    start: usize,
+    depth: usize,
+    parallel_depth: usize,
+) -> BuildNode {
+    let count = order.len();
+    let mut min = Vec3A::splat(f32::INFINITY);
+    let mut max = Vec3A::splat(f32::NEG_INFINITY);
+    let mut cmin = Vec3A::splat(f32::INFINITY);
+    let mut cmax = Vec3A::splat(f32::NEG_INFINITY);
+    for &t in order.iter() {
+        let t = t as usize;
+        min = min.min(primitives.min[t]);
+        max = max.max(primitives.max[t]);
+        cmin = cmin.min(primitives.centroid[t]);
+        cmax = cmax.max(primitives.centroid[t]);
+    }
+    let leaf = || BuildNode::Leaf {
+        min,
+        max,
+        start,
+        count,
+    };
+    if count == 1 {
+        return leaf();
+    }
+
+    let extent = cmax - cmin;
+    let leaf_cost = config.intersection_cost * count as f32;
+    let split = if depth < SAH_DEPTH_LIMIT && extent.max_element() > 0.0 {
+        best_binned_split(primitives, config, order, min, max, cmin, extent)
+    } else {
+        None
+    };
+
+    let (axis, mid) = match split {
+        Some((cost, _, _)) if cost >= leaf_cost && count <= config.max_leaf_size => return leaf(),
+        Some((_, axis, bin)) => {
+            let scale = BIN_COUNT as f32 / extent[axis];
+            let in_left =
+                |t: u32| bin_index(primitives.centroid[t as usize][axis], cmin[axis], scale) < bin;
+            (axis, partition(order, in_left))
+        }
+        None if count <= config.max_leaf_size => return leaf(),
+        None => {
+            let axis = if extent.max_element() > 0.0 {
+                extent.max_position()
+            } else {
+                (max - min).max_position()
+            };
+            let mid = count / 2;
+            let key = |t: &u32| (primitives.centroid[*t as usize][axis], *t);
+            order.select_nth_unstable_by(mid, |a, b| {
+                key(a)
+                    .partial_cmp(&key(b))
+                    .unwrap_or(std::cmp::Ordering::Equal)
+            });
+            (axis, mid)
+        }
+    };
+
+    let (left_order, right_order) = order.split_at_mut(mid);
+    let children = if depth < parallel_depth && count >= PARALLEL_THRESHOLD {
+        std::thread::scope(|scope| {
+            let left = scope.spawn(|| {
+                build_recursive(
+                    primitives,
+                    config,
+                    left_order,
+                    start,
+                    depth + 1,
+                    parallel_depth,
+                )
+            });
+            let right = build_recursive(
+                primitives,
+                config,
+                right_order,
+                start + mid,
+                depth + 1,
+                parallel_depth,
+            );
+            [left.join().expect("BVH build thread panicked"), right]
+        })
+    } else {
+        [
+            build_recursive(
+                primitives,
+                config,
+                left_order,
+                start,
+                depth + 1,
+                parallel_depth,
+            ),
+            build_recursive(
+                primitives,
+                config,
+                right_order,
+                start + mid,
+                depth + 1,
+                parallel_depth,
+            ),
+        ]
+    };
+    BuildNode::Inner {
+        min,
+        max,
+        axis: axis as u32,
+        children: Box::new(children),
+    }
+}
+
+fn bin_index(centroid: f32, cmin: f32, scale: f32) -> usize {
+    (((centroid - cmin) * scale) as usize).min(BIN_COUNT - 1)
+}
+
+/// The cheapest `(cost, axis, first right bin)` over all axes with a nonzero centroid extent,
+/// or `None` if no plane separates the centroids.
+fn best_binned_split(
+    primitives: &Primitives,
+    config: &BvhConfig,
+    order: &[u32],
+    min: Vec3A,
+    max: Vec3A,
+    cmin: Vec3A,
+    extent: Vec3A,
+) -> Option<(f32, usize, usize)> {
+    let mut bins = [[Bin::EMPTY; BIN_COUNT]; 3];
+    let scale = Vec3A::new(
+        if extent.x > 0.0 {
+            BIN_COUNT as f32 / extent.x
+        } else {
+            0.0
+        },
+        if extent.y > 0.0 {
+            BIN_COUNT as f32 / extent.y
+        } else {
+            0.0
+        },
+        if extent.z > 0.0 {
+            BIN_COUNT as f32 / extent.z
+        } else {
+            0.0
+        },
+    );
+    for &t in order {
+        let t = t as usize;
+        let c = primitives.centroid[t];
+        for axis in 0..3 {
+            let b = bin_index(c[axis], cmin[axis], scale[axis]);
+            bins[axis][b].grow(primitives.min[t], primitives.max[t], 1);
+        }
+    }
+    let parent_area = half_area(min, max);
+    let mut best: Option<(f32, usize, usize)> = None;
+    for axis in 0..3 {
+        if extent[axis] <= 0.0 {
+            continue;
+        }
+        // right_cost[b] = A * N of bins b..BIN_COUNT
+        let mut right_cost = [0.0f32; BIN_COUNT];
+        let mut right_count = [0usize; BIN_COUNT];
+        let mut acc = Bin::EMPTY;
+        for b in (1..BIN_COUNT).rev() {
+            let bin = bins[axis][b];
+            acc.grow(bin.min, bin.max, bin.count);
+            right_cost[b] = half_area(acc.min, acc.max) * acc.count as f32;
+            right_count[b] = acc.count;
+        }
+        let mut left = Bin::EMPTY;
+        for b in 1..BIN_COUNT {
+            let bin = bins[axis][b - 1];
+            left.grow(bin.min, bin.max, bin.count);
+            if left.count == 0 || right_count[b] == 0 {
+                continue;
+            }
+            let weighted = half_area(left.min, left.max) * left.count as f32 + right_cost[b];
+            let cost = if parent_area > 0.0 {
+                config.traversal_cost + config.intersection_cost * weighted / parent_area
+            } else {
+                config.traversal_cost + config.intersection_cost * order.len() as f32
+            };
+            if best.is_none_or(|(best_cost, _, _)| cost < best_cost) {
+                best = Some((cost, axis, b));
+            }
+        }
+    }
+    best
+}
+
+/// Moves the elements satisfying `in_left` to the front; returns how many there are.
+fn partition(order: &mut [u32], in_left: impl Fn(u32) -> bool) -> usize {
+    let mut i = 0usize;
+    let mut j = order.len();
+    while i < j {
+        if in_left(order[i]) {
+            i += 1;
+        } else {
+            j -= 1;
+            order.swap(i, j);
+        }
+    }
+    i
+}
+
+fn flatten(node: &BuildNode, index: usize, nodes: &mut Vec<BvhNode>) {
+    match node {
+        BuildNode::Leaf {
+            min,
+            max,
+            start,
+            count,
+        } => {
+            nodes[index] = BvhNode {
+                min: *min,
+                max: *max,
+                link: *start as u32,
+                count: *count as u32,
+                axis: 0,
+            };
+        }
+        BuildNode::Inner {
+            min,
+            max,
+            axis,
+            children,
+        } => {
+            let first = nodes.len();
+            nodes.push(BvhNode::empty());
+            nodes.push(BvhNode::empty());
+            nodes[index] = BvhNode {
+                min: *min,
+                max: *max,
+                link: first as u32,
+                count: 0,
+                axis: *axis,
+            };
+            flatten(&children[0], first, nodes);
+            flatten(&children[1], first + 1, nodes);
+        }
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::scene::Triangle;
+    use glam::Vec3;
+
+    /// A deterministic triangle soup: small triangles scattered by an LCG, plus some
+    /// duplicates (identical centroids) to exercise the median fallback.
+    pub(crate) fn soup(count: usize) -> Scene {
+        soup_sized(count, 0.3)
+    }
+
+    pub(crate) fn soup_sized(count: usize, size: f32) -> Scene {
+        let mut state = 12345u32;
+        let mut next = || {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (state >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for i in 0..count {
+            let center = if i % 10 == 9 {
+                Vec3::splat(0.5)
+            } else {
+                Vec3::new(next(), next(), next()) * 10.0
+            };
+            for _ in 0..3 {
+                positions.push(center + Vec3::new(next(), next(), next()) * size);
+            }
+            let base = (3 * i) as u32;
+            triangles.push(Triangle {
+                v: [base, base + 1, base + 2],
+                material: 0,
+            });
+        }
+        Scene::from_parts(positions, None, Vec::new(), triangles, Vec::new())
+    }
+
+    #[test]
+    fn invariants_hold_for_various_leaf_sizes() {
+        let scene = soup(3000);
+        for max_leaf_size in [1, 2, 4, 8] {
+            let bvh = Bvh::build(
+                &scene,
+                &BvhConfig {
+                    max_leaf_size,
+                    ..Default::default()
+                },
+            );
+            bvh.validate(&scene).unwrap();
+            let stats = bvh.stats();
+            assert_eq!(stats.leaves, stats.inner_nodes + 1);
+            assert_eq!(bvh.nodes.len(), 2 * stats.inner_nodes + 2);
+            assert!(bvh.sah_cost > 0.0 && bvh.sah_cost.is_finite());
+        }
+    }
+
+    #[test]
+    fn sah_cost_is_far_below_a_single_leaf() {
+        let scene = soup(5000);
+        let bvh = Bvh::build(&scene, &BvhConfig::default());
+        // One leaf would cost N * C_isect = 5000; a good tree is a few dozen.
+        assert!(bvh.sah_cost < 100.0, "SAH cost {}", bvh.sah_cost);
+    }
+
+    #[test]
+    fn result_does_not_depend_on_thread_count() {
+        let scene = soup(60_000);
+        let one = Bvh::build(
+            &scene,
+            &BvhConfig {
+                threads: 1,
+                ..Default::default()
+            },
+        );
+        let four = Bvh::build(
+            &scene,
+            &BvhConfig {
+                threads: 4,
+                ..Default::default()
+            },
+        );
+        assert_eq!(one.nodes, four.nodes);
+        assert_eq!(one.triangle_order, four.triangle_order);
+        one.validate(&scene).unwrap();
+    }
+
+    #[test]
+    fn tiny_and_degenerate_inputs() {
+        let empty = Scene::from_parts(Vec::new(), None, Vec::new(), Vec::new(), Vec::new());
+        let bvh = Bvh::build(&empty, &BvhConfig::default());
+        assert_eq!(bvh.nodes.len(), 2);
+        bvh.validate(&empty).unwrap();
+
+        let one = soup(1);
+        let bvh = Bvh::build(&one, &BvhConfig::default());
+        assert!(bvh.root().is_leaf());
+        bvh.validate(&one).unwrap();
+
+        // Twenty identical triangles: no plane separates them, so median splits.
+        let mut same = soup(1);
+        same.triangles = vec![same.triangles[0]; 20];
+        let bvh = Bvh::build(&same, &BvhConfig::default());
+        bvh.validate(&same).unwrap();
+        assert!(bvh.stats().max_leaf_triangles <= 4);
+    }
+}

@@ -1,0 +1,357 @@
+//! Wavefront OBJ scenes through the `tobj` crate, plus what `tobj` does not give us: a
+//! missing `.mtl` library is not an error (each `usemtl` name gets a deterministic default
+//! color instead), and parse errors are traced back to the offending line, since `tobj`
+//! reports only the kind of error.
+
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::{Vec2, Vec3};
+
+use crate::error::LoadError;
+use crate::scene::{read_maybe_gzipped, Material, Scene, Triangle};
+
+/// Parses OBJ text (already decompressed) that was read from `path`; `path` is used for
+/// error messages and to find `mtllib` files next to it (`name.mtl` or `name.mtl.gz`).
+pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        let line = 1 + bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
+        LoadError::new(path, Some(line), "invalid UTF-8")
+    })?;
+
+    let usemtl_names = used_material_names(text);
+    let directory = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let material_error: RefCell<Option<LoadError>> = RefCell::new(None);
+    let material_loader = |mtl: &Path| -> tobj::MTLLoadResult {
+        let plain = directory.join(mtl);
+        let mut gz_name = plain.clone().into_os_string();
+        gz_name.push(".gz");
+        let gz = std::path::PathBuf::from(gz_name);
+        let found = [plain, gz].into_iter().find(|p| p.is_file());
+        match found {
+            Some(mtl_path) => {
+                let parsed = read_maybe_gzipped(&mtl_path).and_then(|data| {
+                    tobj::load_mtl_buf(&mut &data[..]).map_err(|e| {
+                        LoadError::new(&mtl_path, None, format!("material library: {e}"))
+                    })
+                });
+                parsed.map_err(|e| {
+                    material_error.borrow_mut().get_or_insert(e);
+                    tobj::LoadError::MaterialParseError
+                })
+            }
+            None => {
+                // No library: define every used name so groups keep distinct materials.
+                let materials: Vec<tobj::Material> = usemtl_names
+                    .iter()
+                    .map(|name| {
+                        let default = Material::default_for_name(name);
+                        tobj::Material {
+                            name: name.clone(),
+                            diffuse: Some(default.diffuse),
+                            ..Default::default()
+                        }
+                    })
+                    .collect();
+                let map = usemtl_names
+                    .iter()
+                    .enumerate()
+                    .map(|(i, n)| (n.clone(), i))
+                    .collect();
+                Ok((materials, map))
+            }
+        }
+    };
+
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let result = tobj::load_obj_buf(&mut text.as_bytes(), &options, material_loader);
+    if let Some(error) = material_error.into_inner() {
+        return Err(error);
+    }
+    let (models, materials) = result.map_err(|kind| locate_obj_error(path, text, kind))?;
+    // Library errors are captured above; an `Err` here can only mean "nothing loaded".
+    let tobj_materials = materials.unwrap_or_default();
+
+    let mut scene_materials: Vec<Material> = tobj_materials
+        .iter()
+        .map(|m| Material {
+            name: m.name.clone(),
+            diffuse: m.diffuse.unwrap_or([0.8; 3]),
+            specular: m.specular.unwrap_or([0.0; 3]),
+            shininess: m.shininess.unwrap_or(0.0),
+        })
+        .collect();
+    let fallback_material = scene_materials.len() as u32;
+    let mut fallback_used = false;
+
+    let vertex_total: usize = models.iter().map(|m| m.mesh.positions.len() / 3).sum();
+    let triangle_total: usize = models.iter().map(|m| m.mesh.indices.len() / 3).sum();
+    let any_texcoords = models.iter().any(|m| !m.mesh.texcoords.is_empty());
+    let mut positions = Vec::with_capacity(vertex_total);
+    let mut normals = Vec::with_capacity(vertex_total);
+    let mut needs_normal = Vec::with_capacity(vertex_total);
+    let mut texcoords = Vec::with_capacity(if any_texcoords { vertex_total } else { 0 });
+    let mut triangles = Vec::with_capacity(triangle_total);
+
+    for model in &models {
+        let mesh = &model.mesh;
+        let base = positions.len() as u32;
+        let count = mesh.positions.len() / 3;
+        positions.extend(
+            mesh.positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2])),
+        );
+        let has_normals = mesh.normals.len() == count * 3;
+        if has_normals {
+            normals.extend(mesh.normals.chunks_exact(3).map(|n| {
+                let n = Vec3::new(n[0], n[1], n[2]);
+                n.try_normalize().unwrap_or(Vec3::Z)
+            }));
+        } else {
+            normals.extend(std::iter::repeat_n(Vec3::Z, count));
+        }
+        needs_normal.extend(std::iter::repeat_n(!has_normals, count));
+        if any_texcoords {
+            if mesh.texcoords.len() == count * 2 {
+                texcoords.extend(
+                    mesh.texcoords
+                        .chunks_exact(2)
+                        .map(|t| Vec2::new(t[0], t[1])),
+                );
+            } else {
+                texcoords.extend(std::iter::repeat_n(Vec2::ZERO, count));
+            }
+        }
+        let material = match mesh.material_id {
+            Some(id) if id < scene_materials.len() => id as u32,
+            _ => {
+                fallback_used = true;
+                fallback_material
+            }
+        };
+        triangles.extend(mesh.indices.chunks_exact(3).map(|i| Triangle {
+            v: [base + i[0], base + i[1], base + i[2]],
+            material,
+        }));
+    }
+    if fallback_used || scene_materials.is_empty() {
+        scene_materials.push(Material::default());
+    }
+
+    let mut scene = Scene::from_parts(
+        positions,
+        Some(normals),
+        texcoords,
+        triangles,
+        scene_materials,
+    );
+    if needs_normal.iter().any(|&n| n) {
+        scene.compute_smooth_normals_where(&mut needs_normal);
+    }
+    Ok(scene)
+}
+
+/// Every `usemtl` name, in order of first use.
+fn used_material_names(text: &str) -> Vec<String> {
+    let mut seen = HashMap::new();
+    let mut names = Vec::new();
+    for line in text.lines() {
+        let line = line.trim_start();
+        if let Some(rest) = line.strip_prefix("usemtl") {
+            if rest.starts_with(|c: char| c.is_ascii_whitespace()) {
+                let name = rest.trim().to_string();
+                if !name.is_empty() && seen.insert(name.clone(), ()).is_none() {
+                    names.push(name);
+                }
+            }
+        }
+    }
+    names
+}
+
+/// Turns `tobj`'s line-less error kind into an error naming the first line that causes it.
+fn locate_obj_error(path: &Path, text: &str, kind: tobj::LoadError) -> LoadError {
+    let (mut n_positions, mut n_texcoords, mut n_normals) = (0usize, 0usize, 0usize);
+    for line in text.lines() {
+        let mut words = line.split_ascii_whitespace();
+        match words.next() {
+            Some("v") => n_positions += 1,
+            Some("vt") => n_texcoords += 1,
+            Some("vn") => n_normals += 1,
+            _ => {}
+        }
+    }
+    let floats_ok = |words: std::str::SplitAsciiWhitespace, n: usize| {
+        let values: Vec<_> = words.take(n).map(str::parse::<f32>).collect();
+        values.len() == n && values.iter().all(Result::is_ok)
+    };
+    let resolve = |word: &str, total: usize| -> Result<Option<usize>, String> {
+        if word.is_empty() {
+            return Ok(None);
+        }
+        let index: i64 = word
+            .parse()
+            .map_err(|_| format!("'{word}' is not an index"))?;
+        let resolved = if index > 0 {
+            index - 1
+        } else if index < 0 {
+            total as i64 + index
+        } else {
+            return Err("index 0 (OBJ indices start at 1)".into());
+        };
+        if resolved < 0 || resolved as usize >= total {
+            return Err(format!("index {index} out of range (there are {total})"));
+        }
+        Ok(Some(resolved as usize))
+    };
+    let (mut seen_p, mut seen_t, mut seen_n) = (0usize, 0usize, 0usize);
+    for (number, line) in text.lines().enumerate() {
+        let number = number + 1;
+        let mut words = line.split_ascii_whitespace();
+        let problem = match words.next() {
+            Some("v") => {
+                seen_p += 1;
+                (!floats_ok(words, 3)).then(|| "vertex position needs three numbers".to_string())
+            }
+            Some("vt") => {
+                seen_t += 1;
+                (!floats_ok(words, 2)).then(|| "texture coordinate needs two numbers".to_string())
+            }
+            Some("vn") => {
+                seen_n += 1;
+                (!floats_ok(words, 3)).then(|| "normal needs three numbers".to_string())
+            }
+            Some("f") => {
+                let corners: Vec<&str> = words.collect();
+                let mut problem =
+                    (corners.len() < 3).then(|| format!("face with {} corners", corners.len()));
+                for corner in &corners {
+                    if problem.is_some() {
+                        break;
+                    }
+                    let mut parts = corner.split('/');
+                    // Relative (negative) indices count from what has been read so far.
+                    let checks = [
+                        (
+                            parts.next().unwrap_or(""),
+                            if corner.starts_with('-') {
+                                seen_p
+                            } else {
+                                n_positions
+                            },
+                            "position",
+                        ),
+                        (
+                            parts.next().unwrap_or(""),
+                            n_texcoords.max(seen_t),
+                            "texcoord",
+                        ),
+                        (parts.next().unwrap_or(""), n_normals.max(seen_n), "normal"),
+                    ];
+                    for (i, (word, total, what)) in checks.into_iter().enumerate() {
+                        if i == 0 && word.is_empty() {
+                            problem = Some(format!("face corner '{corner}' has no position index"));
+                            break;
+                        }
+                        if let Err(e) = resolve(word, total) {
+                            problem = Some(format!("face corner '{corner}': {what} {e}"));
+                            break;
+                        }
+                    }
+                }
+                problem
+            }
+            _ => None,
+        };
+        if let Some(problem) = problem {
+            return LoadError::new(path, Some(number), problem);
+        }
+    }
+    LoadError::new(path, None, format!("OBJ: {kind}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Scene, LoadError> {
+        parse_obj(Path::new("/nowhere/test.obj"), text.as_bytes())
+    }
+
+    #[test]
+    fn groups_materials_and_quads() {
+        let text = "mtllib missing.mtl\n\
+                    v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n\
+                    g floor\nusemtl red\nf 1 2 3 4\n\
+                    g wall\nusemtl blue\nf 1 2 5\n\
+                    usemtl red\nf -1 -4 -3\n";
+        let scene = parse(text).unwrap();
+        scene.validate().unwrap();
+        assert_eq!(scene.triangle_count(), 4);
+        let names: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
+        assert_eq!(&names[..2], &["red", "blue"]);
+        assert_eq!(scene.triangles[0].material, 0);
+        assert_eq!(scene.triangles[2].material, 1);
+        assert_eq!(scene.triangles[3].material, 0);
+        assert_ne!(scene.materials[0].diffuse, scene.materials[1].diffuse);
+        assert!((scene.normals[0].length() - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn file_normals_are_kept() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nf 1//1 2//1 3//1\n";
+        let scene = parse(text).unwrap();
+        assert_eq!(scene.materials.len(), 1);
+        assert!(scene.normals.iter().all(|n| *n == Vec3::Z));
+    }
+
+    #[test]
+    fn bad_files_name_file_line_and_reason() {
+        let err = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n").unwrap_err();
+        assert_eq!(err.line, Some(4), "{err}");
+        assert!(err.reason.contains("out of range"), "{err}");
+        assert!(err.to_string().starts_with("/nowhere/test.obj:4:"), "{err}");
+
+        let err = parse("v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n").unwrap_err();
+        assert_eq!(err.line, Some(2), "{err}");
+        assert!(err.reason.contains("three numbers"), "{err}");
+
+        let err = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n").unwrap_err();
+        assert_eq!(err.line, Some(4), "{err}");
+    }
+
+    #[test]
+    fn present_material_library_is_used() {
+        let dir = std::env::temp_dir().join(format!("spu-loader-obj-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join("m.mtl"),
+            "newmtl green\nKd 0 1 0\nKs 0.5 0.5 0.5\nNs 20\n",
+        )
+        .unwrap();
+        let obj = dir.join("s.obj");
+        std::fs::write(
+            &obj,
+            "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl green\nf 1 2 3\n",
+        )
+        .unwrap();
+        let scene = Scene::load(&obj).unwrap();
+        assert_eq!(scene.materials[0].name, "green");
+        assert_eq!(scene.materials[0].diffuse, [0.0, 1.0, 0.0]);
+        assert_eq!(scene.materials[0].shininess, 20.0);
+        std::fs::write(dir.join("m.mtl"), "newmtl green\nKd 0 x 0\n").unwrap();
+        let err = Scene::load(&obj).unwrap_err();
+        assert!(err.path.ends_with("m.mtl"), "{err}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

@@ -1,0 +1,375 @@
+//! The host reference ray caster: what the SPU kernels must produce, computed with a plain
+//! single-ray traversal over the very same node and triangle records (and the same f32
+//! projection test, [`TriangleRecord::intersect`]), so kernel and reference can be compared
+//! pixel by pixel. It is itself checked against an f64 brute-force Möller–Trumbore caster.
+//!
+//! Conventions shared with the kernels:
+//! - rays come from [`CameraBasis::direction`] (unnormalized; `t` is in units of that
+//!   direction, see [`crate::camera`]);
+//! - a hit needs `T_MIN < t < t_max`, where `t_max` starts at [`T_MAX`] (finite: the SPU has
+//!   no infinity) and shrinks to the nearest hit so far; of two hits at exactly the same `t`
+//!   the first one tested wins;
+//! - a miss reports triangle [`MISS`] and `t = T_MAX`;
+//! - the reported triangle is the record's `original_index` (the scene's triangle index).
+
+use glam::Vec3;
+
+use crate::bvh::Bvh;
+use crate::camera::Camera;
+use crate::layout::{node_records, triangle_records, NodeRecord, StagedScene, TriangleRecord};
+use crate::scene::Scene;
+
+/// Triangle index reported for a ray that hits nothing.
+pub const MISS: u32 = u32::MAX;
+/// Hits need `t > T_MIN`.
+pub const T_MIN: f32 = 0.0;
+/// The initial (and miss) `t`.
+pub const T_MAX: f32 = f32::MAX;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    /// Original scene index of the nearest triangle hit, or [`MISS`].
+    pub triangle: u32,
+    pub t: f32,
+    /// Index of the hit triangle's record (valid only for hits).
+    pub record: u32,
+}
+
+impl Hit {
+    pub const NONE: Hit = Hit {
+        triangle: MISS,
+        t: T_MAX,
+        record: MISS,
+    };
+
+    pub fn is_hit(&self) -> bool {
+        self.triangle != MISS
+    }
+}
+
+/// The records the caster runs over.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reference {
+    pub nodes: Vec<NodeRecord>,
+    pub triangles: Vec<TriangleRecord>,
+}
+
+/// The eye-light shade `|N.D| / (|N| |D|)`, clamped to `[0, 1]`, computed in f32 as
+/// `abs(dot(n, d)) / sqrt(dot(n, n) * dot(d, d))`; 0 for a zero vector.
+pub fn shade_eye_light(normal: Vec3, dir: Vec3) -> f32 {
+    let lengths = (normal.dot(normal) * dir.dot(dir)).sqrt();
+    if lengths > 0.0 {
+        (normal.dot(dir).abs() / lengths).min(1.0)
+    } else {
+        0.0
+    }
+}
+
+/// A shade in `[0, 1]` as an 8-bit value: `(shade * 255 + 0.5)` truncated.
+pub fn shade_to_u8(shade: f32) -> u8 {
+    (shade.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+}
+
+/// Eye-light gray level of a hit: [`shade_to_u8`] of [`shade_eye_light`].
+pub fn eye_light_gray(normal: Vec3, dir: Vec3) -> u8 {
+    shade_to_u8(shade_eye_light(normal, dir))
+}
+
+/// Eye-light color of a hit on a material with `diffuse` color: per channel
+/// [`shade_to_u8`]`(diffuse_c * shade)`.
+pub fn eye_light_rgb(normal: Vec3, dir: Vec3, diffuse: [f32; 3]) -> [u8; 3] {
+    let shade = shade_eye_light(normal, dir);
+    diffuse.map(|c| shade_to_u8(c * shade))
+}
+
+/// Slab test; returns the entry distance if the box is hit within `(t_min, t_max]`.
+#[inline]
+fn hit_box(
+    node: &NodeRecord,
+    origin: [f32; 3],
+    inverse: [f32; 3],
+    t_min: f32,
+    t_max: f32,
+) -> Option<f32> {
+    let mut near = t_min;
+    let mut far = t_max;
+    for axis in 0..3 {
+        let t0 = (node.min[axis] - origin[axis]) * inverse[axis];
+        let t1 = (node.max[axis] - origin[axis]) * inverse[axis];
+        near = near.max(t0.min(t1));
+        far = far.min(t0.max(t1));
+    }
+    (near <= far).then_some(near)
+}
+
+/// `1 / d` per component, with zero components treated as `±1e-30` so no infinities arise
+/// (the SPU has none) and the slab test stays correct for rays parallel to a slab.
+fn safe_inverse(d: [f32; 3]) -> [f32; 3] {
+    d.map(|x| {
+        if x == 0.0 {
+            1e30
+        } else if x.abs() < 1e-30 {
+            1.0 / 1e-30f32.copysign(x)
+        } else {
+            1.0 / x
+        }
+    })
+}
+
+impl Reference {
+    pub fn new(scene: &Scene, bvh: &Bvh) -> Reference {
+        Reference {
+            nodes: node_records(bvh),
+            triangles: triangle_records(scene, bvh),
+        }
+    }
+
+    pub fn from_staged(staged: &StagedScene) -> Reference {
+        Reference {
+            nodes: staged.nodes.clone(),
+            triangles: staged.triangles.clone(),
+        }
+    }
+
+    /// The nearest hit of the ray `origin + t * dir` with `T_MIN < t < T_MAX`.
+    pub fn trace(&self, origin: Vec3, dir: Vec3) -> Hit {
+        let o = origin.to_array();
+        let d = dir.to_array();
+        let inverse = safe_inverse(d);
+        let mut best = Hit::NONE;
+        let mut stack: Vec<(u32, f32)> = Vec::with_capacity(128);
+        if let Some(entry) = hit_box(&self.nodes[0], o, inverse, T_MIN, best.t) {
+            stack.push((0, entry));
+        }
+        while let Some((index, entry)) = stack.pop() {
+            if entry > best.t {
+                continue;
+            }
+            let node = &self.nodes[index as usize];
+            let count = node.triangle_count();
+            if count > 0 {
+                for record in node.link..node.link + count {
+                    let triangle = &self.triangles[record as usize];
+                    if let Some((t, _, _)) = triangle.intersect(o, d, T_MIN, best.t) {
+                        best = Hit {
+                            triangle: triangle.original_index,
+                            t,
+                            record,
+                        };
+                    }
+                }
+                continue;
+            }
+            let c = node.link;
+            let near = hit_box(&self.nodes[c as usize], o, inverse, T_MIN, best.t);
+            let far = hit_box(&self.nodes[c as usize + 1], o, inverse, T_MIN, best.t);
+            match (near, far) {
+                (Some(a), Some(b)) if a <= b => {
+                    stack.push((c + 1, b));
+                    stack.push((c, a));
+                }
+                (Some(a), Some(b)) => {
+                    stack.push((c, a));
+                    stack.push((c + 1, b));
+                }
+                (Some(a), None) => stack.push((c, a)),
+                (None, Some(b)) => stack.push((c + 1, b)),
+                (None, None) => {}
+            }
+        }
+        best
+    }
+
+    /// Primary-ray hits of a `width x height` image, row-major from the top row, computed on
+    /// up to `threads` threads (the result does not depend on the thread count).
+    pub fn render(&self, camera: &Camera, width: u32, height: u32, threads: usize) -> Vec<Hit> {
+        let basis = camera.basis(width, height);
+        let mut hits = vec![Hit::NONE; width as usize * height as usize];
+        if hits.is_empty() {
+            return hits;
+        }
+        let threads = threads.max(1).min(height as usize);
+        let rows_per_chunk = (height as usize).div_ceil(threads * 8).max(1);
+        // Interleaved chunks balance the load; each pixel is computed independently, so the
+        // assignment cannot change the result.
+        let mut work: Vec<Vec<(usize, &mut [Hit])>> = (0..threads).map(|_| Vec::new()).collect();
+        for (number, chunk) in hits.chunks_mut(rows_per_chunk * width as usize).enumerate() {
+            work[number % threads].push((number, chunk));
+        }
+        let trace_chunks = |chunks: Vec<(usize, &mut [Hit])>| {
+            for (number, chunk) in chunks {
+                let first_row = number * rows_per_chunk;
+                for (i, hit) in chunk.iter_mut().enumerate() {
+                    let x = (i % width as usize) as u32;
+                    let y = (first_row + i / width as usize) as u32;
+                    *hit = self.trace(basis.origin, basis.direction(x, y));
+                }
+            }
+        };
+        std::thread::scope(|scope| {
+            let mut work = work.into_iter();
+            let mine = work.next().unwrap_or_default();
+            for chunks in work {
+                scope.spawn(|| trace_chunks(chunks));
+            }
+            trace_chunks(mine);
+        });
+        hits
+    }
+
+    /// Eye-light gray image (row-major, top row first) of `hits` from [`Reference::render`],
+    /// shaded with the geometric normal stored in the triangle record; misses are 0.
+    pub fn eye_light_image(
+        &self,
+        hits: &[Hit],
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Vec<u8> {
+        let basis = camera.basis(width, height);
+        hits.iter()
+            .enumerate()
+            .map(|(i, hit)| {
+                if !hit.is_hit() {
+                    return 0;
+                }
+                let dir = basis.direction(i as u32 % width, i as u32 / width);
+                eye_light_gray(self.triangles[hit.record as usize].geometric_normal(), dir)
+            })
+            .collect()
+    }
+}
+
+/// Möller–Trumbore in f64 against every triangle: `(triangle, t, beta, gamma)` of the
+/// nearest hit with `t > 0`, for checking [`Reference::trace`]. `slack` widens (positive) or
+/// narrows (negative) the barycentric acceptance range.
+pub fn brute_force_trace(
+    scene: &Scene,
+    origin: Vec3,
+    dir: Vec3,
+    slack: f64,
+) -> Option<(u32, f64, f64, f64)> {
+    let o = origin.as_dvec3();
+    let d = dir.as_dvec3();
+    let mut best: Option<(u32, f64, f64, f64)> = None;
+    for index in 0..scene.triangles.len() {
+        let [a, b, c] = scene.triangle_positions(index).map(|p| p.as_dvec3());
+        let e1 = b - a;
+        let e2 = c - a;
+        let p = d.cross(e2);
+        let det = e1.dot(p);
+        if det == 0.0 {
+            continue;
+        }
+        let inv = 1.0 / det;
+        let s = o - a;
+        let beta = s.dot(p) * inv;
+        let q = s.cross(e1);
+        let gamma = d.dot(q) * inv;
+        let t = e2.dot(q) * inv;
+        let inside = beta >= -slack && gamma >= -slack && beta + gamma <= 1.0 + slack;
+        if inside && t > 0.0 && best.is_none_or(|(_, best_t, _, _)| t < best_t) {
+            best = Some((index as u32, t, beta, gamma));
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::BvhConfig;
+
+    /// Compares the reference with brute force for every pixel. Disagreements are allowed
+    /// only where f32 vs f64 precision legitimately decides: the reference's triangle is hit
+    /// (with a tiny barycentric slack) at the same distance as brute force's (a tie or a
+    /// shared edge), or brute force's hit lies on a triangle edge.
+    fn check_against_brute_force(scene: &Scene, camera: &Camera, width: u32, height: u32) -> usize {
+        let bvh = Bvh::build(scene, &BvhConfig::default());
+        bvh.validate(scene).unwrap();
+        let reference = Reference::new(scene, &bvh);
+        let hits = reference.render(camera, width, height, 2);
+        let basis = camera.basis(width, height);
+        let mut hit_count = 0;
+        for (i, hit) in hits.iter().enumerate() {
+            let (x, y) = (i as u32 % width, i as u32 / width);
+            let dir = basis.direction(x, y);
+            let exact = brute_force_trace(scene, basis.origin, dir, 0.0);
+            hit_count += usize::from(hit.is_hit());
+            let agree = match exact {
+                None => !hit.is_hit(),
+                Some((triangle, t, _, _)) => {
+                    hit.triangle == triangle
+                        && ((hit.t as f64 - t).abs() <= 1e-4 * t.abs().max(1e-3))
+                }
+            };
+            if agree {
+                continue;
+            }
+            let near_edge = |beta: f64, gamma: f64| beta.min(gamma).min(1.0 - beta - gamma) < 1e-4;
+            let explained = match exact {
+                Some((_, t, beta, gamma))
+                    if near_edge(beta, gamma)
+                        && (!hit.is_hit() || hit.t as f64 >= t * (1.0 - 1e-4)) =>
+                {
+                    true
+                }
+                Some((_, t, _, _)) if hit.is_hit() => {
+                    let mut single = scene.clone();
+                    single.triangles = vec![scene.triangles[hit.triangle as usize]];
+                    brute_force_trace(&single, basis.origin, dir, 1e-4).is_some_and(
+                        |(_, t_ref, _, _)| (t_ref - t).abs() <= 1e-4 * t.abs().max(1e-3),
+                    )
+                }
+                _ => false,
+            };
+            assert!(
+                explained,
+                "pixel ({x},{y}): reference {hit:?}, brute force {exact:?}"
+            );
+        }
+        hit_count
+    }
+
+    #[test]
+    fn reference_matches_brute_force_on_a_triangle_soup() {
+        let scene = crate::bvh::tests::soup_sized(400, 2.5);
+        let camera = Camera::new(
+            Vec3::new(5.0, 6.0, 25.0),
+            Vec3::new(5.0, 5.0, 5.0),
+            Vec3::Y,
+            40.0,
+        );
+        let hits = check_against_brute_force(&scene, &camera, 48, 40);
+        assert!(hits > 300, "only {hits} pixels hit");
+    }
+
+    #[test]
+    fn reference_matches_brute_force_on_the_room() {
+        let scene = crate::procedural::room();
+        let hits = check_against_brute_force(&scene, &scene.camera, 64, 48);
+        assert_eq!(hits, 64 * 48, "a closed room is hit everywhere");
+    }
+
+    #[test]
+    fn render_is_independent_of_threads_and_shading_is_defined() {
+        let scene = crate::procedural::room();
+        let bvh = Bvh::build(&scene, &BvhConfig::default());
+        let reference = Reference::new(&scene, &bvh);
+        let one = reference.render(&scene.camera, 40, 30, 1);
+        let three = reference.render(&scene.camera, 40, 30, 3);
+        assert_eq!(one, three);
+        let image = reference.eye_light_image(&one, &scene.camera, 40, 30);
+        assert_eq!(image.len(), 1200);
+        assert!(image.iter().any(|&g| g > 100));
+
+        assert_eq!(eye_light_gray(Vec3::Z, Vec3::new(0.0, 0.0, -3.0)), 255);
+        assert_eq!(eye_light_gray(Vec3::X, Vec3::Z), 0);
+        assert_eq!(eye_light_gray(Vec3::new(0.0, 1.0, 1.0), Vec3::Z), 180); // 0.7071 * 255 + 0.5 = 180.8
+        assert_eq!(
+            eye_light_rgb(Vec3::Z, Vec3::Z, [1.0, 0.5, 0.0]),
+            [255, 128, 0]
+        );
+        assert_eq!(eye_light_gray(Vec3::ZERO, Vec3::Z), 0);
+    }
+}
