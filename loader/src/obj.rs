@@ -1,7 +1,8 @@
 //! Wavefront OBJ scenes through the `tobj` crate, plus what `tobj` does not give us: a
 //! missing `.mtl` library is not an error (each `usemtl` name gets a deterministic default
-//! color instead), and parse errors are traced back to the offending line, since `tobj`
-//! reports only the kind of error.
+//! color instead, [`Material::default_for_name`]), a file without any `usemtl` gets one such
+//! material per group/object (so that e.g. Sponza's groups stay distinguishable), and parse
+//! errors are traced back to the offending line, since `tobj` reports only the kind of error.
 
 use std::cell::RefCell;
 use std::collections::HashMap;
@@ -11,6 +12,9 @@ use glam::{Vec2, Vec3};
 
 use crate::error::LoadError;
 use crate::scene::{read_maybe_gzipped, Material, Scene, Triangle};
+
+/// The library name given to `tobj` for files that use materials but name no library.
+const MISSING_LIBRARY: &str = "spu-loader-no-material-library.mtl";
 
 /// Parses OBJ text (already decompressed) that was read from `path`; `path` is used for
 /// error messages and to find `mtllib` files next to it (`name.mtl` or `name.mtl.gz`).
@@ -31,7 +35,9 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
         let mut gz_name = plain.clone().into_os_string();
         gz_name.push(".gz");
         let gz = std::path::PathBuf::from(gz_name);
-        let found = [plain, gz].into_iter().find(|p| p.is_file());
+        let found = [plain, gz]
+            .into_iter()
+            .find(|p| p.is_file() && mtl != Path::new(MISSING_LIBRARY));
         match found {
             Some(mtl_path) => {
                 let parsed = read_maybe_gzipped(&mtl_path).and_then(|data| {
@@ -73,7 +79,20 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
         ignore_points: true,
         ignore_lines: true,
     };
-    let result = tobj::load_obj_buf(&mut text.as_bytes(), &options, material_loader);
+    // `tobj` only resolves `usemtl` names through a library; a file naming materials without
+    // any `mtllib` gets a made-up one (which the loader then finds missing, so defaults).
+    // Error lines are located in the original `text`, so the extra line does not shift them.
+    let has_library = text
+        .lines()
+        .any(|line| line.trim_start().starts_with("mtllib"));
+    let patched;
+    let tobj_input = if !has_library && !usemtl_names.is_empty() {
+        patched = format!("mtllib {MISSING_LIBRARY}\n{text}");
+        patched.as_str()
+    } else {
+        text
+    };
+    let result = tobj::load_obj_buf(&mut tobj_input.as_bytes(), &options, material_loader);
     if let Some(error) = material_error.into_inner() {
         return Err(error);
     }
@@ -90,6 +109,18 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
             shininess: m.shininess.unwrap_or(0.0),
         })
         .collect();
+    // Without any `usemtl`, each group/object gets its own default-colored material so that
+    // the groups stay distinguishable in images.
+    let by_group = usemtl_names.is_empty() && models.len() > 1;
+    let mut group_materials: HashMap<&str, u32> = HashMap::new();
+    if by_group {
+        for model in &models {
+            if !group_materials.contains_key(model.name.as_str()) {
+                group_materials.insert(&model.name, scene_materials.len() as u32);
+                scene_materials.push(Material::default_for_name(&model.name));
+            }
+        }
+    }
     let fallback_material = scene_materials.len() as u32;
     let mut fallback_used = false;
 
@@ -133,6 +164,7 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
             }
         }
         let material = match mesh.material_id {
+            _ if by_group => group_materials[model.name.as_str()],
             Some(id) if id < scene_materials.len() => id as u32,
             _ => {
                 fallback_used = true;
@@ -305,6 +337,44 @@ mod tests {
         assert_eq!(scene.triangles[3].material, 0);
         assert_ne!(scene.materials[0].diffuse, scene.materials[1].diffuse);
         assert!((scene.normals[0].length() - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn usemtl_without_library_and_groups_without_usemtl() {
+        let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+        let scene = parse(&format!("{tri}usemtl a\nf 1 2 3\nusemtl b\nf 1 3 2\n")).unwrap();
+        assert_eq!(
+            scene
+                .materials
+                .iter()
+                .map(|m| m.name.as_str())
+                .collect::<Vec<_>>(),
+            ["a", "b"]
+        );
+        assert_eq!(scene.triangles[1].material, 1);
+        let err = parse(&format!("{tri}usemtl a\nf 1 2 9\n")).unwrap_err();
+        assert_eq!(err.line, Some(5), "{err}");
+
+        let scene = parse(&format!(
+            "{tri}g one\nf 1 2 3\ng two\nf 1 3 2\ng one\nf 2 3 1\n"
+        ))
+        .unwrap();
+        assert_eq!(
+            scene
+                .materials
+                .iter()
+                .map(|m| m.name.as_str())
+                .collect::<Vec<_>>(),
+            ["one", "two"]
+        );
+        assert_eq!(
+            scene
+                .triangles
+                .iter()
+                .map(|t| t.material)
+                .collect::<Vec<_>>(),
+            [0, 1, 0]
+        );
     }
 
     #[test]
