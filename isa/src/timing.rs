@@ -568,23 +568,24 @@ impl Timing {
                 self.fetch.next_ready = probe + self.config.fetch_latency as u64;
             } else {
                 self.fetch.probe = probe;
-                if flags & F_LS != 0 && probe == issue {
-                    // This load/store/hint takes the cycle; the prefetch waits.
-                    self.fetch.probe = issue + 1;
-                    self.profile.totals.ls_contention += 1;
-                }
             }
-        }
-        if self.fetch.pending && is_hbrp(inst) {
-            // hbrp takes its own local-store cycle for the inline prefetch (R8).
-            self.fetch.pending = false;
-            self.fetch.next_ready = issue + self.config.fetch_latency as u64;
         }
         if new_line {
             // Executing a new line: the next sequential line is requested now.
             self.fetch.line = line;
             self.fetch.pending = self.config.model_fetch;
             self.fetch.probe = issue;
+        }
+        if self.fetch.pending {
+            if is_hbrp(inst) {
+                // hbrp takes its own local-store cycle for the inline prefetch (R8).
+                self.fetch.pending = false;
+                self.fetch.next_ready = issue + self.config.fetch_latency as u64;
+            } else if flags & F_LS != 0 && self.fetch.probe == issue {
+                // This load/store/hint takes the cycle; the prefetch waits.
+                self.fetch.probe = issue + 1;
+                self.profile.totals.ls_contention += 1;
+            }
         }
 
         // Results (R2).
