@@ -529,7 +529,7 @@ fn frsqest_exponent(e: u32) -> u32 {
     if e == 0 {
         255
     } else {
-        190 - (e + 1) / 2
+        190 - e.div_ceil(2)
     }
 }
 
@@ -1166,6 +1166,33 @@ mod tests {
         // fs: 3 - 1 = 2, and 1 - 3 = -2.
         assert_eq!(fs(THREE, ONE), TWO);
         assert_eq!(fs(ONE, THREE), 0xc000_0000);
+    }
+
+    #[test]
+    fn sp_matches_truncated_exact_host_arithmetic() {
+        // Independent oracle: a product of two 24-bit mantissas (48 bits), and a sum of two
+        // singles whose exponents differ by at most 28, are exact in f64; chopping the f64
+        // to 24 significant bits (clearing its low 29 fraction bits) is truncation.
+        let chop = |v: f64| (f64::from_bits(v.to_bits() & !((1u64 << 29) - 1)) as f32).to_bits();
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |lo: u64, span: u64| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            ((x as u32) & 0x807f_ffff) | (((lo + (x >> 40) % span) as u32) << 23)
+        };
+        for _ in 0..20000 {
+            let a = next(70, 110);
+            let b = next(70, 110);
+            let exact = f32::from_bits(a) as f64 * f32::from_bits(b) as f64;
+            let want = if exact == 0.0 { 0 } else { chop(exact) };
+            assert_eq!(fm(a, b), want, "fm {a:08x} {b:08x}");
+            let ea = (a >> 23) & 0xff;
+            let b2 = (b & 0x807f_ffff) | ((ea - 14 + (b >> 23) % 29) << 23);
+            let exact = f32::from_bits(a) as f64 + f32::from_bits(b2) as f64;
+            let want = if exact == 0.0 { 0 } else { chop(exact) };
+            assert_eq!(fa(a, b2), want, "fa {a:08x} {b2:08x}");
+        }
     }
 
     #[test]
