@@ -368,8 +368,9 @@ struct Fetch {
     probe: u64,
     /// Cycle from which the instructions of line `line + 1` may issue.
     next_ready: u64,
-    /// Local-store cycles taken by DMA (sorted).
+    /// Local-store cycles taken by DMA (sorted), and the first of them (or `u64::MAX`).
     dma: std::collections::VecDeque<u64>,
+    dma_min: u64,
 }
 
 impl Fetch {
@@ -380,6 +381,7 @@ impl Fetch {
             probe: 0,
             next_ready: 0,
             dma: Default::default(),
+            dma_min: u64::MAX,
         }
     }
 }
@@ -644,7 +646,15 @@ impl Timing {
 
     /// The first cycle at or after `from` that no DMA takes (drops older DMA cycles).
     #[inline]
-    fn fetch_first_free(&mut self, mut from: u64) -> u64 {
+    fn fetch_first_free(&mut self, from: u64) -> u64 {
+        if from < self.fetch.dma_min {
+            return from;
+        }
+        self.fetch_first_free_dma(from)
+    }
+
+    #[cold]
+    fn fetch_first_free_dma(&mut self, mut from: u64) -> u64 {
         while let Some(&c) = self.fetch.dma.front() {
             if c < from {
                 self.fetch.dma.pop_front();
@@ -656,6 +666,7 @@ impl Timing {
                 break;
             }
         }
+        self.fetch.dma_min = self.fetch.dma.front().copied().unwrap_or(u64::MAX);
         from
     }
 
@@ -760,6 +771,7 @@ impl Timing {
                 self.fetch.dma.insert(pos, c);
             }
         }
+        self.fetch.dma_min = self.fetch.dma.front().copied().unwrap_or(u64::MAX);
     }
 
     /// The current cycle: the issue cycle of the next instruction at the earliest.
