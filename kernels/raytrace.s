@@ -234,6 +234,7 @@ _start:
         ai      $11, $11, 16
         ai      $12, $12, -1
         brnz    $12, 1b
+        il      ZERO, 0
         ilhu    ONE, 0x3f80
         ilhu    BIG, 0x7149
         iohl    BIG, 0xf2ca
@@ -720,9 +721,9 @@ tri_loop:
         wrch    $MFC_WrTagMask, $86
         wrch    $MFC_WrTagUpdate, $86
         rdch    $86, $MFC_RdTagStat
-9:      lqd     $86, TRI_NU($84)              # (n_u, n_v, n_d, k)
-        lqd     $87, TRI_BNU($84)             # (b_nu, b_nv, b_d, -)
-        lqd     $88, TRI_CNU($84)             # (c_nu, c_nv, c_d, -)
+9:      lqd     $86, TRI_N_U($84)              # (n_u, n_v, n_d, k)
+        lqd     $87, TRI_B_NU($84)             # (b_nu, b_nv, b_d, -)
+        lqd     $88, TRI_C_NU($84)             # (c_nu, c_nv, c_d, -)
         rotqbyi $89, $86, 12                  # k
         shli    $89, $89, 4
         ila     $90, k_axoff
@@ -979,7 +980,8 @@ packet_done:
         wrch    $MFC_TagID, $81
         il      $93, 0x20
         wrch    $MFC_Cmd, $93
-        xori    OUTSEL, OUTSEL, 1024
+        il      $93, 1024
+        xor     OUTSEL, OUTSEL, $93
         ai      PKT, PKT, 1
         ceqi    $93, PKT, 64
         brz     $93, packet_loop
