@@ -128,6 +128,59 @@ impl Totals {
         }
     }
 
+    /// `self - earlier` for the counters the timing model increments.
+    pub(crate) fn since(&self, earlier: &Totals) -> Totals {
+        let mut d = self.clone();
+        d.scale_sub(earlier);
+        d.spus = 0;
+        d
+    }
+
+    fn scale_sub(&mut self, o: &Totals) {
+        self.instructions -= o.instructions;
+        self.nops -= o.nops;
+        self.cycles -= o.cycles;
+        self.dual_cycles -= o.dual_cycles;
+        self.branches_taken -= o.branches_taken;
+        self.branches_not_taken -= o.branches_not_taken;
+        self.branch_misses -= o.branch_misses;
+        self.hints -= o.hints;
+        self.hint_hits -= o.hint_hits;
+        for i in 0..STALL_CLASSES {
+            self.stall[i] -= o.stall[i];
+        }
+        for i in 0..12 {
+            self.dep_by_unit[i] -= o.dep_by_unit[i];
+        }
+        self.pair_dependency -= o.pair_dependency;
+        self.ls_contention -= o.ls_contention;
+        self.dma_contention -= o.dma_contention;
+        self.idle_cycles -= o.idle_cycles;
+    }
+
+    /// Adds `times` × `d`.
+    pub(crate) fn add_scaled(&mut self, d: &Totals, times: u64) {
+        self.instructions += d.instructions * times;
+        self.nops += d.nops * times;
+        self.cycles += d.cycles * times;
+        self.dual_cycles += d.dual_cycles * times;
+        self.branches_taken += d.branches_taken * times;
+        self.branches_not_taken += d.branches_not_taken * times;
+        self.branch_misses += d.branch_misses * times;
+        self.hints += d.hints * times;
+        self.hint_hits += d.hint_hits * times;
+        for i in 0..STALL_CLASSES {
+            self.stall[i] += d.stall[i] * times;
+        }
+        for i in 0..12 {
+            self.dep_by_unit[i] += d.dep_by_unit[i] * times;
+        }
+        self.pair_dependency += d.pair_dependency * times;
+        self.ls_contention += d.ls_contention * times;
+        self.dma_contention += d.dma_contention * times;
+        self.idle_cycles += d.idle_cycles * times;
+    }
+
     fn merge(&mut self, o: &Totals) {
         self.instructions += o.instructions;
         self.nops += o.nops;
@@ -381,7 +434,22 @@ pub struct Profile {
     /// Channel stall cycles per (address, channel).
     channels: HashMap<(u32, u8), u64>,
     pub totals: Totals,
+    /// While the timing model records a block, every per-address change is also logged
+    /// here so that the block's replays can repeat it.
+    pub(crate) log: Option<Vec<LogEntry>>,
 }
+
+/// One per-address counter change: `field` 0 executions, 1 cycles, 2 dual, 3.. stall
+/// class, `DEP` a dependency attribution to `producer`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LogEntry {
+    pub(crate) pc: u32,
+    pub(crate) field: u8,
+    pub(crate) producer: u32,
+    pub(crate) n: u64,
+}
+
+pub(crate) const DEP: u8 = 100;
 
 impl Profile {
     pub fn new() -> Self {
@@ -393,6 +461,45 @@ impl Profile {
                 spus: 1,
                 ..Default::default()
             },
+            log: None,
+        }
+    }
+
+    #[inline]
+    fn note(&mut self, pc: u32, field: u8, producer: u32, n: u64) {
+        if let Some(log) = &mut self.log {
+            log.push(LogEntry {
+                pc,
+                field,
+                producer,
+                n,
+            });
+        }
+    }
+
+    /// Applies logged changes `times` times.
+    pub(crate) fn apply_log(&mut self, log: &[LogEntry], times: u64) {
+        for e in log {
+            let n = e.n * times;
+            if e.field == DEP {
+                let i = ((e.pc & 0x3_ffff) >> 2) as usize;
+                self.at(e.pc);
+                add_dep(
+                    &mut self.pcs[i].dep_from,
+                    &mut self.dep_extra,
+                    e.pc,
+                    e.producer,
+                    n,
+                );
+                continue;
+            }
+            let s = self.at(e.pc);
+            match e.field {
+                0 => s.executions += n,
+                1 => s.cycles += n,
+                2 => s.dual += n,
+                f => s.stall[(f - 3) as usize] += n,
+            }
         }
     }
 
@@ -423,10 +530,19 @@ impl Profile {
             let s = self.at(pc);
             s.executions += 1;
             s.dual += 1;
+            if self.log.is_some() {
+                self.note(pc.wrapping_sub(4), 2, 0, 1);
+                self.note(pc, 0, 0, 1);
+                self.note(pc, 2, 0, 1);
+            }
         } else {
             let s = self.at(pc);
             s.executions += 1;
             s.cycles += 1;
+            if self.log.is_some() {
+                self.note(pc, 0, 0, 1);
+                self.note(pc, 1, 0, 1);
+            }
         }
     }
 
@@ -437,6 +553,10 @@ impl Profile {
         let s = self.at(pc);
         s.stall[cause.index()] += n;
         s.cycles += n;
+        if self.log.is_some() {
+            self.note(pc, 3 + cause.index() as u8, 0, n);
+            self.note(pc, 1, 0, n);
+        }
     }
 
     /// `n` dependency stall cycles at `pc` waiting on the result of `producer`.
@@ -452,6 +572,7 @@ impl Profile {
             producer,
             n,
         );
+        self.note(pc, DEP, producer, n);
     }
 
     pub(crate) fn channel(&mut self, pc: u32, channel: u8, n: u64) {
@@ -1171,6 +1292,7 @@ mod static_timing {
         TimingConfig {
             model_fetch: false,
             hint_window: 0,
+            memoize: false,
             ..Default::default()
         }
     }

@@ -13,7 +13,7 @@
 
 use crate::analysis;
 use crate::codec::Inst;
-use crate::profile::Profile;
+use crate::profile::{Profile, Totals};
 use crate::table::{Op, Pipe, Unit, OP_INFO};
 use std::sync::OnceLock;
 
@@ -75,6 +75,8 @@ pub struct TimingConfig {
     /// Cycles from the local-store access that fills an instruction line buffer until its
     /// instructions may issue (6: the local-store access pipeline a load also takes).
     pub fetch_latency: u32,
+    /// Replay the timing of basic blocks whose entry state repeats (exact; only a speed-up).
+    pub memoize: bool,
 }
 
 impl Default for TimingConfig {
@@ -90,6 +92,7 @@ impl Default for TimingConfig {
             dp_issue_block: 6,
             model_fetch: true,
             fetch_latency: 6,
+            memoize: true,
         }
     }
 }
@@ -355,6 +358,7 @@ pub struct Timing {
     profile: Profile,
     /// Keep the issue record of the last instruction (`last_record`).
     record: IssueRecord,
+    memo: memo::Memos,
 }
 
 /// Instruction fetch state (R8).
@@ -425,6 +429,7 @@ impl Timing {
                 dual: false,
                 cause: None,
             },
+            memo: memo::Memos::default(),
         }
     }
 
@@ -432,6 +437,21 @@ impl Timing {
     /// cycle at which it issues.
     #[inline]
     pub fn issue(&mut self, pc: u32, inst: Inst) -> u64 {
+        if self.memo.replaying() {
+            if let Some(t) = self.replay_next(pc, inst) {
+                return t;
+            }
+        }
+        if self.config.memoize {
+            return self.issue_memo(pc, inst);
+        }
+        self.issue_slow(pc, inst)
+    }
+
+    /// The model itself: times one instruction from the current state (no memoization).
+    ///
+    #[inline]
+    fn issue_slow(&mut self, pc: u32, inst: Inst) -> u64 {
         let class = self.classes[inst.op as usize];
         let flags = class.flags;
         let regs = class.regs;
@@ -672,6 +692,7 @@ impl Timing {
 
     /// After a branch instruction executed: whether it was taken and where it went.
     pub fn branch_resolved(&mut self, pc: u32, _inst: Inst, taken: bool, target: u32) {
+        self.sync();
         if self.last.pc != pc {
             return;
         }
@@ -712,6 +733,10 @@ impl Timing {
     /// After a hint executed: the branch address it names and the target it predicts
     /// (for `hbr` the target comes from a register, so the core supplies it).
     pub fn hint(&mut self, pc: u32, branch: u32, target: u32) {
+        if self.replay_hint_matches(pc, branch, target) {
+            return;
+        }
+        self.sync();
         if self.last.pc == pc && self.last.hbrp {
             return;
         }
@@ -732,6 +757,7 @@ impl Timing {
     /// The instruction just issued at `pc` could not complete before cycle `until` because
     /// channel `channel` was empty (read) or full (write): it re-issues at `until`.
     pub fn channel_stall(&mut self, pc: u32, channel: u8, until: u64) {
+        self.sync();
         if self.last.pc != pc || until <= self.last.issue {
             return;
         }
@@ -763,6 +789,8 @@ impl Timing {
     /// priority over loads, stores and instruction fetch): one 128-byte line access every
     /// 16 cycles (8 B/cycle), R9.
     pub fn dma_local_store(&mut self, cycle: u64, bytes: u32) {
+        self.sync();
+        self.memo.abort_recording(&mut self.profile);
         let lines = bytes.div_ceil(128).max(1) as u64;
         for k in 0..lines {
             let c = cycle + 16 * k;
@@ -786,40 +814,637 @@ impl Timing {
 
     /// Lets time pass without issuing (e.g. while the SPU is stopped and restarted).
     pub fn advance_to(&mut self, cycle: u64) {
+        self.sync();
+        self.memo.abort_recording(&mut self.profile);
         if cycle > self.now {
             self.profile.totals.idle_cycles += cycle - self.now;
             self.now = cycle;
         }
     }
 
-    /// Issue detail of the last instruction issued.
+    /// Issue detail of the last instruction issued (exact when `memoize` is off).
     pub fn last_record(&self) -> IssueRecord {
         self.record
-    }
-
-    /// The counters.
-    pub fn profile(&self) -> &Profile {
-        &self.profile
     }
 
     /// The counters, with the total cycle count filled in.
     pub fn finish_profile(&self) -> Profile {
         let mut p = self.profile.clone();
+        p.log = None;
+        self.memo.add_pending(&mut p, self.replay_done_counts());
         p.totals.cycles = self.now;
         p
     }
 
     /// Clears the counters (the pipeline state is kept).
     pub fn reset_profile(&mut self) {
+        self.sync();
+        self.memo.abort_recording(&mut self.profile);
+        self.memo.clear_hits();
         self.profile = Profile::new();
     }
 
     /// Forgets register readiness, the hint and branch state: what `spu timing` does at the
     /// start of an analysed block.
     pub fn reset_pipeline(&mut self) {
-        let keep = (self.config.clone(), std::mem::take(&mut self.profile));
-        *self = Timing::new(keep.0);
-        self.profile = keep.1;
+        let mut profile = self.finish_profile();
+        profile.totals.cycles = 0;
+        let config = self.config.clone();
+        *self = Timing::new(config);
+        self.profile = profile;
+    }
+}
+
+// ---- block memoization ------------------------------------------------------------------
+//
+// A basic block (up to its first branch) issued from the same relative pipeline state always
+// times the same way. The first time a block starts at an address the model records, for
+// each of its instructions, the state after it relative to the block's entry cycle and every
+// counter change; when the block later starts in the same relative state (its signature),
+// the recorded issue cycles are returned instead of recomputed, the state is set from the
+// record at the end of the block, and the counter changes are counted once per replay and
+// added when the profile is read. Anything unexpected in the middle of a replay (another
+// address, a hook) first brings the state up to date at that point, so the result is exact.
+
+mod memo {
+    use super::*;
+    use crate::profile::LogEntry;
+
+    pub(super) const MAX_BLOCK: usize = 64;
+    pub(super) const NEVER: u32 = u32::MAX;
+
+    #[derive(Clone, Debug)]
+    pub(super) struct Step {
+        pub issue_rel: i64,
+        pub write: u8,
+        pub ready_rel: i64,
+        pub producer: u32,
+        pub unit: Unit,
+        pub last: Last,
+        pub last_issue_rel: i64,
+        pub dp_rel: Option<i64>,
+        pub hint: Option<(HintEntry, i64, u64)>,
+        pub fetch: (u32, bool, i64, i64),
+        pub record: IssueRecord,
+        pub record_base_rel: i64,
+        pub log_end: usize,
+        pub totals: Totals,
+    }
+
+    #[derive(Clone, Debug)]
+    pub(super) struct Memo {
+        pub start: u32,
+        pub words: Vec<u32>,
+        pub live: Vec<u8>,
+        pub branch_pc: u32,
+        pub sig: Vec<i64>,
+        pub steps: Vec<Step>,
+        pub log: Vec<LogEntry>,
+        pub hits: u64,
+    }
+
+    #[derive(Clone, Debug)]
+    pub(super) struct Recording {
+        pub start: u32,
+        pub words: Vec<u32>,
+        pub entry: Box<Entry>,
+        pub dp_changed: bool,
+        pub hint_changed: bool,
+        pub steps: Vec<Step>,
+    }
+
+    /// The state a block's timing depends on, at its entry.
+    #[derive(Clone, Debug)]
+    pub(super) struct Entry {
+        pub now: u64,
+        pub index: u64,
+        pub ready: [u64; 128],
+        pub producer: [u32; 128],
+        pub unit: [Unit; 128],
+        pub last: Last,
+        pub redirect: u64,
+        pub miss_pc: u32,
+        pub dp_until: u64,
+        pub hint: HintEntry,
+        pub fetch: (u32, bool, u64, u64),
+        pub totals: Totals,
+    }
+
+    /// What the signature reads, borrowed from a live model or a recorded entry.
+    pub(super) struct EntryRef<'a> {
+        pub now: u64,
+        pub index: u64,
+        pub ready: &'a [u64; 128],
+        pub producer: &'a [u32; 128],
+        pub unit: &'a [Unit; 128],
+        pub last: Last,
+        pub redirect: u64,
+        pub miss_pc: u32,
+        pub dp_until: u64,
+        pub hint: HintEntry,
+        pub fetch: (u32, bool, u64, u64),
+    }
+
+    impl Entry {
+        pub fn as_ref(&self) -> EntryRef<'_> {
+            EntryRef {
+                now: self.now,
+                index: self.index,
+                ready: &self.ready,
+                producer: &self.producer,
+                unit: &self.unit,
+                last: self.last,
+                redirect: self.redirect,
+                miss_pc: self.miss_pc,
+                dp_until: self.dp_until,
+                hint: self.hint,
+                fetch: self.fetch,
+            }
+        }
+    }
+
+    #[derive(Clone, Copy, Debug)]
+    pub(super) struct Replay {
+        pub memo: usize,
+        pub k: usize,
+        pub entry_now: u64,
+        pub entry_index: u64,
+    }
+
+    #[derive(Clone, Debug, Default)]
+    pub(super) struct Memos {
+        /// Per word address: 0 none, `NEVER`, or memo index + 1.
+        pub slots: Vec<u32>,
+        pub fails: Vec<u8>,
+        pub memos: Vec<Memo>,
+        pub rec: Option<Box<Recording>>,
+        pub replay: Option<Replay>,
+        pub buf: Vec<i64>,
+    }
+
+    impl Memos {
+        #[inline]
+        pub fn replaying(&self) -> bool {
+            self.replay.is_some()
+        }
+
+        pub fn abort_recording(&mut self, profile: &mut Profile) {
+            if self.rec.take().is_some() {
+                profile.log = None;
+            }
+        }
+
+        pub fn clear_hits(&mut self) {
+            for m in &mut self.memos {
+                m.hits = 0;
+            }
+        }
+
+        /// Adds every replay's counters (and a replay in progress up to `partial`).
+        pub fn add_pending(&self, p: &mut Profile, partial: Option<(usize, usize)>) {
+            for m in &self.memos {
+                if m.hits > 0 {
+                    p.apply_log(&m.log, m.hits);
+                    p.totals.add_scaled(&m.steps.last().unwrap().totals, m.hits);
+                }
+            }
+            if let Some((id, k)) = partial {
+                let m = &self.memos[id];
+                let st = &m.steps[k - 1];
+                p.apply_log(&m.log[..st.log_end], 1);
+                p.totals.add_scaled(&st.totals, 1);
+            }
+        }
+
+        /// Adds the counters of `id`'s replays to the profile and forgets them.
+        pub fn flush(&mut self, id: usize, p: &mut Profile) {
+            let m = &mut self.memos[id];
+            if m.hits > 0 {
+                p.apply_log(&m.log, m.hits);
+                p.totals.add_scaled(&m.steps.last().unwrap().totals, m.hits);
+                m.hits = 0;
+            }
+        }
+    }
+
+    /// Instructions that end a block before them and are never recorded: channel and SPR
+    /// access (channel stalls), `hbr` (its target comes through a hook), halts, stops and
+    /// syncs, unknown words.
+    pub(super) fn is_terminator(inst: Inst) -> bool {
+        use Op::*;
+        match inst.op {
+            Rdch | Wrch | Rchcnt | Mfspr | Mtspr | Stop | Stopd | Sync | Dsync | Heq | Hgt
+            | Hlgt | Heqi | Hgti | Hlgti | Unknown => true,
+            Hbr => !is_hbrp(inst),
+            _ => false,
+        }
+    }
+}
+
+use memo::{Entry, EntryRef, Memo, Recording, Replay, Step};
+
+impl Timing {
+    #[inline]
+    fn slot_index(pc: u32) -> usize {
+        ((pc & 0x3_ffff) >> 2) as usize
+    }
+
+    /// The signature of the current state for a block with live-in registers `live` and
+    /// final branch `branch_pc`, into `out`.
+    fn signature(
+        &self,
+        e: &EntryRef,
+        live: &[u8],
+        start: u32,
+        branch_at: Option<(u32, u64)>,
+        out: &mut Vec<i64>,
+    ) {
+        out.clear();
+        let now = e.now as i64;
+        for &r in live {
+            let rel = (e.ready[r as usize] as i64 - now).max(-1);
+            out.push(rel);
+            if rel > 0 {
+                out.push(e.producer[r as usize] as i64);
+                out.push(e.unit[r as usize] as i64);
+            }
+        }
+        let seq = e.last.pc.wrapping_add(4) == start;
+        out.push(seq as i64);
+        if seq && e.last.pairable {
+            out.push(1 + e.last.writes as i64);
+            out.push(e.last.issue as i64 - now);
+        }
+        let redirect = (e.redirect as i64 - now).max(0);
+        out.push(redirect);
+        if redirect > 0 {
+            out.push(e.miss_pc as i64);
+        }
+        out.push((e.dp_until as i64 - now).max(0));
+        if let Some((bpc, k)) = branch_at {
+            let h = &e.hint;
+            let m = h.valid && h.branch == bpc;
+            let close = e.index + k - h.index >= self.config.hint_min_distance as u64;
+            out.push(m as i64 | (close as i64) << 1);
+            if m && close {
+                out.push((h.issued as i64 + self.config.hint_window as i64 - now).max(-1));
+                out.push(h.target as i64);
+            }
+        }
+        if self.config.model_fetch {
+            let lat = self.config.fetch_latency as i64;
+            out.push(e.fetch.0 as i64);
+            out.push(e.fetch.1 as i64);
+            if e.fetch.1 {
+                out.push((e.fetch.2 as i64 - now).max(-lat - 1));
+            } else {
+                out.push((e.fetch.3 as i64 - now).max(-1));
+            }
+        }
+    }
+
+    fn entry(&self) -> Entry {
+        Entry {
+            now: self.now,
+            index: self.index,
+            ready: self.ready,
+            producer: self.producer,
+            unit: self.producer_unit,
+            last: self.last,
+            redirect: self.redirect,
+            miss_pc: self.miss_pc,
+            dp_until: self.dp_until,
+            hint: self.hint,
+            fetch: (
+                self.fetch.line,
+                self.fetch.pending,
+                self.fetch.probe,
+                self.fetch.next_ready,
+            ),
+            totals: self.profile.totals.clone(),
+        }
+    }
+
+    fn issue_memo(&mut self, pc: u32, inst: Inst) -> u64 {
+        if let Some(rec) = &self.memo.rec {
+            let k = rec.words.len();
+            if pc != rec.start.wrapping_add(4 * k as u32)
+                || memo::is_terminator(inst)
+                || k >= memo::MAX_BLOCK
+            {
+                self.finish_recording();
+            } else {
+                let t = self.issue_slow(pc, inst);
+                self.record_step(inst);
+                if self.classes[inst.op as usize].flags & F_BRANCH != 0 {
+                    self.finish_recording();
+                }
+                return t;
+            }
+        }
+        if memo::is_terminator(inst) || self.fetch.dma_min != u64::MAX {
+            return self.issue_slow(pc, inst);
+        }
+        let idx = Self::slot_index(pc);
+        if idx >= self.memo.slots.len() {
+            self.memo.slots.resize(0x1_0000, 0);
+            self.memo.fails.resize(0x1_0000, 0);
+        }
+        let slot = self.memo.slots[idx];
+        if slot == memo::NEVER {
+            return self.issue_slow(pc, inst);
+        }
+        if slot != 0 {
+            let id = (slot - 1) as usize;
+            let m = &self.memo.memos[id];
+            if m.start == pc && m.words[0] == inst.word {
+                let mut buf = std::mem::take(&mut self.memo.buf);
+                let branch_at =
+                    (m.branch_pc != NO_PC).then(|| (m.branch_pc, m.words.len() as u64 - 1));
+                let e = self.entry_ref();
+                self.signature(&e, &m.live, pc, branch_at, &mut buf);
+                let hit = buf == m.sig;
+                self.memo.buf = buf;
+                if hit {
+                    self.memo.replay = Some(Replay {
+                        memo: id,
+                        k: 0,
+                        entry_now: self.now,
+                        entry_index: self.index,
+                    });
+                    return self
+                        .replay_next(pc, inst)
+                        .expect("first replayed instruction");
+                }
+            }
+            // A different state: record again (keeping what the old record counted).
+            if self.memo.memos[id].hits < 2 {
+                self.memo.fails[idx] = self.memo.fails[idx].saturating_add(1);
+                if self.memo.fails[idx] >= 8 {
+                    self.memo.flush(id, &mut self.profile);
+                    self.memo.slots[idx] = memo::NEVER;
+                    return self.issue_slow(pc, inst);
+                }
+            }
+        }
+        // Record this block.
+        self.memo.rec = Some(Box::new(Recording {
+            start: pc,
+            words: Vec::new(),
+            entry: Box::new(self.entry()),
+            dp_changed: false,
+            hint_changed: false,
+            steps: Vec::new(),
+        }));
+        self.profile.log = Some(Vec::new());
+        let t = self.issue_slow(pc, inst);
+        self.record_step(inst);
+        if self.classes[inst.op as usize].flags & F_BRANCH != 0 {
+            self.finish_recording();
+        }
+        t
+    }
+
+    /// A view of the current state for the signature.
+    fn entry_ref(&self) -> EntryRef<'_> {
+        EntryRef {
+            now: self.now,
+            index: self.index,
+            ready: &self.ready,
+            producer: &self.producer,
+            unit: &self.producer_unit,
+            last: self.last,
+            redirect: self.redirect,
+            miss_pc: self.miss_pc,
+            dp_until: self.dp_until,
+            hint: self.hint,
+            fetch: (
+                self.fetch.line,
+                self.fetch.pending,
+                self.fetch.probe,
+                self.fetch.next_ready,
+            ),
+        }
+    }
+
+    fn record_step(&mut self, inst: Inst) {
+        let Some(rec) = self.memo.rec.as_mut() else {
+            return;
+        };
+        let e = &rec.entry;
+        let now = e.now as i64;
+        let class = self.classes[inst.op as usize];
+        if class.flags & F_FPD != 0 {
+            rec.dp_changed = true;
+        }
+        if class.flags & F_HINT != 0 && !is_hbrp(inst) {
+            rec.hint_changed = true;
+        }
+        let w = self.last.writes;
+        let (ready_rel, producer, unit) = if w < 128 {
+            (
+                self.ready[w as usize] as i64 - now,
+                self.producer[w as usize],
+                self.producer_unit[w as usize],
+            )
+        } else {
+            (0, NO_PC, Unit::NOP)
+        };
+        let step = Step {
+            issue_rel: self.last.issue as i64 - now,
+            write: w,
+            ready_rel,
+            producer,
+            unit,
+            last: self.last,
+            last_issue_rel: self.last.issue as i64 - now,
+            dp_rel: rec.dp_changed.then(|| self.dp_until as i64 - now),
+            hint: rec.hint_changed.then(|| {
+                (
+                    self.hint,
+                    self.hint.issued as i64 - now,
+                    self.hint.index - e.index,
+                )
+            }),
+            fetch: (
+                self.fetch.line,
+                self.fetch.pending,
+                self.fetch.probe as i64 - now,
+                self.fetch.next_ready as i64 - now,
+            ),
+            record: self.record,
+            record_base_rel: self.record.base as i64 - now,
+            log_end: self.profile.log.as_ref().map_or(0, |l| l.len()),
+            totals: self.profile.totals.since(&e.totals),
+        };
+        rec.words.push(inst.word);
+        rec.steps.push(step);
+    }
+
+    fn finish_recording(&mut self) {
+        let Some(rec) = self.memo.rec.take() else {
+            return;
+        };
+        let log = self.profile.log.take().unwrap_or_default();
+        if rec.steps.is_empty() {
+            return;
+        }
+        // Live-in registers: read before the block writes them.
+        let mut written = [false; 128];
+        let mut live = Vec::new();
+        let mut branch_pc = NO_PC;
+        for (k, &word) in rec.words.iter().enumerate() {
+            let inst = crate::codec::decode(word);
+            let c = self.classes[inst.op as usize];
+            let mut read = |r: u8| {
+                let r = r & 127;
+                if !written[r as usize] && !live.contains(&r) {
+                    live.push(r);
+                }
+            };
+            if c.regs & R_RA != 0 {
+                read(inst.ra);
+            }
+            if c.regs & R_RB != 0 {
+                read(inst.rb);
+            }
+            if c.regs & R_RC != 0 {
+                read(inst.rc);
+            }
+            if c.regs & R_RT != 0 {
+                read(inst.rt);
+            }
+            if c.regs & W_RT != 0 {
+                written[(inst.rt & 127) as usize] = true;
+            }
+            if c.flags & F_BRANCH != 0 {
+                branch_pc = rec.start.wrapping_add(4 * k as u32);
+            }
+        }
+        let branch_at = (branch_pc != NO_PC).then(|| (branch_pc, rec.words.len() as u64 - 1));
+        let mut sig = Vec::new();
+        self.signature(
+            &memo::Entry::as_ref(&rec.entry),
+            &live,
+            rec.start,
+            branch_at,
+            &mut sig,
+        );
+        let memo = Memo {
+            start: rec.start,
+            words: rec.words,
+            live,
+            branch_pc,
+            sig,
+            steps: rec.steps,
+            log,
+            hits: 0,
+        };
+        let idx = Self::slot_index(memo.start);
+        let slot = self.memo.slots[idx];
+        if slot != 0 && slot != memo::NEVER {
+            let id = (slot - 1) as usize;
+            self.memo.flush(id, &mut self.profile);
+            self.memo.memos[id] = memo;
+        } else {
+            self.memo.memos.push(memo);
+            self.memo.slots[idx] = self.memo.memos.len() as u32;
+        }
+    }
+
+    /// Replays the next instruction of the block in progress, or brings the state up to
+    /// date and returns `None` when `pc`/`inst` is not what the block recorded.
+    #[inline]
+    fn replay_next(&mut self, pc: u32, inst: Inst) -> Option<u64> {
+        let rp = self.memo.replay.as_mut()?;
+        let m = &mut self.memo.memos[rp.memo];
+        let k = rp.k;
+        if k < m.words.len() && pc == m.start.wrapping_add(4 * k as u32) && inst.word == m.words[k]
+        {
+            let issue = (rp.entry_now as i64 + m.steps[k].issue_rel) as u64;
+            self.now = issue + 1;
+            rp.k = k + 1;
+            if rp.k == m.words.len() {
+                m.hits += 1;
+                let rp = *rp;
+                self.memo.replay = None;
+                self.materialize(rp, false);
+            }
+            Some(issue)
+        } else {
+            self.sync();
+            None
+        }
+    }
+
+    /// Sets the state after `rp.k` replayed instructions; `eager`: also apply their
+    /// counter changes now (a partial block).
+    fn materialize(&mut self, rp: Replay, eager: bool) {
+        let m = &self.memo.memos[rp.memo];
+        let k = rp.k;
+        let base = rp.entry_now as i64;
+        let at = |rel: i64| (base + rel).max(0) as u64;
+        for st in &m.steps[..k] {
+            if st.write < 128 {
+                self.ready[st.write as usize] = at(st.ready_rel);
+                self.producer[st.write as usize] = st.producer;
+                self.producer_unit[st.write as usize] = st.unit;
+            }
+        }
+        let st = &m.steps[k - 1];
+        self.last = st.last;
+        self.last.issue = at(st.last_issue_rel);
+        self.now = self.last.issue + 1;
+        if let Some(d) = st.dp_rel {
+            self.dp_until = at(d);
+        }
+        if let Some((h, issued, index)) = st.hint {
+            self.hint = h;
+            self.hint.issued = at(issued);
+            self.hint.index = rp.entry_index + index;
+        }
+        self.fetch.line = st.fetch.0;
+        self.fetch.pending = st.fetch.1;
+        self.fetch.probe = at(st.fetch.2);
+        self.fetch.next_ready = at(st.fetch.3);
+        self.record = st.record;
+        self.record.issue = self.last.issue;
+        self.record.base = at(st.record_base_rel);
+        self.index = rp.entry_index + k as u64;
+        if eager {
+            let (log_end, totals) = (st.log_end, st.totals.clone());
+            let log: Vec<_> = m.log[..log_end].to_vec();
+            self.profile.apply_log(&log, 1);
+            self.profile.totals.add_scaled(&totals, 1);
+        }
+    }
+
+    /// Brings a replay in progress up to date (before a hook or an unexpected address).
+    fn sync(&mut self) {
+        if let Some(rp) = self.memo.replay.take() {
+            if rp.k > 0 {
+                self.materialize(rp, true);
+            }
+        }
+    }
+
+    /// A `hint` hook call that repeats what a replayed hint instruction already recorded.
+    fn replay_hint_matches(&self, pc: u32, branch: u32, target: u32) -> bool {
+        let Some(rp) = &self.memo.replay else {
+            return false;
+        };
+        let m = &self.memo.memos[rp.memo];
+        if rp.k == 0 || pc != m.start.wrapping_add(4 * (rp.k as u32 - 1)) {
+            return false;
+        }
+        matches!(m.steps[rp.k - 1].hint, Some((h, _, _)) if h.branch == branch & 0x3_ffff && h.target == target & 0x3_ffff)
+    }
+
+    fn replay_done_counts(&self) -> Option<(usize, usize)> {
+        self.memo
+            .replay
+            .filter(|rp| rp.k > 0)
+            .map(|rp| (rp.memo, rp.k))
     }
 }
 
@@ -913,5 +1538,18 @@ mod tests {
             second,
             (240.0 + 2.0 * 16384.0 / (25.6 / 2.4) as f64).ceil() as u64
         );
+    }
+}
+impl Timing {
+    /// Memoization statistics: (blocks recorded, replays, addresses given up on).
+    pub fn memo_stats(&self) -> (usize, u64, usize) {
+        let hits = self.memo.memos.iter().map(|m| m.hits).sum();
+        let never = self
+            .memo
+            .slots
+            .iter()
+            .filter(|&&s| s == memo::NEVER)
+            .count();
+        (self.memo.memos.len(), hits, never)
     }
 }

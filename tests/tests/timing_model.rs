@@ -529,3 +529,84 @@ fn profiles_of_several_spus_merge() {
     assert_eq!(p.get(8).unwrap().executions, 1);
     assert_eq!(p.dependency_sources(4), vec![(0, 2)]);
 }
+
+// ---- memoization is exact -----------------------------------------------------------------
+
+/// A loop nest with hints, loads, stores, double precision and a data-dependent exit,
+/// executed with and without block memoization: every issue cycle and counter agrees.
+#[test]
+fn memoized_replay_is_exact() {
+    let body: Vec<(&str, Vec<i64>)> = vec![
+        ("hbrr", vec![0x3c, 0x0]),
+        ("lqd", vec![10, 0, 1]),
+        ("fma", vec![20, 21, 22, 20]),
+        ("lqd", vec![11, 16, 1]),
+        ("fma", vec![23, 24, 25, 23]),
+        ("shufb", vec![12, 10, 11, 13]),
+        ("a", vec![30, 30, 31]),
+        ("lqd", vec![14, 32, 1]),
+        ("dfa", vec![26, 27, 28]),
+        ("shufb", vec![15, 14, 12, 13]),
+        ("ai", vec![1, 1, 48]),
+        ("stqd", vec![15, 48, 2]),
+        ("fm", vec![29, 26, 28]),
+        ("hbrp", vec![]),
+        ("ai", vec![5, 5, -1]),
+        ("brnz", vec![5, 0x0]),
+        // 0x40: a second block reached by fall-through, then back to 0 via br.
+        ("a", vec![40, 29, 29]),
+        ("lnop", vec![]),
+        ("br", vec![0x0]),
+    ];
+    let insts: Vec<Inst> = body
+        .iter()
+        .enumerate()
+        .map(|(i, (m, o))| inst(m, o, 4 * i as u32))
+        .collect();
+    // Trace: inner loop counts 1..=6 iterations alternately, then the outer block.
+    let mut trace: Vec<u32> = Vec::new();
+    for outer in 0..40 {
+        let n = 1 + outer % 6;
+        for _ in 0..n {
+            trace.extend((0..16).map(|i| 4 * i));
+        }
+        trace.extend([0x40, 0x44, 0x48]);
+    }
+    let run = |memoize: bool, fetch: bool| {
+        let mut t = Timing::new(TimingConfig {
+            memoize,
+            model_fetch: fetch,
+            ..Default::default()
+        });
+        let mut cycles = Vec::new();
+        for (i, &pc) in trace.iter().enumerate() {
+            let ins = insts[(pc / 4) as usize];
+            cycles.push(t.issue(pc, ins));
+            if spu_isa::analysis::is_branch(ins.op) {
+                let next = trace.get(i + 1).copied().unwrap_or(pc + 4);
+                t.branch_resolved(pc, ins, next != pc + 4, next);
+            }
+            if i == trace.len() / 2 {
+                // A DMA and a channel wait in the middle.
+                t.dma_local_store(t.now() + 3, 256);
+            }
+        }
+        (cycles, t.finish_profile())
+    };
+    for fetch in [false, true] {
+        let (c0, p0) = run(false, fetch);
+        let (c1, p1) = run(true, fetch);
+        assert_eq!(c0, c1);
+        assert_eq!(p0.totals, p1.totals);
+        let a0: Vec<_> = p0.addresses().map(|(a, s)| (a, *s)).collect();
+        let a1: Vec<_> = p1.addresses().map(|(a, s)| (a, *s)).collect();
+        assert_eq!(a0, a1);
+        for pc in (0..0x4c).step_by(4) {
+            assert_eq!(
+                p0.dependency_sources(pc),
+                p1.dependency_sources(pc),
+                "{pc:x}"
+            );
+        }
+    }
+}

@@ -70,4 +70,5 @@ fn timing_model_speed() {
         p.totals.cpi()
     );
     println!("{}", p.totals.report());
+    println!("memo {:?}", t.memo_stats());
 }
