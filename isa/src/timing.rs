@@ -901,6 +901,8 @@ mod memo {
         pub steps: Vec<Step>,
         pub log: Vec<LogEntry>,
         pub hits: u64,
+        /// The last write of each register the block writes (for the end of a replay).
+        pub final_writes: Vec<(u8, i64, u32, Unit)>,
     }
 
     #[derive(Clone, Debug)]
@@ -979,7 +981,6 @@ mod memo {
         pub memos: Vec<Memo>,
         pub rec: Option<Box<Recording>>,
         pub replay: Option<Replay>,
-        pub buf: Vec<i64>,
     }
 
     impl Memos {
@@ -1051,54 +1052,53 @@ impl Timing {
 
     /// The signature of the current state for a block with live-in registers `live` and
     /// final branch `branch_pc`, into `out`.
-    fn signature(
+    fn signature<F: FnMut(i64)>(
         &self,
         e: &EntryRef,
         live: &[u8],
         start: u32,
         branch_at: Option<(u32, u64)>,
-        out: &mut Vec<i64>,
+        emit: &mut F,
     ) {
-        out.clear();
         let now = e.now as i64;
         for &r in live {
             let rel = (e.ready[r as usize] as i64 - now).max(-1);
-            out.push(rel);
+            emit(rel);
             if rel > 0 {
-                out.push(e.producer[r as usize] as i64);
-                out.push(e.unit[r as usize] as i64);
+                emit(e.producer[r as usize] as i64);
+                emit(e.unit[r as usize] as i64);
             }
         }
         let seq = e.last.pc.wrapping_add(4) == start;
-        out.push(seq as i64);
+        emit(seq as i64);
         if seq && e.last.pairable {
-            out.push(1 + e.last.writes as i64);
-            out.push(e.last.issue as i64 - now);
+            emit(1 + e.last.writes as i64);
+            emit(e.last.issue as i64 - now);
         }
         let redirect = (e.redirect as i64 - now).max(0);
-        out.push(redirect);
+        emit(redirect);
         if redirect > 0 {
-            out.push(e.miss_pc as i64);
+            emit(e.miss_pc as i64);
         }
-        out.push((e.dp_until as i64 - now).max(0));
+        emit((e.dp_until as i64 - now).max(0));
         if let Some((bpc, k)) = branch_at {
             let h = &e.hint;
             let m = h.valid && h.branch == bpc;
             let close = e.index + k - h.index >= self.config.hint_min_distance as u64;
-            out.push(m as i64 | (close as i64) << 1);
+            emit(m as i64 | (close as i64) << 1);
             if m && close {
-                out.push((h.issued as i64 + self.config.hint_window as i64 - now).max(-1));
-                out.push(h.target as i64);
+                emit((h.issued as i64 + self.config.hint_window as i64 - now).max(-1));
+                emit(h.target as i64);
             }
         }
         if self.config.model_fetch {
             let lat = self.config.fetch_latency as i64;
-            out.push(e.fetch.0 as i64);
-            out.push(e.fetch.1 as i64);
+            emit(e.fetch.0 as i64);
+            emit(e.fetch.1 as i64);
             if e.fetch.1 {
-                out.push((e.fetch.2 as i64 - now).max(-lat - 1));
+                emit((e.fetch.2 as i64 - now).max(-lat - 1));
             } else {
-                out.push((e.fetch.3 as i64 - now).max(-1));
+                emit((e.fetch.3 as i64 - now).max(-1));
             }
         }
     }
@@ -1158,13 +1158,16 @@ impl Timing {
             let id = (slot - 1) as usize;
             let m = &self.memo.memos[id];
             if m.start == pc && m.words[0] == inst.word {
-                let mut buf = std::mem::take(&mut self.memo.buf);
                 let branch_at =
                     (m.branch_pc != NO_PC).then(|| (m.branch_pc, m.words.len() as u64 - 1));
                 let e = self.entry_ref();
-                self.signature(&e, &m.live, pc, branch_at, &mut buf);
-                let hit = buf == m.sig;
-                self.memo.buf = buf;
+                let mut pos = 0usize;
+                let mut hit = true;
+                self.signature(&e, &m.live, pc, branch_at, &mut |v| {
+                    hit &= m.sig.get(pos) == Some(&v);
+                    pos += 1;
+                });
+                let hit = hit && pos == m.sig.len();
                 if hit {
                     self.memo.replay = Some(Replay {
                         memo: id,
@@ -1328,7 +1331,7 @@ impl Timing {
             &live,
             rec.start,
             branch_at,
-            &mut sig,
+            &mut |v| sig.push(v),
         );
         let memo = Memo {
             start: rec.start,
@@ -1339,7 +1342,15 @@ impl Timing {
             steps: rec.steps,
             log,
             hits: 0,
+            final_writes: Vec::new(),
         };
+        let mut memo = memo;
+        for st in memo.steps.iter().rev() {
+            if st.write < 128 && !memo.final_writes.iter().any(|w| w.0 == st.write) {
+                memo.final_writes
+                    .push((st.write, st.ready_rel, st.producer, st.unit));
+            }
+        }
         let idx = Self::slot_index(memo.start);
         let slot = self.memo.slots[idx];
         if slot != 0 && slot != memo::NEVER {
@@ -1384,11 +1395,19 @@ impl Timing {
         let k = rp.k;
         let base = rp.entry_now as i64;
         let at = |rel: i64| (base + rel).max(0) as u64;
-        for st in &m.steps[..k] {
-            if st.write < 128 {
-                self.ready[st.write as usize] = at(st.ready_rel);
-                self.producer[st.write as usize] = st.producer;
-                self.producer_unit[st.write as usize] = st.unit;
+        if k == m.steps.len() {
+            for &(r, rel, producer, unit) in &m.final_writes {
+                self.ready[r as usize] = at(rel);
+                self.producer[r as usize] = producer;
+                self.producer_unit[r as usize] = unit;
+            }
+        } else {
+            for st in &m.steps[..k] {
+                if st.write < 128 {
+                    self.ready[st.write as usize] = at(st.ready_rel);
+                    self.producer[st.write as usize] = st.producer;
+                    self.producer_unit[st.write as usize] = st.unit;
+                }
             }
         }
         let st = &m.steps[k - 1];
