@@ -26,3 +26,6 @@ pub use camera::{Camera, CameraBasis};
 pub use error::LoadError;
 pub use layout::StagedScene;
 pub use scene::{Material, Scene, Triangle};
+pub mod frame;
+pub mod kernel_abi;
+pub mod runtime;

@@ -1,0 +1,118 @@
+//! One frame in simulated main memory: where the scene, the parameter block, the tile
+//! counter, the statistics blocks and the frame buffer live, and the image they make.
+//!
+//! Every region is 128-byte aligned (the DMA engine's best case, and the tile counter must
+//! be a whole lock line for `getllar`/`putllc`).
+
+use crate::camera::CameraBasis;
+use crate::kernel_abi::{frame_buffer_bytes, ParamBlock, STATS_BYTES};
+use crate::layout::StagedScene;
+
+/// Main-memory address where the staged scene image starts.
+pub const SCENE_BASE: u32 = 0x1_0000;
+
+fn align128(value: u64) -> u64 {
+    value.div_ceil(128) * 128
+}
+
+/// The addresses of one frame's regions in main memory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameLayout {
+    pub param_addr: u32,
+    pub counter_addr: u32,
+    pub stats_addr: u32,
+    pub frame_buffer_addr: u32,
+    pub frame_buffer_len: usize,
+    /// Total bytes of main memory needed.
+    pub memory_len: usize,
+    pub params: ParamBlock,
+}
+
+impl FrameLayout {
+    /// Places a `width x height` frame rendered by `spes` SPUs after the staged scene.
+    pub fn new(
+        staged: &StagedScene,
+        basis: &CameraBasis,
+        width: u32,
+        height: u32,
+        spes: usize,
+        bvh_cache_lines: u32,
+        tri_cache_lines: u32,
+    ) -> Result<FrameLayout, String> {
+        if staged.base != SCENE_BASE {
+            return Err(format!("the scene must be staged at {SCENE_BASE:#x}"));
+        }
+        for (what, lines) in [("BVH", bvh_cache_lines), ("triangle", tri_cache_lines)] {
+            if !lines.is_power_of_two() || !(128..=1024).contains(&lines) {
+                return Err(format!(
+                    "{what} cache of {lines} lines: must be a power of two from 128 to 1024"
+                ));
+            }
+        }
+        let scene_end = SCENE_BASE as u64 + staged.image.len() as u64;
+        let param_addr = align128(scene_end);
+        let counter_addr = param_addr + 128;
+        let stats_addr = counter_addr + 128;
+        let frame_buffer_addr = align128(stats_addr + (spes * STATS_BYTES) as u64);
+        let frame_buffer_len = frame_buffer_bytes(width, height);
+        let memory_len = align128(frame_buffer_addr + frame_buffer_len as u64);
+        if memory_len > u32::MAX as u64 {
+            return Err(format!("the frame needs {memory_len} bytes of main memory, over 4 GiB"));
+        }
+        let mut params = ParamBlock::new(basis, width, height);
+        params.ea_nodes = staged.header.node_addr;
+        params.ea_triangles = staged.header.triangle_addr;
+        params.ea_frame_buffer = frame_buffer_addr as u32;
+        params.ea_tile_counter = counter_addr as u32;
+        params.ea_stats = stats_addr as u32;
+        params.bvh_cache_log2 = bvh_cache_lines.trailing_zeros();
+        params.tri_cache_log2 = tri_cache_lines.trailing_zeros();
+        Ok(FrameLayout {
+            param_addr: param_addr as u32,
+            counter_addr: counter_addr as u32,
+            stats_addr: stats_addr as u32,
+            frame_buffer_addr: frame_buffer_addr as u32,
+            frame_buffer_len,
+            memory_len: memory_len as usize,
+            params,
+        })
+    }
+
+    /// The initial main-memory image: scene, parameters, a zero tile counter, empty
+    /// statistics and frame buffer.
+    pub fn memory_image(&self, staged: &StagedScene) -> Vec<u8> {
+        let mut memory = vec![0u8; self.memory_len];
+        let base = SCENE_BASE as usize;
+        memory[base..base + staged.image.len()].copy_from_slice(&staged.image);
+        let p = self.param_addr as usize;
+        memory[p..p + 128].copy_from_slice(&self.params.to_be_bytes());
+        memory
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{bvh::BvhConfig, procedural, Bvh};
+
+    #[test]
+    fn regions_are_aligned_and_disjoint() {
+        let scene = procedural::room();
+        let bvh = Bvh::build(&scene, &BvhConfig::default());
+        let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
+        let basis = scene.camera.basis(128, 64);
+        let f = FrameLayout::new(&staged, &basis, 128, 64, 4, 256, 256).unwrap();
+        for a in [f.param_addr, f.counter_addr, f.stats_addr, f.frame_buffer_addr] {
+            assert_eq!(a % 128, 0);
+        }
+        assert!(f.param_addr as usize >= SCENE_BASE as usize + staged.image.len());
+        assert_eq!(f.frame_buffer_len, 2 * 64 * 1024);
+        assert_eq!(f.params.num_tiles, 2);
+        assert_eq!(f.params.bvh_cache_log2, 8);
+        let memory = f.memory_image(&staged);
+        assert_eq!(memory.len(), f.memory_len);
+        let p = f.param_addr as usize;
+        assert_eq!(&memory[p..p + 4], &staged.header.node_addr.to_be_bytes());
+        assert!(FrameLayout::new(&staged, &basis, 128, 64, 4, 100, 256).is_err());
+    }
+}
