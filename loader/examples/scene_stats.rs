@@ -1,7 +1,10 @@
 //! Loads (or generates) scenes and reports load, BVH build and reference render times — the
 //! figures quoted for the host side. Run in release:
 //!
-//! `cargo run --release -p spu-loader --example scene_stats -- [room|conference|beetle|PATH]... [--render N]`
+//! `cargo run --release -p spu-loader --example scene_stats -- [room|conference|beetle|PATH]... [--render N] [--png DIR]`
+//!
+//! `--png DIR` also writes each reference eye-light image as `DIR/<scene>.png` (grayscale), to
+//! eyeball the default cameras.
 
 use std::time::Instant;
 
@@ -17,6 +20,14 @@ fn main() {
     if let Some(i) = args.iter().position(|a| a == "--render") {
         render_size = args.get(i + 1).and_then(|s| s.parse().ok()).unwrap_or(1024);
         args.drain(i..(i + 2).min(args.len()));
+    }
+    let mut png_dir = None;
+    if let Some(i) = args.iter().position(|a| a == "--png") {
+        png_dir = args.get(i + 1).cloned();
+        args.drain(i..(i + 2).min(args.len()));
+        if render_size == 0 {
+            render_size = 512;
+        }
     }
     if args.is_empty() {
         args = vec!["room".into(), "conference".into(), "beetle".into()];
@@ -71,6 +82,63 @@ fn main() {
                 elapsed.as_secs_f64(),
                 scene.camera.to_cli_string()
             );
+            if let Some(dir) = &png_dir {
+                let image =
+                    reference.eye_light_image(&hits, &scene.camera, render_size, render_size);
+                let stem = std::path::Path::new(&name)
+                    .file_name()
+                    .unwrap()
+                    .to_string_lossy()
+                    .replace('.', "_");
+                let path = std::path::Path::new(dir).join(format!("{stem}.png"));
+                std::fs::write(&path, gray_png(&image, render_size, render_size))
+                    .expect("write png");
+                println!("  wrote {}", path.display());
+            }
         }
     }
+}
+
+/// A minimal grayscale PNG (the tools crate owns real image output).
+fn gray_png(pixels: &[u8], width: u32, height: u32) -> Vec<u8> {
+    use std::io::Write;
+    fn crc32(bytes: &[u8]) -> u32 {
+        let mut crc = !0u32;
+        for &byte in bytes {
+            crc ^= byte as u32;
+            for _ in 0..8 {
+                crc = if crc & 1 != 0 {
+                    (crc >> 1) ^ 0xedb8_8320
+                } else {
+                    crc >> 1
+                };
+            }
+        }
+        !crc
+    }
+    fn chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {
+        out.extend_from_slice(&(data.len() as u32).to_be_bytes());
+        let start = out.len();
+        out.extend_from_slice(kind);
+        out.extend_from_slice(data);
+        let crc = crc32(&out[start..]);
+        out.extend_from_slice(&crc.to_be_bytes());
+    }
+    let mut raw = Vec::with_capacity(pixels.len() + height as usize);
+    for row in pixels.chunks(width as usize) {
+        raw.push(0);
+        raw.extend_from_slice(row);
+    }
+    let mut encoder = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+    encoder.write_all(&raw).unwrap();
+    let compressed = encoder.finish().unwrap();
+    let mut out = b"\x89PNG\r\n\x1a\n".to_vec();
+    let mut header = Vec::new();
+    header.extend_from_slice(&width.to_be_bytes());
+    header.extend_from_slice(&height.to_be_bytes());
+    header.extend_from_slice(&[8, 0, 0, 0, 0]);
+    chunk(&mut out, b"IHDR", &header);
+    chunk(&mut out, b"IDAT", &compressed);
+    chunk(&mut out, b"IEND", &[]);
+    out
 }

@@ -57,7 +57,9 @@ impl FrameLayout {
         let frame_buffer_len = frame_buffer_bytes(width, height);
         let memory_len = align128(frame_buffer_addr + frame_buffer_len as u64);
         if memory_len > u32::MAX as u64 {
-            return Err(format!("the frame needs {memory_len} bytes of main memory, over 4 GiB"));
+            return Err(format!(
+                "the frame needs {memory_len} bytes of main memory, over 4 GiB"
+            ));
         }
         let mut params = ParamBlock::new(basis, width, height);
         params.ea_nodes = staged.header.node_addr;
@@ -102,7 +104,12 @@ mod tests {
         let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
         let basis = scene.camera.basis(128, 64);
         let f = FrameLayout::new(&staged, &basis, 128, 64, 4, 256, 256).unwrap();
-        for a in [f.param_addr, f.counter_addr, f.stats_addr, f.frame_buffer_addr] {
+        for a in [
+            f.param_addr,
+            f.counter_addr,
+            f.stats_addr,
+            f.frame_buffer_addr,
+        ] {
             assert_eq!(a % 128, 0);
         }
         assert!(f.param_addr as usize >= SCENE_BASE as usize + staged.image.len());

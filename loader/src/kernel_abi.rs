@@ -88,7 +88,12 @@ impl ParamBlock {
         for v in [self.origin, self.dir00, self.du, self.dv] {
             words.extend(v.iter().map(|f| f.to_bits()));
         }
-        words.extend([self.bvh_cache_log2, self.tri_cache_log2, self.ea_stats, self.flags]);
+        words.extend([
+            self.bvh_cache_log2,
+            self.tri_cache_log2,
+            self.ea_stats,
+            self.flags,
+        ]);
         words.extend(self.reserved);
         let mut out = [0u8; 128];
         for (chunk, w) in out.chunks_exact_mut(4).zip(words) {
@@ -206,7 +211,8 @@ pub fn frame_buffer_bytes(width: u32, height: u32) -> usize {
 /// Where pixel `(x, y)` lives in the packet-major frame buffer: the block and the index.
 pub fn pixel_location(x: u32, y: u32, tiles_x: u32) -> (usize, usize) {
     let tile = (y / TILE_SIZE) * tiles_x + x / TILE_SIZE;
-    let packet = ((y % TILE_SIZE) / PACKET_SIZE) * (TILE_SIZE / PACKET_SIZE) + (x % TILE_SIZE) / PACKET_SIZE;
+    let packet =
+        ((y % TILE_SIZE) / PACKET_SIZE) * (TILE_SIZE / PACKET_SIZE) + (x % TILE_SIZE) / PACKET_SIZE;
     let index = (y % PACKET_SIZE) * PACKET_SIZE + x % PACKET_SIZE;
     let block = (tile * PACKETS_PER_TILE + packet) as usize * PACKET_BLOCK_BYTES as usize;
     (block, index as usize)
@@ -216,7 +222,9 @@ pub fn pixel_location(x: u32, y: u32, tiles_x: u32) -> (usize, usize) {
 pub fn decode_frame_buffer(fb: &[u8], width: u32, height: u32) -> Vec<PixelResult> {
     let tiles_x = width.div_ceil(TILE_SIZE);
     let word = |off: usize| {
-        fb.get(off..off + 4).map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]])).unwrap_or(0)
+        fb.get(off..off + 4)
+            .map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+            .unwrap_or(0)
     };
     let mut out = Vec::with_capacity((width * height) as usize);
     for y in 0..height {
@@ -238,12 +246,19 @@ mod tests {
 
     #[test]
     fn param_block_bytes() {
-        let mut p = ParamBlock { ea_nodes: 0x1000, width: 1024, ..Default::default() };
+        let mut p = ParamBlock {
+            ea_nodes: 0x1000,
+            width: 1024,
+            ..Default::default()
+        };
         p.origin = [1.0, 2.0, 3.0, 0.0];
         let b = p.to_be_bytes();
         assert_eq!(&b[0..4], &[0, 0, 0x10, 0]);
         assert_eq!(&b[PARAM_WIDTH..PARAM_WIDTH + 4], &1024u32.to_be_bytes());
-        assert_eq!(&b[PARAM_ORIGIN + 4..PARAM_ORIGIN + 8], &2.0f32.to_be_bytes());
+        assert_eq!(
+            &b[PARAM_ORIGIN + 4..PARAM_ORIGIN + 8],
+            &2.0f32.to_be_bytes()
+        );
         assert_eq!(PARAM_BVH_LOG2, 96);
     }
 
@@ -267,6 +282,9 @@ mod tests {
         b[16..20].copy_from_slice(&(-40i32).to_be_bytes());
         b[20..24].copy_from_slice(&(-25i32).to_be_bytes());
         let s = KernelStats::from_be_bytes(&b);
-        assert_eq!((s.packets, s.traversal_steps, s.early_hits, s.early_exits), (3, 100, 60, 25));
+        assert_eq!(
+            (s.packets, s.traversal_steps, s.early_hits, s.early_exits),
+            (3, 100, 60, 25)
+        );
     }
 }

@@ -47,7 +47,9 @@ impl FrameRun {
             .collect();
         let validation = match validation {
             Some((pixels, mismatches)) => {
-                format!(",\n  \"validation\": {{\"pixels\": {pixels}, \"mismatches\": {mismatches}}}")
+                format!(
+                    ",\n  \"validation\": {{\"pixels\": {pixels}, \"mismatches\": {mismatches}}}"
+                )
             }
             None => String::new(),
         };
