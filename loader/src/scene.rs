@@ -374,6 +374,38 @@ mod tests {
     }
 
     #[test]
+    fn gzip_and_format_are_sniffed() {
+        use std::io::Write;
+        let dir = std::env::temp_dir().join(format!("spu-loader-gz-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let gzip = |text: &str| {
+            let mut encoder =
+                flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+            encoder.write_all(text.as_bytes()).unwrap();
+            encoder.finish().unwrap()
+        };
+        let obj = dir.join("tri.obj.gz");
+        std::fs::write(&obj, gzip("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")).unwrap();
+        assert_eq!(Scene::load(&obj).unwrap().triangle_count(), 1);
+        // PLY is recognized by its magic whatever the name says.
+        let ply = dir.join("tri.data.gz");
+        let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                    property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+                    0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+        std::fs::write(&ply, gzip(text)).unwrap();
+        assert_eq!(Scene::load(&ply).unwrap().triangle_count(), 1);
+        // Errors in compressed text files still name the file and line.
+        std::fs::write(&ply, gzip(&text.replace("3 0 1 2", "3 0 1 3"))).unwrap();
+        let err = Scene::load(&ply).unwrap_err();
+        assert_eq!(
+            (err.path.as_path(), err.line),
+            (ply.as_path(), Some(13)),
+            "{err}"
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
     fn missing_and_unknown_files_fail_with_the_path() {
         let err = Scene::load("/nonexistent/dir/scene.obj").unwrap_err();
         assert!(
