@@ -341,7 +341,7 @@ impl Bvh {
                 next_triangle += node.count as usize;
             } else {
                 let c = node.link as usize;
-                if c % 2 != 0 || c < 2 || c + 1 >= self.nodes.len() {
+                if !c.is_multiple_of(2) || c < 2 || c + 1 >= self.nodes.len() {
                     return Err(format!("inner node {index} has bad child index {c}"));
                 }
                 if node.axis > 2 {

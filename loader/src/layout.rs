@@ -18,7 +18,7 @@
 //!
 //! # Triangle record, 64 bytes ([`TriangleRecord`])
 //!
-//! Wald's projection test ("TriAccel", Wald's PhD thesis 2004, section 7.1; used by the
+//! Wald's projection test ("TriAccel", Wald's PhD thesis 2004; used by the
 //! paper, section 4.2): 48 bytes that suffice for the hit test, plus 16 bytes for shading.
 //! For the triangle `A = v0, B = v1, C = v2` with `N = (B - A) x (C - A)`, let `k` be the axis
 //! of the largest `|N_k|` (lowest axis on ties), `u = (k + 1) % 3`, `v = (k + 2) % 3`, and in
@@ -572,7 +572,7 @@ fn align_up(value: usize, alignment: usize) -> usize {
 impl StagedScene {
     /// Packs `scene` with its hierarchy `bvh` for placement at main-memory address `base`.
     pub fn new(scene: &Scene, bvh: &Bvh, base: u32) -> Result<StagedScene, String> {
-        if base as usize % STAGE_ALIGN != 0 {
+        if !(base as usize).is_multiple_of(STAGE_ALIGN) {
             return Err(format!(
                 "image base {base:#x} is not {STAGE_ALIGN}-byte aligned"
             ));

@@ -10,7 +10,15 @@
 //!   no infinity) and shrinks to the nearest hit so far; of two hits at exactly the same `t`
 //!   the first one tested wins;
 //! - a miss reports triangle [`MISS`] and `t = T_MAX`;
-//! - the reported triangle is the record's `original_index` (the scene's triangle index).
+//! - the reported triangle is the record's `original_index` (the scene's triangle index);
+//! - boxes are tested with slabs: per axis `t0 = (min - o) * inv`, `t1 = (max - o) * inv`
+//!   with `inv = 1 / d` (a zero component uses `1e30`, there being no infinity on the SPU),
+//!   `entry = max(T_MIN, min(t0, t1) over axes)`, `exit = min(t_max, max(t0, t1) over
+//!   axes)`, hit iff `entry <= exit`;
+//! - traversal visits the nearer child (smaller entry) first, child `c` on equal entries.
+//!   Only exact ties in `t` between two triangles can make an order-dependent difference,
+//!   and a packet kernel, which orders children by the packet's direction signs along the
+//!   node's split axis instead, may legitimately report the other triangle there.
 
 use glam::Vec3;
 
