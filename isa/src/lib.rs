@@ -4,15 +4,11 @@
 //! [`table`] is the single declaration every other module derives from.
 
 pub mod analysis;
-pub mod channel;
 pub mod codec;
 pub mod disasm;
-pub mod exec;
 pub mod float;
-pub mod memory;
-pub mod mfc;
 pub mod profile;
-pub mod spu;
+pub mod sim;
 pub mod table;
 pub mod timing;
 

@@ -1,0 +1,1 @@
+//! The simulated SPU core (under construction).
