@@ -7,6 +7,7 @@ pub mod analysis;
 pub mod codec;
 pub mod disasm;
 pub mod float;
+pub mod machine;
 pub mod profile;
 pub mod sim;
 pub mod table;

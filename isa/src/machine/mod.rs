@@ -1,0 +1,875 @@
+//! One simulated SPU: the core, its pre-decoded local store, channels and MFC, driven in
+//! quanta of simulated cycles against a main memory shared by all SPUs.
+//!
+//! # Determinism across host threads
+//! During a quantum an SPU only *reads* main memory (gets and `getllar` read the state left
+//! by the previous boundary) and logs its writes (`put`, `putllc`, `putlluc`) with the cycle
+//! they complete. At the boundary [`apply_quantum`] applies every SPU's log in (cycle, SPU
+//! index, sequence) order. A `putllc` succeeds only if no write to its 128-byte line by
+//! another SPU was ordered before it since its `getllar` (including writes made in the same
+//! quantum, which its `getllar` could not see); its status becomes readable after the
+//! boundary, so an SPU waiting on `MFC_RdAtomicStat` for it waits until then. The outcome
+//! depends only on simulated time, never on which host thread ran which SPU.
+//!
+//! # DMA timing
+//! One DMA engine per SPU moves one command at a time: a command completes at
+//! `max(issue + latency, previous completion) + bytes / bytes-per-cycle`. With the timing
+//! model off the clock is the instruction count, so completion times stay deterministic.
+
+pub mod exec;
+
+use std::collections::VecDeque;
+
+use crate::codec::{decode, Inst};
+use crate::machine::exec::{execute, Core, Effect, Reg, LS_MASK, LS_SIZE};
+use crate::table::Op;
+use crate::timing::{StallCause, Timing, TimingConfig};
+
+/// Main memory shared by all SPUs, big-endian bytes owned by the host.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MainMemory {
+    bytes: Vec<u8>,
+}
+
+impl MainMemory {
+    pub fn new(bytes: Vec<u8>) -> Self {
+        MainMemory { bytes }
+    }
+    pub fn zeroed(len: usize) -> Self {
+        MainMemory { bytes: vec![0; len] }
+    }
+    pub fn len(&self) -> usize {
+        self.bytes.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.bytes.is_empty()
+    }
+    pub fn bytes(&self) -> &[u8] {
+        &self.bytes
+    }
+    pub fn bytes_mut(&mut self) -> &mut [u8] {
+        &mut self.bytes
+    }
+    pub fn read_u32(&self, addr: u32) -> u32 {
+        let a = addr as usize;
+        self.bytes.get(a..a + 4).map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]])).unwrap_or(0)
+    }
+    pub fn write_u32(&mut self, addr: u32, value: u32) {
+        let a = addr as usize;
+        if let Some(b) = self.bytes.get_mut(a..a + 4) {
+            b.copy_from_slice(&value.to_be_bytes());
+        }
+    }
+    fn range(&self, ea: u64, size: u32) -> Option<std::ops::Range<usize>> {
+        let end = ea.checked_add(size as u64)?;
+        (end <= self.bytes.len() as u64).then_some(ea as usize..end as usize)
+    }
+}
+
+/// Why an SPU stopped running.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum StopReason {
+    /// `stop`/`stopd` with the 14-bit stop code.
+    Stop(u16),
+    /// A halt instruction's condition held.
+    Halt { pc: u32 },
+    IllegalInstruction { pc: u32, word: u32 },
+    DmaError { pc: u32, reason: String },
+    /// Blocked on a channel nothing will ever make ready.
+    Deadlock { pc: u32, channel: u8 },
+    /// Waiting on a channel only the host can serve (a mailbox or signal): resumable.
+    Blocked { channel: u8 },
+    CycleLimit,
+}
+
+impl std::fmt::Display for StopReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StopReason::Stop(code) => write!(f, "stop {code:#x}"),
+            StopReason::Halt { pc } => write!(f, "halt at {pc:#x}"),
+            StopReason::IllegalInstruction { pc, word } => write!(f, "illegal instruction {word:#010x} at {pc:#x}"),
+            StopReason::DmaError { pc, reason } => write!(f, "DMA error at {pc:#x}: {reason}"),
+            StopReason::Deadlock { pc, channel } => write!(f, "deadlock at {pc:#x} on channel {channel}"),
+            StopReason::Blocked { channel } => write!(f, "blocked on channel {channel}"),
+            StopReason::CycleLimit => write!(f, "cycle limit reached"),
+        }
+    }
+}
+
+/// Channel numbers (SPU ISA / Cell BE Handbook).
+pub mod ch {
+    pub const RD_EVENT_STAT: u8 = 0;
+    pub const WR_EVENT_MASK: u8 = 1;
+    pub const WR_EVENT_ACK: u8 = 2;
+    pub const RD_SIG_NOTIFY1: u8 = 3;
+    pub const RD_SIG_NOTIFY2: u8 = 4;
+    pub const WR_DEC: u8 = 7;
+    pub const RD_DEC: u8 = 8;
+    pub const WR_MS_SYNC_REQ: u8 = 9;
+    pub const RD_EVENT_MASK: u8 = 11;
+    pub const RD_TAG_MASK: u8 = 12;
+    pub const RD_MACH_STAT: u8 = 13;
+    pub const WR_SRR0: u8 = 14;
+    pub const RD_SRR0: u8 = 15;
+    pub const LSA: u8 = 16;
+    pub const EAH: u8 = 17;
+    pub const EAL: u8 = 18;
+    pub const SIZE: u8 = 19;
+    pub const TAG_ID: u8 = 20;
+    pub const CMD: u8 = 21;
+    pub const WR_TAG_MASK: u8 = 22;
+    pub const WR_TAG_UPDATE: u8 = 23;
+    pub const RD_TAG_STAT: u8 = 24;
+    pub const RD_LIST_STALL_STAT: u8 = 25;
+    pub const WR_LIST_STALL_ACK: u8 = 26;
+    pub const RD_ATOMIC_STAT: u8 = 27;
+    pub const WR_OUT_MBOX: u8 = 28;
+    pub const RD_IN_MBOX: u8 = 29;
+    pub const WR_OUT_INTR_MBOX: u8 = 30;
+}
+
+/// Event bits of SPU_RdEventStat.
+pub mod event {
+    pub const LR: u32 = 0x400; // lock-line reservation lost
+    pub const SIGNAL1: u32 = 0x200;
+    pub const SIGNAL2: u32 = 0x100;
+    pub const OUT_INTR_MBOX: u32 = 0x20;
+    pub const OUT_MBOX: u32 = 0x10;
+    pub const TAG_GROUP: u32 = 0x8;
+    pub const IN_MBOX: u32 = 0x4;
+    pub const LIST_STALL: u32 = 0x2;
+}
+
+#[derive(Clone, Debug)]
+struct DmaCommand {
+    tag: u8,
+    complete: u64,
+    /// Bytes to copy into local store at completion (gets).
+    incoming: Vec<(u32, Vec<u8>)>,
+}
+
+#[derive(Clone, Debug)]
+enum WriteKind {
+    Put,
+    Conditional,
+    Unconditional,
+}
+
+#[derive(Clone, Debug)]
+struct LoggedWrite {
+    cycle: u64,
+    seq: u64,
+    ea: u32,
+    data: Vec<u8>,
+    kind: WriteKind,
+}
+
+/// One SPU.
+pub struct Spu {
+    pub index: u32,
+    core: Core,
+    decoded: Vec<Inst>,
+    pc: u32,
+    instructions: u64,
+    cycle: u64,
+    timing: Option<Timing>,
+    // channels
+    in_mbox: VecDeque<u32>,
+    out_mbox: Option<u32>,
+    out_intr_mbox: Option<u32>,
+    signal: [Option<u32>; 2],
+    /// OR mode for each signal register (otherwise overwrite).
+    pub signal_or_mode: [bool; 2],
+    /// The host promises to feed the inbound mailbox/signals: a read on them blocks
+    /// instead of deadlocking.
+    pub host_feeds: bool,
+    dec_value: u32,
+    dec_written_at: u64,
+    event_mask: u32,
+    event_status: u32,
+    srr0: u32,
+    // MFC
+    lsa: u32,
+    eah: u32,
+    eal: u32,
+    size: u32,
+    tag_id: u32,
+    tag_mask: u32,
+    tag_update: Option<u32>,
+    queue: Vec<DmaCommand>,
+    dma_free_at: u64,
+    list_stall: u32,
+    stalled_list: Option<(u8, u8, u32, u32, u32, u32)>,
+    atomic_stat: Option<(u32, u64)>,
+    atomic_pending: bool,
+    reservation: Option<u32>,
+    writes: Vec<LoggedWrite>,
+    seq: u64,
+    timing_config: TimingConfig,
+}
+
+enum ChannelOutcome {
+    Done,
+    /// Not ready before this cycle; retry then.
+    WaitUntil(u64),
+    /// Ready only after the next quantum boundary.
+    WaitBoundary,
+    /// Only the host can make it ready.
+    Host,
+    Never,
+    Error(String),
+}
+
+impl Spu {
+    pub fn new(index: u32) -> Spu {
+        Spu {
+            index,
+            core: Core::new(),
+            decoded: vec![decode(0); LS_SIZE / 4],
+            pc: 0,
+            instructions: 0,
+            cycle: 0,
+            timing: None,
+            in_mbox: VecDeque::new(),
+            out_mbox: None,
+            out_intr_mbox: None,
+            signal: [None, None],
+            signal_or_mode: [false, false],
+            host_feeds: false,
+            dec_value: 0,
+            dec_written_at: 0,
+            event_mask: 0,
+            event_status: 0,
+            srr0: 0,
+            lsa: 0,
+            eah: 0,
+            eal: 0,
+            size: 0,
+            tag_id: 0,
+            tag_mask: 0,
+            tag_update: None,
+            queue: Vec::new(),
+            dma_free_at: 0,
+            list_stall: 0,
+            stalled_list: None,
+            atomic_stat: None,
+            atomic_pending: false,
+            reservation: None,
+            writes: Vec::new(),
+            seq: 0,
+            timing_config: TimingConfig::default(),
+        }
+    }
+
+    /// Loads a flat image at local-store address 0.
+    pub fn load_image(&mut self, image: &[u8]) {
+        self.load_segments(&[(0, image)], 0);
+    }
+
+    /// Loads `(address, bytes)` segments and sets the entry point.
+    pub fn load_segments(&mut self, segments: &[(u32, &[u8])], entry: u32) {
+        for (addr, bytes) in segments {
+            for (i, b) in bytes.iter().enumerate() {
+                self.core.ls[(*addr as usize + i) & LS_MASK as usize] = *b;
+            }
+        }
+        self.redecode(0, LS_SIZE as u32);
+        self.pc = entry & LS_MASK & !3;
+    }
+
+    fn redecode(&mut self, addr: u32, len: u32) {
+        let start = (addr & LS_MASK) as usize / 4;
+        let words = (len as usize).div_ceil(4) + 1;
+        for k in 0..words.min(LS_SIZE / 4) {
+            let w = (start + k) % (LS_SIZE / 4);
+            let b = &self.core.ls[4 * w..4 * w + 4];
+            self.decoded[w] = decode(u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
+        }
+    }
+
+    pub fn pc(&self) -> u32 {
+        self.pc
+    }
+    pub fn set_pc(&mut self, pc: u32) {
+        self.pc = pc & LS_MASK & !3;
+    }
+    pub fn reg(&self, n: usize) -> Reg {
+        self.core.regs[n & 127]
+    }
+    pub fn set_reg(&mut self, n: usize, value: Reg) {
+        self.core.regs[n & 127] = value;
+    }
+    pub fn ls(&self) -> &[u8] {
+        &self.core.ls
+    }
+    /// Writes local store from the host (re-decoding what it covers).
+    pub fn write_ls(&mut self, addr: u32, bytes: &[u8]) {
+        for (i, b) in bytes.iter().enumerate() {
+            self.core.ls[(addr as usize + i) & LS_MASK as usize] = *b;
+        }
+        self.redecode(addr, bytes.len() as u32);
+    }
+    pub fn instructions(&self) -> u64 {
+        self.instructions
+    }
+    pub fn cycles(&self) -> u64 {
+        self.cycle
+    }
+    pub fn fpscr(&self) -> &crate::float::Fpscr {
+        &self.core.fpscr
+    }
+    pub fn timing(&self) -> Option<&Timing> {
+        self.timing.as_ref()
+    }
+    pub fn timing_mut(&mut self) -> Option<&mut Timing> {
+        self.timing.as_mut()
+    }
+
+    /// Turns the cycle-level timing model on.
+    pub fn enable_timing(&mut self, config: TimingConfig) {
+        self.timing_config = config.clone();
+        self.timing = Some(Timing::new(config));
+    }
+
+    /// Host side of the inbound mailbox (4 deep): false when full.
+    pub fn write_inbound_mailbox(&mut self, value: u32) -> bool {
+        if self.in_mbox.len() >= 4 {
+            return false;
+        }
+        self.in_mbox.push_back(value);
+        self.event_status |= event::IN_MBOX;
+        true
+    }
+    pub fn read_outbound_mailbox(&mut self) -> Option<u32> {
+        self.out_mbox.take()
+    }
+    pub fn read_outbound_interrupt_mailbox(&mut self) -> Option<u32> {
+        self.out_intr_mbox.take()
+    }
+    /// Host (or another SPU's `sndsig`) writes a signal-notification register (0 or 1).
+    pub fn write_signal(&mut self, which: usize, value: u32) {
+        let w = which & 1;
+        self.signal[w] = Some(match (self.signal[w], self.signal_or_mode[w]) {
+            (Some(old), true) => old | value,
+            _ => value,
+        });
+        self.event_status |= if w == 0 { event::SIGNAL1 } else { event::SIGNAL2 };
+    }
+
+    fn dma_latency(&self) -> u64 {
+        (self.timing_config.dma_latency_ns * self.timing_config.clock_ghz).round() as u64
+    }
+
+    /// Runs until `max_cycles` or a stop; main memory writes apply immediately after.
+    pub fn run(&mut self, memory: &mut MainMemory, max_cycles: u64) -> StopReason {
+        const QUANTUM: u64 = 4096;
+        loop {
+            let until = (self.cycle + QUANTUM).min(max_cycles);
+            let outcome = self.run_quantum(memory, until);
+            apply_quantum(std::slice::from_mut(self), memory);
+            match outcome {
+                Some(StopReason::Blocked { channel }) if !self.host_feeds => {
+                    return StopReason::Deadlock { pc: self.pc, channel }
+                }
+                Some(reason) => return reason,
+                None if self.cycle >= max_cycles => return StopReason::CycleLimit,
+                None => {}
+            }
+        }
+    }
+
+    /// Runs until the SPU's clock reaches `until` (returns `None`) or it stops. Main memory
+    /// is only read; writes wait for [`apply_quantum`].
+    pub fn run_quantum(&mut self, memory: &MainMemory, until: u64) -> Option<StopReason> {
+        while self.cycle < until {
+            let pc = self.pc;
+            let inst = self.decoded[(pc >> 2) as usize];
+            let issue = match &mut self.timing {
+                Some(t) => t.issue(pc, inst),
+                None => self.cycle,
+            };
+            match execute(&mut self.core, inst, pc) {
+                Effect::Next => self.pc = (pc + 4) & LS_MASK,
+                Effect::Branch { taken, target } => {
+                    if let Some(t) = &mut self.timing {
+                        t.branch_resolved(pc, inst, taken, target);
+                    }
+                    self.pc = if taken { target } else { (pc + 4) & LS_MASK };
+                }
+                Effect::Store { addr } => {
+                    self.redecode(addr, 16);
+                    self.pc = (pc + 4) & LS_MASK;
+                }
+                Effect::Hint { branch, target } => {
+                    if let Some(t) = &mut self.timing {
+                        t.hint(pc, branch, target);
+                    }
+                    self.pc = (pc + 4) & LS_MASK;
+                }
+                Effect::Stop(code) => {
+                    self.finish(issue);
+                    self.pc = (pc + 4) & LS_MASK;
+                    return Some(StopReason::Stop(code));
+                }
+                Effect::Halt => {
+                    self.finish(issue);
+                    return Some(StopReason::Halt { pc });
+                }
+                Effect::Illegal => {
+                    self.finish(issue);
+                    return Some(StopReason::IllegalInstruction { pc, word: inst.word });
+                }
+                Effect::Channel => match self.channel(inst, issue, memory) {
+                    ChannelOutcome::Done => self.pc = (pc + 4) & LS_MASK,
+                    ChannelOutcome::WaitUntil(when) => {
+                        // Stall on the channel, then retry the instruction.
+                        match &mut self.timing {
+                            Some(t) => t.channel_stall(pc, inst.ra, when),
+                            None => self.cycle = when,
+                        }
+                        if self.timing.is_some() {
+                            self.cycle = self.timing.as_ref().unwrap().now();
+                        }
+                        continue;
+                    }
+                    ChannelOutcome::WaitBoundary => {
+                        match &mut self.timing {
+                            Some(t) => {
+                                t.channel_stall(pc, inst.ra, until);
+                                self.cycle = until.max(t.now());
+                            }
+                            None => self.cycle = until,
+                        }
+                        return None;
+                    }
+                    ChannelOutcome::Host => {
+                        self.cycle = self.cycle.max(until);
+                        return Some(StopReason::Blocked { channel: inst.ra });
+                    }
+                    ChannelOutcome::Never => {
+                        self.finish(issue);
+                        return Some(StopReason::Deadlock { pc, channel: inst.ra });
+                    }
+                    ChannelOutcome::Error(reason) => {
+                        self.finish(issue);
+                        return Some(StopReason::DmaError { pc, reason });
+                    }
+                },
+            }
+            self.instructions += 1;
+            self.cycle = match &self.timing {
+                Some(t) => t.now(),
+                None => self.cycle + 1,
+            };
+        }
+        None
+    }
+
+    fn finish(&mut self, issue: u64) {
+        self.instructions += 1;
+        self.cycle = issue + 1;
+    }
+
+    fn complete_dma(&mut self, now: u64) {
+        let mut i = 0;
+        while i < self.queue.len() {
+            if self.queue[i].complete <= now {
+                let cmd = self.queue.remove(i);
+                for (lsa, bytes) in cmd.incoming {
+                    for (k, b) in bytes.iter().enumerate() {
+                        self.core.ls[(lsa as usize + k) & LS_MASK as usize] = *b;
+                    }
+                    self.redecode(lsa, bytes.len() as u32);
+                }
+            } else {
+                i += 1;
+            }
+        }
+        if self.tag_done_mask() & self.tag_mask != 0 {
+            self.event_status |= event::TAG_GROUP;
+        }
+    }
+
+    fn busy_tags(&self) -> u32 {
+        self.queue.iter().fold(0, |m, c| m | (1 << c.tag)) | self.stalled_list.map_or(0, |s| 1 << s.0)
+    }
+
+    fn tag_done_mask(&self) -> u32 {
+        !self.busy_tags()
+    }
+
+    /// The cycle when the commands of the tags in `mask` complete (all) or the first does.
+    fn completion_of(&self, mask: u32, all: bool) -> Option<u64> {
+        let times = self.queue.iter().filter(|c| mask & (1 << c.tag) != 0).map(|c| c.complete);
+        if all { times.max() } else { times.min() }
+    }
+
+    fn read_channel(&mut self, channel: u8, now: u64) -> Result<u32, ChannelOutcome> {
+        use ch::*;
+        self.complete_dma(now);
+        Ok(match channel {
+            RD_EVENT_STAT => {
+                let pending = self.event_status & self.event_mask;
+                if pending == 0 {
+                    return Err(match self.queue.iter().map(|c| c.complete).min() {
+                        Some(t) => ChannelOutcome::WaitUntil(t),
+                        None if self.atomic_pending => ChannelOutcome::WaitBoundary,
+                        None if self.host_feeds => ChannelOutcome::Host,
+                        None => ChannelOutcome::Never,
+                    });
+                }
+                pending
+            }
+            RD_SIG_NOTIFY1 | RD_SIG_NOTIFY2 => {
+                let w = (channel - RD_SIG_NOTIFY1) as usize;
+                match self.signal[w].take() {
+                    Some(v) => v,
+                    None => return Err(if self.host_feeds { ChannelOutcome::Host } else { ChannelOutcome::Never }),
+                }
+            }
+            RD_DEC => self.dec_value.wrapping_sub((now - self.dec_written_at) as u32),
+            RD_EVENT_MASK => self.event_mask,
+            RD_TAG_MASK => self.tag_mask,
+            RD_MACH_STAT => 0,
+            RD_SRR0 => self.srr0,
+            RD_TAG_STAT => {
+                let Some(mode) = self.tag_update.take() else {
+                    return Err(ChannelOutcome::Never);
+                };
+                let done = self.tag_done_mask() & self.tag_mask;
+                let ready = match mode {
+                    1 => done != 0 || self.tag_mask == 0,
+                    2 => done == self.tag_mask,
+                    _ => true,
+                };
+                if !ready {
+                    self.tag_update = Some(mode);
+                    return Err(match self.completion_of(self.tag_mask, mode == 2) {
+                        Some(t) => ChannelOutcome::WaitUntil(t),
+                        None if self.stalled_list.is_some() => ChannelOutcome::Never,
+                        None => ChannelOutcome::Never,
+                    });
+                }
+                done
+            }
+            RD_LIST_STALL_STAT => {
+                if self.list_stall == 0 {
+                    return Err(match self.queue.iter().map(|c| c.complete).min() {
+                        Some(t) => ChannelOutcome::WaitUntil(t),
+                        None => ChannelOutcome::Never,
+                    });
+                }
+                std::mem::take(&mut self.list_stall)
+            }
+            RD_ATOMIC_STAT => match self.atomic_stat {
+                Some((value, ready)) if ready <= now => {
+                    self.atomic_stat = None;
+                    value
+                }
+                Some((_, ready)) => return Err(ChannelOutcome::WaitUntil(ready)),
+                None if self.atomic_pending => return Err(ChannelOutcome::WaitBoundary),
+                None => return Err(ChannelOutcome::Never),
+            },
+            RD_IN_MBOX => match self.in_mbox.pop_front() {
+                Some(v) => v,
+                None => return Err(if self.host_feeds { ChannelOutcome::Host } else { ChannelOutcome::Never }),
+            },
+            _ => 0,
+        })
+    }
+
+    fn channel_count(&mut self, channel: u8, now: u64) -> u32 {
+        use ch::*;
+        self.complete_dma(now);
+        match channel {
+            RD_IN_MBOX => self.in_mbox.len() as u32,
+            WR_OUT_MBOX => self.out_mbox.is_none() as u32,
+            WR_OUT_INTR_MBOX => self.out_intr_mbox.is_none() as u32,
+            RD_SIG_NOTIFY1 | RD_SIG_NOTIFY2 => self.signal[(channel - RD_SIG_NOTIFY1) as usize].is_some() as u32,
+            CMD => 16 - self.queue.len().min(16) as u32,
+            RD_TAG_STAT => match self.tag_update {
+                Some(2) => (self.tag_done_mask() & self.tag_mask == self.tag_mask) as u32,
+                Some(1) => (self.tag_done_mask() & self.tag_mask != 0) as u32,
+                Some(_) => 1,
+                None => 0,
+            },
+            RD_ATOMIC_STAT => matches!(self.atomic_stat, Some((_, r)) if r <= now) as u32,
+            RD_LIST_STALL_STAT => (self.list_stall != 0) as u32,
+            RD_EVENT_STAT => (self.event_status & self.event_mask != 0) as u32,
+            _ => 1,
+        }
+    }
+
+    fn channel(&mut self, inst: Inst, now: u64, memory: &MainMemory) -> ChannelOutcome {
+        let channel = inst.ra;
+        match inst.op {
+            Op::Rdch => match self.read_channel(channel, now) {
+                Ok(v) => {
+                    self.core.regs[inst.rt as usize] = [v, 0, 0, 0];
+                    ChannelOutcome::Done
+                }
+                Err(wait) => wait,
+            },
+            Op::Rchcnt => {
+                let n = self.channel_count(channel, now);
+                self.core.regs[inst.rt as usize] = [n, 0, 0, 0];
+                ChannelOutcome::Done
+            }
+            _ => {
+                let v = self.core.regs[inst.rt as usize][0];
+                self.write_channel(channel, v, now, memory)
+            }
+        }
+    }
+
+    fn write_channel(&mut self, channel: u8, v: u32, now: u64, memory: &MainMemory) -> ChannelOutcome {
+        use ch::*;
+        self.complete_dma(now);
+        match channel {
+            WR_EVENT_MASK => self.event_mask = v,
+            WR_EVENT_ACK => self.event_status &= !v,
+            WR_DEC => {
+                self.dec_value = v;
+                self.dec_written_at = now;
+            }
+            WR_SRR0 => self.srr0 = v,
+            LSA => self.lsa = v,
+            EAH => self.eah = v,
+            EAL => self.eal = v,
+            SIZE => self.size = v,
+            TAG_ID => self.tag_id = v,
+            WR_TAG_MASK => self.tag_mask = v,
+            WR_TAG_UPDATE => self.tag_update = Some(v & 3),
+            WR_LIST_STALL_ACK => {
+                if let Some((tag, cmd, lsa, list, remaining, eah)) = self.stalled_list.take() {
+                    if tag as u32 == (v & 31) {
+                        return self.run_list(cmd, tag, lsa, list, remaining, eah, now, memory);
+                    }
+                    self.stalled_list = Some((tag, cmd, lsa, list, remaining, eah));
+                }
+            }
+            CMD => {
+                if self.queue.len() >= 16 {
+                    let earliest = self.queue.iter().map(|c| c.complete).min().unwrap_or(now);
+                    return ChannelOutcome::WaitUntil(earliest);
+                }
+                return self.mfc_command(v & 0xff, now, memory);
+            }
+            WR_OUT_MBOX => {
+                if self.out_mbox.is_some() {
+                    return ChannelOutcome::Host;
+                }
+                self.out_mbox = Some(v);
+            }
+            WR_OUT_INTR_MBOX => {
+                if self.out_intr_mbox.is_some() {
+                    return ChannelOutcome::Host;
+                }
+                self.out_intr_mbox = Some(v);
+            }
+            _ => {}
+        }
+        ChannelOutcome::Done
+    }
+
+    fn schedule(&mut self, now: u64, bytes: u32) -> u64 {
+        let start = (now + self.dma_latency()).max(self.dma_free_at);
+        let per_cycle = (self.timing_config.spu_bytes_per_cycle.max(1.0)) as u64;
+        let done = start + (bytes as u64).div_ceil(per_cycle);
+        self.dma_free_at = done;
+        if let Some(t) = &mut self.timing {
+            t.dma_local_store(done, bytes);
+        }
+        done
+    }
+
+    fn check_transfer(&self, lsa: u32, ea: u64, size: u32, memory: &MainMemory) -> Result<(), String> {
+        let ok_size = matches!(size, 1 | 2 | 4 | 8) || (size % 16 == 0 && size <= 16384);
+        if !ok_size {
+            return Err(format!("transfer size {size} is not 1, 2, 4, 8 or a multiple of 16 up to 16384"));
+        }
+        if size < 16 {
+            if lsa % size != 0 || ea % size as u64 != 0 {
+                return Err(format!("{size}-byte transfer with LS {lsa:#x} / EA {ea:#x} not naturally aligned"));
+            }
+            if (lsa ^ ea as u32) & 15 != 0 {
+                return Err(format!("LS {lsa:#x} and EA {ea:#x} differ in their low 4 bits"));
+            }
+        } else if lsa & 15 != 0 || ea & 15 != 0 {
+            return Err(format!("LS {lsa:#x} / EA {ea:#x} not 16-byte aligned for a {size}-byte transfer"));
+        }
+        if memory.range(ea, size).is_none() {
+            return Err(format!("EA {ea:#x}+{size} is outside main memory ({} bytes)", memory.len()));
+        }
+        Ok(())
+    }
+
+    fn mfc_command(&mut self, cmd: u32, now: u64, memory: &MainMemory) -> ChannelOutcome {
+        let tag = self.tag_id;
+        if tag > 31 && !matches!(cmd, 0xd0 | 0xb4 | 0xb0 | 0xb8) {
+            return ChannelOutcome::Error(format!("tag {tag} is out of range 0..31"));
+        }
+        let tag = (tag & 31) as u8;
+        let lsa = self.lsa & LS_MASK;
+        let ea = ((self.eah as u64) << 32) | self.eal as u64;
+        match cmd {
+            0x40..=0x42 | 0x20..=0x22 => {
+                let size = self.size;
+                if let Err(e) = self.check_transfer(lsa, ea, size, memory) {
+                    return ChannelOutcome::Error(e);
+                }
+                let complete = self.schedule(now, size);
+                let range = memory.range(ea, size).unwrap();
+                if cmd & 0x40 != 0 {
+                    let data = memory.bytes()[range].to_vec();
+                    self.queue.push(DmaCommand { tag, complete, incoming: vec![(lsa, data)] });
+                } else {
+                    let data: Vec<u8> = (0..size).map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize]).collect();
+                    self.log_write(complete, ea as u32, data, WriteKind::Put);
+                    self.queue.push(DmaCommand { tag, complete, incoming: Vec::new() });
+                }
+                ChannelOutcome::Done
+            }
+            0x44..=0x46 | 0x24..=0x26 => {
+                let list = self.eal & LS_MASK;
+                if list & 7 != 0 {
+                    return ChannelOutcome::Error(format!("DMA list address {list:#x} is not 8-byte aligned"));
+                }
+                if self.size % 8 != 0 || self.size / 8 > 2048 {
+                    return ChannelOutcome::Error(format!("DMA list size {} is not a multiple of 8 up to 16384", self.size));
+                }
+                self.run_list(cmd as u8, tag, lsa, list, self.size / 8, self.eah, now, memory)
+            }
+            0xd0 => {
+                let line = self.eal & !127;
+                let ea = ((self.eah as u64) << 32) | line as u64;
+                if lsa & 127 != 0 {
+                    return ChannelOutcome::Error(format!("getllar LS {lsa:#x} not 128-byte aligned"));
+                }
+                let Some(range) = memory.range(ea, 128) else {
+                    return ChannelOutcome::Error(format!("getllar EA {ea:#x} outside main memory"));
+                };
+                let data = memory.bytes()[range].to_vec();
+                for (k, b) in data.iter().enumerate() {
+                    self.core.ls[(lsa as usize + k) & LS_MASK as usize] = *b;
+                }
+                self.redecode(lsa, 128);
+                self.reservation = Some(line);
+                let ready = now + self.dma_latency();
+                self.atomic_stat = Some((4, ready));
+                ChannelOutcome::Done
+            }
+            0xb4 | 0xb0 | 0xb8 => {
+                let line = self.eal & !127;
+                if lsa & 127 != 0 {
+                    return ChannelOutcome::Error(format!("putllc/putlluc LS {lsa:#x} not 128-byte aligned"));
+                }
+                if memory.range(line as u64, 128).is_none() {
+                    return ChannelOutcome::Error(format!("atomic EA {line:#x} outside main memory"));
+                }
+                let data: Vec<u8> = (0..128).map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize]).collect();
+                let cycle = now + self.dma_latency();
+                if cmd == 0xb4 {
+                    if self.reservation != Some(line) {
+                        self.atomic_stat = Some((1, cycle));
+                    } else {
+                        self.log_write(cycle, line, data, WriteKind::Conditional);
+                        self.atomic_pending = true;
+                        self.atomic_stat = None;
+                    }
+                } else {
+                    self.log_write(cycle, line, data, WriteKind::Unconditional);
+                    self.atomic_stat = Some((2, cycle));
+                }
+                ChannelOutcome::Done
+            }
+            0xa0 | 0xa1 | 0xa2 | 0xc0 | 0xc8 | 0xcc => ChannelOutcome::Done,
+            other => ChannelOutcome::Error(format!("unknown MFC command {other:#x}")),
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn run_list(&mut self, cmd: u8, tag: u8, mut lsa: u32, mut list: u32, mut remaining: u32, eah: u32, now: u64, memory: &MainMemory) -> ChannelOutcome {
+        let mut incoming = Vec::new();
+        let mut last = now;
+        while remaining > 0 {
+            let e0 = u32::from_be_bytes(self.core.ls[list as usize..list as usize + 4].try_into().unwrap());
+            let e1 = u32::from_be_bytes(self.core.ls[list as usize + 4..list as usize + 8].try_into().unwrap());
+            let size = e0 & 0x7fff;
+            let ea = ((eah as u64) << 32) | e1 as u64;
+            if let Err(e) = self.check_transfer(lsa, ea, size, memory) {
+                return ChannelOutcome::Error(format!("list element at {list:#x}: {e}"));
+            }
+            last = self.schedule(now, size);
+            let range = memory.range(ea, size).unwrap();
+            if cmd & 0x40 != 0 {
+                incoming.push((lsa, memory.bytes()[range].to_vec()));
+            } else {
+                let data: Vec<u8> = (0..size).map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize]).collect();
+                self.log_write(last, e1, data, WriteKind::Put);
+            }
+            lsa = (lsa + size.div_ceil(16) * 16) & LS_MASK;
+            list = (list + 8) & LS_MASK;
+            remaining -= 1;
+            if e0 & 0x8000_0000 != 0 && remaining > 0 {
+                self.stalled_list = Some((tag, cmd, lsa, list, remaining, eah));
+                self.list_stall |= 1 << tag;
+                self.event_status |= event::LIST_STALL;
+                break;
+            }
+        }
+        self.queue.push(DmaCommand { tag, complete: last, incoming });
+        ChannelOutcome::Done
+    }
+
+    fn log_write(&mut self, cycle: u64, ea: u32, data: Vec<u8>, kind: WriteKind) {
+        self.seq += 1;
+        self.writes.push(LoggedWrite { cycle, seq: self.seq, ea, data, kind });
+    }
+}
+
+/// Applies every SPU's logged main-memory writes in (cycle, SPU index, sequence) order and
+/// settles `putllc` outcomes and lost reservations (see the module docs).
+pub fn apply_quantum(spus: &mut [Spu], memory: &mut MainMemory) {
+    let mut all: Vec<(u64, usize, u64, LoggedWrite)> = Vec::new();
+    for (i, spu) in spus.iter_mut().enumerate() {
+        for w in spu.writes.drain(..) {
+            all.push((w.cycle, i, w.seq, w));
+        }
+    }
+    all.sort_by_key(|(c, i, s, _)| (*c, *i, *s));
+    for (_, i, _, w) in all {
+        let line = w.ea & !127;
+        let apply = match w.kind {
+            WriteKind::Conditional => {
+                let ok = spus[i].reservation == Some(line);
+                spus[i].reservation = None;
+                spus[i].atomic_pending = false;
+                spus[i].atomic_stat = Some((if ok { 0 } else { 1 }, 0));
+                ok
+            }
+            _ => true,
+        };
+        if !apply {
+            continue;
+        }
+        let start = w.ea as usize;
+        if let Some(dst) = memory.bytes.get_mut(start..start + w.data.len()) {
+            dst.copy_from_slice(&w.data);
+        }
+        let first_line = w.ea & !127;
+        let last_line = (w.ea + w.data.len().max(1) as u32 - 1) & !127;
+        for (j, other) in spus.iter_mut().enumerate() {
+            if j == i {
+                continue;
+            }
+            if let Some(r) = other.reservation {
+                if r >= first_line && r <= last_line {
+                    other.reservation = None;
+                    other.event_status |= event::LR;
+                }
+            }
+        }
+    }
+    let _ = StallCause::Dependency;
+}
