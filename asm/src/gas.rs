@@ -1,0 +1,1307 @@
+//! A GNU-as compatible assembler for SPU: the statement processor (labels, directives,
+//! macros and repetition), expressions, operand parsing with GNU as's range checks, and
+//! the two passes that lay sections out and encode through the shared instruction table.
+//!
+//! Pass 1 walks the source to give every label an address (every instruction is 4 bytes,
+//! so only data directives need values then); pass 2 walks it again with all symbols known
+//! and emits bytes. Both passes run the same expansion of `.include`, `.macro`, `.irp`,
+//! `.rept` and `.if`, so they see the same statements.
+
+use spu_isa::codec::encode;
+use spu_isa::table::{forms_named, FormInfo, OperandKind};
+use std::collections::HashMap;
+use std::path::PathBuf;
+
+/// Where a diagnostic points.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Location {
+    pub file: String,
+    pub line: usize,
+    pub column: usize,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Severity {
+    Error,
+    Warning,
+}
+
+/// An error or warning with its source line, shown GNU-style with a caret.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Diagnostic {
+    pub severity: Severity,
+    pub location: Location,
+    pub message: String,
+    pub source_line: String,
+}
+
+impl std::fmt::Display for Diagnostic {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let kind = match self.severity {
+            Severity::Error => "error",
+            Severity::Warning => "warning",
+        };
+        let l = &self.location;
+        writeln!(f, "{}:{}:{}: {kind}: {}", l.file, l.line, l.column, self.message)?;
+        writeln!(f, "    {}", self.source_line)?;
+        write!(f, "    {}^", " ".repeat(l.column.saturating_sub(1)))
+    }
+}
+
+/// Assembler settings.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    pub include_dirs: Vec<PathBuf>,
+    /// In-memory files for `.include` (name, contents), tried before the directories.
+    pub virtual_files: Vec<(String, String)>,
+    /// Symbols defined before the source (like `--defsym`).
+    pub defines: Vec<(String, i64)>,
+}
+
+/// The assembled program.
+#[derive(Clone, Debug, Default)]
+pub struct Output {
+    /// Local-store image loaded at address 0: `.text`, then `.data`, then `.bss` (zeros).
+    pub image: Vec<u8>,
+    /// An SPU ELF executable of the same program.
+    pub elf: Vec<u8>,
+    /// Global and local symbols (not `.L` locals) with their addresses.
+    pub symbols: Vec<(String, u32)>,
+    pub entry: u32,
+    /// Address, words and source line of every statement that emitted bytes.
+    pub listing: String,
+    pub warnings: Vec<Diagnostic>,
+    /// Section extents: (name, address, size, is code).
+    pub sections: Vec<(String, u32, u32, bool)>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Sect {
+    Text,
+    Data,
+    Bss,
+}
+
+#[derive(Clone, Debug)]
+struct Line {
+    text: String,
+    file: String,
+    line: usize,
+}
+
+#[derive(Clone, Debug)]
+struct Macro {
+    params: Vec<(String, Option<String>)>,
+    body: Vec<Line>,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum SymVal {
+    Abs(i64),
+    Label(Sect, u32),
+}
+
+struct Assembler<'o> {
+    opts: &'o Options,
+    pass: u8,
+    sect: Sect,
+    offsets: HashMap<Sect, u32>,
+    align: HashMap<Sect, u32>,
+    bases: HashMap<Sect, u32>,
+    symbols: HashMap<String, SymVal>,
+    globals: Vec<String>,
+    /// Numeric local label definitions: label -> list of (statement number, section, offset).
+    numeric: HashMap<u32, Vec<(usize, Sect, u32)>>,
+    stmt: usize,
+    bytes: HashMap<Sect, Vec<u8>>,
+    diags: Vec<Diagnostic>,
+    macros: HashMap<String, Macro>,
+    macro_counter: usize,
+    listing: String,
+    depth: usize,
+}
+
+fn is_ident_start(c: char) -> bool {
+    c.is_ascii_alphabetic() || c == '_' || c == '.' || c == '$'
+}
+fn is_ident(c: char) -> bool {
+    c.is_ascii_alphanumeric() || c == '_' || c == '.' || c == '$'
+}
+
+/// Removes comments: `#` to end of line (outside strings) and `/* */` (single line).
+fn strip_comment(s: &str) -> String {
+    let mut out = String::new();
+    let mut chars = s.chars().peekable();
+    let mut in_str = false;
+    while let Some(c) = chars.next() {
+        if in_str {
+            out.push(c);
+            if c == '\\' {
+                if let Some(n) = chars.next() {
+                    out.push(n);
+                }
+            } else if c == '"' {
+                in_str = false;
+            }
+            continue;
+        }
+        match c {
+            '"' => {
+                in_str = true;
+                out.push(c);
+            }
+            '#' => break,
+            '/' if chars.peek() == Some(&'*') => {
+                chars.next();
+                let mut prev = ' ';
+                for d in chars.by_ref() {
+                    if prev == '*' && d == '/' {
+                        break;
+                    }
+                    prev = d;
+                }
+                out.push(' ');
+            }
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// Splits on `sep` at nesting depth 0 (parentheses) outside strings.
+fn split_top(s: &str, sep: char) -> Vec<String> {
+    let mut parts = Vec::new();
+    let mut depth = 0i32;
+    let mut cur = String::new();
+    let mut in_str = false;
+    for c in s.chars() {
+        if in_str {
+            cur.push(c);
+            if c == '"' {
+                in_str = false;
+            }
+            continue;
+        }
+        match c {
+            '"' => {
+                in_str = true;
+                cur.push(c)
+            }
+            '(' => {
+                depth += 1;
+                cur.push(c)
+            }
+            ')' => {
+                depth -= 1;
+                cur.push(c)
+            }
+            c if c == sep && depth == 0 => parts.push(std::mem::take(&mut cur)),
+            _ => cur.push(c),
+        }
+    }
+    parts.push(cur);
+    parts
+}
+
+const CHANNELS: &[(&str, u32)] = &[
+    ("SPU_RdEventStat", 0),
+    ("SPU_WrEventMask", 1),
+    ("SPU_WrEventAck", 2),
+    ("SPU_RdSigNotify1", 3),
+    ("SPU_RdSigNotify2", 4),
+    ("SPU_WrDec", 7),
+    ("SPU_RdDec", 8),
+    ("MFC_WrMSSyncReq", 9),
+    ("SPU_RdEventMask", 11),
+    ("MFC_RdTagMask", 12),
+    ("SPU_RdMachStat", 13),
+    ("SPU_WrSRR0", 14),
+    ("SPU_RdSRR0", 15),
+    ("MFC_LSA", 16),
+    ("MFC_EAH", 17),
+    ("MFC_EAL", 18),
+    ("MFC_Size", 19),
+    ("MFC_TagID", 20),
+    ("MFC_Cmd", 21),
+    ("MFC_WrTagMask", 22),
+    ("MFC_WrTagUpdate", 23),
+    ("MFC_RdTagStat", 24),
+    ("MFC_RdListStallStat", 25),
+    ("MFC_WrListStallAck", 26),
+    ("MFC_RdAtomicStat", 27),
+    ("SPU_WrOutMbox", 28),
+    ("SPU_RdInMbox", 29),
+    ("SPU_WrOutIntrMbox", 30),
+];
+
+type Res<T> = Result<T, (usize, String)>;
+
+/// A tiny expression evaluator over GNU as's operators, with C-like precedence.
+struct Expr<'a, 'b> {
+    s: &'a [u8],
+    pos: usize,
+    asm: &'b Assembler<'b>,
+    /// Whether an undefined symbol may read as 0 (pass 1).
+    lenient: bool,
+    undefined: bool,
+}
+
+impl Expr<'_, '_> {
+    fn ws(&mut self) {
+        while self.pos < self.s.len() && (self.s[self.pos] as char).is_whitespace() {
+            self.pos += 1;
+        }
+    }
+    fn peek(&mut self) -> Option<char> {
+        self.ws();
+        self.s.get(self.pos).map(|c| *c as char)
+    }
+    fn eat(&mut self, t: &str) -> bool {
+        self.ws();
+        if self.s[self.pos..].starts_with(t.as_bytes()) {
+            self.pos += t.len();
+            true
+        } else {
+            false
+        }
+    }
+    fn err<T>(&self, m: impl Into<String>) -> Res<T> {
+        Err((self.pos, m.into()))
+    }
+    fn parse(&mut self) -> Res<i64> {
+        self.binary(0)
+    }
+    fn binary(&mut self, min_prec: u8) -> Res<i64> {
+        let mut lhs = self.unary()?;
+        loop {
+            self.ws();
+            let ops: &[(&str, u8)] = &[
+                ("||", 1), ("&&", 2), ("==", 4), ("!=", 4), ("<>", 4), ("<=", 5), (">=", 5),
+                ("<<", 6), (">>", 6), ("<", 5), (">", 5), ("|", 3), ("^", 3), ("&", 3),
+                ("+", 7), ("-", 7), ("*", 8), ("/", 8), ("%", 8), ("!", 3),
+            ];
+            let Some((op, prec)) = ops.iter().find(|(o, _)| self.s[self.pos..].starts_with(o.as_bytes())) else {
+                return Ok(lhs);
+            };
+            if *prec < min_prec.max(1) || *prec <= min_prec && min_prec > 0 && false {
+                return Ok(lhs);
+            }
+            if *prec < min_prec {
+                return Ok(lhs);
+            }
+            self.pos += op.len();
+            let rhs = self.binary(prec + 1)?;
+            lhs = match *op {
+                "||" => ((lhs != 0) || (rhs != 0)) as i64,
+                "&&" => ((lhs != 0) && (rhs != 0)) as i64,
+                "==" => -((lhs == rhs) as i64),
+                "!=" | "<>" => -((lhs != rhs) as i64),
+                "<=" => -((lhs <= rhs) as i64),
+                ">=" => -((lhs >= rhs) as i64),
+                "<" => -((lhs < rhs) as i64),
+                ">" => -((lhs > rhs) as i64),
+                "<<" => lhs.wrapping_shl(rhs as u32),
+                ">>" => lhs.wrapping_shr(rhs as u32),
+                "|" => lhs | rhs,
+                "^" => lhs ^ rhs,
+                "&" => lhs & rhs,
+                "!" => lhs | !rhs,
+                "+" => lhs.wrapping_add(rhs),
+                "-" => lhs.wrapping_sub(rhs),
+                "*" => lhs.wrapping_mul(rhs),
+                "/" | "%" => {
+                    if rhs == 0 {
+                        return self.err("division by zero");
+                    }
+                    if *op == "/" { lhs / rhs } else { lhs % rhs }
+                }
+                _ => unreachable!(),
+            };
+        }
+    }
+    fn unary(&mut self) -> Res<i64> {
+        match self.peek() {
+            Some('-') => {
+                self.pos += 1;
+                Ok(self.unary()?.wrapping_neg())
+            }
+            Some('+') => {
+                self.pos += 1;
+                self.unary()
+            }
+            Some('~') => {
+                self.pos += 1;
+                Ok(!self.unary()?)
+            }
+            Some('!') => {
+                self.pos += 1;
+                Ok((self.unary()? == 0) as i64)
+            }
+            _ => self.primary(),
+        }
+    }
+    fn primary(&mut self) -> Res<i64> {
+        let Some(c) = self.peek() else { return self.err("expected an expression") };
+        if c == '(' {
+            self.pos += 1;
+            let v = self.parse()?;
+            if !self.eat(")") {
+                return self.err("expected ')'");
+            }
+            return Ok(v);
+        }
+        if c == '\'' {
+            let ch = self.s.get(self.pos + 1).copied().unwrap_or(0);
+            self.pos += 2;
+            self.eat("'");
+            return Ok(ch as i64);
+        }
+        if c.is_ascii_digit() {
+            let start = self.pos;
+            while self.pos < self.s.len() && (self.s[self.pos] as char).is_ascii_alphanumeric() {
+                self.pos += 1;
+            }
+            let text = std::str::from_utf8(&self.s[start..self.pos]).unwrap();
+            // Numeric local label reference: 1b / 1f.
+            if let Some(n) = text.strip_suffix('b').or_else(|| text.strip_suffix('f')) {
+                if !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()) && !text.starts_with("0x") && !text.starts_with("0b") {
+                    let forward = text.ends_with('f');
+                    return match self.asm.numeric_ref(n.parse().unwrap_or(0), forward) {
+                        Some(v) => Ok(v),
+                        None if self.lenient => {
+                            self.undefined = true;
+                            Ok(0)
+                        }
+                        None => Err((start, format!("undefined local label `{text}`"))),
+                    };
+                }
+            }
+            return parse_number(text).ok_or((start, format!("bad number `{text}`")));
+        }
+        if c == '.' && !self.s.get(self.pos + 1).is_some_and(|b| is_ident(*b as char)) {
+            self.pos += 1;
+            return Ok(self.asm.here() as i64);
+        }
+        if is_ident_start(c) {
+            let start = self.pos;
+            while self.pos < self.s.len() && is_ident(self.s[self.pos] as char) {
+                self.pos += 1;
+            }
+            let name = std::str::from_utf8(&self.s[start..self.pos]).unwrap();
+            let mut v = match self.asm.symbol(name) {
+                Some(v) => v,
+                None if self.lenient => {
+                    self.undefined = true;
+                    0
+                }
+                None => return Err((start, format!("undefined symbol `{name}`"))),
+            };
+            // sym@h / sym@l
+            if self.s[self.pos..].starts_with(b"@h") || self.s[self.pos..].starts_with(b"@H") {
+                self.pos += 2;
+                v = (v >> 16) & 0xffff;
+            } else if self.s[self.pos..].starts_with(b"@l") || self.s[self.pos..].starts_with(b"@L") {
+                self.pos += 2;
+                v &= 0xffff;
+            }
+            return Ok(v);
+        }
+        self.err(format!("unexpected `{c}`"))
+    }
+}
+
+fn parse_number(t: &str) -> Option<i64> {
+    let t = t.to_ascii_lowercase();
+    if let Some(h) = t.strip_prefix("0x") {
+        i64::from_str_radix(h, 16).ok().or_else(|| u64::from_str_radix(h, 16).ok().map(|v| v as i64))
+    } else if let Some(b) = t.strip_prefix("0b") {
+        i64::from_str_radix(b, 2).ok()
+    } else if t.len() > 1 && t.starts_with('0') {
+        i64::from_str_radix(&t[1..], 8).ok()
+    } else {
+        t.parse().ok()
+    }
+}
+
+/// Value ranges as GNU as checks them: (lo, hi) errors; (wlo, whi) warnings.
+fn range_of(kind: OperandKind) -> Option<((i64, i64), Option<(i64, i64)>)> {
+    use OperandKind::*;
+    Some(match kind {
+        S7 => ((-64, 63), None),
+        S6 => ((-64, 63), Some((-32, 31))),
+        S3 | U3 | S7n | U7 => ((-64, 127), None),
+        U5 => ((0, 31), None),
+        U6 => ((0, 63), None),
+        Scale173 | Scale155 => ((0, 127), None),
+        S10 => ((-512, 511), None),
+        S10b => ((-512, 511), Some((-128, 255))),
+        Off14 => ((-8192, 8191), None),
+        S16 => ((-32768, 32767), None),
+        X16 => ((-32768, 65535), None),
+        U18 => ((0, 262143), None),
+        U14 => ((0, 16383), None),
+        _ => return None,
+    })
+}
+
+impl<'o> Assembler<'o> {
+    fn here(&self) -> u32 {
+        self.bases.get(&self.sect).copied().unwrap_or(0) + self.offsets.get(&self.sect).copied().unwrap_or(0)
+    }
+
+    fn symbol(&self, name: &str) -> Option<i64> {
+        match self.symbols.get(name)? {
+            SymVal::Abs(v) => Some(*v),
+            SymVal::Label(s, off) => Some((self.bases.get(s).copied().unwrap_or(0) + off) as i64),
+        }
+    }
+
+    fn numeric_ref(&self, n: u32, forward: bool) -> Option<i64> {
+        let defs = self.numeric.get(&n)?;
+        let pick = if forward {
+            defs.iter().find(|d| d.0 > self.stmt)
+        } else {
+            defs.iter().rev().find(|d| d.0 < self.stmt)
+        }?;
+        Some((self.bases.get(&pick.1).copied().unwrap_or(0) + pick.2) as i64)
+    }
+
+    fn eval(&self, text: &str) -> Res<(i64, bool)> {
+        let mut e = Expr { s: text.as_bytes(), pos: 0, asm: self, lenient: self.pass == 1, undefined: false };
+        let v = e.parse()?;
+        e.ws();
+        if e.pos != text.len() {
+            return Err((e.pos, format!("junk at end of expression: `{}`", &text[e.pos..])));
+        }
+        Ok((v, e.undefined))
+    }
+
+    fn diag(&mut self, sev: Severity, line: &Line, column: usize, message: impl Into<String>) {
+        if self.pass == 2 || sev == Severity::Error {
+            let d = Diagnostic {
+                severity: sev,
+                location: Location { file: line.file.clone(), line: line.line, column: column.max(1) },
+                message: message.into(),
+                source_line: line.text.clone(),
+            };
+            if !self.diags.contains(&d) {
+                self.diags.push(d);
+            }
+        }
+    }
+
+    fn emit(&mut self, data: &[u8]) {
+        let off = self.offsets.entry(self.sect).or_insert(0);
+        if self.pass == 2 && self.sect != Sect::Bss {
+            let buf = self.bytes.entry(self.sect).or_default();
+            let at = *off as usize;
+            if buf.len() < at + data.len() {
+                buf.resize(at + data.len(), 0);
+            }
+            buf[at..at + data.len()].copy_from_slice(data);
+        }
+        *off += data.len() as u32;
+    }
+
+    fn align_to(&mut self, boundary: u32, fill: Option<u8>) {
+        if boundary <= 1 {
+            return;
+        }
+        let a = self.align.entry(self.sect).or_insert(1);
+        *a = (*a).max(boundary);
+        let off = self.offsets.get(&self.sect).copied().unwrap_or(0);
+        let pad = (boundary - off % boundary) % boundary;
+        if self.sect == Sect::Text && fill.is_none() {
+            // tc-spu.c spu_handle_align: zero bytes to a word, then lnop in an odd slot,
+            // then nop/lnop pairs.
+            let mut bytes = Vec::new();
+            let mut left = pad;
+            let mut pos = off;
+            while left & 3 != 0 {
+                bytes.push(0);
+                left -= 1;
+                pos += 1;
+            }
+            while left > 0 {
+                let word: u32 = if pos & 4 != 0 { 0x0020_0000 } else { 0x4020_0000 };
+                bytes.extend(word.to_be_bytes());
+                left -= 4;
+                pos += 4;
+            }
+            self.emit(&bytes);
+        } else {
+            self.emit(&vec![fill.unwrap_or(0); pad as usize]);
+        }
+    }
+
+    fn read_include(&self, name: &str) -> Option<String> {
+        if let Some((_, text)) = self.opts.virtual_files.iter().find(|(n, _)| n == name) {
+            return Some(text.clone());
+        }
+        for dir in &self.opts.include_dirs {
+            if let Ok(t) = std::fs::read_to_string(dir.join(name)) {
+                return Some(t);
+            }
+        }
+        std::fs::read_to_string(name).ok()
+    }
+
+    /// Processes a list of lines (one file, a macro body or a repetition).
+    fn run_lines(&mut self, lines: &[Line]) {
+        self.depth += 1;
+        if self.depth > 64 {
+            if let Some(l) = lines.first() {
+                self.diag(Severity::Error, l, 1, "macros, includes or repetitions nested too deeply");
+            }
+            self.depth -= 1;
+            return;
+        }
+        let mut i = 0;
+        let mut cond: Vec<(bool, bool)> = Vec::new(); // (active, any branch taken)
+        while i < lines.len() {
+            let line = &lines[i];
+            let text = strip_comment(&line.text);
+            let trimmed = text.trim();
+            let first_word = trimmed.split(|c: char| c.is_whitespace() || c == ',').next().unwrap_or("").to_ascii_lowercase();
+            let active = cond.iter().all(|c| c.0);
+            // Conditionals are tracked even while inactive.
+            match first_word.as_str() {
+                ".if" | ".ifdef" | ".ifndef" | ".ifeq" | ".ifne" | ".ifc" | ".ifnc" => {
+                    let value = if active { self.condition(&first_word, trimmed[first_word.len()..].trim(), line) } else { false };
+                    cond.push((active && value, value));
+                    i += 1;
+                    continue;
+                }
+                ".elseif" => {
+                    let outer = cond.len() < 2 || cond[..cond.len() - 1].iter().all(|c| c.0);
+                    if let Some(top) = cond.last_mut() {
+                        let taken = top.1;
+                        let v = !taken && outer && self.condition(".if", trimmed[7..].trim(), line);
+                        *top = (v, taken || v);
+                    }
+                    i += 1;
+                    continue;
+                }
+                ".else" => {
+                    let outer = cond.len() < 2 || cond[..cond.len() - 1].iter().all(|c| c.0);
+                    if let Some(top) = cond.last_mut() {
+                        *top = (!top.1 && outer, true);
+                    } else {
+                        self.diag(Severity::Error, line, 1, ".else without .if");
+                    }
+                    i += 1;
+                    continue;
+                }
+                ".endif" => {
+                    if cond.pop().is_none() {
+                        self.diag(Severity::Error, line, 1, ".endif without .if");
+                    }
+                    i += 1;
+                    continue;
+                }
+                _ => {}
+            }
+            if !active {
+                i += 1;
+                continue;
+            }
+            // Block directives that swallow lines up to their end.
+            if matches!(first_word.as_str(), ".macro" | ".rept" | ".irp" | ".irpc") {
+                let (body, next) = collect_block(lines, i + 1);
+                if next > lines.len() {
+                    self.diag(Severity::Error, line, 1, format!("missing end of {first_word}"));
+                }
+                let args = trimmed[first_word.len()..].trim().to_string();
+                self.block(&first_word, &args, body, line);
+                i = next;
+                continue;
+            }
+            self.statement(line, &text);
+            i += 1;
+        }
+        if !cond.is_empty() {
+            if let Some(l) = lines.last() {
+                self.diag(Severity::Error, l, 1, "missing .endif");
+            }
+        }
+        self.depth -= 1;
+    }
+
+    fn condition(&mut self, kind: &str, args: &str, line: &Line) -> bool {
+        match kind {
+            ".ifdef" => self.symbols.contains_key(args.trim()),
+            ".ifndef" => !self.symbols.contains_key(args.trim()),
+            ".ifc" | ".ifnc" => {
+                let parts = split_top(args, ',');
+                let eq = parts.first().map(|s| s.trim().trim_matches('\'')) == parts.get(1).map(|s| s.trim().trim_matches('\''));
+                eq == (kind == ".ifc")
+            }
+            _ => match self.eval(args) {
+                Ok((v, _)) => match kind {
+                    ".ifeq" => v == 0,
+                    _ => v != 0,
+                },
+                Err((col, m)) => {
+                    self.diag(Severity::Error, line, col + 1, m);
+                    false
+                }
+            },
+        }
+    }
+
+    fn block(&mut self, kind: &str, args: &str, body: Vec<Line>, line: &Line) {
+        match kind {
+            ".rept" => match self.eval(args) {
+                Ok((n, _)) => {
+                    for _ in 0..n.clamp(0, 1 << 20) {
+                        self.run_lines(&body);
+                    }
+                }
+                Err((c, m)) => self.diag(Severity::Error, line, c + 1, m),
+            },
+            ".irp" | ".irpc" => {
+                let parts = split_top(args, ',');
+                let var = parts.first().map(|s| s.trim().to_string()).unwrap_or_default();
+                let values: Vec<String> = if kind == ".irp" {
+                    parts[1..].iter().map(|s| s.trim().to_string()).collect()
+                } else {
+                    parts.get(1).map(|s| s.trim().chars().map(|c| c.to_string()).collect()).unwrap_or_default()
+                };
+                for v in values {
+                    let expanded: Vec<Line> = body.iter().map(|l| Line { text: substitute(&l.text, &[(var.clone(), v.clone())], None), ..l.clone() }).collect();
+                    self.run_lines(&expanded);
+                }
+            }
+            _ => {
+                // .macro NAME params
+                let mut it = args.splitn(2, |c: char| c.is_whitespace() || c == ',');
+                let name = it.next().unwrap_or("").to_string();
+                let params = it
+                    .next()
+                    .unwrap_or("")
+                    .split(|c: char| c == ',' || c.is_whitespace())
+                    .filter(|s| !s.is_empty())
+                    .map(|p| match p.split_once('=') {
+                        Some((n, d)) => (n.trim().to_string(), Some(d.trim().to_string())),
+                        None => (p.trim().to_string(), None),
+                    })
+                    .collect();
+                self.macros.insert(name.to_ascii_lowercase(), Macro { params, body });
+            }
+        }
+    }
+
+    fn statement(&mut self, line: &Line, text: &str) {
+        for piece in split_top(text, ';') {
+            self.stmt += 1;
+            let mut rest = piece.trim().to_string();
+            // Labels.
+            loop {
+                let Some(colon) = rest.find(':') else { break };
+                let name = rest[..colon].trim();
+                if name.is_empty() || !name.chars().all(is_ident) || name.contains(' ') {
+                    break;
+                }
+                self.define_label(name, line);
+                self.stmt += 1;
+                rest = rest[colon + 1..].trim().to_string();
+            }
+            if rest.is_empty() {
+                continue;
+            }
+            let (word, args) = match rest.find(char::is_whitespace) {
+                Some(p) => (rest[..p].to_string(), rest[p..].trim().to_string()),
+                None => (rest.clone(), String::new()),
+            };
+            let lw = word.to_ascii_lowercase();
+            let col = line.text.find(&word).map(|c| c + 1).unwrap_or(1);
+            let before = (self.sect, self.offsets.get(&self.sect).copied().unwrap_or(0));
+            if let Some(m) = self.macros.get(&lw).cloned() {
+                self.expand_macro(&m, &args, line);
+            } else if lw.starts_with('.') {
+                self.directive(&lw, &args, line, col);
+            } else if args.starts_with('=') {
+                let v = args[1..].trim().to_string();
+                self.set_symbol(&word, &v, line);
+            } else {
+                self.instruction(&lw, &args, line, col);
+            }
+            if self.pass == 2 {
+                let after = self.offsets.get(&before.0).copied().unwrap_or(0);
+                if after > before.1 && self.sect == before.0 {
+                    let base = self.bases.get(&before.0).copied().unwrap_or(0);
+                    let bytes = self.bytes.get(&before.0).map(|b| b[before.1 as usize..(after as usize).min(b.len())].to_vec()).unwrap_or_default();
+                    let words: Vec<String> = bytes.chunks(4).take(4).map(|c| c.iter().map(|b| format!("{b:02x}")).collect()).collect();
+                    self.listing.push_str(&format!("{:5} {:05x} {:<36} {}\n", line.line, base + before.1, words.join(" "), line.text.trim_end()));
+                }
+            }
+        }
+    }
+
+    fn define_label(&mut self, name: &str, line: &Line) {
+        let off = self.offsets.get(&self.sect).copied().unwrap_or(0);
+        if let Ok(n) = name.parse::<u32>() {
+            if self.pass == 1 {
+                self.numeric.entry(n).or_default().push((self.stmt, self.sect, off));
+            }
+            return;
+        }
+        if self.pass == 1 {
+            if let Some(SymVal::Label(..)) = self.symbols.get(name) {
+                self.diag(Severity::Error, line, 1, format!("symbol `{name}` is already defined"));
+            }
+        }
+        self.symbols.insert(name.to_string(), SymVal::Label(self.sect, off));
+    }
+
+    fn set_symbol(&mut self, name: &str, expr: &str, line: &Line) {
+        match self.eval(expr) {
+            Ok((v, _)) => {
+                self.symbols.insert(name.to_string(), SymVal::Abs(v));
+            }
+            Err((c, m)) => self.diag(Severity::Error, line, c + 1, m),
+        }
+    }
+
+    fn expand_macro(&mut self, m: &Macro, args: &str, line: &Line) {
+        self.macro_counter += 1;
+        let given: Vec<String> = if args.trim().is_empty() { vec![] } else { split_top(args, ',').iter().map(|s| s.trim().to_string()).collect() };
+        let mut subst = Vec::new();
+        let mut positional = given.iter();
+        for (name, default) in &m.params {
+            let named = given.iter().find_map(|g| g.split_once('=').filter(|(n, _)| n.trim() == name).map(|(_, v)| v.trim().to_string()));
+            let value = named.or_else(|| positional.next().filter(|g| !g.contains('=')).cloned()).or_else(|| default.clone()).unwrap_or_default();
+            subst.push((name.clone(), value));
+        }
+        let counter = self.macro_counter.to_string();
+        let mut body = Vec::new();
+        for l in &m.body {
+            if strip_comment(&l.text).trim().eq_ignore_ascii_case(".exitm") {
+                break;
+            }
+            body.push(Line { text: substitute(&l.text, &subst, Some(&counter)), file: line.file.clone(), line: line.line });
+        }
+        self.run_lines(&body);
+    }
+
+    fn data_values(&mut self, args: &str, line: &Line, col: usize) -> Vec<i64> {
+        let mut out = Vec::new();
+        if args.trim().is_empty() {
+            return out;
+        }
+        for part in split_top(args, ',') {
+            match self.eval(part.trim()) {
+                Ok((v, _)) => out.push(v),
+                Err((c, m)) => {
+                    self.diag(Severity::Error, line, col + c, m);
+                    out.push(0);
+                }
+            }
+        }
+        out
+    }
+
+    fn directive(&mut self, d: &str, args: &str, line: &Line, col: usize) {
+        match d {
+            ".text" => self.sect = Sect::Text,
+            ".data" | ".rodata" => self.sect = Sect::Data,
+            ".bss" => self.sect = Sect::Bss,
+            ".section" => {
+                let name = args.split(',').next().unwrap_or("").trim().trim_matches('"');
+                self.sect = if name.starts_with(".text") {
+                    Sect::Text
+                } else if name.starts_with(".bss") {
+                    Sect::Bss
+                } else {
+                    Sect::Data
+                };
+            }
+            ".align" | ".p2align" | ".balign" => {
+                let vals = self.data_values(args, line, col);
+                let v = vals.first().copied().unwrap_or(0);
+                let boundary = if d == ".balign" { v } else { 1i64 << v.clamp(0, 30) };
+                if boundary <= 0 || boundary & (boundary - 1) != 0 {
+                    self.diag(Severity::Error, line, col, format!("alignment not a power of 2: {boundary}"));
+                    return;
+                }
+                let fill = if vals.len() > 1 { Some(vals[1] as u8) } else { None };
+                self.align_to(boundary as u32, fill);
+            }
+            ".byte" | ".short" | ".half" | ".hword" | ".2byte" | ".int" | ".long" | ".word" | ".4byte" | ".quad" | ".8byte" => {
+                let size = match d {
+                    ".byte" => 1,
+                    ".short" | ".half" | ".hword" | ".2byte" => 2,
+                    ".quad" | ".8byte" => 8,
+                    _ => 4,
+                };
+                for v in self.data_values(args, line, col) {
+                    let b = v.to_be_bytes();
+                    self.emit(&b[8 - size..]);
+                }
+            }
+            ".float" | ".single" | ".ffloat" | ".double" | ".dfloat" => {
+                for part in split_top(args, ',') {
+                    let t = part.trim();
+                    let v: f64 = match t.parse::<f64>() {
+                        Ok(v) => v,
+                        Err(_) => match self.eval(t) {
+                            Ok((v, _)) => v as f64,
+                            Err((c, m)) => {
+                                self.diag(Severity::Error, line, col + c, m);
+                                0.0
+                            }
+                        },
+                    };
+                    if d.contains('d') {
+                        self.emit(&v.to_be_bytes());
+                    } else {
+                        self.emit(&(v as f32).to_be_bytes());
+                    }
+                }
+            }
+            ".ascii" | ".asciz" | ".string" => {
+                for part in split_top(args, ',') {
+                    match unquote(part.trim()) {
+                        Some(mut bytes) => {
+                            if d != ".ascii" {
+                                bytes.push(0);
+                            }
+                            self.emit(&bytes);
+                        }
+                        None => self.diag(Severity::Error, line, col, "expected a string"),
+                    }
+                }
+            }
+            ".space" | ".skip" | ".zero" => {
+                let vals = self.data_values(args, line, col);
+                let n = vals.first().copied().unwrap_or(0);
+                if !(0..=1 << 24).contains(&n) {
+                    self.diag(Severity::Error, line, col, format!("bad .space size {n}"));
+                    return;
+                }
+                let fill = vals.get(1).copied().unwrap_or(0) as u8;
+                self.emit(&vec![fill; n as usize]);
+            }
+            ".fill" => {
+                let vals = self.data_values(args, line, col);
+                let (n, size, value) = (vals.first().copied().unwrap_or(0), vals.get(1).copied().unwrap_or(1).clamp(0, 8), vals.get(2).copied().unwrap_or(0));
+                for _ in 0..n.clamp(0, 1 << 24) {
+                    let b = value.to_be_bytes();
+                    let s = size as usize;
+                    let mut word = vec![0u8; s];
+                    let k = s.min(4);
+                    word[s - k..].copy_from_slice(&b[8 - k..]);
+                    self.emit(&word);
+                }
+            }
+            ".global" | ".globl" => {
+                for n in args.split(',') {
+                    let n = n.trim().to_string();
+                    if !n.is_empty() && !self.globals.contains(&n) {
+                        self.globals.push(n);
+                    }
+                }
+            }
+            ".set" | ".equ" | ".eqv" => {
+                let parts = split_top(args, ',');
+                if parts.len() < 2 {
+                    self.diag(Severity::Error, line, col, format!("{d} needs a name and a value"));
+                    return;
+                }
+                let name = parts[0].trim().to_string();
+                let expr = parts[1..].join(",");
+                self.set_symbol(&name, expr.trim(), line);
+            }
+            ".include" => {
+                let name = args.trim().trim_matches('"');
+                match self.read_include(name) {
+                    Some(text) => {
+                        let lines = to_lines(&text, name);
+                        self.run_lines(&lines);
+                    }
+                    None => self.diag(Severity::Error, line, col, format!("can't open {name} for reading")),
+                }
+            }
+            ".local" | ".type" | ".size" | ".file" | ".ident" | ".loc" | ".cfi_startproc" | ".cfi_endproc" | ".brinfo" | ".weak" | ".hidden" => {}
+            ".end" => {}
+            ".endm" | ".endr" => self.diag(Severity::Error, line, col, format!("{d} without a matching start")),
+            ".err" | ".error" => self.diag(Severity::Error, line, col, args.trim().trim_matches('"').to_string()),
+            ".warning" => self.diag(Severity::Warning, line, col, args.trim().trim_matches('"').to_string()),
+            _ => self.diag(Severity::Error, line, col, format!("unknown pseudo-op: `{d}`")),
+        }
+    }
+
+    fn register(&self, text: &str, kind: OperandKind) -> Res<i64> {
+        let t = text.trim();
+        let lower = t.to_ascii_lowercase();
+        let body = lower.strip_prefix('$').unwrap_or(&lower);
+        let numeric = |s: &str| s.parse::<i64>().ok();
+        let v = match kind {
+            OperandKind::Ch => {
+                if let Some(n) = body.strip_prefix("ch").and_then(numeric) {
+                    Some(n)
+                } else if let Some((_, n)) = CHANNELS.iter().find(|(name, _)| name.eq_ignore_ascii_case(t.trim_start_matches('$'))) {
+                    Some(*n as i64)
+                } else {
+                    numeric(body)
+                }
+            }
+            OperandKind::Spr => body.strip_prefix("sp").and_then(numeric).or_else(|| numeric(body)),
+            _ => match body {
+                "lr" | "rp" => Some(0),
+                "sp" => Some(1),
+                "fp" => Some(127),
+                _ => numeric(body),
+            },
+        };
+        let v = match v {
+            Some(v) => v,
+            None if t.starts_with('$') => return Err((0, format!("invalid register `{t}`"))),
+            None => self.eval(t)?.0,
+        };
+        if !(0..128).contains(&v) {
+            return Err((0, format!("register number {v} out of range [0, 127]")));
+        }
+        Ok(v)
+    }
+
+    fn instruction(&mut self, mnemonic: &str, args: &str, line: &Line, col: usize) {
+        let pc = self.here();
+        if self.sect != Sect::Text && self.pass == 2 {
+            // GNU as allows code in any section; nothing to check here.
+        }
+        let forms: Vec<&'static FormInfo> = forms_named(mnemonic).collect();
+        if forms.is_empty() {
+            self.diag(Severity::Error, line, col, format!("unknown instruction `{mnemonic}`"));
+            self.emit(&[0; 4]);
+            return;
+        }
+        let texts: Vec<String> = if args.trim().is_empty() { vec![] } else { split_top(args, ',').iter().map(|s| s.trim().to_string()).collect() };
+        let mut last_err = None;
+        for form in &forms {
+            match self.operands(form, &texts, pc) {
+                Ok((values, warnings)) => {
+                    if self.pass == 2 {
+                        for w in warnings {
+                            self.diag(Severity::Warning, line, col, w);
+                        }
+                    }
+                    let word = encode(form, &values, pc);
+                    self.emit(&word.to_be_bytes());
+                    return;
+                }
+                Err(e) => last_err = Some(e),
+            }
+        }
+        let (c, m) = last_err.unwrap_or((0, "bad operands".into()));
+        let arg_col = line.text.find(args.trim()).map(|p| p + 1).unwrap_or(col);
+        self.diag(Severity::Error, line, if c == 0 { arg_col } else { arg_col + c }, m);
+        self.emit(&[0; 4]);
+    }
+
+    /// Parses the operand texts for `form`, returning the values `encode` takes.
+    fn operands(&self, form: &FormInfo, texts: &[String], pc: u32) -> Res<(Vec<i64>, Vec<String>)> {
+        let kinds = form.operands;
+        let expected = kinds.iter().filter(|k| **k != OperandKind::ParenRa).count();
+        if texts.len() != expected {
+            return Err((0, format!("`{}` takes {expected} operand(s), got {}", form.mnemonic, texts.len())));
+        }
+        let mut values = Vec::new();
+        let mut warnings = Vec::new();
+        let mut t = texts.iter();
+        let mut i = 0;
+        while i < kinds.len() {
+            let kind = kinds[i];
+            let text = t.next().unwrap();
+            if kinds.get(i + 1) == Some(&OperandKind::ParenRa) {
+                let Some(open) = text.rfind('(') else {
+                    return Err((0, format!("expected `offset(register)`, got `{text}`")));
+                };
+                let inner = text[open + 1..].trim_end().trim_end_matches(')');
+                let off_text = text[..open].trim();
+                let off = if off_text.is_empty() { 0 } else { self.eval(off_text)?.0 };
+                values.push(self.check_immediate(kind, off, pc, &mut warnings)?);
+                values.push(self.register(inner, OperandKind::Ra)?);
+                i += 2;
+                continue;
+            }
+            let v = match kind {
+                OperandKind::Rt | OperandKind::Ra | OperandKind::Rb | OperandKind::Rc | OperandKind::Ch | OperandKind::Spr => self.register(text, kind)?,
+                _ => {
+                    if text.starts_with('$') {
+                        return Err((0, format!("expected an immediate, got register `{text}`")));
+                    }
+                    let v = self.eval(text)?.0;
+                    self.check_immediate(kind, v, pc, &mut warnings)?
+                }
+            };
+            values.push(v);
+            i += 1;
+        }
+        Ok((values, warnings))
+    }
+
+    fn check_immediate(&self, kind: OperandKind, v: i64, pc: u32, warnings: &mut Vec<String>) -> Res<i64> {
+        if self.pass == 1 {
+            return Ok(v);
+        }
+        match kind {
+            OperandKind::Off14 => {
+                if v % 16 != 0 {
+                    warnings.push(format!("offset {v} is not a multiple of 16; the low 4 bits are ignored"));
+                }
+                if !(-8192..=8191).contains(&v) {
+                    return Err((0, format!("Constant expression {v} out of range, [-8192, 8191].")));
+                }
+            }
+            OperandKind::Rel18 => {
+                let off = v - pc as i64;
+                if off % 4 != 0 || !(-(1 << 17)..(1 << 17)).contains(&off) {
+                    return Err((0, format!("branch target {v:#x} out of range or misaligned")));
+                }
+            }
+            OperandKind::Abs18 => {
+                if !(0..(1 << 18)).contains(&v) && !(-(1 << 17)..0).contains(&v) {
+                    return Err((0, format!("address {v:#x} out of range")));
+                }
+            }
+            OperandKind::BrInst => {
+                let off = v - pc as i64;
+                if off % 4 != 0 || !(-1024..=1023).contains(&off) {
+                    return Err((0, format!("branch {v:#x} too far from its hint (must be within -1024..1023 bytes)")));
+                }
+            }
+            _ => {
+                if let Some(((lo, hi), warn)) = range_of(kind) {
+                    if v < lo || v > hi {
+                        return Err((0, format!("Constant expression {v} out of range, [{lo}, {hi}].")));
+                    }
+                    if let Some((wlo, whi)) = warn {
+                        if v < wlo || v > whi {
+                            warnings.push(format!("Constant expression {v} out of range, [{wlo}, {whi}]."));
+                        }
+                    }
+                }
+            }
+        }
+        Ok(v)
+    }
+}
+
+fn unquote(s: &str) -> Option<Vec<u8>> {
+    let inner = s.strip_prefix('"')?.strip_suffix('"')?;
+    let mut out = Vec::new();
+    let mut chars = inner.chars();
+    while let Some(c) = chars.next() {
+        if c != '\\' {
+            let mut buf = [0u8; 4];
+            out.extend(c.encode_utf8(&mut buf).as_bytes());
+            continue;
+        }
+        match chars.next()? {
+            'n' => out.push(b'\n'),
+            't' => out.push(b'\t'),
+            'r' => out.push(b'\r'),
+            '0' => out.push(0),
+            '\\' => out.push(b'\\'),
+            '"' => out.push(b'"'),
+            other => out.push(other as u8),
+        }
+    }
+    Some(out)
+}
+
+/// Replaces `\name` (and `\@` with the macro counter) in a macro or repetition body.
+fn substitute(text: &str, vars: &[(String, String)], counter: Option<&str>) -> String {
+    let mut out = String::new();
+    let b = text.as_bytes();
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'\\' {
+            if let Some(c) = counter {
+                if b.get(i + 1) == Some(&b'@') {
+                    out.push_str(c);
+                    i += 2;
+                    continue;
+                }
+            }
+            let start = i + 1;
+            let mut end = start;
+            while end < b.len() && is_ident(b[end] as char) && b[end] != b'.' && b[end] != b'$' {
+                end += 1;
+            }
+            let name = &text[start..end];
+            if let Some((_, v)) = vars.iter().find(|(n, _)| n == name) {
+                out.push_str(v);
+                i = end;
+                // `\()` separates a parameter from following text.
+                if text[i..].starts_with("()") {
+                    i += 2;
+                }
+                continue;
+            }
+        }
+        out.push(b[i] as char);
+        i += 1;
+    }
+    out
+}
+
+fn collect_block(lines: &[Line], start: usize) -> (Vec<Line>, usize) {
+    let mut depth = 1;
+    let mut i = start;
+    while i < lines.len() {
+        let w = strip_comment(&lines[i].text).trim().split_whitespace().next().unwrap_or("").to_ascii_lowercase();
+        match w.as_str() {
+            ".macro" | ".rept" | ".irp" | ".irpc" => depth += 1,
+            ".endm" | ".endr" => {
+                depth -= 1;
+                if depth == 0 {
+                    return (lines[start..i].to_vec(), i + 1);
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    (lines[start..].to_vec(), lines.len() + 1)
+}
+
+fn to_lines(text: &str, file: &str) -> Vec<Line> {
+    text.lines().enumerate().map(|(i, l)| Line { text: l.to_string(), file: file.to_string(), line: i + 1 }).collect()
+}
+
+/// Assembles `source` (named `file_name` in diagnostics).
+pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output, Vec<Diagnostic>> {
+    let lines = to_lines(source, file_name);
+    let mut asm = Assembler {
+        opts,
+        pass: 1,
+        sect: Sect::Text,
+        offsets: HashMap::new(),
+        align: HashMap::new(),
+        bases: HashMap::new(),
+        symbols: HashMap::new(),
+        globals: Vec::new(),
+        numeric: HashMap::new(),
+        stmt: 0,
+        bytes: HashMap::new(),
+        diags: Vec::new(),
+        macros: HashMap::new(),
+        macro_counter: 0,
+        listing: String::new(),
+        depth: 0,
+    };
+    let predefine = |asm: &mut Assembler| {
+        for (n, v) in &opts.defines {
+            asm.symbols.insert(n.clone(), SymVal::Abs(*v));
+        }
+    };
+    predefine(&mut asm);
+    asm.run_lines(&lines);
+    // Lay the sections out: text at 0, data and bss after, each at its alignment.
+    let size = |s: Sect, a: &Assembler| a.offsets.get(&s).copied().unwrap_or(0);
+    let align = |s: Sect, a: &Assembler| a.align.get(&s).copied().unwrap_or(16).max(16);
+    let text_size = size(Sect::Text, &asm);
+    let data_base = text_size.div_ceil(align(Sect::Data, &asm)) * align(Sect::Data, &asm);
+    let data_size = size(Sect::Data, &asm);
+    let bss_base = (data_base + data_size).div_ceil(align(Sect::Bss, &asm)) * align(Sect::Bss, &asm);
+    let bss_size = size(Sect::Bss, &asm);
+    asm.bases = HashMap::from([(Sect::Text, 0), (Sect::Data, data_base), (Sect::Bss, bss_base)]);
+    // Pass 2.
+    asm.pass = 2;
+    asm.sect = Sect::Text;
+    asm.offsets.clear();
+    asm.stmt = 0;
+    asm.macros.clear();
+    asm.macro_counter = 0;
+    let labels: HashMap<String, SymVal> = asm.symbols.iter().filter(|(_, v)| matches!(v, SymVal::Label(..))).map(|(k, v)| (k.clone(), *v)).collect();
+    asm.symbols = labels;
+    predefine(&mut asm);
+    asm.run_lines(&lines);
+    let (errors, warnings): (Vec<_>, Vec<_>) = asm.diags.into_iter().partition(|d| d.severity == Severity::Error);
+    if !errors.is_empty() {
+        let mut all = errors;
+        all.extend(warnings);
+        return Err(all);
+    }
+    let end = bss_base + bss_size;
+    if end as usize > 256 * 1024 {
+        return Err(vec![Diagnostic {
+            severity: Severity::Error,
+            location: Location { file: file_name.into(), line: 1, column: 1 },
+            message: format!("program of {end} bytes does not fit the 256 KiB local store"),
+            source_line: lines.first().map(|l| l.text.clone()).unwrap_or_default(),
+        }]);
+    }
+    let mut image = vec![0u8; end as usize];
+    for (s, base) in [(Sect::Text, 0u32), (Sect::Data, data_base)] {
+        if let Some(b) = asm.bytes.get(&s) {
+            image[base as usize..base as usize + b.len()].copy_from_slice(b);
+        }
+    }
+    let mut symbols: Vec<(String, u32)> = asm
+        .symbols
+        .iter()
+        .filter_map(|(n, v)| match v {
+            SymVal::Label(s, off) if !n.starts_with(".L") => Some((n.clone(), asm.bases[s] + off)),
+            _ => None,
+        })
+        .collect();
+    symbols.sort_by(|a, b| a.1.cmp(&b.1).then(a.0.cmp(&b.0)));
+    let entry = symbols.iter().find(|(n, _)| n == "_start").map(|s| s.1).unwrap_or(0);
+    let sections = vec![
+        (".text".to_string(), 0, text_size, true),
+        (".data".to_string(), data_base, data_size, false),
+        (".bss".to_string(), bss_base, bss_size, false),
+    ];
+    let elf = crate::elf::write_elf(&image, &sections, &symbols, &asm.globals, entry);
+    Ok(Output { image, elf, symbols, entry, listing: asm.listing, warnings, sections })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn words(src: &str) -> Vec<u32> {
+        let out = assemble(src, "t.s", &Options::default()).unwrap_or_else(|e| panic!("{}", e.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n")));
+        let text = out.sections[0].2 as usize;
+        out.image[..text].chunks(4).map(|c| u32::from_be_bytes([c[0], c[1], c[2], c[3]])).collect()
+    }
+
+    #[test]
+    fn readme_encodings() {
+        assert_eq!(words("il $3,42\nfma $7,$6,$5,$4\nlqd $5,32($1)\nbi $3\nbid $3"), vec![0x40801503, 0xe0e14304, 0x34008085, 0x35000180, 0x35080180]);
+    }
+
+    #[test]
+    fn labels_locals_and_set_registers() {
+        // `1b` on the line that defines `1:` is that very label (offset 0), as in GNU as.
+        let w = words(".set R, 5\n1: ai R, R, 1\n brnz R, 1b\n br 2f\n2: stop\n 1: brz R, 1b\n");
+        assert_eq!(w[0], 0x1c004285);
+        assert_eq!(w[1], 0x217fff85); // brnz $5, -4 bytes
+        assert_eq!(w[2], 0x32000080); // br +4
+        assert_eq!(w[4], 0x20000005); // brz $5, 0
+    }
+
+    #[test]
+    fn irp_with_register_expressions() {
+        let w = words(".irp J, 0, 1\n ai (\\J+80), (\\J+80), 1\n.endr\n");
+        // ai $80,$80,1 and ai $81,$81,1
+        assert_eq!(w, vec![0x1c006850, 0x1c0068d1]);
+    }
+
+    #[test]
+    fn alignment_pads_with_nop_and_lnop() {
+        let w = words("il $3,1\n.align 4\nil $3,2\n");
+        assert_eq!(w, vec![0x40800083, 0x00200000, 0x40200000, 0x00200000, 0x40800103]);
+    }
+
+    #[test]
+    fn errors_name_file_line_column_and_continue() {
+        let e = assemble("il $3, 40000\nfoo $1\nai $3,$3,1\nlqd $3, 4($1)\n", "bad.s", &Options::default()).unwrap_err();
+        let text: Vec<String> = e.iter().map(|d| format!("{}:{}", d.location.line, d.message)).collect();
+        assert!(text.iter().any(|t| t.starts_with("1:Constant expression 40000 out of range")), "{text:?}");
+        assert!(text.iter().any(|t| t.starts_with("2:unknown instruction")), "{text:?}");
+    }
+}
