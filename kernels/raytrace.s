@@ -226,14 +226,18 @@ _start:
         shli    $10, $9, 4
         a       TDATA, TTAGS, $10
         il      ZERO, 0
-        # invalidate every tag
+        # invalidate every tag of both caches
         il      $10, -1
         ori     $11, BTAGS, 0
-        a       $12, $8, $9                   # total tag lines
 1:      stqd    $10, 0($11)
         ai      $11, $11, 16
-        ai      $12, $12, -1
-        brnz    $12, 1b
+        ai      $8, $8, -1
+        brnz    $8, 1b
+        ori     $11, TTAGS, 0
+1:      stqd    $10, 0($11)
+        ai      $11, $11, 16
+        ai      $9, $9, -1
+        brnz    $9, 1b
         il      ZERO, 0
         ilhu    ONE, 0x3f80
         ilhu    BIG, 0x7149
@@ -264,8 +268,8 @@ next_tile:
         wrch    $MFC_Cmd, $6
         rdch    $7, $MFC_RdAtomicStat
         lqd     $8, 0($5)
-        a       $10, $8, $9
-        stqd    $10, 0($5)
+        a       $80, $8, $9
+        stqd    $80, 0($5)
         wrch    $MFC_LSA, $5
         wrch    $MFC_EAH, ZERO
         wrch    $MFC_EAL, EACNT

@@ -13,9 +13,15 @@ fn be32(v: u32) -> [u8; 4] {
 
 /// Writes an executable: one PT_LOAD segment covering the image at address 0, section
 /// headers for the sections, a symbol table and the string tables.
-pub fn write_elf(image: &[u8], sections: &[(String, u32, u32, bool)], symbols: &[(String, u32)], globals: &[String], entry: u32) -> Vec<u8> {
+pub fn write_elf(
+    image: &[u8],
+    sections: &[(String, u32, u32, bool)],
+    symbols: &[(String, u32)],
+    globals: &[String],
+    entry: u32,
+) -> Vec<u8> {
     let mut shstr = vec![0u8];
-    let mut name_off = |s: &str, table: &mut Vec<u8>| {
+    let name_off = |s: &str, table: &mut Vec<u8>| {
         let off = table.len() as u32;
         table.extend(s.as_bytes());
         table.push(0);
@@ -32,7 +38,8 @@ pub fn write_elf(image: &[u8], sections: &[(String, u32, u32, bool)], symbols: &
         }
         1
     };
-    let mut ordered: Vec<&(String, u32)> = symbols.iter().filter(|s| !globals.contains(&s.0)).collect();
+    let mut ordered: Vec<&(String, u32)> =
+        symbols.iter().filter(|s| !globals.contains(&s.0)).collect();
     let first_global = ordered.len() + 1;
     ordered.extend(symbols.iter().filter(|s| globals.contains(&s.0)));
     for (name, addr) in ordered {
@@ -96,7 +103,12 @@ pub fn write_elf(image: &[u8], sections: &[(String, u32, u32, bool)], symbols: &
     out.extend(be32(image_off));
     out.extend(be32(0));
     out.extend(be32(0));
-    let file_size = sections.iter().filter(|s| s.0 != ".bss").map(|s| s.1 + s.2).max().unwrap_or(0);
+    let file_size = sections
+        .iter()
+        .filter(|s| s.0 != ".bss")
+        .map(|s| s.1 + s.2)
+        .max()
+        .unwrap_or(0);
     out.extend(be32(file_size));
     out.extend(be32(image.len() as u32));
     out.extend(be32(7));
@@ -104,20 +116,84 @@ pub fn write_elf(image: &[u8], sections: &[(String, u32, u32, bool)], symbols: &
     out.resize(image_off as usize, 0);
     out.extend(&body);
     // Section headers.
-    let sh = |out: &mut Vec<u8>, name: u32, ty: u32, flags: u32, addr: u32, off: u32, size: u32, link: u32, info: u32, align: u32, entsize: u32| {
+    let sh = |out: &mut Vec<u8>,
+              name: u32,
+              ty: u32,
+              flags: u32,
+              addr: u32,
+              off: u32,
+              size: u32,
+              link: u32,
+              info: u32,
+              align: u32,
+              entsize: u32| {
         for v in [name, ty, flags, addr, off, size, link, info, align, entsize] {
             out.extend(be32(v));
         }
     };
     sh(&mut out, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0);
     for ((name, addr, size, code), n) in sections.iter().zip(&names) {
-        let (ty, flags) = if name == ".bss" { (8, 3) } else if *code { (1, 6) } else { (1, 3) };
-        sh(&mut out, *n, ty, flags, *addr, image_off + addr, *size, 0, 0, 16, 0);
+        let (ty, flags) = if name == ".bss" {
+            (8, 3)
+        } else if *code {
+            (1, 6)
+        } else {
+            (1, 3)
+        };
+        sh(
+            &mut out,
+            *n,
+            ty,
+            flags,
+            *addr,
+            image_off + addr,
+            *size,
+            0,
+            0,
+            16,
+            0,
+        );
     }
     let symtab_index = sections.len() as u32 + 1;
-    sh(&mut out, symtab_name, 2, 0, 0, symtab_off, symtab.len() as u32, symtab_index + 1, first_global as u32, 4, 16);
-    sh(&mut out, strtab_name, 3, 0, 0, strtab_off, strtab.len() as u32, 0, 0, 1, 0);
-    sh(&mut out, shstrtab_name, 3, 0, 0, shstr_off, shstr.len() as u32, 0, 0, 1, 0);
+    sh(
+        &mut out,
+        symtab_name,
+        2,
+        0,
+        0,
+        symtab_off,
+        symtab.len() as u32,
+        symtab_index + 1,
+        first_global as u32,
+        4,
+        16,
+    );
+    sh(
+        &mut out,
+        strtab_name,
+        3,
+        0,
+        0,
+        strtab_off,
+        strtab.len() as u32,
+        0,
+        0,
+        1,
+        0,
+    );
+    sh(
+        &mut out,
+        shstrtab_name,
+        3,
+        0,
+        0,
+        shstr_off,
+        shstr.len() as u32,
+        0,
+        0,
+        1,
+        0,
+    );
     out
 }
 
@@ -133,8 +209,18 @@ pub struct LoadedElf {
 
 /// Reads an SPU ELF executable; never panics on malformed input.
 pub fn read_elf(bytes: &[u8]) -> Result<LoadedElf, String> {
-    let u16_at = |o: usize| bytes.get(o..o + 2).map(|b| u16::from_be_bytes([b[0], b[1]])).ok_or("truncated ELF file");
-    let u32_at = |o: usize| bytes.get(o..o + 4).map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]])).ok_or("truncated ELF file");
+    let u16_at = |o: usize| {
+        bytes
+            .get(o..o + 2)
+            .map(|b| u16::from_be_bytes([b[0], b[1]]))
+            .ok_or("truncated ELF file")
+    };
+    let u32_at = |o: usize| {
+        bytes
+            .get(o..o + 4)
+            .map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+            .ok_or("truncated ELF file")
+    };
     if bytes.get(0..4) != Some(&[0x7f, b'E', b'L', b'F']) {
         return Err("not an ELF file".into());
     }
@@ -147,19 +233,40 @@ pub fn read_elf(bytes: &[u8]) -> Result<LoadedElf, String> {
     let entry = u32_at(24)?;
     let (phoff, shoff) = (u32_at(28)? as usize, u32_at(32)? as usize);
     let (phentsize, phnum) = (u16_at(42)? as usize, u16_at(44)? as usize);
-    let (shentsize, shnum, shstrndx) = (u16_at(46)? as usize, u16_at(48)? as usize, u16_at(50)? as usize);
+    let (shentsize, shnum, shstrndx) = (
+        u16_at(46)? as usize,
+        u16_at(48)? as usize,
+        u16_at(50)? as usize,
+    );
     let slice = |off: u32, size: u32| -> Result<&[u8], String> {
-        bytes.get(off as usize..(off as usize).checked_add(size as usize).ok_or("bad size")?).ok_or_else(|| "ELF data out of bounds".to_string())
+        bytes
+            .get(
+                off as usize
+                    ..(off as usize)
+                        .checked_add(size as usize)
+                        .ok_or("bad size")?,
+            )
+            .ok_or_else(|| "ELF data out of bounds".to_string())
     };
-    let mut out = LoadedElf { entry, ..Default::default() };
+    let mut out = LoadedElf {
+        entry,
+        ..Default::default()
+    };
     for i in 0..phnum.min(64) {
         let p = phoff + i * phentsize.max(32);
         if u32_at(p)? != 1 {
             continue;
         }
-        let (off, vaddr, filesz, memsz) = (u32_at(p + 4)?, u32_at(p + 8)?, u32_at(p + 16)?, u32_at(p + 20)?);
+        let (off, vaddr, filesz, memsz) = (
+            u32_at(p + 4)?,
+            u32_at(p + 8)?,
+            u32_at(p + 16)?,
+            u32_at(p + 20)?,
+        );
         if memsz > 256 * 1024 || filesz > memsz {
-            return Err(format!("segment at {vaddr:#x} of {memsz} bytes does not fit the local store"));
+            return Err(format!(
+                "segment at {vaddr:#x} of {memsz} bytes does not fit the local store"
+            ));
         }
         let mut data = slice(off, filesz)?.to_vec();
         data.resize(memsz as usize, 0);
@@ -171,14 +278,27 @@ pub fn read_elf(bytes: &[u8]) -> Result<LoadedElf, String> {
         let name = |table: (u32, u32), off: u32| -> String {
             let start = (table.0 + off) as usize;
             let end = (table.0 + table.1) as usize;
-            bytes.get(start..end.min(bytes.len())).map(|b| String::from_utf8_lossy(b.split(|c| *c == 0).next().unwrap_or(&[])).into_owned()).unwrap_or_default()
+            bytes
+                .get(start..end.min(bytes.len()))
+                .map(|b| {
+                    String::from_utf8_lossy(b.split(|c| *c == 0).next().unwrap_or(&[])).into_owned()
+                })
+                .unwrap_or_default()
         };
         let shstr = strtab_of(shstrndx.min(shnum.saturating_sub(1)))?;
         for i in 1..shnum.min(256) {
-            let (ty, flags, addr, off, size, link) = (sh(i, 1)?, sh(i, 2)?, sh(i, 3)?, sh(i, 4)?, sh(i, 5)?, sh(i, 6)?);
+            let (ty, flags, addr, off, size, link) = (
+                sh(i, 1)?,
+                sh(i, 2)?,
+                sh(i, 3)?,
+                sh(i, 4)?,
+                sh(i, 5)?,
+                sh(i, 6)?,
+            );
             let nm = name(shstr, sh(i, 0)?);
             if ty == 1 && flags & 2 != 0 {
-                out.sections.push((nm, addr, slice(off, size)?.to_vec(), flags & 4 != 0));
+                out.sections
+                    .push((nm, addr, slice(off, size)?.to_vec(), flags & 4 != 0));
             } else if ty == 2 {
                 let strtab = strtab_of(link as usize)?;
                 let data = slice(off, size)?;
@@ -208,7 +328,13 @@ mod tests {
     fn round_trip() {
         let image = vec![0x40, 0x80, 0x15, 0x03, 0, 0, 0x20, 0];
         let sections = vec![(".text".to_string(), 0, 8, true)];
-        let elf = write_elf(&image, &sections, &[("_start".into(), 0), ("x".into(), 4)], &["_start".into()], 0);
+        let elf = write_elf(
+            &image,
+            &sections,
+            &[("_start".into(), 0), ("x".into(), 4)],
+            &["_start".into()],
+            0,
+        );
         let back = read_elf(&elf).unwrap();
         assert_eq!(back.segments, vec![(0, image.clone())]);
         assert_eq!(back.sections[0].2, image);

@@ -42,7 +42,11 @@ impl std::fmt::Display for Diagnostic {
             Severity::Warning => "warning",
         };
         let l = &self.location;
-        writeln!(f, "{}:{}:{}: {kind}: {}", l.file, l.line, l.column, self.message)?;
+        writeln!(
+            f,
+            "{}:{}:{}: {kind}: {}",
+            l.file, l.line, l.column, self.message
+        )?;
         writeln!(f, "    {}", self.source_line)?;
         write!(f, "    {}^", " ".repeat(l.column.saturating_sub(1)))
     }
@@ -276,11 +280,31 @@ impl Expr<'_, '_> {
         loop {
             self.ws();
             let ops: &[(&str, u8)] = &[
-                ("||", 1), ("&&", 2), ("==", 4), ("!=", 4), ("<>", 4), ("<=", 5), (">=", 5),
-                ("<<", 6), (">>", 6), ("<", 5), (">", 5), ("|", 3), ("^", 3), ("&", 3),
-                ("+", 7), ("-", 7), ("*", 8), ("/", 8), ("%", 8), ("!", 3),
+                ("||", 1),
+                ("&&", 2),
+                ("==", 4),
+                ("!=", 4),
+                ("<>", 4),
+                ("<=", 5),
+                (">=", 5),
+                ("<<", 6),
+                (">>", 6),
+                ("<", 5),
+                (">", 5),
+                ("|", 3),
+                ("^", 3),
+                ("&", 3),
+                ("+", 7),
+                ("-", 7),
+                ("*", 8),
+                ("/", 8),
+                ("%", 8),
+                ("!", 3),
             ];
-            let Some((op, prec)) = ops.iter().find(|(o, _)| self.s[self.pos..].starts_with(o.as_bytes())) else {
+            let Some((op, prec)) = ops
+                .iter()
+                .find(|(o, _)| self.s[self.pos..].starts_with(o.as_bytes()))
+            else {
                 return Ok(lhs);
             };
             if *prec < min_prec.max(1) || *prec <= min_prec && min_prec > 0 && false {
@@ -313,7 +337,11 @@ impl Expr<'_, '_> {
                     if rhs == 0 {
                         return self.err("division by zero");
                     }
-                    if *op == "/" { lhs / rhs } else { lhs % rhs }
+                    if *op == "/" {
+                        lhs / rhs
+                    } else {
+                        lhs % rhs
+                    }
                 }
                 _ => unreachable!(),
             };
@@ -341,7 +369,9 @@ impl Expr<'_, '_> {
         }
     }
     fn primary(&mut self) -> Res<i64> {
-        let Some(c) = self.peek() else { return self.err("expected an expression") };
+        let Some(c) = self.peek() else {
+            return self.err("expected an expression");
+        };
         if c == '(' {
             self.pos += 1;
             let v = self.parse()?;
@@ -364,7 +394,11 @@ impl Expr<'_, '_> {
             let text = std::str::from_utf8(&self.s[start..self.pos]).unwrap();
             // Numeric local label reference: 1b / 1f.
             if let Some(n) = text.strip_suffix('b').or_else(|| text.strip_suffix('f')) {
-                if !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()) && !text.starts_with("0x") && !text.starts_with("0b") {
+                if !n.is_empty()
+                    && n.bytes().all(|b| b.is_ascii_digit())
+                    && !text.starts_with("0x")
+                    && !text.starts_with("0b")
+                {
                     let forward = text.ends_with('f');
                     return match self.asm.numeric_ref(n.parse().unwrap_or(0), forward) {
                         Some(v) => Ok(v),
@@ -378,7 +412,12 @@ impl Expr<'_, '_> {
             }
             return parse_number(text).ok_or((start, format!("bad number `{text}`")));
         }
-        if c == '.' && !self.s.get(self.pos + 1).is_some_and(|b| is_ident(*b as char)) {
+        if c == '.'
+            && !self
+                .s
+                .get(self.pos + 1)
+                .is_some_and(|b| is_ident(*b as char))
+        {
             self.pos += 1;
             return Ok(self.asm.here() as i64);
         }
@@ -400,7 +439,8 @@ impl Expr<'_, '_> {
             if self.s[self.pos..].starts_with(b"@h") || self.s[self.pos..].starts_with(b"@H") {
                 self.pos += 2;
                 v = (v >> 16) & 0xffff;
-            } else if self.s[self.pos..].starts_with(b"@l") || self.s[self.pos..].starts_with(b"@L") {
+            } else if self.s[self.pos..].starts_with(b"@l") || self.s[self.pos..].starts_with(b"@L")
+            {
                 self.pos += 2;
                 v &= 0xffff;
             }
@@ -413,7 +453,9 @@ impl Expr<'_, '_> {
 fn parse_number(t: &str) -> Option<i64> {
     let t = t.to_ascii_lowercase();
     if let Some(h) = t.strip_prefix("0x") {
-        i64::from_str_radix(h, 16).ok().or_else(|| u64::from_str_radix(h, 16).ok().map(|v| v as i64))
+        i64::from_str_radix(h, 16)
+            .ok()
+            .or_else(|| u64::from_str_radix(h, 16).ok().map(|v| v as i64))
     } else if let Some(b) = t.strip_prefix("0b") {
         i64::from_str_radix(b, 2).ok()
     } else if t.len() > 1 && t.starts_with('0') {
@@ -446,7 +488,8 @@ fn range_of(kind: OperandKind) -> Option<((i64, i64), Option<(i64, i64)>)> {
 
 impl<'o> Assembler<'o> {
     fn here(&self) -> u32 {
-        self.bases.get(&self.sect).copied().unwrap_or(0) + self.offsets.get(&self.sect).copied().unwrap_or(0)
+        self.bases.get(&self.sect).copied().unwrap_or(0)
+            + self.offsets.get(&self.sect).copied().unwrap_or(0)
     }
 
     fn symbol(&self, name: &str) -> Option<i64> {
@@ -467,11 +510,20 @@ impl<'o> Assembler<'o> {
     }
 
     fn eval(&self, text: &str) -> Res<(i64, bool)> {
-        let mut e = Expr { s: text.as_bytes(), pos: 0, asm: self, lenient: self.pass == 1, undefined: false };
+        let mut e = Expr {
+            s: text.as_bytes(),
+            pos: 0,
+            asm: self,
+            lenient: self.pass == 1,
+            undefined: false,
+        };
         let v = e.parse()?;
         e.ws();
         if e.pos != text.len() {
-            return Err((e.pos, format!("junk at end of expression: `{}`", &text[e.pos..])));
+            return Err((
+                e.pos,
+                format!("junk at end of expression: `{}`", &text[e.pos..]),
+            ));
         }
         Ok((v, e.undefined))
     }
@@ -480,7 +532,11 @@ impl<'o> Assembler<'o> {
         if self.pass == 2 || sev == Severity::Error {
             let d = Diagnostic {
                 severity: sev,
-                location: Location { file: line.file.clone(), line: line.line, column: column.max(1) },
+                location: Location {
+                    file: line.file.clone(),
+                    line: line.line,
+                    column: column.max(1),
+                },
                 message: message.into(),
                 source_line: line.text.clone(),
             };
@@ -523,7 +579,11 @@ impl<'o> Assembler<'o> {
                 pos += 1;
             }
             while left > 0 {
-                let word: u32 = if pos & 4 != 0 { 0x0020_0000 } else { 0x4020_0000 };
+                let word: u32 = if pos & 4 != 0 {
+                    0x0020_0000
+                } else {
+                    0x4020_0000
+                };
                 bytes.extend(word.to_be_bytes());
                 left -= 4;
                 pos += 4;
@@ -551,7 +611,12 @@ impl<'o> Assembler<'o> {
         self.depth += 1;
         if self.depth > 64 {
             if let Some(l) = lines.first() {
-                self.diag(Severity::Error, l, 1, "macros, includes or repetitions nested too deeply");
+                self.diag(
+                    Severity::Error,
+                    l,
+                    1,
+                    "macros, includes or repetitions nested too deeply",
+                );
             }
             self.depth -= 1;
             return;
@@ -562,12 +627,20 @@ impl<'o> Assembler<'o> {
             let line = &lines[i];
             let text = strip_comment(&line.text);
             let trimmed = text.trim();
-            let first_word = trimmed.split(|c: char| c.is_whitespace() || c == ',').next().unwrap_or("").to_ascii_lowercase();
+            let first_word = trimmed
+                .split(|c: char| c.is_whitespace() || c == ',')
+                .next()
+                .unwrap_or("")
+                .to_ascii_lowercase();
             let active = cond.iter().all(|c| c.0);
             // Conditionals are tracked even while inactive.
             match first_word.as_str() {
                 ".if" | ".ifdef" | ".ifndef" | ".ifeq" | ".ifne" | ".ifc" | ".ifnc" => {
-                    let value = if active { self.condition(&first_word, trimmed[first_word.len()..].trim(), line) } else { false };
+                    let value = if active {
+                        self.condition(&first_word, trimmed[first_word.len()..].trim(), line)
+                    } else {
+                        false
+                    };
                     cond.push((active && value, value));
                     i += 1;
                     continue;
@@ -609,7 +682,12 @@ impl<'o> Assembler<'o> {
             if matches!(first_word.as_str(), ".macro" | ".rept" | ".irp" | ".irpc") {
                 let (body, next) = collect_block(lines, i + 1);
                 if next > lines.len() {
-                    self.diag(Severity::Error, line, 1, format!("missing end of {first_word}"));
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        1,
+                        format!("missing end of {first_word}"),
+                    );
                 }
                 let args = trimmed[first_word.len()..].trim().to_string();
                 self.block(&first_word, &args, body, line);
@@ -633,7 +711,8 @@ impl<'o> Assembler<'o> {
             ".ifndef" => !self.symbols.contains_key(args.trim()),
             ".ifc" | ".ifnc" => {
                 let parts = split_top(args, ',');
-                let eq = parts.first().map(|s| s.trim().trim_matches('\'')) == parts.get(1).map(|s| s.trim().trim_matches('\''));
+                let eq = parts.first().map(|s| s.trim().trim_matches('\''))
+                    == parts.get(1).map(|s| s.trim().trim_matches('\''));
                 eq == (kind == ".ifc")
             }
             _ => match self.eval(args) {
@@ -661,14 +740,26 @@ impl<'o> Assembler<'o> {
             },
             ".irp" | ".irpc" => {
                 let parts = split_top(args, ',');
-                let var = parts.first().map(|s| s.trim().to_string()).unwrap_or_default();
+                let var = parts
+                    .first()
+                    .map(|s| s.trim().to_string())
+                    .unwrap_or_default();
                 let values: Vec<String> = if kind == ".irp" {
                     parts[1..].iter().map(|s| s.trim().to_string()).collect()
                 } else {
-                    parts.get(1).map(|s| s.trim().chars().map(|c| c.to_string()).collect()).unwrap_or_default()
+                    parts
+                        .get(1)
+                        .map(|s| s.trim().chars().map(|c| c.to_string()).collect())
+                        .unwrap_or_default()
                 };
                 for v in values {
-                    let expanded: Vec<Line> = body.iter().map(|l| Line { text: substitute(&l.text, &[(var.clone(), v.clone())], None), ..l.clone() }).collect();
+                    let expanded: Vec<Line> = body
+                        .iter()
+                        .map(|l| Line {
+                            text: substitute(&l.text, &[(var.clone(), v.clone())], None),
+                            ..l.clone()
+                        })
+                        .collect();
                     self.run_lines(&expanded);
                 }
             }
@@ -686,7 +777,8 @@ impl<'o> Assembler<'o> {
                         None => (p.trim().to_string(), None),
                     })
                     .collect();
-                self.macros.insert(name.to_ascii_lowercase(), Macro { params, body });
+                self.macros
+                    .insert(name.to_ascii_lowercase(), Macro { params, body });
             }
         }
     }
@@ -715,7 +807,10 @@ impl<'o> Assembler<'o> {
             };
             let lw = word.to_ascii_lowercase();
             let col = line.text.find(&word).map(|c| c + 1).unwrap_or(1);
-            let before = (self.sect, self.offsets.get(&self.sect).copied().unwrap_or(0));
+            let before = (
+                self.sect,
+                self.offsets.get(&self.sect).copied().unwrap_or(0),
+            );
             if let Some(m) = self.macros.get(&lw).cloned() {
                 self.expand_macro(&m, &args, line);
             } else if lw.starts_with('.') {
@@ -730,9 +825,23 @@ impl<'o> Assembler<'o> {
                 let after = self.offsets.get(&before.0).copied().unwrap_or(0);
                 if after > before.1 && self.sect == before.0 {
                     let base = self.bases.get(&before.0).copied().unwrap_or(0);
-                    let bytes = self.bytes.get(&before.0).map(|b| b[before.1 as usize..(after as usize).min(b.len())].to_vec()).unwrap_or_default();
-                    let words: Vec<String> = bytes.chunks(4).take(4).map(|c| c.iter().map(|b| format!("{b:02x}")).collect()).collect();
-                    self.listing.push_str(&format!("{:5} {:05x} {:<36} {}\n", line.line, base + before.1, words.join(" "), line.text.trim_end()));
+                    let bytes = self
+                        .bytes
+                        .get(&before.0)
+                        .map(|b| b[before.1 as usize..(after as usize).min(b.len())].to_vec())
+                        .unwrap_or_default();
+                    let words: Vec<String> = bytes
+                        .chunks(4)
+                        .take(4)
+                        .map(|c| c.iter().map(|b| format!("{b:02x}")).collect())
+                        .collect();
+                    self.listing.push_str(&format!(
+                        "{:5} {:05x} {:<36} {}\n",
+                        line.line,
+                        base + before.1,
+                        words.join(" "),
+                        line.text.trim_end()
+                    ));
                 }
             }
         }
@@ -742,16 +851,25 @@ impl<'o> Assembler<'o> {
         let off = self.offsets.get(&self.sect).copied().unwrap_or(0);
         if let Ok(n) = name.parse::<u32>() {
             if self.pass == 1 {
-                self.numeric.entry(n).or_default().push((self.stmt, self.sect, off));
+                self.numeric
+                    .entry(n)
+                    .or_default()
+                    .push((self.stmt, self.sect, off));
             }
             return;
         }
         if self.pass == 1 {
             if let Some(SymVal::Label(..)) = self.symbols.get(name) {
-                self.diag(Severity::Error, line, 1, format!("symbol `{name}` is already defined"));
+                self.diag(
+                    Severity::Error,
+                    line,
+                    1,
+                    format!("symbol `{name}` is already defined"),
+                );
             }
         }
-        self.symbols.insert(name.to_string(), SymVal::Label(self.sect, off));
+        self.symbols
+            .insert(name.to_string(), SymVal::Label(self.sect, off));
     }
 
     fn set_symbol(&mut self, name: &str, expr: &str, line: &Line) {
@@ -765,12 +883,26 @@ impl<'o> Assembler<'o> {
 
     fn expand_macro(&mut self, m: &Macro, args: &str, line: &Line) {
         self.macro_counter += 1;
-        let given: Vec<String> = if args.trim().is_empty() { vec![] } else { split_top(args, ',').iter().map(|s| s.trim().to_string()).collect() };
+        let given: Vec<String> = if args.trim().is_empty() {
+            vec![]
+        } else {
+            split_top(args, ',')
+                .iter()
+                .map(|s| s.trim().to_string())
+                .collect()
+        };
         let mut subst = Vec::new();
         let mut positional = given.iter();
         for (name, default) in &m.params {
-            let named = given.iter().find_map(|g| g.split_once('=').filter(|(n, _)| n.trim() == name).map(|(_, v)| v.trim().to_string()));
-            let value = named.or_else(|| positional.next().filter(|g| !g.contains('=')).cloned()).or_else(|| default.clone()).unwrap_or_default();
+            let named = given.iter().find_map(|g| {
+                g.split_once('=')
+                    .filter(|(n, _)| n.trim() == name)
+                    .map(|(_, v)| v.trim().to_string())
+            });
+            let value = named
+                .or_else(|| positional.next().filter(|g| !g.contains('=')).cloned())
+                .or_else(|| default.clone())
+                .unwrap_or_default();
             subst.push((name.clone(), value));
         }
         let counter = self.macro_counter.to_string();
@@ -779,7 +911,11 @@ impl<'o> Assembler<'o> {
             if strip_comment(&l.text).trim().eq_ignore_ascii_case(".exitm") {
                 break;
             }
-            body.push(Line { text: substitute(&l.text, &subst, Some(&counter)), file: line.file.clone(), line: line.line });
+            body.push(Line {
+                text: substitute(&l.text, &subst, Some(&counter)),
+                file: line.file.clone(),
+                line: line.line,
+            });
         }
         self.run_lines(&body);
     }
@@ -807,7 +943,12 @@ impl<'o> Assembler<'o> {
             ".data" | ".rodata" => self.sect = Sect::Data,
             ".bss" => self.sect = Sect::Bss,
             ".section" => {
-                let name = args.split(',').next().unwrap_or("").trim().trim_matches('"');
+                let name = args
+                    .split(',')
+                    .next()
+                    .unwrap_or("")
+                    .trim()
+                    .trim_matches('"');
                 self.sect = if name.starts_with(".text") {
                     Sect::Text
                 } else if name.starts_with(".bss") {
@@ -819,15 +960,29 @@ impl<'o> Assembler<'o> {
             ".align" | ".p2align" | ".balign" => {
                 let vals = self.data_values(args, line, col);
                 let v = vals.first().copied().unwrap_or(0);
-                let boundary = if d == ".balign" { v } else { 1i64 << v.clamp(0, 30) };
+                let boundary = if d == ".balign" {
+                    v
+                } else {
+                    1i64 << v.clamp(0, 30)
+                };
                 if boundary <= 0 || boundary & (boundary - 1) != 0 {
-                    self.diag(Severity::Error, line, col, format!("alignment not a power of 2: {boundary}"));
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("alignment not a power of 2: {boundary}"),
+                    );
                     return;
                 }
-                let fill = if vals.len() > 1 { Some(vals[1] as u8) } else { None };
+                let fill = if vals.len() > 1 {
+                    Some(vals[1] as u8)
+                } else {
+                    None
+                };
                 self.align_to(boundary as u32, fill);
             }
-            ".byte" | ".short" | ".half" | ".hword" | ".2byte" | ".int" | ".long" | ".word" | ".4byte" | ".quad" | ".8byte" => {
+            ".byte" | ".short" | ".half" | ".hword" | ".2byte" | ".int" | ".long" | ".word"
+            | ".4byte" | ".quad" | ".8byte" => {
                 let size = match d {
                     ".byte" => 1,
                     ".short" | ".half" | ".hword" | ".2byte" => 2,
@@ -884,7 +1039,11 @@ impl<'o> Assembler<'o> {
             }
             ".fill" => {
                 let vals = self.data_values(args, line, col);
-                let (n, size, value) = (vals.first().copied().unwrap_or(0), vals.get(1).copied().unwrap_or(1).clamp(0, 8), vals.get(2).copied().unwrap_or(0));
+                let (n, size, value) = (
+                    vals.first().copied().unwrap_or(0),
+                    vals.get(1).copied().unwrap_or(1).clamp(0, 8),
+                    vals.get(2).copied().unwrap_or(0),
+                );
                 for _ in 0..n.clamp(0, 1 << 24) {
                     let b = value.to_be_bytes();
                     let s = size as usize;
@@ -905,7 +1064,12 @@ impl<'o> Assembler<'o> {
             ".set" | ".equ" | ".eqv" => {
                 let parts = split_top(args, ',');
                 if parts.len() < 2 {
-                    self.diag(Severity::Error, line, col, format!("{d} needs a name and a value"));
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("{d} needs a name and a value"),
+                    );
                     return;
                 }
                 let name = parts[0].trim().to_string();
@@ -919,15 +1083,41 @@ impl<'o> Assembler<'o> {
                         let lines = to_lines(&text, name);
                         self.run_lines(&lines);
                     }
-                    None => self.diag(Severity::Error, line, col, format!("can't open {name} for reading")),
+                    None => self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("can't open {name} for reading"),
+                    ),
                 }
             }
-            ".local" | ".type" | ".size" | ".file" | ".ident" | ".loc" | ".cfi_startproc" | ".cfi_endproc" | ".brinfo" | ".weak" | ".hidden" => {}
+            ".local" | ".type" | ".size" | ".file" | ".ident" | ".loc" | ".cfi_startproc"
+            | ".cfi_endproc" | ".brinfo" | ".weak" | ".hidden" => {}
             ".end" => {}
-            ".endm" | ".endr" => self.diag(Severity::Error, line, col, format!("{d} without a matching start")),
-            ".err" | ".error" => self.diag(Severity::Error, line, col, args.trim().trim_matches('"').to_string()),
-            ".warning" => self.diag(Severity::Warning, line, col, args.trim().trim_matches('"').to_string()),
-            _ => self.diag(Severity::Error, line, col, format!("unknown pseudo-op: `{d}`")),
+            ".endm" | ".endr" => self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("{d} without a matching start"),
+            ),
+            ".err" | ".error" => self.diag(
+                Severity::Error,
+                line,
+                col,
+                args.trim().trim_matches('"').to_string(),
+            ),
+            ".warning" => self.diag(
+                Severity::Warning,
+                line,
+                col,
+                args.trim().trim_matches('"').to_string(),
+            ),
+            _ => self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("unknown pseudo-op: `{d}`"),
+            ),
         }
     }
 
@@ -940,13 +1130,19 @@ impl<'o> Assembler<'o> {
             OperandKind::Ch => {
                 if let Some(n) = body.strip_prefix("ch").and_then(numeric) {
                     Some(n)
-                } else if let Some((_, n)) = CHANNELS.iter().find(|(name, _)| name.eq_ignore_ascii_case(t.trim_start_matches('$'))) {
+                } else if let Some((_, n)) = CHANNELS
+                    .iter()
+                    .find(|(name, _)| name.eq_ignore_ascii_case(t.trim_start_matches('$')))
+                {
                     Some(*n as i64)
                 } else {
                     numeric(body)
                 }
             }
-            OperandKind::Spr => body.strip_prefix("sp").and_then(numeric).or_else(|| numeric(body)),
+            OperandKind::Spr => body
+                .strip_prefix("sp")
+                .and_then(numeric)
+                .or_else(|| numeric(body)),
             _ => match body {
                 "lr" | "rp" => Some(0),
                 "sp" => Some(1),
@@ -972,11 +1168,23 @@ impl<'o> Assembler<'o> {
         }
         let forms: Vec<&'static FormInfo> = forms_named(mnemonic).collect();
         if forms.is_empty() {
-            self.diag(Severity::Error, line, col, format!("unknown instruction `{mnemonic}`"));
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("unknown instruction `{mnemonic}`"),
+            );
             self.emit(&[0; 4]);
             return;
         }
-        let texts: Vec<String> = if args.trim().is_empty() { vec![] } else { split_top(args, ',').iter().map(|s| s.trim().to_string()).collect() };
+        let texts: Vec<String> = if args.trim().is_empty() {
+            vec![]
+        } else {
+            split_top(args, ',')
+                .iter()
+                .map(|s| s.trim().to_string())
+                .collect()
+        };
         let mut last_err = None;
         for form in &forms {
             match self.operands(form, &texts, pc) {
@@ -995,7 +1203,12 @@ impl<'o> Assembler<'o> {
         }
         let (c, m) = last_err.unwrap_or((0, "bad operands".into()));
         let arg_col = line.text.find(args.trim()).map(|p| p + 1).unwrap_or(col);
-        self.diag(Severity::Error, line, if c == 0 { arg_col } else { arg_col + c }, m);
+        self.diag(
+            Severity::Error,
+            line,
+            if c == 0 { arg_col } else { arg_col + c },
+            m,
+        );
         self.emit(&[0; 4]);
     }
 
@@ -1004,7 +1217,14 @@ impl<'o> Assembler<'o> {
         let kinds = form.operands;
         let expected = kinds.iter().filter(|k| **k != OperandKind::ParenRa).count();
         if texts.len() != expected {
-            return Err((0, format!("`{}` takes {expected} operand(s), got {}", form.mnemonic, texts.len())));
+            return Err((
+                0,
+                format!(
+                    "`{}` takes {expected} operand(s), got {}",
+                    form.mnemonic,
+                    texts.len()
+                ),
+            ));
         }
         let mut values = Vec::new();
         let mut warnings = Vec::new();
@@ -1019,14 +1239,23 @@ impl<'o> Assembler<'o> {
                 };
                 let inner = text[open + 1..].trim_end().trim_end_matches(')');
                 let off_text = text[..open].trim();
-                let off = if off_text.is_empty() { 0 } else { self.eval(off_text)?.0 };
+                let off = if off_text.is_empty() {
+                    0
+                } else {
+                    self.eval(off_text)?.0
+                };
                 values.push(self.check_immediate(kind, off, pc, &mut warnings)?);
                 values.push(self.register(inner, OperandKind::Ra)?);
                 i += 2;
                 continue;
             }
             let v = match kind {
-                OperandKind::Rt | OperandKind::Ra | OperandKind::Rb | OperandKind::Rc | OperandKind::Ch | OperandKind::Spr => self.register(text, kind)?,
+                OperandKind::Rt
+                | OperandKind::Ra
+                | OperandKind::Rb
+                | OperandKind::Rc
+                | OperandKind::Ch
+                | OperandKind::Spr => self.register(text, kind)?,
                 _ => {
                     if text.starts_with('$') {
                         return Err((0, format!("expected an immediate, got register `{text}`")));
@@ -1041,23 +1270,37 @@ impl<'o> Assembler<'o> {
         Ok((values, warnings))
     }
 
-    fn check_immediate(&self, kind: OperandKind, v: i64, pc: u32, warnings: &mut Vec<String>) -> Res<i64> {
+    fn check_immediate(
+        &self,
+        kind: OperandKind,
+        v: i64,
+        pc: u32,
+        warnings: &mut Vec<String>,
+    ) -> Res<i64> {
         if self.pass == 1 {
             return Ok(v);
         }
         match kind {
             OperandKind::Off14 => {
                 if v % 16 != 0 {
-                    warnings.push(format!("offset {v} is not a multiple of 16; the low 4 bits are ignored"));
+                    warnings.push(format!(
+                        "offset {v} is not a multiple of 16; the low 4 bits are ignored"
+                    ));
                 }
                 if !(-8192..=8191).contains(&v) {
-                    return Err((0, format!("Constant expression {v} out of range, [-8192, 8191].")));
+                    return Err((
+                        0,
+                        format!("Constant expression {v} out of range, [-8192, 8191]."),
+                    ));
                 }
             }
             OperandKind::Rel18 => {
                 let off = v - pc as i64;
                 if off % 4 != 0 || !(-(1 << 17)..(1 << 17)).contains(&off) {
-                    return Err((0, format!("branch target {v:#x} out of range or misaligned")));
+                    return Err((
+                        0,
+                        format!("branch target {v:#x} out of range or misaligned"),
+                    ));
                 }
             }
             OperandKind::Abs18 => {
@@ -1074,11 +1317,16 @@ impl<'o> Assembler<'o> {
             _ => {
                 if let Some(((lo, hi), warn)) = range_of(kind) {
                     if v < lo || v > hi {
-                        return Err((0, format!("Constant expression {v} out of range, [{lo}, {hi}].")));
+                        return Err((
+                            0,
+                            format!("Constant expression {v} out of range, [{lo}, {hi}]."),
+                        ));
                     }
                     if let Some((wlo, whi)) = warn {
                         if v < wlo || v > whi {
-                            warnings.push(format!("Constant expression {v} out of range, [{wlo}, {whi}]."));
+                            warnings.push(format!(
+                                "Constant expression {v} out of range, [{wlo}, {whi}]."
+                            ));
                         }
                     }
                 }
@@ -1151,7 +1399,12 @@ fn collect_block(lines: &[Line], start: usize) -> (Vec<Line>, usize) {
     let mut depth = 1;
     let mut i = start;
     while i < lines.len() {
-        let w = strip_comment(&lines[i].text).trim().split_whitespace().next().unwrap_or("").to_ascii_lowercase();
+        let w = strip_comment(&lines[i].text)
+            .trim()
+            .split_whitespace()
+            .next()
+            .unwrap_or("")
+            .to_ascii_lowercase();
         match w.as_str() {
             ".macro" | ".rept" | ".irp" | ".irpc" => depth += 1,
             ".endm" | ".endr" => {
@@ -1168,7 +1421,14 @@ fn collect_block(lines: &[Line], start: usize) -> (Vec<Line>, usize) {
 }
 
 fn to_lines(text: &str, file: &str) -> Vec<Line> {
-    text.lines().enumerate().map(|(i, l)| Line { text: l.to_string(), file: file.to_string(), line: i + 1 }).collect()
+    text.lines()
+        .enumerate()
+        .map(|(i, l)| Line {
+            text: l.to_string(),
+            file: file.to_string(),
+            line: i + 1,
+        })
+        .collect()
 }
 
 /// Assembles `source` (named `file_name` in diagnostics).
@@ -1205,9 +1465,14 @@ pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output,
     let text_size = size(Sect::Text, &asm);
     let data_base = text_size.div_ceil(align(Sect::Data, &asm)) * align(Sect::Data, &asm);
     let data_size = size(Sect::Data, &asm);
-    let bss_base = (data_base + data_size).div_ceil(align(Sect::Bss, &asm)) * align(Sect::Bss, &asm);
+    let bss_base =
+        (data_base + data_size).div_ceil(align(Sect::Bss, &asm)) * align(Sect::Bss, &asm);
     let bss_size = size(Sect::Bss, &asm);
-    asm.bases = HashMap::from([(Sect::Text, 0), (Sect::Data, data_base), (Sect::Bss, bss_base)]);
+    asm.bases = HashMap::from([
+        (Sect::Text, 0),
+        (Sect::Data, data_base),
+        (Sect::Bss, bss_base),
+    ]);
     // Pass 2.
     asm.pass = 2;
     asm.sect = Sect::Text;
@@ -1215,11 +1480,19 @@ pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output,
     asm.stmt = 0;
     asm.macros.clear();
     asm.macro_counter = 0;
-    let labels: HashMap<String, SymVal> = asm.symbols.iter().filter(|(_, v)| matches!(v, SymVal::Label(..))).map(|(k, v)| (k.clone(), *v)).collect();
+    let labels: HashMap<String, SymVal> = asm
+        .symbols
+        .iter()
+        .filter(|(_, v)| matches!(v, SymVal::Label(..)))
+        .map(|(k, v)| (k.clone(), *v))
+        .collect();
     asm.symbols = labels;
     predefine(&mut asm);
     asm.run_lines(&lines);
-    let (errors, warnings): (Vec<_>, Vec<_>) = asm.diags.into_iter().partition(|d| d.severity == Severity::Error);
+    let (errors, warnings): (Vec<_>, Vec<_>) = asm
+        .diags
+        .into_iter()
+        .partition(|d| d.severity == Severity::Error);
     if !errors.is_empty() {
         let mut all = errors;
         all.extend(warnings);
@@ -1229,7 +1502,11 @@ pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output,
     if end as usize > 256 * 1024 {
         return Err(vec![Diagnostic {
             severity: Severity::Error,
-            location: Location { file: file_name.into(), line: 1, column: 1 },
+            location: Location {
+                file: file_name.into(),
+                line: 1,
+                column: 1,
+            },
             message: format!("program of {end} bytes does not fit the 256 KiB local store"),
             source_line: lines.first().map(|l| l.text.clone()).unwrap_or_default(),
         }]);
@@ -1249,14 +1526,26 @@ pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output,
         })
         .collect();
     symbols.sort_by(|a, b| a.1.cmp(&b.1).then(a.0.cmp(&b.0)));
-    let entry = symbols.iter().find(|(n, _)| n == "_start").map(|s| s.1).unwrap_or(0);
+    let entry = symbols
+        .iter()
+        .find(|(n, _)| n == "_start")
+        .map(|s| s.1)
+        .unwrap_or(0);
     let sections = vec![
         (".text".to_string(), 0, text_size, true),
         (".data".to_string(), data_base, data_size, false),
         (".bss".to_string(), bss_base, bss_size, false),
     ];
     let elf = crate::elf::write_elf(&image, &sections, &symbols, &asm.globals, entry);
-    Ok(Output { image, elf, symbols, entry, listing: asm.listing, warnings, sections })
+    Ok(Output {
+        image,
+        elf,
+        symbols,
+        entry,
+        listing: asm.listing,
+        warnings,
+        sections,
+    })
 }
 
 #[cfg(test)]
@@ -1264,14 +1553,28 @@ mod tests {
     use super::*;
 
     fn words(src: &str) -> Vec<u32> {
-        let out = assemble(src, "t.s", &Options::default()).unwrap_or_else(|e| panic!("{}", e.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n")));
+        let out = assemble(src, "t.s", &Options::default()).unwrap_or_else(|e| {
+            panic!(
+                "{}",
+                e.iter()
+                    .map(|d| d.to_string())
+                    .collect::<Vec<_>>()
+                    .join("\n")
+            )
+        });
         let text = out.sections[0].2 as usize;
-        out.image[..text].chunks(4).map(|c| u32::from_be_bytes([c[0], c[1], c[2], c[3]])).collect()
+        out.image[..text]
+            .chunks(4)
+            .map(|c| u32::from_be_bytes([c[0], c[1], c[2], c[3]]))
+            .collect()
     }
 
     #[test]
     fn readme_encodings() {
-        assert_eq!(words("il $3,42\nfma $7,$6,$5,$4\nlqd $5,32($1)\nbi $3\nbid $3"), vec![0x40801503, 0xe0e14304, 0x34008085, 0x35000180, 0x35080180]);
+        assert_eq!(
+            words("il $3,42\nfma $7,$6,$5,$4\nlqd $5,32($1)\nbi $3\nbid $3"),
+            vec![0x40801503, 0xe0e14304, 0x34008085, 0x35000180, 0x35080180]
+        );
     }
 
     #[test]
@@ -1294,14 +1597,32 @@ mod tests {
     #[test]
     fn alignment_pads_with_nop_and_lnop() {
         let w = words("il $3,1\n.align 4\nil $3,2\n");
-        assert_eq!(w, vec![0x40800083, 0x00200000, 0x40200000, 0x00200000, 0x40800103]);
+        assert_eq!(
+            w,
+            vec![0x40800083, 0x00200000, 0x40200000, 0x00200000, 0x40800103]
+        );
     }
 
     #[test]
     fn errors_name_file_line_column_and_continue() {
-        let e = assemble("il $3, 40000\nfoo $1\nai $3,$3,1\nlqd $3, 4($1)\n", "bad.s", &Options::default()).unwrap_err();
-        let text: Vec<String> = e.iter().map(|d| format!("{}:{}", d.location.line, d.message)).collect();
-        assert!(text.iter().any(|t| t.starts_with("1:Constant expression 40000 out of range")), "{text:?}");
-        assert!(text.iter().any(|t| t.starts_with("2:unknown instruction")), "{text:?}");
+        let e = assemble(
+            "il $3, 40000\nfoo $1\nai $3,$3,1\nlqd $3, 4($1)\n",
+            "bad.s",
+            &Options::default(),
+        )
+        .unwrap_err();
+        let text: Vec<String> = e
+            .iter()
+            .map(|d| format!("{}:{}", d.location.line, d.message))
+            .collect();
+        assert!(
+            text.iter()
+                .any(|t| t.starts_with("1:Constant expression 40000 out of range")),
+            "{text:?}"
+        );
+        assert!(
+            text.iter().any(|t| t.starts_with("2:unknown instruction")),
+            "{text:?}"
+        );
     }
 }

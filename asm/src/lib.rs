@@ -11,7 +11,11 @@ pub fn assemble_file(path: &std::path::Path, opts: &Options) -> Result<Output, V
     let source = std::fs::read_to_string(path).map_err(|e| {
         vec![Diagnostic {
             severity: Severity::Error,
-            location: Location { file: path.display().to_string(), line: 0, column: 0 },
+            location: Location {
+                file: path.display().to_string(),
+                line: 0,
+                column: 0,
+            },
             message: format!("can't read: {e}"),
             source_line: String::new(),
         }]

@@ -7,7 +7,9 @@ use spu_isa::table::forms_named;
 fn asm(lines: &[(&str, &[i64])]) -> Vec<u8> {
     let mut out = Vec::new();
     for (i, (m, ops)) in lines.iter().enumerate() {
-        let form = forms_named(m).find(|f| f.operands.len() == ops.len()).unwrap_or_else(|| panic!("{m}"));
+        let form = forms_named(m)
+            .find(|f| f.operands.len() == ops.len())
+            .unwrap_or_else(|| panic!("{m}"));
         out.extend(encode(form, ops, 4 * i as u32).to_be_bytes());
     }
     out
@@ -94,7 +96,10 @@ fn bad_dma_stops_with_an_error() {
     let mut spu = Spu::new(0);
     spu.load_image(&image);
     let mut mem = MainMemory::zeroed(4096);
-    assert!(matches!(spu.run(&mut mem, 1_000_000), StopReason::DmaError { pc: 20, .. }));
+    assert!(matches!(
+        spu.run(&mut mem, 1_000_000),
+        StopReason::DmaError { pc: 20, .. }
+    ));
 }
 
 #[test]
@@ -102,8 +107,17 @@ fn unknown_word_is_illegal_and_empty_mailbox_deadlocks() {
     let mut spu = Spu::new(0);
     spu.load_image(&0x00f0_0000u32.to_be_bytes());
     let mut mem = MainMemory::zeroed(16);
-    assert_eq!(spu.run(&mut mem, 100), StopReason::IllegalInstruction { pc: 0, word: 0x00f0_0000 });
+    assert_eq!(
+        spu.run(&mut mem, 100),
+        StopReason::IllegalInstruction {
+            pc: 0,
+            word: 0x00f0_0000
+        }
+    );
     let mut spu = Spu::new(0);
     spu.load_image(&asm(&[("rdch", &[3, 29])]));
-    assert_eq!(spu.run(&mut mem, 100), StopReason::Deadlock { pc: 0, channel: 29 });
+    assert_eq!(
+        spu.run(&mut mem, 100),
+        StopReason::Deadlock { pc: 0, channel: 29 }
+    );
 }

@@ -1,10 +1,9 @@
 //! The multi-SPE runtime: starts N simulated SPUs on a shared main memory, lets them take
 //! tiles from the shared counter, and collects the frame buffer and the statistics.
 //!
-//! (The SPU-driving half waits for the SPU core; until then `render_frame` says so.)
 
 use crate::frame::FrameLayout;
-use crate::kernel_abi::KernelStats;
+use crate::kernel_abi::{KernelStats, STATS_BYTES};
 use crate::layout::StagedScene;
 
 /// What one SPU did in a frame.
@@ -62,15 +61,168 @@ impl FrameRun {
     }
 }
 
-/// Renders one frame with `spes` SPUs on `threads` host threads.
+/// The kernels' sources, built into the binary so `spu render` needs no files.
+pub const RAYTRACE_SOURCE: &str = include_str!("../../kernels/raytrace.s");
+pub const FILL_SOURCE: &str = include_str!("../../kernels/fill.s");
+
+/// The generated `layout.inc` every kernel includes: record layouts and the kernel ABI.
+pub fn layout_include() -> String {
+    crate::layout::spu_layout_include() + &crate::kernel_abi::spu_include()
+}
+
+/// An assembled SPU program: a flat local-store image and its entry point.
+#[derive(Clone, Debug)]
+pub struct Program {
+    pub image: Vec<u8>,
+    pub entry: u32,
+    pub symbols: Vec<(String, u32)>,
+}
+
+/// Assembles a kernel with the generated include.
+pub fn assemble_kernel(source: &str, name: &str) -> Result<Program, String> {
+    let opts = spu_asm::Options {
+        virtual_files: vec![("layout.inc".to_string(), layout_include())],
+        ..Default::default()
+    };
+    match spu_asm::assemble(source, name, &opts) {
+        Ok(out) => Ok(Program {
+            image: out.image,
+            entry: out.entry,
+            symbols: out.symbols,
+        }),
+        Err(diagnostics) => Err(diagnostics
+            .iter()
+            .map(|d| d.to_string())
+            .collect::<Vec<_>>()
+            .join("\n")),
+    }
+}
+
+/// Simulated cycles each SPU runs between two synchronisations of main memory. Writes and
+/// atomic updates become visible to other SPUs at these boundaries, in a fixed order, so a
+/// frame's result does not depend on how the SPUs are spread over host threads.
+pub const QUANTUM_CYCLES: u64 = 10_000;
+
+/// Stop code of a kernel that finished its frame (`stop 0x2000`, exit status 0).
+pub const STOP_DONE: u16 = 0x2000;
+
+/// Renders one frame with `spes` SPUs on `threads` host threads; `progress` hears the
+/// number of tiles taken so far.
+#[allow(clippy::too_many_arguments)]
 pub fn render_frame(
-    _staged: &StagedScene,
-    _layout: &FrameLayout,
-    _spes: usize,
-    _threads: usize,
-    _clock_ghz: f64,
-    _fill: bool,
-    _max_cycles: u64,
+    staged: &StagedScene,
+    layout: &FrameLayout,
+    spes: usize,
+    threads: usize,
+    clock_ghz: f64,
+    fill: bool,
+    max_cycles: u64,
+    progress: &mut dyn FnMut(u32, u32),
 ) -> Result<FrameRun, String> {
-    Err("the SPU core is not available yet: spu render cannot run the kernels".into())
+    use spu_isa::machine::{apply_quantum, MainMemory, Spu, StopReason};
+    let (source, name) = if fill {
+        (FILL_SOURCE, "kernels/fill.s")
+    } else {
+        (RAYTRACE_SOURCE, "kernels/raytrace.s")
+    };
+    let program = assemble_kernel(source, name)?;
+    let mut memory = MainMemory::new(layout.memory_image(staged));
+    let timing = spu_isa::timing::TimingConfig {
+        clock_ghz,
+        ..Default::default()
+    };
+    let mut spus: Vec<Spu> = (0..spes)
+        .map(|i| {
+            let mut spu = Spu::new(i as u32);
+            spu.load_image(&program.image);
+            spu.set_pc(program.entry);
+            spu.set_reg(3, [i as u32, 0, 0, 0]);
+            spu.set_reg(4, [layout.param_addr, 0, 0, 0]);
+            spu.enable_timing(timing.clone());
+            spu
+        })
+        .collect();
+    let mut finished: Vec<Option<u64>> = vec![None; spes];
+    let threads = threads.clamp(1, spes);
+    let mut until = 0u64;
+    while finished.iter().any(|f| f.is_none()) {
+        until += QUANTUM_CYCLES;
+        if until > max_cycles {
+            return Err(format!(
+                "the frame did not finish within {max_cycles} cycles"
+            ));
+        }
+        let memory_view = &memory;
+        let mut outcomes: Vec<Option<StopReason>> = vec![None; spes];
+        let per_thread = spes.div_ceil(threads);
+        if threads == 1 {
+            for ((spu, out), done) in spus.iter_mut().zip(outcomes.iter_mut()).zip(&finished) {
+                if done.is_none() {
+                    *out = spu.run_quantum(memory_view, until);
+                }
+            }
+        } else {
+            std::thread::scope(|scope| {
+                for (spu_chunk, (out_chunk, done_chunk)) in spus.chunks_mut(per_thread).zip(
+                    outcomes
+                        .chunks_mut(per_thread)
+                        .zip(finished.chunks(per_thread)),
+                ) {
+                    scope.spawn(move || {
+                        for ((spu, out), done) in
+                            spu_chunk.iter_mut().zip(out_chunk).zip(done_chunk)
+                        {
+                            if done.is_none() {
+                                *out = spu.run_quantum(memory_view, until);
+                            }
+                        }
+                    });
+                }
+            });
+        }
+        apply_quantum(&mut spus, &mut memory);
+        for (i, outcome) in outcomes.into_iter().enumerate() {
+            match outcome {
+                None => {}
+                Some(StopReason::Stop(code)) if code == STOP_DONE => {
+                    if spus[i].read_outbound_mailbox() != Some(1) {
+                        return Err(format!("SPU {i} stopped without its end-of-frame message"));
+                    }
+                    finished[i] = Some(spus[i].cycles());
+                }
+                Some(StopReason::Blocked { .. }) => {}
+                Some(other) => return Err(format!("SPU {i} stopped: {other:?}")),
+            }
+        }
+        let taken = memory
+            .read_u32(layout.counter_addr)
+            .min(layout.params.num_tiles);
+        progress(taken, layout.params.num_tiles);
+    }
+    let stats_base = layout.stats_addr as usize;
+    let spus_report = spus
+        .iter()
+        .enumerate()
+        .map(|(i, spu)| {
+            let block =
+                &memory.bytes()[stats_base + i * STATS_BYTES..stats_base + (i + 1) * STATS_BYTES];
+            let stats = KernelStats::from_be_bytes(block);
+            SpuReport {
+                cycles: finished[i].unwrap_or(0),
+                instructions: spu.instructions(),
+                tiles: if fill {
+                    stats.traversal_steps
+                } else {
+                    stats.packets / 64
+                },
+                stats,
+            }
+        })
+        .collect::<Vec<_>>();
+    let fb = layout.frame_buffer_addr as usize;
+    Ok(FrameRun {
+        frame_buffer: memory.bytes()[fb..fb + layout.frame_buffer_len].to_vec(),
+        frame_cycles: spus_report.iter().map(|s| s.cycles).max().unwrap_or(0),
+        spus: spus_report,
+    })
 }

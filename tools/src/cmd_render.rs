@@ -63,23 +63,45 @@ pub fn load_scene(name: &str) -> Result<Scene, String> {
     Scene::load(name).map_err(|e| e.to_string())
 }
 
-/// Per-pixel comparison with the reference: (pixels, mismatches).
-fn validate(pixels: &[PixelResult], reference: &[spu_loader::reference::Hit], record_to_original: &[u32]) -> (usize, usize) {
+/// Per-pixel comparison with the reference: (pixels, mismatches); the first few
+/// mismatches are printed.
+fn validate(
+    pixels: &[PixelResult],
+    reference: &[spu_loader::reference::Hit],
+    record_to_original: &[u32],
+    width: u32,
+) -> (usize, usize) {
     let mut mismatches = 0;
-    for (p, r) in pixels.iter().zip(reference) {
+    for (i, (p, r)) in pixels.iter().zip(reference).enumerate() {
         let kernel_tri = if p.triangle == MISS {
             MISS
         } else {
-            record_to_original.get(p.triangle as usize).copied().unwrap_or(u32::MAX - 1)
+            record_to_original
+                .get(p.triangle as usize)
+                .copied()
+                .unwrap_or(u32::MAX - 1)
         };
         let same_triangle = kernel_tri == r.triangle;
         let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * a.abs().max(b.abs()).max(1e-30);
         let ok = match (kernel_tri == MISS, r.is_hit()) {
             (true, false) => true,
-            (false, true) => same_triangle && close(p.t, r.t) || (!same_triangle && close(p.t, r.t)),
+            (false, true) => {
+                same_triangle && close(p.t, r.t) || (!same_triangle && close(p.t, r.t))
+            }
             _ => false,
         };
         if !ok {
+            if mismatches < 10 {
+                eprintln!(
+                    "mismatch at ({}, {}): kernel triangle {} t {} / reference triangle {} t {}",
+                    i as u32 % width,
+                    i as u32 / width,
+                    kernel_tri as i64,
+                    p.t,
+                    r.triangle as i64,
+                    r.t
+                );
+            }
             mismatches += 1;
         }
     }
@@ -101,7 +123,15 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let bvh = Bvh::build(&scene, &BvhConfig::default());
     let staged = StagedScene::new(&scene, &bvh, SCENE_BASE)?;
     let basis = scene.camera.basis(args.width, args.height);
-    let layout = FrameLayout::new(&staged, &basis, args.width, args.height, args.spes, args.bvh_cache, args.tri_cache)?;
+    let layout = FrameLayout::new(
+        &staged,
+        &basis,
+        args.width,
+        args.height,
+        args.spes,
+        args.bvh_cache,
+        args.tri_cache,
+    )?;
     eprintln!(
         "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
         args.scene,
@@ -109,44 +139,93 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         staged.nodes.len(),
         started.elapsed().as_secs_f64()
     );
-    let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
-    let run = spu_loader::runtime::render_frame(&staged, &layout, args.spes, threads, args.clock, args.fill, args.max_cycles)?;
+    let threads = args.threads.unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    });
+    let bar = indicatif::ProgressBar::new(layout.params.num_tiles as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} tiles {pos}/{len} {wide_bar} {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let sim_started = Instant::now();
+    let run = spu_loader::runtime::render_frame(
+        &staged,
+        &layout,
+        args.spes,
+        threads,
+        args.clock,
+        args.fill,
+        args.max_cycles,
+        &mut |taken, _| bar.set_position(taken as u64),
+    );
+    bar.finish_and_clear();
+    let run = run?;
+    let host_seconds = sim_started.elapsed().as_secs_f64();
     let pixels = decode_frame_buffer(&run.frame_buffer, args.width, args.height);
     write_png(&args.output, &pixels, args.width, args.height)?;
 
     let record_to_original: Vec<u32> = staged.triangles.iter().map(|t| t.original_index).collect();
     let validation = if args.validate && !args.fill {
-        let reference = Reference::from_staged(&staged).render(&scene.camera, args.width, args.height, threads);
-        Some(validate(&pixels, &reference, &record_to_original))
+        let reference =
+            Reference::from_staged(&staged).render(&scene.camera, args.width, args.height, threads);
+        Some(validate(
+            &pixels,
+            &reference,
+            &record_to_original,
+            args.width,
+        ))
     } else {
         None
     };
     let rays = args.width as u64 * args.height as u64;
     let seconds = run.frame_cycles as f64 / (args.clock * 1e9);
-    let mrays = if seconds > 0.0 { rays as f64 / seconds / 1e6 } else { 0.0 };
+    let mrays = if seconds > 0.0 {
+        rays as f64 / seconds / 1e6
+    } else {
+        0.0
+    };
+    let instructions: u64 = run.spus.iter().map(|s| s.instructions).sum();
     println!(
-        "{} SPE(s): {} cycles per frame, {:.2} MRays/s at {} GHz; wrote {}",
+        "{} SPE(s): {} cycles per frame, {:.2} MRays/s at {} GHz; {} instructions simulated in {:.1} s ({:.0} M/s); wrote {}",
         args.spes,
         run.frame_cycles,
         mrays,
         args.clock,
+        instructions,
+        host_seconds,
+        instructions as f64 / host_seconds / 1e6,
         args.output.display()
     );
     if let Some((n, bad)) = validation {
         println!("validation: {bad} of {n} pixels differ from the host reference");
     }
     if let Some(path) = &args.stats {
-        let json = run.stats_json(&args.scene, args.width, args.height, args.clock, mrays, validation);
+        let json = run.stats_json(
+            &args.scene,
+            args.width,
+            args.height,
+            args.clock,
+            mrays,
+            validation,
+        );
         std::fs::write(path, json).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     Ok(ExitCode::SUCCESS)
 }
 
-fn write_png(path: &PathBuf, pixels: &[PixelResult], width: u32, height: u32) -> Result<(), String> {
+fn write_png(
+    path: &PathBuf,
+    pixels: &[PixelResult],
+    width: u32,
+    height: u32,
+) -> Result<(), String> {
     let mut rgb = Vec::with_capacity(pixels.len() * 3);
     for p in pixels {
         let [r, g, b, _] = p.rgba.to_be_bytes();
         rgb.extend([r, g, b]);
     }
-    image::save_buffer(path, &rgb, width, height, image::ColorType::Rgb8).map_err(|e| format!("{}: {e}", path.display()))
+    image::save_buffer(path, &rgb, width, height, image::ColorType::Rgb8)
+        .map_err(|e| format!("{}: {e}", path.display()))
 }

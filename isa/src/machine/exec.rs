@@ -16,7 +16,12 @@ fn zip(a: Reg, b: Reg, f: impl Fn(u32, u32) -> u32) -> Reg {
 }
 #[inline]
 fn zip3(a: Reg, b: Reg, c: Reg, f: impl Fn(u32, u32, u32) -> u32) -> Reg {
-    [f(a[0], b[0], c[0]), f(a[1], b[1], c[1]), f(a[2], b[2], c[2]), f(a[3], b[3], c[3])]
+    [
+        f(a[0], b[0], c[0]),
+        f(a[1], b[1], c[1]),
+        f(a[2], b[2], c[2]),
+        f(a[3], b[3], c[3]),
+    ]
 }
 #[inline]
 fn halves(a: Reg, b: Reg, f: impl Fn(u16, u16) -> u16) -> Reg {
@@ -54,19 +59,40 @@ fn to_u128(a: Reg) -> u128 {
 }
 #[inline]
 fn from_u128(v: u128) -> Reg {
-    [(v >> 96) as u32, (v >> 64) as u32, (v >> 32) as u32, v as u32]
+    [
+        (v >> 96) as u32,
+        (v >> 64) as u32,
+        (v >> 32) as u32,
+        v as u32,
+    ]
 }
 fn dwords(a: Reg) -> [u64; 2] {
-    [((a[0] as u64) << 32) | a[1] as u64, ((a[2] as u64) << 32) | a[3] as u64]
+    [
+        ((a[0] as u64) << 32) | a[1] as u64,
+        ((a[2] as u64) << 32) | a[3] as u64,
+    ]
 }
 fn from_dwords(d: [u64; 2]) -> Reg {
-    [(d[0] >> 32) as u32, d[0] as u32, (d[1] >> 32) as u32, d[1] as u32]
+    [
+        (d[0] >> 32) as u32,
+        d[0] as u32,
+        (d[1] >> 32) as u32,
+        d[1] as u32,
+    ]
 }
 fn mask(b: bool) -> u32 {
-    if b { u32::MAX } else { 0 }
+    if b {
+        u32::MAX
+    } else {
+        0
+    }
 }
 fn hmask(b: bool) -> u16 {
-    if b { u16::MAX } else { 0 }
+    if b {
+        u16::MAX
+    } else {
+        0
+    }
 }
 fn splat(v: u32) -> Reg {
     [v; 4]
@@ -97,10 +123,18 @@ pub const LS_MASK: u32 = (LS_SIZE as u32) - 1;
 pub enum Effect {
     Next,
     /// A branch instruction: where it went when taken.
-    Branch { taken: bool, target: u32 },
+    Branch {
+        taken: bool,
+        target: u32,
+    },
     /// A quadword store to this (aligned) local-store address.
-    Store { addr: u32 },
-    Hint { branch: u32, target: u32 },
+    Store {
+        addr: u32,
+    },
+    Hint {
+        branch: u32,
+        target: u32,
+    },
     Stop(u16),
     Halt,
     /// Channel instructions are carried out by the SPU, not here.
@@ -151,7 +185,13 @@ fn insertion_mask(t: u32, size: u32) -> Reg {
     }
     let start = (t & (16 - size)) as usize & 15;
     for k in 0..size as usize {
-        b[start + k] = (if size == 1 { 3 } else if size == 2 { 2 } else { 0 } + k) as u8;
+        b[start + k] = (if size == 1 {
+            3
+        } else if size == 2 {
+            2
+        } else {
+            0
+        } + k) as u8;
     }
     from_bytes(b)
 }
@@ -169,7 +209,11 @@ fn shufb(a: Reg, b: Reg, c: Reg) -> Reg {
             0
         } else {
             let k = (s & 0x1f) as usize;
-            if k < 16 { x[k] } else { y[k - 16] }
+            if k < 16 {
+                x[k]
+            } else {
+                y[k - 16]
+            }
         };
     }
     from_bytes(out)
@@ -226,31 +270,55 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         Sfh => Some(halves(ra, rb, |a, b| b.wrapping_sub(a))),
         Sfi => Some(map(ra, |a| i10.wrapping_sub(a))),
         Sfhi => Some(halves(ra, splat_h(imm as u16), |a, b| b.wrapping_sub(a))),
-        Addx => Some(zip3(ra, rb, rt_old, |a, b, t| a.wrapping_add(b).wrapping_add(t & 1))),
-        Sfx => Some(zip3(ra, rb, rt_old, |a, b, t| b.wrapping_add(!a).wrapping_add(t & 1))),
+        Addx => Some(zip3(ra, rb, rt_old, |a, b, t| {
+            a.wrapping_add(b).wrapping_add(t & 1)
+        })),
+        Sfx => Some(zip3(ra, rb, rt_old, |a, b, t| {
+            b.wrapping_add(!a).wrapping_add(t & 1)
+        })),
         Cg => Some(zip(ra, rb, |a, b| ((a as u64 + b as u64) >> 32) as u32)),
-        Cgx => Some(zip3(ra, rb, rt_old, |a, b, t| ((a as u64 + b as u64 + (t & 1) as u64) >> 32) as u32)),
+        Cgx => Some(zip3(ra, rb, rt_old, |a, b, t| {
+            ((a as u64 + b as u64 + (t & 1) as u64) >> 32) as u32
+        })),
         Bg => Some(zip(ra, rb, |a, b| (b >= a) as u32)),
         Bgx => Some(zip3(ra, rb, rt_old, |a, b, t| {
-            if t & 1 != 0 { (b >= a) as u32 } else { (b > a) as u32 }
+            if t & 1 != 0 {
+                (b >= a) as u32
+            } else {
+                (b > a) as u32
+            }
         })),
-        Mpy => Some(zip(ra, rb, |a, b| ((a as i16 as i32) * (b as i16 as i32)) as u32)),
+        Mpy => Some(zip(ra, rb, |a, b| {
+            ((a as i16 as i32) * (b as i16 as i32)) as u32
+        })),
         Mpyu => Some(zip(ra, rb, |a, b| (a & 0xffff) * (b & 0xffff))),
-        Mpyi => Some(map(ra, |a| ((a as i16 as i32) * (imm as i16 as i32)) as u32)),
+        Mpyi => Some(map(ra, |a| {
+            ((a as i16 as i32) * (imm as i16 as i32)) as u32
+        })),
         Mpyui => Some(map(ra, |a| (a & 0xffff) * (imm as u32 & 0xffff))),
-        Mpya => Some(zip3(ra, rb, rc, |a, b, c| ((a as i16 as i32) * (b as i16 as i32)).wrapping_add(c as i32) as u32)),
+        Mpya => Some(zip3(ra, rb, rc, |a, b, c| {
+            ((a as i16 as i32) * (b as i16 as i32)).wrapping_add(c as i32) as u32
+        })),
         Mpyh => Some(zip(ra, rb, |a, b| ((a >> 16) * (b & 0xffff)) << 16)),
-        Mpys => Some(zip(ra, rb, |a, b| (((a as i16 as i32) * (b as i16 as i32)) >> 16) as u32)),
-        Mpyhh => Some(zip(ra, rb, |a, b| (((a >> 16) as i16 as i32) * ((b >> 16) as i16 as i32)) as u32)),
+        Mpys => Some(zip(ra, rb, |a, b| {
+            (((a as i16 as i32) * (b as i16 as i32)) >> 16) as u32
+        })),
+        Mpyhh => Some(zip(ra, rb, |a, b| {
+            (((a >> 16) as i16 as i32) * ((b >> 16) as i16 as i32)) as u32
+        })),
         Mpyhha => Some(zip3(ra, rb, rt_old, |a, b, t| {
             (((a >> 16) as i16 as i32) * ((b >> 16) as i16 as i32)).wrapping_add(t as i32) as u32
         })),
         Mpyhhu => Some(zip(ra, rb, |a, b| (a >> 16) * (b >> 16))),
-        Mpyhhau => Some(zip3(ra, rb, rt_old, |a, b, t| ((a >> 16) * (b >> 16)).wrapping_add(t))),
+        Mpyhhau => Some(zip3(ra, rb, rt_old, |a, b, t| {
+            ((a >> 16) * (b >> 16)).wrapping_add(t)
+        })),
         Clz => Some(map(ra, u32::leading_zeros)),
         Cntb => Some(bytewise(ra, ra, |a, _| a.count_ones() as u8)),
         Absdb => Some(bytewise(ra, rb, |a, b| a.abs_diff(b))),
-        Avgb => Some(bytewise(ra, rb, |a, b| ((a as u16 + b as u16 + 1) >> 1) as u8)),
+        Avgb => Some(bytewise(ra, rb, |a, b| {
+            ((a as u16 + b as u16 + 1) >> 1) as u8
+        })),
         Sumb => Some(zip(ra, rb, |a, b| {
             let s = |x: u32| x.to_be_bytes().iter().map(|v| *v as u32).sum::<u32>();
             (s(b) << 16) | s(a)
@@ -291,65 +359,139 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         Ceqb => Some(bytewise(ra, rb, |a, b| if a == b { 0xff } else { 0 })),
         Ceqi => Some(map(ra, |a| mask(a == i10))),
         Ceqhi => Some(halves(ra, splat_h(imm as u16), |a, b| hmask(a == b))),
-        Ceqbi => Some(bytewise(ra, splat_b(imm as u8), |a, b| if a == b { 0xff } else { 0 })),
+        Ceqbi => Some(bytewise(ra, splat_b(imm as u8), |a, b| {
+            if a == b {
+                0xff
+            } else {
+                0
+            }
+        })),
         Cgt => Some(zip(ra, rb, |a, b| mask((a as i32) > (b as i32)))),
         Cgth => Some(halves(ra, rb, |a, b| hmask((a as i16) > (b as i16)))),
-        Cgtb => Some(bytewise(ra, rb, |a, b| if (a as i8) > (b as i8) { 0xff } else { 0 })),
+        Cgtb => Some(bytewise(ra, rb, |a, b| {
+            if (a as i8) > (b as i8) {
+                0xff
+            } else {
+                0
+            }
+        })),
         Cgti => Some(map(ra, |a| mask((a as i32) > imm))),
-        Cgthi => Some(halves(ra, splat_h(imm as u16), |a, b| hmask((a as i16) > (b as i16)))),
-        Cgtbi => Some(bytewise(ra, splat_b(imm as u8), |a, b| if (a as i8) > (b as i8) { 0xff } else { 0 })),
+        Cgthi => Some(halves(ra, splat_h(imm as u16), |a, b| {
+            hmask((a as i16) > (b as i16))
+        })),
+        Cgtbi => Some(bytewise(ra, splat_b(imm as u8), |a, b| {
+            if (a as i8) > (b as i8) {
+                0xff
+            } else {
+                0
+            }
+        })),
         Clgt => Some(zip(ra, rb, |a, b| mask(a > b))),
         Clgth => Some(halves(ra, rb, |a, b| hmask(a > b))),
         Clgtb => Some(bytewise(ra, rb, |a, b| if a > b { 0xff } else { 0 })),
         Clgti => Some(map(ra, |a| mask(a > i10))),
         Clgthi => Some(halves(ra, splat_h(imm as u16), |a, b| hmask(a > b))),
-        Clgtbi => Some(bytewise(ra, splat_b(imm as u8), |a, b| if a > b { 0xff } else { 0 })),
+        Clgtbi => Some(bytewise(ra, splat_b(imm as u8), |a, b| {
+            if a > b {
+                0xff
+            } else {
+                0
+            }
+        })),
         // ---- word and halfword shifts and rotates
         Shl | Shli => {
-            let cnt = if inst.op == Shl { rb } else { splat(imm as u32) };
+            let cnt = if inst.op == Shl {
+                rb
+            } else {
+                splat(imm as u32)
+            };
             Some(zip(ra, cnt, |a, c| {
                 let c = c & 0x3f;
-                if c > 31 { 0 } else { a << c }
+                if c > 31 {
+                    0
+                } else {
+                    a << c
+                }
             }))
         }
         Shlh | Shlhi => {
-            let cnt = if inst.op == Shlh { rb } else { splat_h(imm as u16) };
+            let cnt = if inst.op == Shlh {
+                rb
+            } else {
+                splat_h(imm as u16)
+            };
             Some(halves(ra, cnt, |a, c| {
                 let c = c & 0x1f;
-                if c > 15 { 0 } else { a << c }
+                if c > 15 {
+                    0
+                } else {
+                    a << c
+                }
             }))
         }
         Rot | Roti => {
-            let cnt = if inst.op == Rot { rb } else { splat(imm as u32) };
+            let cnt = if inst.op == Rot {
+                rb
+            } else {
+                splat(imm as u32)
+            };
             Some(zip(ra, cnt, |a, c| a.rotate_left(c & 0x1f)))
         }
         Roth | Rothi => {
-            let cnt = if inst.op == Roth { rb } else { splat_h(imm as u16) };
+            let cnt = if inst.op == Roth {
+                rb
+            } else {
+                splat_h(imm as u16)
+            };
             Some(halves(ra, cnt, |a, c| a.rotate_left((c & 0xf) as u32)))
         }
         Rotm | Rotmi => {
-            let cnt = if inst.op == Rotm { rb } else { splat(imm as u32) };
+            let cnt = if inst.op == Rotm {
+                rb
+            } else {
+                splat(imm as u32)
+            };
             Some(zip(ra, cnt, |a, c| {
                 let c = c.wrapping_neg() & 0x3f;
-                if c > 31 { 0 } else { a >> c }
+                if c > 31 {
+                    0
+                } else {
+                    a >> c
+                }
             }))
         }
         Rotma | Rotmai => {
-            let cnt = if inst.op == Rotma { rb } else { splat(imm as u32) };
+            let cnt = if inst.op == Rotma {
+                rb
+            } else {
+                splat(imm as u32)
+            };
             Some(zip(ra, cnt, |a, c| {
                 let c = c.wrapping_neg() & 0x3f;
                 ((a as i32) >> c.min(31)) as u32
             }))
         }
         Rothm | Rothmi => {
-            let cnt = if inst.op == Rothm { rb } else { splat_h(imm as u16) };
+            let cnt = if inst.op == Rothm {
+                rb
+            } else {
+                splat_h(imm as u16)
+            };
             Some(halves(ra, cnt, |a, c| {
                 let c = c.wrapping_neg() & 0x1f;
-                if c > 15 { 0 } else { a >> c }
+                if c > 15 {
+                    0
+                } else {
+                    a >> c
+                }
             }))
         }
         Rotmah | Rotmahi => {
-            let cnt = if inst.op == Rotmah { rb } else { splat_h(imm as u16) };
+            let cnt = if inst.op == Rotmah {
+                rb
+            } else {
+                splat_h(imm as u16)
+            };
             Some(halves(ra, cnt, |a, c| {
                 let c = c.wrapping_neg() & 0x1f;
                 ((a as i16) >> c.min(15)) as u16
@@ -366,7 +508,11 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
                 Shlqbyi => imm as u32 & 0x1f,
                 _ => (rb[0] >> 3) & 0x1f,
             };
-            Some(if c > 15 { [0; 4] } else { from_u128(to_u128(ra) << (8 * c)) })
+            Some(if c > 15 {
+                [0; 4]
+            } else {
+                from_u128(to_u128(ra) << (8 * c))
+            })
         }
         Rotqbi | Rotqbii => {
             let c = if inst.op == Rotqbi { rb[0] } else { imm as u32 } & 7;
@@ -381,7 +527,13 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
             Some(from_u128(to_u128(ra).rotate_left(8 * c)))
         }
         Rotqmbi | Rotqmbii => {
-            let c = if inst.op == Rotqmbi { rb[0] } else { imm as u32 }.wrapping_neg() & 7;
+            let c = if inst.op == Rotqmbi {
+                rb[0]
+            } else {
+                imm as u32
+            }
+            .wrapping_neg()
+                & 7;
             Some(from_u128(to_u128(ra) >> c))
         }
         Rotqmby | Rotqmbyi | Rotqmbybi => {
@@ -390,7 +542,11 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
                 Rotqmbyi => (imm as u32).wrapping_neg() & 0x1f,
                 _ => ((rb[0] >> 3).wrapping_neg()) & 0x1f,
             };
-            Some(if c > 15 { [0; 4] } else { from_u128(to_u128(ra) >> (8 * c)) })
+            Some(if c > 15 {
+                [0; 4]
+            } else {
+                from_u128(to_u128(ra) >> (8 * c))
+            })
         }
         // ---- gather and form select masks
         Gb => Some([(0..4).fold(0, |m, i| m | ((ra[i] & 1) << (3 - i))), 0, 0, 0]),
@@ -404,14 +560,27 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         }
         Gbb => {
             let b = bytes_of(ra);
-            Some([(0..16).fold(0, |m, i| m | (((b[i] & 1) as u32) << (15 - i))), 0, 0, 0])
+            Some([
+                (0..16).fold(0, |m, i| m | (((b[i] & 1) as u32) << (15 - i))),
+                0,
+                0,
+                0,
+            ])
         }
         Fsm => Some([0, 1, 2, 3].map(|i| mask(ra[0] & (8 >> i) != 0))),
         Fsmh => {
             let m = ra[0];
             Some([0, 1, 2, 3].map(|i| {
-                let hi = if m & (0x80 >> (2 * i)) != 0 { 0xffff0000 } else { 0 };
-                let lo = if m & (0x40 >> (2 * i)) != 0 { 0xffff } else { 0 };
+                let hi = if m & (0x80 >> (2 * i)) != 0 {
+                    0xffff0000
+                } else {
+                    0
+                };
+                let lo = if m & (0x40 >> (2 * i)) != 0 {
+                    0xffff
+                } else {
+                    0
+                };
                 hi | lo
             }))
         }
@@ -486,11 +655,17 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
                 Dfnms => float::dfnms,
                 _ => float::dfnma,
             };
-            Some(from_dwords([op(a[0], b[0], t[0], f, 0), op(a[1], b[1], t[1], f, 1)]))
+            Some(from_dwords([
+                op(a[0], b[0], t[0], f, 0),
+                op(a[1], b[1], t[1], f, 1),
+            ]))
         }
         Fesd => {
             let f = &mut core.fpscr;
-            Some(from_dwords([float::fesd(ra[0], f, 0), float::fesd(ra[2], f, 1)]))
+            Some(from_dwords([
+                float::fesd(ra[0], f, 0),
+                float::fesd(ra[2], f, 1),
+            ]))
         }
         Frds => {
             let a = dwords(ra);
@@ -508,12 +683,21 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
             };
             let m0 = op(a[0], b[0], f, 0);
             let m1 = op(a[1], b[1], f, 1);
-            Some(from_dwords([if m0 { u64::MAX } else { 0 }, if m1 { u64::MAX } else { 0 }]))
+            Some(from_dwords([
+                if m0 { u64::MAX } else { 0 },
+                if m1 { u64::MAX } else { 0 },
+            ]))
         }
         Dftsv => {
             let a = dwords(ra);
             let u = imm as u32 & 0x7f;
-            Some(from_dwords(a.map(|x| if float::dftsv(x, u) { u64::MAX } else { 0 })))
+            Some(from_dwords(a.map(|x| {
+                if float::dftsv(x, u) {
+                    u64::MAX
+                } else {
+                    0
+                }
+            })))
         }
         Fscrrd => Some(core.fpscr.read()),
         Fscrwr => {
@@ -522,9 +706,21 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         }
         // ---- branches
         Br | Bra | Brsl | Brasl => {
-            let target = if matches!(inst.op, Br | Brsl) { pc.wrapping_add((imm << 2) as u32) } else { (imm << 2) as u32 } & LS_MASK & !3;
-            effect = Effect::Branch { taken: true, target };
-            if matches!(inst.op, Brsl | Brasl) { Some([next, 0, 0, 0]) } else { None }
+            let target = if matches!(inst.op, Br | Brsl) {
+                pc.wrapping_add((imm << 2) as u32)
+            } else {
+                (imm << 2) as u32
+            } & LS_MASK
+                & !3;
+            effect = Effect::Branch {
+                taken: true,
+                target,
+            };
+            if matches!(inst.op, Brsl | Brasl) {
+                Some([next, 0, 0, 0])
+            } else {
+                None
+            }
         }
         Brz | Brnz | Brhz | Brhnz => {
             let t = rt_old[0];
@@ -534,7 +730,10 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
                 Brhz => t & 0xffff == 0,
                 _ => t & 0xffff != 0,
             };
-            effect = Effect::Branch { taken, target: pc.wrapping_add((imm << 2) as u32) & LS_MASK & !3 };
+            effect = Effect::Branch {
+                taken,
+                target: pc.wrapping_add((imm << 2) as u32) & LS_MASK & !3,
+            };
             None
         }
         Bi | Bisl | Biz | Binz | Bihz | Bihnz | Iret | Bisled => {
@@ -554,8 +753,15 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
                 Bihnz => (t & 0xffff != 0, ra[0]),
                 _ => (true, ra[0]),
             };
-            effect = Effect::Branch { taken, target: target & LS_MASK & !3 };
-            if matches!(inst.op, Bisl | Bisled) { Some([next, 0, 0, 0]) } else { None }
+            effect = Effect::Branch {
+                taken,
+                target: target & LS_MASK & !3,
+            };
+            if matches!(inst.op, Bisl | Bisled) {
+                Some([next, 0, 0, 0])
+            } else {
+                None
+            }
         }
         Hbr | Hbra | Hbrr => {
             if inst.feature_bits() & 0x40 != 0 && inst.op == Hbr {
@@ -566,13 +772,18 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
                 Hbr => ra[0],
                 Hbra => (imm << 2) as u32,
                 _ => pc.wrapping_add((imm << 2) as u32),
-            } & LS_MASK & !3;
+            } & LS_MASK
+                & !3;
             return Effect::Hint { branch, target };
         }
         // ---- halts and stops
         Heq | Heqi | Hgt | Hgti | Hlgt | Hlgti => {
             let a = ra[0];
-            let b = if matches!(inst.op, Heq | Hgt | Hlgt) { rb[0] } else { imm as u32 };
+            let b = if matches!(inst.op, Heq | Hgt | Hlgt) {
+                rb[0]
+            } else {
+                imm as u32
+            };
             let halt = match inst.op {
                 Heq | Heqi => a == b,
                 Hgt | Hgti => (a as i32) > (b as i32),
@@ -595,10 +806,26 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
 
 fn fl2(core: &mut Core, a: Reg, b: Reg, f: fn(u32, u32, &mut float::Fpscr, usize) -> u32) -> Reg {
     let s = &mut core.fpscr;
-    [f(a[0], b[0], s, 0), f(a[1], b[1], s, 1), f(a[2], b[2], s, 2), f(a[3], b[3], s, 3)]
+    [
+        f(a[0], b[0], s, 0),
+        f(a[1], b[1], s, 1),
+        f(a[2], b[2], s, 2),
+        f(a[3], b[3], s, 3),
+    ]
 }
 
-fn fl3(core: &mut Core, a: Reg, b: Reg, c: Reg, f: fn(u32, u32, u32, &mut float::Fpscr, usize) -> u32) -> Reg {
+fn fl3(
+    core: &mut Core,
+    a: Reg,
+    b: Reg,
+    c: Reg,
+    f: fn(u32, u32, u32, &mut float::Fpscr, usize) -> u32,
+) -> Reg {
     let s = &mut core.fpscr;
-    [f(a[0], b[0], c[0], s, 0), f(a[1], b[1], c[1], s, 1), f(a[2], b[2], c[2], s, 2), f(a[3], b[3], c[3], s, 3)]
+    [
+        f(a[0], b[0], c[0], s, 0),
+        f(a[1], b[1], c[1], s, 1),
+        f(a[2], b[2], c[2], s, 2),
+        f(a[3], b[3], c[3], s, 3),
+    ]
 }

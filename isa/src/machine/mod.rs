@@ -36,7 +36,9 @@ impl MainMemory {
         MainMemory { bytes }
     }
     pub fn zeroed(len: usize) -> Self {
-        MainMemory { bytes: vec![0; len] }
+        MainMemory {
+            bytes: vec![0; len],
+        }
     }
     pub fn len(&self) -> usize {
         self.bytes.len()
@@ -52,7 +54,10 @@ impl MainMemory {
     }
     pub fn read_u32(&self, addr: u32) -> u32 {
         let a = addr as usize;
-        self.bytes.get(a..a + 4).map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]])).unwrap_or(0)
+        self.bytes
+            .get(a..a + 4)
+            .map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+            .unwrap_or(0)
     }
     pub fn write_u32(&mut self, addr: u32, value: u32) {
         let a = addr as usize;
@@ -72,13 +77,26 @@ pub enum StopReason {
     /// `stop`/`stopd` with the 14-bit stop code.
     Stop(u16),
     /// A halt instruction's condition held.
-    Halt { pc: u32 },
-    IllegalInstruction { pc: u32, word: u32 },
-    DmaError { pc: u32, reason: String },
+    Halt {
+        pc: u32,
+    },
+    IllegalInstruction {
+        pc: u32,
+        word: u32,
+    },
+    DmaError {
+        pc: u32,
+        reason: String,
+    },
     /// Blocked on a channel nothing will ever make ready.
-    Deadlock { pc: u32, channel: u8 },
+    Deadlock {
+        pc: u32,
+        channel: u8,
+    },
     /// Waiting on a channel only the host can serve (a mailbox or signal): resumable.
-    Blocked { channel: u8 },
+    Blocked {
+        channel: u8,
+    },
     CycleLimit,
 }
 
@@ -87,9 +105,13 @@ impl std::fmt::Display for StopReason {
         match self {
             StopReason::Stop(code) => write!(f, "stop {code:#x}"),
             StopReason::Halt { pc } => write!(f, "halt at {pc:#x}"),
-            StopReason::IllegalInstruction { pc, word } => write!(f, "illegal instruction {word:#010x} at {pc:#x}"),
+            StopReason::IllegalInstruction { pc, word } => {
+                write!(f, "illegal instruction {word:#010x} at {pc:#x}")
+            }
             StopReason::DmaError { pc, reason } => write!(f, "DMA error at {pc:#x}: {reason}"),
-            StopReason::Deadlock { pc, channel } => write!(f, "deadlock at {pc:#x} on channel {channel}"),
+            StopReason::Deadlock { pc, channel } => {
+                write!(f, "deadlock at {pc:#x} on channel {channel}")
+            }
             StopReason::Blocked { channel } => write!(f, "blocked on channel {channel}"),
             StopReason::CycleLimit => write!(f, "cycle limit reached"),
         }
@@ -353,7 +375,11 @@ impl Spu {
             (Some(old), true) => old | value,
             _ => value,
         });
-        self.event_status |= if w == 0 { event::SIGNAL1 } else { event::SIGNAL2 };
+        self.event_status |= if w == 0 {
+            event::SIGNAL1
+        } else {
+            event::SIGNAL2
+        };
     }
 
     fn dma_latency(&self) -> u64 {
@@ -369,7 +395,10 @@ impl Spu {
             apply_quantum(std::slice::from_mut(self), memory);
             match outcome {
                 Some(StopReason::Blocked { channel }) if !self.host_feeds => {
-                    return StopReason::Deadlock { pc: self.pc, channel }
+                    return StopReason::Deadlock {
+                        pc: self.pc,
+                        channel,
+                    }
                 }
                 Some(reason) => return reason,
                 None if self.cycle >= max_cycles => return StopReason::CycleLimit,
@@ -417,7 +446,10 @@ impl Spu {
                 }
                 Effect::Illegal => {
                     self.finish(issue);
-                    return Some(StopReason::IllegalInstruction { pc, word: inst.word });
+                    return Some(StopReason::IllegalInstruction {
+                        pc,
+                        word: inst.word,
+                    });
                 }
                 Effect::Channel => match self.channel(inst, issue, memory) {
                     ChannelOutcome::Done => self.pc = (pc + 4) & LS_MASK,
@@ -448,7 +480,10 @@ impl Spu {
                     }
                     ChannelOutcome::Never => {
                         self.finish(issue);
-                        return Some(StopReason::Deadlock { pc, channel: inst.ra });
+                        return Some(StopReason::Deadlock {
+                            pc,
+                            channel: inst.ra,
+                        });
                     }
                     ChannelOutcome::Error(reason) => {
                         self.finish(issue);
@@ -491,7 +526,8 @@ impl Spu {
     }
 
     fn busy_tags(&self) -> u32 {
-        self.queue.iter().fold(0, |m, c| m | (1 << c.tag)) | self.stalled_list.map_or(0, |s| 1 << s.0)
+        self.queue.iter().fold(0, |m, c| m | (1 << c.tag))
+            | self.stalled_list.map_or(0, |s| 1 << s.0)
     }
 
     fn tag_done_mask(&self) -> u32 {
@@ -500,8 +536,16 @@ impl Spu {
 
     /// The cycle when the commands of the tags in `mask` complete (all) or the first does.
     fn completion_of(&self, mask: u32, all: bool) -> Option<u64> {
-        let times = self.queue.iter().filter(|c| mask & (1 << c.tag) != 0).map(|c| c.complete);
-        if all { times.max() } else { times.min() }
+        let times = self
+            .queue
+            .iter()
+            .filter(|c| mask & (1 << c.tag) != 0)
+            .map(|c| c.complete);
+        if all {
+            times.max()
+        } else {
+            times.min()
+        }
     }
 
     fn read_channel(&mut self, channel: u8, now: u64) -> Result<u32, ChannelOutcome> {
@@ -524,10 +568,18 @@ impl Spu {
                 let w = (channel - RD_SIG_NOTIFY1) as usize;
                 match self.signal[w].take() {
                     Some(v) => v,
-                    None => return Err(if self.host_feeds { ChannelOutcome::Host } else { ChannelOutcome::Never }),
+                    None => {
+                        return Err(if self.host_feeds {
+                            ChannelOutcome::Host
+                        } else {
+                            ChannelOutcome::Never
+                        })
+                    }
                 }
             }
-            RD_DEC => self.dec_value.wrapping_sub((now - self.dec_written_at) as u32),
+            RD_DEC => self
+                .dec_value
+                .wrapping_sub((now - self.dec_written_at) as u32),
             RD_EVENT_MASK => self.event_mask,
             RD_TAG_MASK => self.tag_mask,
             RD_MACH_STAT => 0,
@@ -572,7 +624,13 @@ impl Spu {
             },
             RD_IN_MBOX => match self.in_mbox.pop_front() {
                 Some(v) => v,
-                None => return Err(if self.host_feeds { ChannelOutcome::Host } else { ChannelOutcome::Never }),
+                None => {
+                    return Err(if self.host_feeds {
+                        ChannelOutcome::Host
+                    } else {
+                        ChannelOutcome::Never
+                    })
+                }
             },
             _ => 0,
         })
@@ -585,7 +643,9 @@ impl Spu {
             RD_IN_MBOX => self.in_mbox.len() as u32,
             WR_OUT_MBOX => self.out_mbox.is_none() as u32,
             WR_OUT_INTR_MBOX => self.out_intr_mbox.is_none() as u32,
-            RD_SIG_NOTIFY1 | RD_SIG_NOTIFY2 => self.signal[(channel - RD_SIG_NOTIFY1) as usize].is_some() as u32,
+            RD_SIG_NOTIFY1 | RD_SIG_NOTIFY2 => {
+                self.signal[(channel - RD_SIG_NOTIFY1) as usize].is_some() as u32
+            }
             CMD => 16 - self.queue.len().min(16) as u32,
             RD_TAG_STAT => match self.tag_update {
                 Some(2) => (self.tag_done_mask() & self.tag_mask == self.tag_mask) as u32,
@@ -622,7 +682,13 @@ impl Spu {
         }
     }
 
-    fn write_channel(&mut self, channel: u8, v: u32, now: u64, memory: &MainMemory) -> ChannelOutcome {
+    fn write_channel(
+        &mut self,
+        channel: u8,
+        v: u32,
+        now: u64,
+        memory: &MainMemory,
+    ) -> ChannelOutcome {
         use ch::*;
         self.complete_dma(now);
         match channel {
@@ -683,23 +749,40 @@ impl Spu {
         done
     }
 
-    fn check_transfer(&self, lsa: u32, ea: u64, size: u32, memory: &MainMemory) -> Result<(), String> {
+    fn check_transfer(
+        &self,
+        lsa: u32,
+        ea: u64,
+        size: u32,
+        memory: &MainMemory,
+    ) -> Result<(), String> {
         let ok_size = matches!(size, 1 | 2 | 4 | 8) || (size % 16 == 0 && size <= 16384);
         if !ok_size {
-            return Err(format!("transfer size {size} is not 1, 2, 4, 8 or a multiple of 16 up to 16384"));
+            return Err(format!(
+                "transfer size {size} is not 1, 2, 4, 8 or a multiple of 16 up to 16384"
+            ));
         }
         if size < 16 {
             if lsa % size != 0 || ea % size as u64 != 0 {
-                return Err(format!("{size}-byte transfer with LS {lsa:#x} / EA {ea:#x} not naturally aligned"));
+                return Err(format!(
+                    "{size}-byte transfer with LS {lsa:#x} / EA {ea:#x} not naturally aligned"
+                ));
             }
             if (lsa ^ ea as u32) & 15 != 0 {
-                return Err(format!("LS {lsa:#x} and EA {ea:#x} differ in their low 4 bits"));
+                return Err(format!(
+                    "LS {lsa:#x} and EA {ea:#x} differ in their low 4 bits"
+                ));
             }
         } else if lsa & 15 != 0 || ea & 15 != 0 {
-            return Err(format!("LS {lsa:#x} / EA {ea:#x} not 16-byte aligned for a {size}-byte transfer"));
+            return Err(format!(
+                "LS {lsa:#x} / EA {ea:#x} not 16-byte aligned for a {size}-byte transfer"
+            ));
         }
         if memory.range(ea, size).is_none() {
-            return Err(format!("EA {ea:#x}+{size} is outside main memory ({} bytes)", memory.len()));
+            return Err(format!(
+                "EA {ea:#x}+{size} is outside main memory ({} bytes)",
+                memory.len()
+            ));
         }
         Ok(())
     }
@@ -722,32 +805,60 @@ impl Spu {
                 let range = memory.range(ea, size).unwrap();
                 if cmd & 0x40 != 0 {
                     let data = memory.bytes()[range].to_vec();
-                    self.queue.push(DmaCommand { tag, complete, incoming: vec![(lsa, data)] });
+                    self.queue.push(DmaCommand {
+                        tag,
+                        complete,
+                        incoming: vec![(lsa, data)],
+                    });
                 } else {
-                    let data: Vec<u8> = (0..size).map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize]).collect();
+                    let data: Vec<u8> = (0..size)
+                        .map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize])
+                        .collect();
                     self.log_write(complete, ea as u32, data, WriteKind::Put);
-                    self.queue.push(DmaCommand { tag, complete, incoming: Vec::new() });
+                    self.queue.push(DmaCommand {
+                        tag,
+                        complete,
+                        incoming: Vec::new(),
+                    });
                 }
                 ChannelOutcome::Done
             }
             0x44..=0x46 | 0x24..=0x26 => {
                 let list = self.eal & LS_MASK;
                 if list & 7 != 0 {
-                    return ChannelOutcome::Error(format!("DMA list address {list:#x} is not 8-byte aligned"));
+                    return ChannelOutcome::Error(format!(
+                        "DMA list address {list:#x} is not 8-byte aligned"
+                    ));
                 }
                 if self.size % 8 != 0 || self.size / 8 > 2048 {
-                    return ChannelOutcome::Error(format!("DMA list size {} is not a multiple of 8 up to 16384", self.size));
+                    return ChannelOutcome::Error(format!(
+                        "DMA list size {} is not a multiple of 8 up to 16384",
+                        self.size
+                    ));
                 }
-                self.run_list(cmd as u8, tag, lsa, list, self.size / 8, self.eah, now, memory)
+                self.run_list(
+                    cmd as u8,
+                    tag,
+                    lsa,
+                    list,
+                    self.size / 8,
+                    self.eah,
+                    now,
+                    memory,
+                )
             }
             0xd0 => {
                 let line = self.eal & !127;
                 let ea = ((self.eah as u64) << 32) | line as u64;
                 if lsa & 127 != 0 {
-                    return ChannelOutcome::Error(format!("getllar LS {lsa:#x} not 128-byte aligned"));
+                    return ChannelOutcome::Error(format!(
+                        "getllar LS {lsa:#x} not 128-byte aligned"
+                    ));
                 }
                 let Some(range) = memory.range(ea, 128) else {
-                    return ChannelOutcome::Error(format!("getllar EA {ea:#x} outside main memory"));
+                    return ChannelOutcome::Error(format!(
+                        "getllar EA {ea:#x} outside main memory"
+                    ));
                 };
                 let data = memory.bytes()[range].to_vec();
                 for (k, b) in data.iter().enumerate() {
@@ -762,12 +873,18 @@ impl Spu {
             0xb4 | 0xb0 | 0xb8 => {
                 let line = self.eal & !127;
                 if lsa & 127 != 0 {
-                    return ChannelOutcome::Error(format!("putllc/putlluc LS {lsa:#x} not 128-byte aligned"));
+                    return ChannelOutcome::Error(format!(
+                        "putllc/putlluc LS {lsa:#x} not 128-byte aligned"
+                    ));
                 }
                 if memory.range(line as u64, 128).is_none() {
-                    return ChannelOutcome::Error(format!("atomic EA {line:#x} outside main memory"));
+                    return ChannelOutcome::Error(format!(
+                        "atomic EA {line:#x} outside main memory"
+                    ));
                 }
-                let data: Vec<u8> = (0..128).map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize]).collect();
+                let data: Vec<u8> = (0..128)
+                    .map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize])
+                    .collect();
                 let cycle = now + self.dma_latency();
                 if cmd == 0xb4 {
                     if self.reservation != Some(line) {
@@ -789,12 +906,30 @@ impl Spu {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn run_list(&mut self, cmd: u8, tag: u8, mut lsa: u32, mut list: u32, mut remaining: u32, eah: u32, now: u64, memory: &MainMemory) -> ChannelOutcome {
+    fn run_list(
+        &mut self,
+        cmd: u8,
+        tag: u8,
+        mut lsa: u32,
+        mut list: u32,
+        mut remaining: u32,
+        eah: u32,
+        now: u64,
+        memory: &MainMemory,
+    ) -> ChannelOutcome {
         let mut incoming = Vec::new();
         let mut last = now;
         while remaining > 0 {
-            let e0 = u32::from_be_bytes(self.core.ls[list as usize..list as usize + 4].try_into().unwrap());
-            let e1 = u32::from_be_bytes(self.core.ls[list as usize + 4..list as usize + 8].try_into().unwrap());
+            let e0 = u32::from_be_bytes(
+                self.core.ls[list as usize..list as usize + 4]
+                    .try_into()
+                    .unwrap(),
+            );
+            let e1 = u32::from_be_bytes(
+                self.core.ls[list as usize + 4..list as usize + 8]
+                    .try_into()
+                    .unwrap(),
+            );
             let size = e0 & 0x7fff;
             let ea = ((eah as u64) << 32) | e1 as u64;
             if let Err(e) = self.check_transfer(lsa, ea, size, memory) {
@@ -805,7 +940,9 @@ impl Spu {
             if cmd & 0x40 != 0 {
                 incoming.push((lsa, memory.bytes()[range].to_vec()));
             } else {
-                let data: Vec<u8> = (0..size).map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize]).collect();
+                let data: Vec<u8> = (0..size)
+                    .map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize])
+                    .collect();
                 self.log_write(last, e1, data, WriteKind::Put);
             }
             lsa = (lsa + size.div_ceil(16) * 16) & LS_MASK;
@@ -818,13 +955,23 @@ impl Spu {
                 break;
             }
         }
-        self.queue.push(DmaCommand { tag, complete: last, incoming });
+        self.queue.push(DmaCommand {
+            tag,
+            complete: last,
+            incoming,
+        });
         ChannelOutcome::Done
     }
 
     fn log_write(&mut self, cycle: u64, ea: u32, data: Vec<u8>, kind: WriteKind) {
         self.seq += 1;
-        self.writes.push(LoggedWrite { cycle, seq: self.seq, ea, data, kind });
+        self.writes.push(LoggedWrite {
+            cycle,
+            seq: self.seq,
+            ea,
+            data,
+            kind,
+        });
     }
 }
 
