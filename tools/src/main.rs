@@ -14,7 +14,11 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "spu", version, about = "Cell BE SPU toolchain and cycle-level simulator")]
+#[command(
+    name = "spu",
+    version,
+    about = "Cell BE SPU toolchain and cycle-level simulator"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
