@@ -1,4 +1,5 @@
-//! `spu dis`: objdump-style disassembly of a raw image (loaded at 0) or an SPU ELF.
+//! `spu dis`: objdump-style disassembly of an SPU ELF (its code sections, with symbols) or
+//! of a raw image loaded at address 0.
 
 use spu_isa::disasm::{listing, SymbolTable};
 use std::path::PathBuf;
@@ -15,7 +16,21 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<ExitCode, String> {
     let bytes = std::fs::read(&args.file).map_err(|e| format!("{}: {e}", args.file.display()))?;
-    let text = listing(&bytes, 0, &SymbolTable::default());
-    print!("{}:     file format binary\n\n\nDisassembly of section .data:\n\n00000000 <.data>:\n{text}", args.file.display());
+    let name = args.file.display();
+    if !args.raw && bytes.starts_with(b"\x7fELF") {
+        let elf = spu_asm::elf::read_elf(&bytes).map_err(|e| format!("{name}: {e}"))?;
+        let symbols = SymbolTable::new(elf.symbols.iter().map(|(n, a)| (*a, n.clone())).collect());
+        print!("\n{name}:     file format elf32-spu\n\n");
+        for (section, addr, data, code) in &elf.sections {
+            if *code {
+                print!(
+                    "\nDisassembly of section {section}:\n{}",
+                    listing(data, *addr, &symbols)
+                );
+            }
+        }
+    } else {
+        print!("\n{name}:     file format binary\n\n\nDisassembly of section .data:\n\n00000000 <.data>:\n{}", listing(&bytes, 0, &SymbolTable::default()));
+    }
     Ok(ExitCode::SUCCESS)
 }
