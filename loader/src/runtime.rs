@@ -21,6 +21,52 @@ pub struct FrameRun {
     pub frame_buffer: Vec<u8>,
     pub frame_cycles: u64,
     pub spus: Vec<SpuReport>,
+    /// The timing model's counters, merged over all SPUs.
+    pub profile: Option<spu_isa::profile::Profile>,
+    /// The kernel's symbols (to split the profile by code section).
+    pub symbols: Vec<(String, u32)>,
+}
+
+impl FrameRun {
+    /// The kernel statistics summed over all SPUs.
+    pub fn kernel_stats(&self) -> KernelStats {
+        let mut total = KernelStats::default();
+        for s in &self.spus {
+            total.merge(&s.stats);
+        }
+        total
+    }
+
+    fn symbol(&self, name: &str) -> Option<u32> {
+        self.symbols
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, a)| *a)
+    }
+
+    /// CPI, instructions, cycles and stalls of the code between two kernel labels.
+    pub fn section_json(&self, from: &str, to: &str) -> String {
+        let (Some(profile), Some(a), Some(b)) = (&self.profile, self.symbol(from), self.symbol(to))
+        else {
+            return "null".into();
+        };
+        let r = profile.range_totals(a, b);
+        let names = ["dep", "branch", "hint", "dp", "chan", "fetch"];
+        let stalls: Vec<String> = r
+            .stall
+            .iter()
+            .zip(names)
+            .map(|(v, n)| format!("\"{n}\": {v}"))
+            .collect();
+        format!(
+            "{{\"from\": {from:?}, \"to\": {to:?}, \"instructions\": {}, \"cycles\": {}, \"cpi\": {:.3}, \"dual_issue_pct\": {:.1}, \"stalls\": {{{}}}}}",
+            r.executions,
+            r.cycles,
+            r.cpi(),
+            if r.cycles > 0 { 100.0 * r.dual as f64 / r.cycles as f64 } else { 0.0 },
+            stalls.join(", ")
+        )
+    }
 }
 
 impl FrameRun {
@@ -52,6 +98,51 @@ impl FrameRun {
             }
             None => String::new(),
         };
+        let k = self.kernel_stats();
+        let per = |x: u64| {
+            if k.packets > 0 {
+                x as f64 / k.packets as f64
+            } else {
+                0.0
+            }
+        };
+        let pct = |x: u64, of: u64| {
+            if of > 0 {
+                100.0 * x as f64 / of as f64
+            } else {
+                0.0
+            }
+        };
+        let cycles_per_spu = self.spus.iter().map(|s| s.cycles).max().unwrap_or(0);
+        let per_spu_mrays = if cycles_per_spu > 0 {
+            (width as f64 * height as f64)
+                / self.spus.len().max(1) as f64
+                / (cycles_per_spu as f64 / (clock_ghz * 1e9))
+                / 1e6
+        } else {
+            0.0
+        };
+        let table2 = format!(
+            "{{\"traversal_steps_per_packet\": {:.2}, \"triangle_tests_per_packet\": {:.2}, \"triangles_culled_per_packet\": {:.2}, \"early_exits_pct\": {:.1}, \"early_hits_pct\": {:.1}, \"bvh_cache_hit_pct\": {:.1}, \"triangle_cache_hit_pct\": {:.1}, \"mrays_per_sec_per_spu\": {:.2}}}",
+            per(k.traversal_steps),
+            per(k.triangle_tests),
+            per(k.triangles_culled),
+            pct(k.early_exits, k.traversal_steps),
+            pct(k.early_hits, k.traversal_steps),
+            100.0 - pct(k.bvh_cache_misses, k.traversal_steps),
+            100.0 - pct(k.triangle_cache_misses, k.triangle_lookups),
+            per_spu_mrays
+        );
+        let stalls = self
+            .profile
+            .as_ref()
+            .map_or("null".to_string(), |p| p.totals.json());
+        let traversal = self.section_json("trav", "leaf");
+        let intersection = self.section_json("leaf", "packet_done");
+        let extra = format!(
+            ",\n  \"table2\": {table2},\n  \"traversal\": {traversal},\n  \"intersection\": {intersection},\n  \"totals\": {stalls}"
+        );
+        let validation = validation + &extra;
         format!(
             "{{\n  \"scene\": {scene:?},\n  \"width\": {width},\n  \"height\": {height},\n  \"clock_ghz\": {clock_ghz},\n  \"frame_cycles\": {},\n  \"rays\": {},\n  \"mrays_per_sec\": {mrays_per_sec:.3},\n  \"spus\": [{}]{validation}\n}}\n",
             self.frame_cycles,
@@ -222,9 +313,21 @@ pub fn render_frame(
         })
         .collect::<Vec<_>>();
     let fb = layout.frame_buffer_addr as usize;
+    let mut profile: Option<spu_isa::profile::Profile> = None;
+    for spu in &spus {
+        if let Some(t) = spu.timing() {
+            let p = t.finish_profile();
+            match &mut profile {
+                Some(total) => total.merge(&p),
+                None => profile = Some(p),
+            }
+        }
+    }
     Ok(FrameRun {
         frame_buffer: memory.bytes()[fb..fb + layout.frame_buffer_len].to_vec(),
         frame_cycles: spus_report.iter().map(|s| s.cycles).max().unwrap_or(0),
         spus: spus_report,
+        profile,
+        symbols: program.symbols.clone(),
     })
 }
