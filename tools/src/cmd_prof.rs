@@ -1,9 +1,10 @@
-//! `spu prof`: run a program with the timing model and print an annotated profile.
-//!
-//! The report side is ready (`spu_isa::profile::{annotated_listing, listing_json}` over a
-//! `Timing::finish_profile()`); running needs the SPU core (`spu_isa::spu::Spu`), which is
-//! being written. Until it exists this command says so.
+//! `spu prof`: run a program with the timing model and print an annotated profile: per
+//! instruction its executions, cycles and stall cycles by cause, a dual-issue mark, then a
+//! summary per label and the totals IBM's simulator reported.
 
+use spu_isa::disasm::{instruction_text, SymbolTable};
+use spu_isa::machine::MainMemory;
+use spu_isa::profile::{annotated_listing, listing_json, ListingLine, ListingOptions};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -18,15 +19,61 @@ pub struct Args {
     #[arg(long, value_name = "LABEL..LABEL")]
     range: Option<String>,
     /// Stop after this many cycles.
-    #[arg(long = "max-cycles")]
-    max_cycles: Option<u64>,
+    #[arg(long = "max-cycles", default_value_t = 1_000_000_000)]
+    max_cycles: u64,
+    /// Main memory in bytes.
+    #[arg(long, default_value_t = 1 << 20)]
+    memory: usize,
 }
 
 pub fn run(args: Args) -> Result<ExitCode, String> {
-    let _ = (&args.json, &args.range, &args.max_cycles);
-    Err(format!(
-        "{}: `spu prof` needs the SPU core (spu_isa::spu::Spu), which is not available yet; \
-         `spu timing` gives the static analysis meanwhile",
-        args.file.display()
-    ))
+    let (mut spu, symbols) = crate::cmd_run::load(&args.file)?;
+    spu.enable_timing(Default::default());
+    let mut memory = MainMemory::zeroed(args.memory);
+    let stop = spu.run(&mut memory, args.max_cycles);
+    let profile = spu
+        .timing()
+        .map(|t| t.finish_profile())
+        .ok_or("timing was not enabled")?;
+    let address_of = |name: &str| symbols.iter().find(|(n, _)| n == name).map(|(_, a)| *a);
+    let range = match &args.range {
+        Some(r) => {
+            let (a, b) = r
+                .split_once("..")
+                .ok_or_else(|| format!("--range {r}: expected LABEL..LABEL"))?;
+            let start = address_of(a).ok_or_else(|| format!("--range: no label `{a}`"))?;
+            let end = address_of(b).ok_or_else(|| format!("--range: no label `{b}`"))?;
+            Some((start, end))
+        }
+        None => None,
+    };
+    // Every executed address, with its labels and disassembly, in address order.
+    let table = SymbolTable::new(symbols.iter().map(|(n, a)| (*a, n.clone())).collect());
+    let mut addresses: Vec<u32> = profile.addresses().map(|(a, _)| a).collect();
+    addresses.sort_unstable();
+    let mut lines = Vec::new();
+    for addr in addresses {
+        let mut names: Vec<&str> = table.at(addr).collect();
+        names.sort_unstable();
+        for n in names {
+            lines.push(ListingLine::Label(n.to_string()));
+        }
+        let b = &spu.ls()[addr as usize..addr as usize + 4];
+        let word = u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+        lines.push(ListingLine::Inst {
+            addr,
+            text: instruction_text(word, addr, &table).replace('\t', " "),
+        });
+    }
+    let opts = ListingOptions {
+        range,
+        executed_only: true,
+    };
+    if args.json {
+        println!("{}", listing_json(&profile, &lines, &opts));
+    } else {
+        println!("{}: stopped with {stop}", args.file.display());
+        print!("{}", annotated_listing(&profile, &lines, &opts));
+    }
+    Ok(ExitCode::SUCCESS)
 }
