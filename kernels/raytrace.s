@@ -476,6 +476,7 @@ packet_loop:
         brsl    $0, set_first
 
 trav:
+        hbrr    .Lstep_br, trav               # every step ends by looping back here
         ai      S_STEPS, S_STEPS, 1
         # BVH cache lookup (direct mapped on the sibling pair)
         rotmi   $80, NODE, -1                 # pair
@@ -547,8 +548,47 @@ bvh_hit:
         a       S_M1SUM, S_M1SUM, $114
         and     $117, $114, $115
         a       S_EESUM, S_EESUM, $117
-        brz     $114, descend
-        brnz    $115, pop
+        andc    $118, $114, $115              # first ray missed, frustum undecided
+        brnz    $118, slow                    # the third case: the only one that branches
+
+# ---- one step ends branch-free: descend into the node ($114 = 0) or pop ($114 = -1).
+# Both are computed; the push is stored either way (when popping it lands above the top).
+step:
+        rotmi   $117, $116, -2                # triangle count (0: inner node)
+        andc    $119, $117, $114              # a leaf we descend into
+        brnz    $119, leaf
+        rotqbyi $118, $87, 12                 # first child
+        andi    $119, $116, 3                 # split axis
+        shli    $119, $119, 2
+        rotqby  $120, FR_R, $119              # first ray's 1/d on that axis
+        fcgt    $121, ZERO, $120              # -1 when it points down the axis
+        lqd     $81, -16(STK)                 # the entry a pop takes
+        sf      $124, $121, $118              # near child: first + (negative)
+        a       $122, $118, $121
+        ai      $122, $122, 1                 # far child
+        lqa     $123, k_entry
+        shufb   $123, $122, FIRST, $123
+        ceq     $80, STK, STKBASE
+        stqd    $123, 0(STK)
+        ai      $125, STK, 16
+        ai      $126, STK, -16
+        and     $80, $80, $114                # popping an empty stack: the packet is done
+        brnz    $80, packet_done
+        rotqbyi $82, $81, 4                   # popped first active ray
+        selb    STK, $125, $126, $114
+        selb    NODE, $124, $81, $114
+        selb    $82, FIRST, $82, $114
+        ceq     $83, $82, FIRST
+        brz     $83, first_changed
+.Lstep_br:
+        br      trav
+first_changed:
+        ori     FIRST, $82, 0
+        brsl    $0, set_first
+        br      trav
+
+        # ---- neither test decided: look for the first ray (from FIRST on) that hits
+slow:
 
         # ---- neither test decided: look for the first ray (from FIRST on) that hits
         shufb   $80, $87, $87, PAT0           # box planes, splat
@@ -612,43 +652,16 @@ bvh_hit:
         ai      $86, $86, 16
         ceqi    $109, $86, 256
         brz     $109, 7b
-        br      pop                           # no ray hits the box
+        il      $114, -1                      # no ray hits the box: pop
+        br      step
 8:      clz     $108, $108                    # first lane = clz - 28
         ai      $108, $108, -28
         rotmi   FIRST, $86, -2
         a       FIRST, FIRST, $108
         brsl    $0, set_first
         rotqbyi $116, $88, 12
-
-descend:
-        rotmi   $117, $116, -2                # triangle count (0: inner node)
-        brnz    $117, leaf
-        rotqbyi $118, $87, 12                 # first child
-        andi    $119, $116, 3                 # split axis
-        shli    $119, $119, 2
-        rotqby  $120, FR_R, $119              # first ray's 1/d on that axis
-        fcgt    $121, ZERO, $120              # -1 when it points down the axis
-        sf      NODE, $121, $118              # near child: first + (negative)
-        a       $122, $118, $121
-        ai      $122, $122, 1                 # far child
-        lqa     $123, k_entry
-        shufb   $124, $122, FIRST, $123
-        stqd    $124, 0(STK)
-        ai      STK, STK, 16
-        br      trav
-
-pop:
-        ceq     $80, STK, STKBASE
-        brnz    $80, packet_done
-        ai      STK, STK, -16
-        lqd     $81, 0(STK)
-        ori     NODE, $81, 0
-        rotqbyi $82, $81, 4
-        ceq     $83, $82, FIRST
-        brnz    $83, trav
-        ori     FIRST, $82, 0
-        brsl    $0, set_first
-        br      trav
+        il      $114, 0                       # descend with the new first ray
+        br      step
 
 bvh_miss:
         # $80 pair, $81 slot, $83 slot*16, $86 node address in the cache line
@@ -904,6 +917,7 @@ tri_next:
         ai      $79, $79, -1
         brnz    $79, tri_loop
         # the packet's largest t shrinks as rays hit: refresh the IA exit bound
+        hbrr    .Lleaf_br, step
         ila     $80, ray_t
         lqd     $81, 0($80)
         il      $82, 15
@@ -920,7 +934,9 @@ tri_next:
         fcgt    $84, $83, $81
         selb    PTMAX, $81, $83, $84
         selb    EXFILL, BIG, PTMAX, M3
-        br      pop
+        il      $114, -1                      # then pop
+.Lleaf_br:
+        br      step
 
 # ---- the packet is done: shade and send its results
 packet_done:
