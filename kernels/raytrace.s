@@ -719,26 +719,9 @@ tri_loop:
         lqx     $83, TTAGS, $81
         a       $84, TDATA, $82
         ceq     $85, $83, $78
-        brnz    $85, 9f
-        # triangle cache miss: fetch the 64-byte record
-        ai      S_TMISS, S_TMISS, 1
-        stqx    $78, TTAGS, $81
-        shli    $85, $78, 6
-        a       $85, $85, EATRIS
-        wrch    $MFC_LSA, $84
-        wrch    $MFC_EAH, ZERO
-        wrch    $MFC_EAL, $85
-        il      $86, 64
-        wrch    $MFC_Size, $86
-        il      $86, 1
-        wrch    $MFC_TagID, $86
-        il      $86, 0x40
-        wrch    $MFC_Cmd, $86
-        il      $86, 2
-        wrch    $MFC_WrTagMask, $86
-        wrch    $MFC_WrTagUpdate, $86
-        rdch    $86, $MFC_RdTagStat
-9:      lqd     $86, TRI_N_U($84)              # (n_u, n_v, n_d, k)
+        brz     $85, tri_miss                 # hits fall through
+.Ltri_hit:
+        lqd     $86, TRI_N_U($84)              # (n_u, n_v, n_d, k)
         lqd     $87, TRI_B_NU($84)             # (b_nu, b_nv, b_d, -)
         lqd     $88, TRI_C_NU($84)             # (c_nu, c_nv, c_d, -)
         rotqbyi $89, $86, 12                  # k
@@ -816,13 +799,15 @@ tri_loop:
         or      $113, $113, $114
         or      $115, $115, $116
         or      $113, $113, $115
-        brnz    $113, tri_culled
+        sf      S_CULLED, $113, S_CULLED      # +1 when culled
+        brnz    $113, tri_next
         ai      S_TRIS, S_TRIS, 1
 
         # the active rays, four vectors (16 rays) per pass, from FIRST's group on
         rotmi   $119, FIRST, -4
         shli    $119, $119, 6                 # byte offset of the first group
 ray_loop:
+        hbrr    .Lray_br, ray_loop
         .irp    J, 0, 1, 2, 3
         lqx     (\J+80), $125, $119          # d_k
         lqx     (\J+84), $126, $119          # d_u
@@ -908,10 +893,8 @@ ray_loop:
         .endr
         ai      $119, $119, 64
         ceqi    $112, $119, 256
+.Lray_br:
         brz     $112, ray_loop
-        br      tri_next
-tri_culled:
-        ai      S_CULLED, S_CULLED, 1
 tri_next:
         ai      $78, $78, 1
         ai      $79, $79, -1
@@ -937,6 +920,27 @@ tri_next:
         il      $114, -1                      # then pop
 .Lleaf_br:
         br      step
+
+tri_miss:
+        # triangle cache miss: fetch the 64-byte record, then test it
+        ai      S_TMISS, S_TMISS, 1
+        stqx    $78, TTAGS, $81
+        shli    $85, $78, 6
+        a       $85, $85, EATRIS
+        wrch    $MFC_LSA, $84
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $85
+        il      $86, 64
+        wrch    $MFC_Size, $86
+        il      $86, 1
+        wrch    $MFC_TagID, $86
+        il      $86, 0x40
+        wrch    $MFC_Cmd, $86
+        il      $86, 2
+        wrch    $MFC_WrTagMask, $86
+        wrch    $MFC_WrTagUpdate, $86
+        rdch    $86, $MFC_RdTagStat
+        br      .Ltri_hit
 
 # ---- the packet is done: shade and send its results
 packet_done:

@@ -9,7 +9,6 @@ pub mod disasm;
 pub mod float;
 pub mod machine;
 pub mod profile;
-pub mod sim;
 pub mod table;
 pub mod timing;
 

@@ -1,1 +1,0 @@
-//! The simulated SPU core (under construction).
