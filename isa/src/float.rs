@@ -356,7 +356,77 @@ fn neg_term(t: Term) -> Term {
     Term { neg: !t.neg, ..t }
 }
 
+// Fast paths: when every operand is normal (exponent 1..254) and the exact result fits in
+// an f64 (53 bits), f64 arithmetic is exact, and truncation toward zero of a result in the
+// normal range is just dropping the low bits. Everything else — zeros, denormals, exponent
+// 255, results needing more than 53 bits, overflow, underflow — takes the exact integer
+// path below, which also raises the flags (the fast path never has any to raise).
+
+#[inline(always)]
+fn sp_exp(x: u32) -> u32 {
+    (x >> 23) & 0xff
+}
+
+#[inline(always)]
+fn sp_normal(x: u32) -> bool {
+    let e = sp_exp(x);
+    e != 0 && e != 255
+}
+
+/// An exact f64 result truncated into the SPU single format, if it is a normal number.
+#[inline(always)]
+fn sp_from_exact_f64(r: f64) -> Option<u32> {
+    if r == 0.0 {
+        return Some(0);
+    }
+    let bits = r.to_bits();
+    let e = ((bits >> 52) & 0x7ff) as i32 - 1023 + 127;
+    if !(1..=254).contains(&e) {
+        return None;
+    }
+    Some(((bits >> 63) as u32) << 31 | (e as u32) << 23 | ((bits >> 29) as u32 & 0x7f_ffff))
+}
+
+#[inline(always)]
+fn fast_add(a: u32, b: u32, sub: bool) -> Option<u32> {
+    if !sp_normal(a) || !sp_normal(b) || sp_exp(a).abs_diff(sp_exp(b)) > 28 {
+        return None;
+    }
+    let (x, y) = (f32::from_bits(a) as f64, f32::from_bits(b) as f64);
+    sp_from_exact_f64(if sub { x - y } else { x + y })
+}
+
+#[inline(always)]
+fn fast_mul(a: u32, b: u32) -> Option<u32> {
+    if !sp_normal(a) || !sp_normal(b) {
+        return None;
+    }
+    sp_from_exact_f64(f32::from_bits(a) as f64 * f32::from_bits(b) as f64)
+}
+
+#[inline(always)]
+fn fast_fma(a: u32, b: u32, c: u32, neg_p: bool, neg_c: bool) -> Option<u32> {
+    if !sp_normal(a) || !sp_normal(b) || !sp_normal(c) {
+        return None;
+    }
+    // Bit spans: the product's 48 bits start at ea+eb-300, the addend's 24 at ec-150.
+    let lsb_p = sp_exp(a) as i32 + sp_exp(b) as i32 - 300;
+    let lsb_c = sp_exp(c) as i32 - 150;
+    let hi = (lsb_p + 48).max(lsb_c + 24);
+    if hi - lsb_p.min(lsb_c) > 52 {
+        return None;
+    }
+    let p = f32::from_bits(a) as f64 * f32::from_bits(b) as f64;
+    let z = f32::from_bits(c) as f64;
+    let p = if neg_p { -p } else { p };
+    let z = if neg_c { -z } else { z };
+    sp_from_exact_f64(p + z)
+}
+
 fn fa_core(a: u32, b: u32, sub: bool) -> (u32, u32) {
+    if let Some(r) = fast_add(a, b, sub) {
+        return (r, 0);
+    }
     let mut fl = 0;
     let x = sp_operand(a, &mut fl);
     let mut y = sp_operand(b, &mut fl);
@@ -368,6 +438,9 @@ fn fa_core(a: u32, b: u32, sub: bool) -> (u32, u32) {
 }
 
 fn fm_core(a: u32, b: u32) -> (u32, u32) {
+    if let Some(r) = fast_mul(a, b) {
+        return (r, 0);
+    }
     let mut fl = 0;
     let x = sp_operand(a, &mut fl);
     let y = sp_operand(b, &mut fl);
@@ -377,6 +450,13 @@ fn fm_core(a: u32, b: u32) -> (u32, u32) {
 
 /// `(-1)^neg_p * a*b + (-1)^neg_c * c`, truncated once.
 fn fma_core(a: u32, b: u32, c: u32, neg_p: bool, neg_c: bool) -> (u32, u32) {
+    if let Some(r) = fast_fma(a, b, c, neg_p, neg_c) {
+        return (r, 0);
+    }
+    fma_exact(a, b, c, neg_p, neg_c)
+}
+
+fn fma_exact(a: u32, b: u32, c: u32, neg_p: bool, neg_c: bool) -> (u32, u32) {
     let mut fl = 0;
     let x = sp_operand(a, &mut fl);
     let y = sp_operand(b, &mut fl);
@@ -1850,5 +1930,58 @@ mod tests {
         // Normal numbers are in no class.
         assert!(!dftsv(D_ONE, 0x7f));
         assert!(!dftsv(0x0010_0000_0000_0000, 0x7f));
+    }
+
+    /// The f64 fast paths agree with the exact integer path wherever they apply.
+    #[test]
+    fn fast_paths_agree_with_the_exact_path() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            // Bias exponents to collide often, so the fast path and its boundaries are hit.
+            let r = state as u32;
+            (r & 0x807f_ffff) | ((100 + (r >> 23) % 60) << 23)
+        };
+        let exact_add = |a: u32, b: u32, sub: bool| {
+            let mut fl = 0;
+            let x = sp_operand(a, &mut fl);
+            let mut y = sp_operand(b, &mut fl);
+            if sub {
+                y = neg_term(y);
+            }
+            sp_finish(exact_add(x, y), &mut fl)
+        };
+        let exact_mul = |a: u32, b: u32| {
+            let mut fl = 0;
+            let x = sp_operand(a, &mut fl);
+            let y = sp_operand(b, &mut fl);
+            sp_finish(sp_mul_term(x, y), &mut fl)
+        };
+        let mut fast_hits = 0;
+        for _ in 0..200_000 {
+            let (a, b, c) = (next(), next(), next());
+            if let Some(r) = fast_add(a, b, false) {
+                fast_hits += 1;
+                assert_eq!(r, exact_add(a, b, false), "fa {a:#x} {b:#x}");
+            }
+            if let Some(r) = fast_add(a, b, true) {
+                assert_eq!(r, exact_add(a, b, true), "fs {a:#x} {b:#x}");
+            }
+            if let Some(r) = fast_mul(a, b) {
+                assert_eq!(r, exact_mul(a, b), "fm {a:#x} {b:#x}");
+            }
+            for (np, nc) in [(false, false), (false, true), (true, false)] {
+                if let Some(r) = fast_fma(a, b, c, np, nc) {
+                    assert_eq!(
+                        r,
+                        fma_exact(a, b, c, np, nc).0,
+                        "fma {a:#x} {b:#x} {c:#x} {np} {nc}"
+                    );
+                }
+            }
+        }
+        assert!(fast_hits > 50_000, "{fast_hits}");
     }
 }
