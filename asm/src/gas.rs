@@ -240,6 +240,9 @@ const CHANNELS: &[(&str, u32)] = &[
 
 type Res<T> = Result<T, (usize, String)>;
 
+/// Bytes of SPU local store: the most a program can occupy.
+const LOCAL_STORE: usize = 256 * 1024;
+
 /// A tiny expression evaluator over GNU as's operators, with C-like precedence.
 struct Expr<'a, 'b> {
     s: &'a [u8],
@@ -548,6 +551,11 @@ impl<'o> Assembler<'o> {
 
     fn emit(&mut self, data: &[u8]) {
         let off = self.offsets.entry(self.sect).or_insert(0);
+        // Past the local store nothing can load: stop growing (the size check reports it).
+        if *off as usize + data.len() > 2 * LOCAL_STORE {
+            *off = (2 * LOCAL_STORE) as u32;
+            return;
+        }
         if self.pass == 2 && self.sect != Sect::Bss {
             let buf = self.bytes.entry(self.sect).or_default();
             let at = *off as usize;
@@ -962,9 +970,17 @@ impl<'o> Assembler<'o> {
                 let v = vals.first().copied().unwrap_or(0);
                 let boundary = if d == ".balign" {
                     v
+                } else if v > 15 {
+                    // GNU as: "alignment too large: 15 assumed".
+                    self.diag(Severity::Warning, line, col, "alignment too large: 15 assumed");
+                    1 << 15
                 } else {
-                    1i64 << v.clamp(0, 30)
+                    1i64 << v.max(0)
                 };
+                if boundary > 1 << 15 {
+                    self.diag(Severity::Error, line, col, format!("alignment too large: {boundary}"));
+                    return;
+                }
                 if boundary <= 0 || boundary & (boundary - 1) != 0 {
                     self.diag(
                         Severity::Error,
@@ -1030,7 +1046,7 @@ impl<'o> Assembler<'o> {
             ".space" | ".skip" | ".zero" => {
                 let vals = self.data_values(args, line, col);
                 let n = vals.first().copied().unwrap_or(0);
-                if !(0..=1 << 24).contains(&n) {
+                if !(0..=LOCAL_STORE as i64 * 2).contains(&n) {
                     self.diag(Severity::Error, line, col, format!("bad .space size {n}"));
                     return;
                 }
@@ -1044,7 +1060,7 @@ impl<'o> Assembler<'o> {
                     vals.get(1).copied().unwrap_or(1).clamp(0, 8),
                     vals.get(2).copied().unwrap_or(0),
                 );
-                for _ in 0..n.clamp(0, 1 << 24) {
+                for _ in 0..n.clamp(0, LOCAL_STORE as i64 * 2) {
                     let b = value.to_be_bytes();
                     let s = size as usize;
                     let mut word = vec![0u8; s];

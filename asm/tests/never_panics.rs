@@ -1,0 +1,72 @@
+//! Bad input never panics the assembler: mutated kernels and random fragments either
+//! assemble or come back as diagnostics.
+
+const SOURCES: &[&str] = &[
+    include_str!("../../kernels/raytrace.s"),
+    include_str!("../../kernels/fill.s"),
+];
+
+const FRAGMENTS: &[&str] = &[
+    "(", ")", "$", "$ch", "$sp9", ",", ":", "::", "1b", "9f", ".irp", ".endr", ".macro m",
+    ".endm", ".if", ".endif", ".else", "@h", "@l", "\\", "\"", "/*", "*/", "#", ";", "0x",
+    "-", "~", "!", "<<", ">>", "%", "/0", "lqd $3,", "($1)", "99999999999999999999", "\t",
+    ".align 40", ".space -1", ".fill 3,9,1", ".rept 3", ".include \"nope\"", "stop", "bi",
+];
+
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> usize {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (self.0 >> 33) as usize
+    }
+}
+
+#[test]
+fn mutated_sources_never_panic() {
+    let mut rng = Lcg(42);
+    let opts = spu_asm::Options {
+        virtual_files: vec![(
+            "layout.inc".into(),
+            ".set TRI_N_U, 0\n.set TRI_B_NU, 16\n.set TRI_C_NU, 32\n".into(),
+        )],
+        ..Default::default()
+    };
+    for round in 0..300 {
+        let base = SOURCES[round % SOURCES.len()];
+        let mut lines: Vec<String> = base.lines().map(str::to_string).collect();
+        for _ in 0..1 + rng.next() % 8 {
+            let i = rng.next() % lines.len();
+            let line = &mut lines[i];
+            let pos = if line.is_empty() { 0 } else { rng.next() % line.len() };
+            let pos = (0..=pos).rev().find(|p| line.is_char_boundary(*p)).unwrap_or(0);
+            match rng.next() % 3 {
+                0 => line.insert_str(pos, FRAGMENTS[rng.next() % FRAGMENTS.len()]),
+                1 => line.truncate(pos),
+                _ => {
+                    let j = rng.next() % lines.len();
+                    lines.swap(i, j);
+                }
+            }
+        }
+        let source = lines.join("\n");
+        let _ = spu_asm::assemble(&source, "mutated.s", &opts);
+    }
+}
+
+#[test]
+fn random_fragments_never_panic() {
+    let mut rng = Lcg(7);
+    for _ in 0..1500 {
+        let mut s = String::new();
+        for _ in 0..rng.next() % 12 {
+            s.push_str(FRAGMENTS[rng.next() % FRAGMENTS.len()]);
+            if rng.next() % 3 == 0 {
+                s.push(' ');
+            }
+            if rng.next() % 5 == 0 {
+                s.push('\n');
+            }
+        }
+        let _ = spu_asm::assemble(&s, "random.s", &spu_asm::Options::default());
+    }
+}
