@@ -36,19 +36,36 @@ pub struct Diagnostic {
 }
 
 impl std::fmt::Display for Diagnostic {
+    /// Rendered by codespan-reporting: the message, `file:line:column`, the line and a caret.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let kind = match self.severity {
-            Severity::Error => "error",
-            Severity::Warning => "warning",
-        };
+        use codespan_reporting::diagnostic as cd;
+        use codespan_reporting::files::SimpleFile;
+        use codespan_reporting::term;
         let l = &self.location;
-        writeln!(
-            f,
-            "{}:{}:{}: {kind}: {}",
-            l.file, l.line, l.column, self.message
-        )?;
-        writeln!(f, "    {}", self.source_line)?;
-        write!(f, "    {}^", " ".repeat(l.column.saturating_sub(1)))
+        let plain = |f: &mut std::fmt::Formatter<'_>| {
+            let kind = if self.severity == Severity::Error { "error" } else { "warning" };
+            write!(f, "{}:{}:{}: {kind}: {}", l.file, l.line, l.column, self.message)
+        };
+        if l.line == 0 {
+            return plain(f);
+        }
+        // A file whose line `l.line` is the source line, so the report shows the real number.
+        let prefix = "\n".repeat(l.line - 1);
+        let text = format!("{prefix}{}\n", self.source_line);
+        let start = prefix.len() + l.column.saturating_sub(1).min(self.source_line.len());
+        let end = (start + 1).min(prefix.len() + self.source_line.len()).max(start);
+        let file = SimpleFile::new(l.file.clone(), text);
+        let diagnostic = match self.severity {
+            Severity::Error => cd::Diagnostic::error(),
+            Severity::Warning => cd::Diagnostic::warning(),
+        }
+        .with_message(self.message.clone())
+        .with_labels(vec![cd::Label::primary((), start..end)]);
+        let config = term::Config { chars: term::Chars::ascii(), ..Default::default() };
+        match term::emit_into_string(&config, &file, &diagnostic) {
+            Ok(text) => write!(f, "{}", text.trim_end()),
+            Err(_) => plain(f),
+        }
     }
 }
 
@@ -265,7 +282,7 @@ impl Expr<'_, '_> {
     }
     fn eat(&mut self, t: &str) -> bool {
         self.ws();
-        if self.s[self.pos..].starts_with(t.as_bytes()) {
+        if self.s.get(self.pos..).is_some_and(|r| r.starts_with(t.as_bytes())) {
             self.pos += t.len();
             true
         } else {
@@ -385,7 +402,7 @@ impl Expr<'_, '_> {
         }
         if c == '\'' {
             let ch = self.s.get(self.pos + 1).copied().unwrap_or(0);
-            self.pos += 2;
+            self.pos = (self.pos + 2).min(self.s.len());
             self.eat("'");
             return Ok(ch as i64);
         }
@@ -1512,6 +1529,7 @@ pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output,
     if !errors.is_empty() {
         let mut all = errors;
         all.extend(warnings);
+        all.sort_by(|a, b| (&a.location.file, a.location.line, a.location.column).cmp(&(&b.location.file, b.location.line, b.location.column)));
         return Err(all);
     }
     let end = bss_base + bss_size;

@@ -70,3 +70,11 @@ fn random_fragments_never_panic() {
         let _ = spu_asm::assemble(&s, "random.s", &spu_asm::Options::default());
     }
 }
+
+/// Inputs the fuzzer found (fuzz/ with cargo-fuzz), kept as regression tests.
+#[test]
+fn fuzzer_findings_stay_fixed() {
+    for input in ["\n\" #\n\")),z\x0b='\r", "x='", "a='b", ".long '"] {
+        let _ = spu_asm::assemble(input, "fuzz.s", &spu_asm::Options::default());
+    }
+}
