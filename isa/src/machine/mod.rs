@@ -230,6 +230,18 @@ pub struct Spu {
     timing_config: TimingConfig,
 }
 
+/// The marker of a stale pre-decoded word: `Unknown` carrying a word that is not unknown
+/// (`il $0,0`), so no real decoding result equals it.
+const STALE: Inst = Inst {
+    op: Op::Unknown,
+    rt: 0,
+    ra: 0,
+    rb: 0,
+    rc: 0,
+    imm: 0,
+    word: 0x4080_0000,
+};
+
 enum ChannelOutcome {
     Done,
     /// Not ready before this cycle; retry then.
@@ -299,14 +311,29 @@ impl Spu {
         self.pc = entry & LS_MASK & !3;
     }
 
+    /// Marks the pre-decoded words covering `[addr, addr + len)` stale; they are decoded
+    /// again when fetched (stores and DMA into local store cost no decoding unless the
+    /// bytes are executed).
     fn redecode(&mut self, addr: u32, len: u32) {
         let start = (addr & LS_MASK) as usize / 4;
         let words = (len as usize).div_ceil(4) + 1;
         for k in 0..words.min(LS_SIZE / 4) {
-            let w = (start + k) % (LS_SIZE / 4);
-            let b = &self.core.ls[4 * w..4 * w + 4];
-            self.decoded[w] = decode(u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
+            self.decoded[(start + k) % (LS_SIZE / 4)] = STALE;
         }
+    }
+
+    /// The decoded instruction at `pc`, decoding it first if a write made it stale.
+    #[inline(always)]
+    fn fetch(&mut self, pc: u32) -> Inst {
+        let w = (pc >> 2) as usize & (LS_SIZE / 4 - 1);
+        let inst = self.decoded[w];
+        if inst.op != Op::Unknown || inst.word != STALE.word {
+            return inst;
+        }
+        let b = &self.core.ls[4 * w..4 * w + 4];
+        let fresh = decode(u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
+        self.decoded[w] = fresh;
+        fresh
     }
 
     pub fn pc(&self) -> u32 {
@@ -412,7 +439,7 @@ impl Spu {
     pub fn run_quantum(&mut self, memory: &MainMemory, until: u64) -> Option<StopReason> {
         while self.cycle < until {
             let pc = self.pc;
-            let inst = self.decoded[(pc >> 2) as usize];
+            let inst = self.fetch(pc);
             let issue = match &mut self.timing {
                 Some(t) => t.issue(pc, inst),
                 None => self.cycle,
