@@ -140,6 +140,9 @@ struct Assembler<'o> {
     macro_counter: usize,
     listing: String,
     depth: usize,
+    /// Macro expansions under way, and whether `.exitm` asked the innermost one to stop.
+    macro_depth: usize,
+    exitm: bool,
 }
 
 fn is_ident_start(c: char) -> bool {
@@ -300,25 +303,27 @@ impl Expr<'_, '_> {
         loop {
             self.ws();
             let ops: &[(&str, u8)] = &[
+                // GNU as precedences (not C's): `* / % << >>` bind tightest, then
+                // `| & ^ !`, then `+ -` with the comparisons, then `&& ||`.
                 ("||", 1),
-                ("&&", 2),
-                ("==", 4),
-                ("!=", 4),
-                ("<>", 4),
-                ("<=", 5),
-                (">=", 5),
-                ("<<", 6),
-                (">>", 6),
-                ("<", 5),
-                (">", 5),
+                ("&&", 1),
+                ("==", 2),
+                ("!=", 2),
+                ("<>", 2),
+                ("<=", 2),
+                (">=", 2),
+                ("<<", 4),
+                (">>", 4),
+                ("<", 2),
+                (">", 2),
                 ("|", 3),
                 ("^", 3),
                 ("&", 3),
-                ("+", 7),
-                ("-", 7),
-                ("*", 8),
-                ("/", 8),
-                ("%", 8),
+                ("+", 2),
+                ("-", 2),
+                ("*", 4),
+                ("/", 4),
+                ("%", 4),
                 ("!", 3),
             ];
             let Some((op, prec)) = ops
@@ -703,6 +708,18 @@ impl<'o> Assembler<'o> {
                 i += 1;
                 continue;
             }
+            if first_word == ".exitm" {
+                if self.macro_depth > 0 {
+                    self.exitm = true;
+                } else {
+                    self.diag(Severity::Error, line, 1, ".exitm outside a macro");
+                    i += 1;
+                    continue;
+                }
+            }
+            if self.exitm {
+                break;
+            }
             // Block directives that swallow lines up to their end.
             if matches!(first_word.as_str(), ".macro" | ".rept" | ".irp" | ".irpc") {
                 let (body, next) = collect_block(lines, i + 1);
@@ -722,7 +739,7 @@ impl<'o> Assembler<'o> {
             self.statement(line, &text);
             i += 1;
         }
-        if !cond.is_empty() {
+        if !cond.is_empty() && !self.exitm {
             if let Some(l) = lines.last() {
                 self.diag(Severity::Error, l, 1, "missing .endif");
             }
@@ -758,6 +775,9 @@ impl<'o> Assembler<'o> {
             ".rept" => match self.eval(args) {
                 Ok((n, _)) => {
                     for _ in 0..n.clamp(0, 1 << 20) {
+                        if self.exitm {
+                            break;
+                        }
                         self.run_lines(&body);
                     }
                 }
@@ -778,6 +798,9 @@ impl<'o> Assembler<'o> {
                         .unwrap_or_default()
                 };
                 for v in values {
+                    if self.exitm {
+                        break;
+                    }
                     let expanded: Vec<Line> = body
                         .iter()
                         .map(|l| Line {
@@ -907,6 +930,8 @@ impl<'o> Assembler<'o> {
     }
 
     fn expand_macro(&mut self, m: &Macro, args: &str, line: &Line) {
+        // `\@` is the number of expansions before this one (GNU as counts from 0).
+        let counter = self.macro_counter.to_string();
         self.macro_counter += 1;
         let given: Vec<String> = if args.trim().is_empty() {
             vec![]
@@ -930,19 +955,18 @@ impl<'o> Assembler<'o> {
                 .unwrap_or_default();
             subst.push((name.clone(), value));
         }
-        let counter = self.macro_counter.to_string();
         let mut body = Vec::new();
         for l in &m.body {
-            if strip_comment(&l.text).trim().eq_ignore_ascii_case(".exitm") {
-                break;
-            }
             body.push(Line {
                 text: substitute(&l.text, &subst, Some(&counter)),
                 file: line.file.clone(),
                 line: line.line,
             });
         }
+        self.macro_depth += 1;
         self.run_lines(&body);
+        self.macro_depth -= 1;
+        self.exitm = false;
     }
 
     fn data_values(&mut self, args: &str, line: &Line, col: usize) -> Vec<i64> {
@@ -1484,6 +1508,8 @@ pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output,
         macro_counter: 0,
         listing: String::new(),
         depth: 0,
+        macro_depth: 0,
+        exitm: false,
     };
     let predefine = |asm: &mut Assembler| {
         for (n, v) in &opts.defines {
