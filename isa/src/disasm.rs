@@ -5,7 +5,8 @@
 //! from their feature bits; registers print as `$N`, channels `$chN`, SPRs `$spN`;
 //! branch and hint targets print as addresses (`a4 <y>`), a zero relative offset as `0`;
 //! `ila` prints an address only when a symbol sits at address 0; a decimal immediate
-//! above 16 is followed by a `# hex` comment; unknown words print as `.long 0x...`.
+//! above 16, or a relative branch target above 16, is followed by a `# hex` comment;
+//! unknown words print as `.long 0x...`.
 
 use crate::codec::{decode, operand_value};
 use crate::table::{Op, OperandKind};
@@ -121,6 +122,8 @@ pub fn instruction_text(word: u32, pc: u32, symbols: &dyn Symbolizer) -> String 
                 if inst.imm == 0 {
                     out.push('0');
                 } else {
+                    // binutils keeps the unmasked target for the `# hex` comment.
+                    hex_value = pc as i64 + (((word << 9) as i32) >> 16) as i64 * 4;
                     out.push_str(&format_address(value as u32, symbols));
                 }
             }
