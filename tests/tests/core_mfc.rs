@@ -1,0 +1,405 @@
+//! The MFC and the channels of the simulated SPU (`spu_isa::machine`): DMA get/put with
+//! their barrier/fence forms, lists with stall-and-notify, tag-status modes, every kind of
+//! bad DMA, atomics between two SPUs, mailboxes blocking and deadlocking.
+
+use spu_isa::machine::{apply_quantum, MainMemory, Spu, StopReason};
+
+/// Source lines issuing one MFC command (uses $70 as scratch).
+fn dma(lsa: u32, ea: u32, size: u32, tag: u32, cmd: u32) -> String {
+    format!(
+        "ila $70, {lsa}\n wrch $MFC_LSA, $70\n il $70, 0\n wrch $MFC_EAH, $70\n\
+         ila $70, {ea}\n wrch $MFC_EAL, $70\n ila $70, {size}\n wrch $MFC_Size, $70\n\
+         ila $70, {tag}\n wrch $MFC_TagID, $70\n ila $70, {cmd}\n wrch $MFC_Cmd, $70\n"
+    )
+}
+
+/// Waits for the tags in `mask` with update mode `mode` (1 any, 2 all); status into `reg`.
+fn wait(mask: u32, mode: u32, reg: u32) -> String {
+    format!(
+        "ila $70, {mask}\n wrch $MFC_WrTagMask, $70\n il $70, {mode}\n\
+         wrch $MFC_WrTagUpdate, $70\n rdch ${reg}, $MFC_RdTagStat\n"
+    )
+}
+
+fn load(body: &str) -> Spu {
+    let src = format!("        .text\n        .global _start\n_start:\n{body}\n stop 0x100\n");
+    let out = spu_asm::assemble(&src, "t.s", &Default::default())
+        .unwrap_or_else(|d| panic!("{d:?}\n{src}"));
+    let mut spu = Spu::new(0);
+    spu.load_image(&out.image);
+    spu.set_pc(out.entry);
+    spu
+}
+
+fn memory() -> MainMemory {
+    let mut m = MainMemory::zeroed(64 * 1024);
+    for (i, b) in m.bytes_mut().iter_mut().enumerate() {
+        *b = (i * 7 + 3) as u8;
+    }
+    m
+}
+
+fn ls_words(spu: &Spu, addr: usize, n: usize) -> Vec<u32> {
+    (0..n)
+        .map(|i| u32::from_be_bytes(spu.ls()[addr + 4 * i..addr + 4 * i + 4].try_into().unwrap()))
+        .collect()
+}
+
+#[test]
+fn get_put_and_their_fence_and_barrier_forms() {
+    // get (0x40), getf (0x42), getb (0x41) into three buffers; wait all; putf (0x22) one back
+    // elsewhere, putb (0x21) another, put (0x20) the third; wait all.
+    let mut body = String::new();
+    body += &dma(0x8000, 0x1000, 64, 1, 0x40);
+    body += &dma(0x8100, 0x1100, 16, 1, 0x42);
+    body += &dma(0x8200, 0x1200, 1024, 2, 0x41);
+    body += &wait(0b110, 2, 10);
+    body += &dma(0x8000, 0x4000, 64, 3, 0x22);
+    body += &dma(0x8100, 0x4100, 16, 3, 0x21);
+    body += &dma(0x8200, 0x4200, 1024, 4, 0x20);
+    body += &wait(0b11000, 2, 11);
+    let mut spu = load(&body);
+    let mut mem = memory();
+    let orig = mem.clone();
+    assert_eq!(spu.run(&mut mem, 1_000_000), StopReason::Stop(0x100));
+    assert_eq!(&spu.ls()[0x8000..0x8040], &orig.bytes()[0x1000..0x1040]);
+    assert_eq!(&spu.ls()[0x8100..0x8110], &orig.bytes()[0x1100..0x1110]);
+    assert_eq!(&spu.ls()[0x8200..0x8600], &orig.bytes()[0x1200..0x1600]);
+    assert_eq!(&mem.bytes()[0x4000..0x4040], &orig.bytes()[0x1000..0x1040]);
+    assert_eq!(&mem.bytes()[0x4100..0x4110], &orig.bytes()[0x1100..0x1110]);
+    assert_eq!(&mem.bytes()[0x4200..0x4600], &orig.bytes()[0x1200..0x1600]);
+    // Nothing else changed.
+    assert_eq!(&mem.bytes()[..0x4000], &orig.bytes()[..0x4000]);
+    assert_eq!(&mem.bytes()[0x4600..], &orig.bytes()[0x4600..]);
+    // The tag status reads back the waited-for groups.
+    assert_eq!(spu.reg(10)[0], 0b110);
+    assert_eq!(spu.reg(11)[0], 0b11000);
+}
+
+#[test]
+fn small_transfers_keep_natural_alignment() {
+    // 1, 2, 4, 8 bytes at matching LS/EA offsets within the quadword.
+    let mut body = String::new();
+    body += &dma(0x8003, 0x1013, 1, 0, 0x40);
+    body += &dma(0x8006, 0x1026, 2, 0, 0x40);
+    body += &dma(0x8008, 0x1038, 4, 0, 0x40);
+    body += &dma(0x8018, 0x1048, 8, 0, 0x40);
+    body += &wait(1, 2, 10);
+    let mut spu = load(&body);
+    let mut mem = memory();
+    assert_eq!(spu.run(&mut mem, 1_000_000), StopReason::Stop(0x100));
+    let m = mem.bytes();
+    assert_eq!(spu.ls()[0x8003], m[0x1013]);
+    assert_eq!(spu.ls()[0x8002], 0, "neighbours untouched");
+    assert_eq!(&spu.ls()[0x8006..0x8008], &m[0x1026..0x1028]);
+    assert_eq!(&spu.ls()[0x8008..0x800c], &m[0x1038..0x103c]);
+    assert_eq!(&spu.ls()[0x8018..0x8020], &m[0x1048..0x1050]);
+}
+
+#[test]
+fn tag_status_any_and_all() {
+    // One DMA engine serves commands in order: the small tag-1 get completes before the
+    // 16 KiB tag-2 get, so "any" on {1, 2} returns only tag 1; "all" returns both.
+    let mut body = String::new();
+    body += &dma(0x8000, 0x1000, 16, 1, 0x40);
+    body += &dma(0xc000, 0x2000, 16384, 2, 0x40);
+    body += &wait(0b110, 1, 10);
+    body += &wait(0b110, 2, 11);
+    // Update mode 0 (immediate) never blocks and reports what is done.
+    body += &wait(0b110, 0, 12);
+    let mut spu = load(&body);
+    let mut mem = memory();
+    assert_eq!(spu.run(&mut mem, 1_000_000), StopReason::Stop(0x100));
+    assert_eq!(spu.reg(10)[0], 0b010);
+    assert_eq!(spu.reg(11)[0], 0b110);
+    assert_eq!(spu.reg(12)[0], 0b110);
+    assert_eq!(&spu.ls()[0xc000..0x10000], &mem.bytes()[0x2000..0x6000]);
+}
+
+#[test]
+fn dma_completes_later_than_it_is_issued() {
+    // A get whose data is read without waiting still sees the old local store contents;
+    // after the wait the data is there. (Completion is deterministic in the instruction
+    // clock when timing is off.)
+    let mut body = String::new();
+    body += &dma(0x8000, 0x1000, 16, 5, 0x40);
+    body += "lqa $20, 0x8000\n";
+    body += &wait(1 << 5, 2, 10);
+    body += "lqa $21, 0x8000\n";
+    let mut spu = load(&body);
+    let mut mem = memory();
+    assert_eq!(spu.run(&mut mem, 1_000_000), StopReason::Stop(0x100));
+    assert_eq!(spu.reg(20), [0; 4]);
+    assert_eq!(spu.reg(21)[0], mem.read_u32(0x1000));
+}
+
+#[test]
+fn list_with_stall_and_notify() {
+    // getl (0x44) of three elements; the first carries the stall-and-notify bit.
+    // List at LS 0x7000: (0x8000_0010, 0x1000), (0x20, 0x2000), (0x10, 0x3000).
+    let mut body = String::new();
+    body += &dma(0x8000, 0x7000, 24, 3, 0x44);
+    body += "rdch $10, $MFC_RdListStallStat\n";
+    // Before the acknowledgement only the first element may have arrived; wait a while
+    // so it has (the stall is notified once the element completes).
+    body += "il $77, 2000\nspin: ai $77, $77, -1\n brnz $77, spin\n";
+    body += "lqa $20, 0x8010\n";
+    body += "il $70, 3\n wrch $MFC_WrListStallAck, $70\n";
+    body += &wait(1 << 3, 2, 11);
+    let mut spu = load(&body);
+    let list: Vec<u8> = [0x8000_0010u32, 0x1000, 0x20, 0x2000, 0x10, 0x3000]
+        .iter()
+        .flat_map(|w| w.to_be_bytes())
+        .collect();
+    spu.write_ls(0x7000, &list);
+    let mut mem = memory();
+    assert_eq!(spu.run(&mut mem, 10_000_000), StopReason::Stop(0x100));
+    assert_eq!(
+        ls_words(&spu, 0x7000, 6),
+        vec![0x8000_0010, 0x1000, 0x20, 0x2000, 0x10, 0x3000]
+    );
+    assert_eq!(spu.reg(10)[0], 1 << 3, "stall status names the tag");
+    assert_eq!(
+        spu.reg(20),
+        [0; 4],
+        "second element not moved before the ack"
+    );
+    let m = mem.bytes();
+    assert_eq!(&spu.ls()[0x8000..0x8010], &m[0x1000..0x1010]);
+    assert_eq!(&spu.ls()[0x8010..0x8030], &m[0x2000..0x2020]);
+    assert_eq!(&spu.ls()[0x8030..0x8040], &m[0x3000..0x3010]);
+    assert_eq!(spu.reg(11)[0], 1 << 3);
+}
+
+fn dma_error(lsa: u32, ea: u32, size: u32, tag: u32, cmd: u32) -> StopReason {
+    let mut spu = load(&dma(lsa, ea, size, tag, cmd));
+    let mut mem = memory();
+    spu.run(&mut mem, 1_000_000)
+}
+
+#[test]
+fn every_kind_of_bad_dma_stops_with_an_error() {
+    let bad = [
+        ("size 3", (0x8000, 0x1000, 3, 0, 0x40)),
+        (
+            "size 24 (not 1,2,4,8 or 16k)",
+            (0x8000, 0x1000, 24, 0, 0x40),
+        ),
+        ("size over 16 KiB", (0x8000, 0x1000, 16400, 0, 0x40)),
+        ("4 bytes misaligned", (0x8002, 0x1002, 4, 0, 0x40)),
+        ("8 bytes at different offsets", (0x8008, 0x1000, 8, 0, 0x20)),
+        ("LS/EA low bits differ", (0x8004, 0x1000, 32, 0, 0x40)),
+        ("tag 32", (0x8000, 0x1000, 16, 32, 0x40)),
+        ("EA outside memory", (0x8000, 0xfff0, 32, 0, 0x40)),
+        ("list address not 8-aligned", (0x8000, 0x7004, 8, 0, 0x44)),
+        ("unknown command", (0x8000, 0x1000, 16, 0, 0x7f)),
+    ];
+    for (what, (lsa, ea, size, tag, cmd)) in bad {
+        let stop = dma_error(lsa, ea, size, tag, cmd);
+        assert!(
+            matches!(stop, StopReason::DmaError { .. }),
+            "{what}: {stop:?}"
+        );
+    }
+    // And the good neighbours of those cases run.
+    for (lsa, ea, size) in [
+        (0x8000, 0x1000, 16384),
+        (0x8004, 0x1004, 4),
+        (0x8010, 0x1020, 32),
+    ] {
+        let mut body = dma(lsa, ea, size, 0, 0x40);
+        body += &wait(1, 2, 10);
+        let mut spu = load(&body);
+        assert_eq!(
+            spu.run(&mut memory(), 1_000_000),
+            StopReason::Stop(0x100),
+            "{lsa:x} {ea:x} {size}"
+        );
+    }
+}
+
+/// Atomic increment of the word at EA 0x2000, `n` times, retrying failed putllc.
+/// $30 counts failed attempts.
+fn atomic_incrementer(n: u32) -> Spu {
+    let mut body = String::new();
+    body += &format!("il $31, {n}\n il $30, 0\n");
+    body += "again:\n";
+    body += &dma(0x8000, 0x2000, 128, 0, 0xd0); // getllar
+    body += "rdch $32, $MFC_RdAtomicStat\n";
+    body += "lqa $33, 0x8000\n ai $33, $33, 1\n stqa $33, 0x8000\n";
+    body += &dma(0x8000, 0x2000, 128, 0, 0xb4); // putllc
+    body += "rdch $32, $MFC_RdAtomicStat\n";
+    body += "andi $34, $32, 1\n a $30, $30, $34\n brnz $34, again\n";
+    body += "ai $31, $31, -1\n brnz $31, again\n";
+    load(&body)
+}
+
+fn run_pair(quantum: u64, n: u32) -> (MainMemory, [u32; 2]) {
+    let mut spus = vec![atomic_incrementer(n), atomic_incrementer(n)];
+    spus[1].index = 1;
+    let mut mem = MainMemory::zeroed(64 * 1024);
+    let mut done = [false; 2];
+    let mut until = 0;
+    while !done.iter().all(|d| *d) {
+        until += quantum;
+        assert!(until < 100_000_000, "no progress");
+        for (i, s) in spus.iter_mut().enumerate() {
+            if !done[i] {
+                if let Some(stop) = s.run_quantum(&mem, until) {
+                    assert_eq!(stop, StopReason::Stop(0x100));
+                    done[i] = true;
+                }
+            }
+        }
+        apply_quantum(&mut spus, &mut mem);
+    }
+    (mem, [spus[0].reg(30)[0], spus[1].reg(30)[0]])
+}
+
+#[test]
+fn atomics_between_two_spus_never_lose_an_increment() {
+    for quantum in [100, 1000, 4096] {
+        let (mem, fails) = run_pair(quantum, 25);
+        assert_eq!(mem.read_u32(0x2000), 50, "quantum {quantum}");
+        // Both SPUs hit the same line in the same quanta: some putllc must have failed.
+        assert!(fails[0] + fails[1] > 0, "quantum {quantum}: {fails:?}");
+        // Deterministic: the same quantum gives the same failure counts.
+        assert_eq!(run_pair(quantum, 25).1, fails);
+    }
+}
+
+#[test]
+fn putllc_without_reservation_fails_and_putlluc_succeeds() {
+    let mut body = String::new();
+    body += "il $40, 7\n stqa $40, 0x8000\n";
+    body += &dma(0x8000, 0x2000, 128, 0, 0xb4); // putllc, no getllar
+    body += "rdch $10, $MFC_RdAtomicStat\n";
+    body += &dma(0x8000, 0x2000, 128, 0, 0xb0); // putlluc
+    body += "rdch $11, $MFC_RdAtomicStat\n";
+    body += &dma(0x8080, 0x2000, 128, 0, 0xd0); // getllar
+    body += "rdch $12, $MFC_RdAtomicStat\n";
+    let mut spu = load(&body);
+    let mut mem = MainMemory::zeroed(64 * 1024);
+    assert_eq!(spu.run(&mut mem, 1_000_000), StopReason::Stop(0x100));
+    assert_eq!(spu.reg(10)[0], 1, "putllc failed");
+    assert_eq!(spu.reg(11)[0], 2, "putlluc done");
+    assert_eq!(spu.reg(12)[0], 4, "getllar done");
+    assert_eq!(mem.read_u32(0x2000), 7);
+}
+
+// Known gaps, recorded as ignored tests (see the report): the machine applies an SPU's own
+// main-memory writes only at the quantum boundary, so a get/getllar after a completed
+// put/putlluc of the same SPU in the same quantum reads stale data; and transfers of 16
+// bytes or more are required to be 16-byte aligned, where shared/isa/README.md only asks
+// that LS and EA share their low 4 bits.
+
+#[test]
+#[ignore = "machine: own writes invisible to own later reads within a quantum"]
+fn getllar_after_own_putlluc_sees_the_new_line() {
+    let mut body = String::new();
+    body += "il $40, 7\n stqa $40, 0x8000\n";
+    body += &dma(0x8000, 0x2000, 128, 0, 0xb0); // putlluc
+    body += "rdch $11, $MFC_RdAtomicStat\n";
+    body += &dma(0x8080, 0x2000, 128, 0, 0xd0); // getllar
+    body += "rdch $12, $MFC_RdAtomicStat\n";
+    let mut spu = load(&body);
+    let mut mem = MainMemory::zeroed(64 * 1024);
+    assert_eq!(spu.run(&mut mem, 1_000_000), StopReason::Stop(0x100));
+    assert_eq!(
+        u32::from_be_bytes(spu.ls()[0x8080..0x8084].try_into().unwrap()),
+        7
+    );
+}
+
+#[test]
+#[ignore = "machine: own writes invisible to own later reads within a quantum"]
+fn get_after_own_completed_put_sees_the_data() {
+    let mut body = String::new();
+    body += "il $40, 9\n stqa $40, 0x8000\n";
+    body += &dma(0x8000, 0x3000, 16, 1, 0x20);
+    body += &wait(2, 2, 10);
+    body += &dma(0x9000, 0x3000, 16, 1, 0x40);
+    body += &wait(2, 2, 10);
+    body += "lqa $20, 0x9000\n";
+    let mut spu = load(&body);
+    let mut mem = memory();
+    assert_eq!(spu.run(&mut mem, 1_000_000), StopReason::Stop(0x100));
+    assert_eq!(spu.reg(20), [9; 4]);
+}
+
+#[test]
+#[ignore = "machine: 16-byte alignment required where the README asks only matching low 4 bits"]
+fn large_transfer_with_matching_low_bits_is_accepted() {
+    let mut body = dma(0x8004, 0x1004, 32, 0, 0x40);
+    body += &wait(1, 2, 10);
+    let mut spu = load(&body);
+    let mut mem = memory();
+    assert_eq!(spu.run(&mut mem, 1_000_000), StopReason::Stop(0x100));
+    assert_eq!(&spu.ls()[0x8004..0x8024], &mem.bytes()[0x1004..0x1024]);
+}
+
+#[test]
+fn mailboxes_block_deadlock_and_resume() {
+    let body = "rdch $3, $SPU_RdInMbox\n rdch $4, $SPU_RdInMbox\n a $5, $3, $4\n\
+                wrch $SPU_WrOutMbox, $5\n";
+    // No host: reading an empty inbound mailbox is a deadlock.
+    let mut spu = load(body);
+    let mut mem = memory();
+    assert!(matches!(
+        spu.run(&mut mem, 100_000),
+        StopReason::Deadlock { channel: 29, .. }
+    ));
+    // Pre-filled: runs through.
+    let mut spu = load(body);
+    assert!(spu.write_inbound_mailbox(40));
+    assert!(spu.write_inbound_mailbox(2));
+    assert_eq!(spu.run(&mut mem, 100_000), StopReason::Stop(0x100));
+    assert_eq!(spu.read_outbound_mailbox(), Some(42));
+    assert_eq!(spu.read_outbound_mailbox(), None);
+    // The inbound mailbox is 4 deep.
+    let mut spu = load(body);
+    for v in 0..4 {
+        assert!(spu.write_inbound_mailbox(v));
+    }
+    assert!(!spu.write_inbound_mailbox(4));
+    // A host that feeds the mailbox sees Blocked, fills it and resumes.
+    let mut spu = load(body);
+    spu.host_feeds = true;
+    let stop = spu.run(&mut mem, 100_000);
+    assert_eq!(stop, StopReason::Blocked { channel: 29 });
+    let pc = spu.pc();
+    spu.write_inbound_mailbox(5);
+    assert_eq!(
+        spu.run(&mut mem, 200_000),
+        StopReason::Blocked { channel: 29 }
+    );
+    assert_eq!(spu.pc(), pc + 4, "first read done, blocked on the second");
+    spu.write_inbound_mailbox(6);
+    assert_eq!(spu.run(&mut mem, 300_000), StopReason::Stop(0x100));
+    assert_eq!(spu.read_outbound_mailbox(), Some(11));
+}
+
+#[test]
+fn outbound_mailbox_full_blocks() {
+    // Two writes to the 1-deep outbound mailbox with no reader: the second cannot complete.
+    let body = "il $3, 1\n wrch $SPU_WrOutMbox, $3\n wrch $SPU_WrOutMbox, $3\n";
+    let mut spu = load(body);
+    spu.host_feeds = true;
+    let stop = spu.run(&mut memory(), 100_000);
+    assert_eq!(stop, StopReason::Blocked { channel: 28 });
+    assert_eq!(spu.read_outbound_mailbox(), Some(1));
+    assert_eq!(spu.run(&mut memory(), 200_000), StopReason::Stop(0x100));
+    assert_eq!(spu.read_outbound_mailbox(), Some(1));
+}
+
+#[test]
+fn channel_counts() {
+    let body = "rchcnt $3, $SPU_RdInMbox\n rchcnt $4, $SPU_WrOutMbox\n rchcnt $5, $MFC_Cmd\n";
+    let mut spu = load(body);
+    spu.write_inbound_mailbox(1);
+    spu.write_inbound_mailbox(2);
+    assert_eq!(spu.run(&mut memory(), 100_000), StopReason::Stop(0x100));
+    assert_eq!(spu.reg(3), [2, 0, 0, 0]);
+    assert_eq!(spu.reg(4), [1, 0, 0, 0]);
+    assert_eq!(spu.reg(5), [16, 0, 0, 0]);
+}
