@@ -1477,7 +1477,65 @@ fn collect_block(lines: &[Line], start: usize) -> (Vec<Line>, usize) {
     (lines[start..].to_vec(), lines.len() + 1)
 }
 
+/// Blanks `/* */` comments (which may span lines) with spaces, keeping every newline so
+/// line and column numbers stay those of the source. Strings and `#` comments are skipped.
+fn blank_block_comments(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut chars = text.chars().peekable();
+    let (mut in_block, mut in_str, mut in_line_comment) = (false, false, false);
+    while let Some(c) = chars.next() {
+        if c == '\n' {
+            in_str = false;
+            in_line_comment = false;
+            out.push(c);
+            continue;
+        }
+        if in_block {
+            if c == '*' && chars.peek() == Some(&'/') {
+                chars.next();
+                in_block = false;
+                out.push_str("  ");
+            } else {
+                out.push(if c == '\t' { '\t' } else { ' ' });
+            }
+            continue;
+        }
+        if in_line_comment {
+            out.push(c);
+            continue;
+        }
+        if in_str {
+            out.push(c);
+            if c == '\\' {
+                if let Some(&n) = chars.peek() {
+                    if n != '\n' {
+                        out.push(n);
+                        chars.next();
+                    }
+                }
+            } else if c == '"' {
+                in_str = false;
+            }
+            continue;
+        }
+        match c {
+            '"' => in_str = true,
+            '#' => in_line_comment = true,
+            '/' if chars.peek() == Some(&'*') => {
+                chars.next();
+                in_block = true;
+                out.push_str("  ");
+                continue;
+            }
+            _ => {}
+        }
+        out.push(c);
+    }
+    out
+}
+
 fn to_lines(text: &str, file: &str) -> Vec<Line> {
+    let text = blank_block_comments(text);
     text.lines()
         .enumerate()
         .map(|(i, l)| Line {
