@@ -294,7 +294,6 @@ fn putllc_without_reservation_fails_and_putlluc_succeeds() {
 // that LS and EA share their low 4 bits.
 
 #[test]
-#[ignore = "machine: own writes invisible to own later reads within a quantum"]
 fn getllar_after_own_putlluc_sees_the_new_line() {
     let mut body = String::new();
     body += "il $40, 7\n stqa $40, 0x8000\n";
@@ -312,7 +311,6 @@ fn getllar_after_own_putlluc_sees_the_new_line() {
 }
 
 #[test]
-#[ignore = "machine: own writes invisible to own later reads within a quantum"]
 fn get_after_own_completed_put_sees_the_data() {
     let mut body = String::new();
     body += "il $40, 9\n stqa $40, 0x8000\n";
@@ -328,7 +326,6 @@ fn get_after_own_completed_put_sees_the_data() {
 }
 
 #[test]
-#[ignore = "machine: 16-byte alignment required where the README asks only matching low 4 bits"]
 fn large_transfer_with_matching_low_bits_is_accepted() {
     let mut body = dma(0x8004, 0x1004, 32, 0, 0x40);
     body += &wait(1, 2, 10);

@@ -800,9 +800,9 @@ impl Spu {
                     "LS {lsa:#x} and EA {ea:#x} differ in their low 4 bits"
                 ));
             }
-        } else if lsa & 15 != 0 || ea & 15 != 0 {
+        } else if (lsa as u64 ^ ea) & 15 != 0 {
             return Err(format!(
-                "LS {lsa:#x} / EA {ea:#x} not 16-byte aligned for a {size}-byte transfer"
+                "LS {lsa:#x} and EA {ea:#x} differ in their low 4 bits for a {size}-byte transfer"
             ));
         }
         if memory.range(ea, size).is_none() {
@@ -831,7 +831,7 @@ impl Spu {
                 let complete = self.schedule(now, size);
                 let range = memory.range(ea, size).unwrap();
                 if cmd & 0x40 != 0 {
-                    let data = memory.bytes()[range].to_vec();
+                    let data = self.read_main(memory, range);
                     self.queue.push(DmaCommand {
                         tag,
                         complete,
@@ -887,7 +887,7 @@ impl Spu {
                         "getllar EA {ea:#x} outside main memory"
                     ));
                 };
-                let data = memory.bytes()[range].to_vec();
+                let data = self.read_main(memory, range);
                 for (k, b) in data.iter().enumerate() {
                     self.core.ls[(lsa as usize + k) & LS_MASK as usize] = *b;
                 }
@@ -965,7 +965,7 @@ impl Spu {
             last = self.schedule(now, size);
             let range = memory.range(ea, size).unwrap();
             if cmd & 0x40 != 0 {
-                incoming.push((lsa, memory.bytes()[range].to_vec()));
+                incoming.push((lsa, self.read_main(memory, range)));
             } else {
                 let data: Vec<u8> = (0..size)
                     .map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize])
@@ -988,6 +988,24 @@ impl Spu {
             incoming,
         });
         ChannelOutcome::Done
+    }
+
+    /// Main memory as this SPU sees it: the state at the last boundary with its own
+    /// logged writes (not yet applied) laid over it, in issue order. Conditional stores
+    /// whose outcome the boundary has not decided yet are left out.
+    fn read_main(&self, memory: &MainMemory, range: std::ops::Range<usize>) -> Vec<u8> {
+        let mut data = memory.bytes()[range.clone()].to_vec();
+        for w in &self.writes {
+            if matches!(w.kind, WriteKind::Conditional) {
+                continue;
+            }
+            let (ws, we) = (w.ea as usize, w.ea as usize + w.data.len());
+            let (s, e) = (ws.max(range.start), we.min(range.end));
+            if s < e {
+                data[s - range.start..e - range.start].copy_from_slice(&w.data[s - ws..e - ws]);
+            }
+        }
+        data
     }
 
     fn log_write(&mut self, cycle: u64, ea: u32, data: Vec<u8>, kind: WriteKind) {
