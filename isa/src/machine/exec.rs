@@ -220,6 +220,7 @@ fn shufb(a: Reg, b: Reg, c: Reg) -> Reg {
 }
 
 /// Executes `inst` at `pc` on `core`. Channel instructions return [`Effect::Channel`].
+#[inline]
 pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
     use Op::*;
     let r = &core.regs;
