@@ -406,8 +406,11 @@ impl Expr<'_, '_> {
             return Ok(v);
         }
         if c == '\'' {
-            let ch = self.s.get(self.pos + 1).copied().unwrap_or(0);
-            self.pos = (self.pos + 2).min(self.s.len());
+            // The character after the quote, a whole UTF-8 character (its first byte is
+            // the value, as GNU as takes bytes).
+            let rest = std::str::from_utf8(&self.s[(self.pos + 1).min(self.s.len())..]).unwrap_or("");
+            let ch = rest.bytes().next().unwrap_or(0);
+            self.pos = (self.pos + 1 + rest.chars().next().map_or(0, char::len_utf8)).min(self.s.len());
             self.eat("'");
             return Ok(ch as i64);
         }
@@ -547,7 +550,7 @@ impl<'o> Assembler<'o> {
         if e.pos != text.len() {
             return Err((
                 e.pos,
-                format!("junk at end of expression: `{}`", &text[e.pos..]),
+                format!("junk at end of expression: `{}`", String::from_utf8_lossy(&text.as_bytes()[e.pos.min(text.len())..])),
             ));
         }
         Ok((v, e.undefined))
@@ -1007,8 +1010,20 @@ impl<'o> Assembler<'o> {
                 };
             }
             ".align" | ".p2align" | ".balign" => {
-                let vals = self.data_values(args, line, col);
-                let v = vals.first().copied().unwrap_or(0);
+                // `boundary[, [fill][, max]]`: an empty fill is the default, and the
+                // alignment is skipped when it needs more than `max` bytes.
+                let parts = split_top(args, ',');
+                let mut vals = Vec::new();
+                for (k, part) in parts.iter().enumerate() {
+                    let t = part.trim();
+                    if t.is_empty() && k > 0 {
+                        vals.push(None);
+                        continue;
+                    }
+                    vals.push(self.data_values(t, line, col).first().copied());
+                }
+                let max_skip = vals.get(2).copied().flatten();
+                let v = vals.first().copied().flatten().unwrap_or(0);
                 let boundary = if d == ".balign" {
                     v
                 } else if v > 15 {
@@ -1031,11 +1046,12 @@ impl<'o> Assembler<'o> {
                     );
                     return;
                 }
-                let fill = if vals.len() > 1 {
-                    Some(vals[1] as u8)
-                } else {
-                    None
-                };
+                let fill = vals.get(1).copied().flatten().map(|f| f as u8);
+                let here = self.offsets.get(&self.sect).copied().unwrap_or(0) as i64;
+                let pad = (boundary - here % boundary) % boundary;
+                if max_skip.is_some_and(|m| pad > m) {
+                    return;
+                }
                 self.align_to(boundary as u32, fill);
             }
             ".byte" | ".short" | ".half" | ".hword" | ".2byte" | ".int" | ".long" | ".word"
@@ -1317,7 +1333,7 @@ impl<'o> Assembler<'o> {
                     if text.starts_with('$') {
                         return Err((0, format!("expected an immediate, got register `{text}`")));
                     }
-                    let v = self.eval(text)?.0;
+                    let v = self.old_style_immediate(text, &mut warnings)?;
                     self.check_immediate(kind, v, pc, &mut warnings)?
                 }
             };
@@ -1325,6 +1341,30 @@ impl<'o> Assembler<'o> {
             i += 1;
         }
         Ok((values, warnings))
+    }
+
+    /// An immediate, accepting tc-spu.c's old-style `%lo(expr)` / `%hi(expr)` (with its
+    /// warning) and `%pic(expr)` (the expression itself: code is loaded at 0).
+    fn old_style_immediate(&self, text: &str, warnings: &mut Vec<String>) -> Res<i64> {
+        let lower = text.to_ascii_lowercase();
+        for (prefix, style) in [("%lo(", "lo"), ("%hi(", "hi"), ("%pic(", "pic")] {
+            if lower.starts_with(prefix) {
+                let rest = &text[prefix.len() - 1..];
+                let v = self.eval(rest).map_err(|(c, m)| (c + prefix.len() - 1, m))?.0;
+                return Ok(match style {
+                    "lo" => {
+                        warnings.push("Using old style, %lo(expr), please change to PPC style, expr@l.".into());
+                        v & 0xffff
+                    }
+                    "hi" => {
+                        warnings.push("Using old style, %hi(expr), please change to PPC style, expr@h.".into());
+                        (v >> 16) & 0xffff
+                    }
+                    _ => v,
+                });
+            }
+        }
+        Ok(self.eval(text)?.0)
     }
 
     fn check_immediate(
