@@ -43,8 +43,16 @@ impl std::fmt::Display for Diagnostic {
         use codespan_reporting::term;
         let l = &self.location;
         let plain = |f: &mut std::fmt::Formatter<'_>| {
-            let kind = if self.severity == Severity::Error { "error" } else { "warning" };
-            write!(f, "{}:{}:{}: {kind}: {}", l.file, l.line, l.column, self.message)
+            let kind = if self.severity == Severity::Error {
+                "error"
+            } else {
+                "warning"
+            };
+            write!(
+                f,
+                "{}:{}:{}: {kind}: {}",
+                l.file, l.line, l.column, self.message
+            )
         };
         if l.line == 0 {
             return plain(f);
@@ -53,7 +61,9 @@ impl std::fmt::Display for Diagnostic {
         let prefix = "\n".repeat(l.line - 1);
         let text = format!("{prefix}{}\n", self.source_line);
         let start = prefix.len() + l.column.saturating_sub(1).min(self.source_line.len());
-        let end = (start + 1).min(prefix.len() + self.source_line.len()).max(start);
+        let end = (start + 1)
+            .min(prefix.len() + self.source_line.len())
+            .max(start);
         let file = SimpleFile::new(l.file.clone(), text);
         let diagnostic = match self.severity {
             Severity::Error => cd::Diagnostic::error(),
@@ -61,7 +71,10 @@ impl std::fmt::Display for Diagnostic {
         }
         .with_message(self.message.clone())
         .with_labels(vec![cd::Label::primary((), start..end)]);
-        let config = term::Config { chars: term::Chars::ascii(), ..Default::default() };
+        let config = term::Config {
+            chars: term::Chars::ascii(),
+            ..Default::default()
+        };
         match term::emit_into_string(&config, &file, &diagnostic) {
             Ok(text) => write!(f, "{}", text.trim_end()),
             Err(_) => plain(f),
@@ -285,7 +298,11 @@ impl Expr<'_, '_> {
     }
     fn eat(&mut self, t: &str) -> bool {
         self.ws();
-        if self.s.get(self.pos..).is_some_and(|r| r.starts_with(t.as_bytes())) {
+        if self
+            .s
+            .get(self.pos..)
+            .is_some_and(|r| r.starts_with(t.as_bytes()))
+        {
             self.pos += t.len();
             true
         } else {
@@ -408,9 +425,11 @@ impl Expr<'_, '_> {
         if c == '\'' {
             // The character after the quote, a whole UTF-8 character (its first byte is
             // the value, as GNU as takes bytes).
-            let rest = std::str::from_utf8(&self.s[(self.pos + 1).min(self.s.len())..]).unwrap_or("");
+            let rest =
+                std::str::from_utf8(&self.s[(self.pos + 1).min(self.s.len())..]).unwrap_or("");
             let ch = rest.bytes().next().unwrap_or(0);
-            self.pos = (self.pos + 1 + rest.chars().next().map_or(0, char::len_utf8)).min(self.s.len());
+            self.pos =
+                (self.pos + 1 + rest.chars().next().map_or(0, char::len_utf8)).min(self.s.len());
             self.eat("'");
             return Ok(ch as i64);
         }
@@ -550,7 +569,10 @@ impl<'o> Assembler<'o> {
         if e.pos != text.len() {
             return Err((
                 e.pos,
-                format!("junk at end of expression: `{}`", String::from_utf8_lossy(&text.as_bytes()[e.pos.min(text.len())..])),
+                format!(
+                    "junk at end of expression: `{}`",
+                    String::from_utf8_lossy(&text.as_bytes()[e.pos.min(text.len())..])
+                ),
             ));
         }
         Ok((v, e.undefined))
@@ -1028,13 +1050,23 @@ impl<'o> Assembler<'o> {
                     v
                 } else if v > 15 {
                     // GNU as: "alignment too large: 15 assumed".
-                    self.diag(Severity::Warning, line, col, "alignment too large: 15 assumed");
+                    self.diag(
+                        Severity::Warning,
+                        line,
+                        col,
+                        "alignment too large: 15 assumed",
+                    );
                     1 << 15
                 } else {
                     1i64 << v.max(0)
                 };
                 if boundary > 1 << 15 {
-                    self.diag(Severity::Error, line, col, format!("alignment too large: {boundary}"));
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("alignment too large: {boundary}"),
+                    );
                     return;
                 }
                 if boundary <= 0 || boundary & (boundary - 1) != 0 {
@@ -1350,14 +1382,23 @@ impl<'o> Assembler<'o> {
         for (prefix, style) in [("%lo(", "lo"), ("%hi(", "hi"), ("%pic(", "pic")] {
             if lower.starts_with(prefix) {
                 let rest = &text[prefix.len() - 1..];
-                let v = self.eval(rest).map_err(|(c, m)| (c + prefix.len() - 1, m))?.0;
+                let v = self
+                    .eval(rest)
+                    .map_err(|(c, m)| (c + prefix.len() - 1, m))?
+                    .0;
                 return Ok(match style {
                     "lo" => {
-                        warnings.push("Using old style, %lo(expr), please change to PPC style, expr@l.".into());
+                        warnings.push(
+                            "Using old style, %lo(expr), please change to PPC style, expr@l."
+                                .into(),
+                        );
                         v & 0xffff
                     }
                     "hi" => {
-                        warnings.push("Using old style, %hi(expr), please change to PPC style, expr@h.".into());
+                        warnings.push(
+                            "Using old style, %hi(expr), please change to PPC style, expr@h."
+                                .into(),
+                        );
                         (v >> 16) & 0xffff
                     }
                     _ => v,
@@ -1653,7 +1694,13 @@ pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output,
     if !errors.is_empty() {
         let mut all = errors;
         all.extend(warnings);
-        all.sort_by(|a, b| (&a.location.file, a.location.line, a.location.column).cmp(&(&b.location.file, b.location.line, b.location.column)));
+        all.sort_by(|a, b| {
+            (&a.location.file, a.location.line, a.location.column).cmp(&(
+                &b.location.file,
+                b.location.line,
+                b.location.column,
+            ))
+        });
         return Err(all);
     }
     let end = bss_base + bss_size;

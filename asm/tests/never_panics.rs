@@ -7,16 +7,59 @@ const SOURCES: &[&str] = &[
 ];
 
 const FRAGMENTS: &[&str] = &[
-    "(", ")", "$", "$ch", "$sp9", ",", ":", "::", "1b", "9f", ".irp", ".endr", ".macro m",
-    ".endm", ".if", ".endif", ".else", "@h", "@l", "\\", "\"", "/*", "*/", "#", ";", "0x",
-    "-", "~", "!", "<<", ">>", "%", "/0", "lqd $3,", "($1)", "99999999999999999999", "\t",
-    ".align 40", ".space -1", ".fill 3,9,1", ".rept 3", ".include \"nope\"", "stop", "bi",
+    "(",
+    ")",
+    "$",
+    "$ch",
+    "$sp9",
+    ",",
+    ":",
+    "::",
+    "1b",
+    "9f",
+    ".irp",
+    ".endr",
+    ".macro m",
+    ".endm",
+    ".if",
+    ".endif",
+    ".else",
+    "@h",
+    "@l",
+    "\\",
+    "\"",
+    "/*",
+    "*/",
+    "#",
+    ";",
+    "0x",
+    "-",
+    "~",
+    "!",
+    "<<",
+    ">>",
+    "%",
+    "/0",
+    "lqd $3,",
+    "($1)",
+    "99999999999999999999",
+    "\t",
+    ".align 40",
+    ".space -1",
+    ".fill 3,9,1",
+    ".rept 3",
+    ".include \"nope\"",
+    "stop",
+    "bi",
 ];
 
 struct Lcg(u64);
 impl Lcg {
     fn next(&mut self) -> usize {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 33) as usize
     }
 }
@@ -37,8 +80,15 @@ fn mutated_sources_never_panic() {
         for _ in 0..1 + rng.next() % 8 {
             let i = rng.next() % lines.len();
             let line = &mut lines[i];
-            let pos = if line.is_empty() { 0 } else { rng.next() % line.len() };
-            let pos = (0..=pos).rev().find(|p| line.is_char_boundary(*p)).unwrap_or(0);
+            let pos = if line.is_empty() {
+                0
+            } else {
+                rng.next() % line.len()
+            };
+            let pos = (0..=pos)
+                .rev()
+                .find(|p| line.is_char_boundary(*p))
+                .unwrap_or(0);
             match rng.next() % 3 {
                 0 => line.insert_str(pos, FRAGMENTS[rng.next() % FRAGMENTS.len()]),
                 1 => line.truncate(pos),
@@ -74,7 +124,14 @@ fn random_fragments_never_panic() {
 /// Inputs the fuzzer found (fuzz/ with cargo-fuzz), kept as regression tests.
 #[test]
 fn fuzzer_findings_stay_fixed() {
-    for input in ["\n\" #\n\")),z\x0b='\r", "x='", "a='b", ".long '"] {
+    for input in [
+        "\n\" #\n\")),z\x0b='\r",
+        "x='",
+        "a='b",
+        ".long '",
+        ",z\x0b='\u{d8}cn",
+        "x = '\u{e9}\u{e9}",
+    ] {
         let _ = spu_asm::assemble(input, "fuzz.s", &spu_asm::Options::default());
     }
 }
