@@ -143,6 +143,8 @@ struct Assembler<'o> {
     align: HashMap<Sect, u32>,
     bases: HashMap<Sect, u32>,
     symbols: HashMap<String, SymVal>,
+    /// The symbols as pass 1 left them (for forward references in pass 2).
+    pass1_symbols: HashMap<String, SymVal>,
     globals: Vec<String>,
     /// Numeric local label definitions: label -> list of (statement number, section, offset).
     numeric: HashMap<u32, Vec<(usize, Sect, u32)>>,
@@ -474,7 +476,7 @@ impl Expr<'_, '_> {
                 self.pos += 1;
             }
             let name = std::str::from_utf8(&self.s[start..self.pos]).unwrap();
-            let mut v = match self.asm.symbol(name) {
+            let mut v = match self.asm.symbol(name).or_else(|| self.asm.pass1_value(name)) {
                 Some(v) => v,
                 None if self.lenient => {
                     self.undefined = true;
@@ -543,6 +545,15 @@ impl<'o> Assembler<'o> {
         match self.symbols.get(name)? {
             SymVal::Abs(v) => Some(*v),
             SymVal::Label(s, off) => Some((self.bases.get(s).copied().unwrap_or(0) + off) as i64),
+        }
+    }
+
+    /// The value a symbol had at the end of pass 1: what a forward reference to a symbol
+    /// defined later by `.set`/`.equ` resolves to in pass 2.
+    fn pass1_value(&self, name: &str) -> Option<i64> {
+        match self.pass1_symbols.get(name)? {
+            SymVal::Abs(v) => Some(*v),
+            SymVal::Label(..) => None,
         }
     }
 
@@ -1477,7 +1488,7 @@ impl<'o> Assembler<'o> {
 fn unquote(s: &str) -> Option<Vec<u8>> {
     let inner = s.strip_prefix('"')?.strip_suffix('"')?;
     let mut out = Vec::new();
-    let mut chars = inner.chars();
+    let mut chars = inner.chars().peekable();
     while let Some(c) = chars.next() {
         if c != '\\' {
             let mut buf = [0u8; 4];
@@ -1488,9 +1499,33 @@ fn unquote(s: &str) -> Option<Vec<u8>> {
             'n' => out.push(b'\n'),
             't' => out.push(b'\t'),
             'r' => out.push(b'\r'),
-            '0' => out.push(0),
+            'b' => out.push(8),
+            'f' => out.push(12),
             '\\' => out.push(b'\\'),
             '"' => out.push(b'"'),
+            // \xHH...: hex digits, the low byte kept (as GNU as does).
+            'x' | 'X' => {
+                let mut v: u32 = 0;
+                while let Some(d) = chars.peek().and_then(|c| c.to_digit(16)) {
+                    v = v.wrapping_mul(16).wrapping_add(d);
+                    chars.next();
+                }
+                out.push(v as u8);
+            }
+            // \NNN: up to three octal digits.
+            d @ '0'..='7' => {
+                let mut v = d.to_digit(8).unwrap_or(0);
+                for _ in 0..2 {
+                    match chars.peek().and_then(|c| c.to_digit(8)) {
+                        Some(n) => {
+                            v = v * 8 + n;
+                            chars.next();
+                        }
+                        None => break,
+                    }
+                }
+                out.push(v as u8);
+            }
             other => out.push(other as u8),
         }
     }
@@ -1638,6 +1673,7 @@ pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output,
         align: HashMap::new(),
         bases: HashMap::new(),
         symbols: HashMap::new(),
+        pass1_symbols: HashMap::new(),
         globals: Vec::new(),
         numeric: HashMap::new(),
         stmt: 0,
@@ -1684,6 +1720,7 @@ pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output,
         .filter(|(_, v)| matches!(v, SymVal::Label(..)))
         .map(|(k, v)| (k.clone(), *v))
         .collect();
+    asm.pass1_symbols = std::mem::take(&mut asm.symbols);
     asm.symbols = labels;
     predefine(&mut asm);
     asm.run_lines(&lines);
@@ -1829,5 +1866,18 @@ mod tests {
             text.iter().any(|t| t.starts_with("2:unknown instruction")),
             "{text:?}"
         );
+    }
+
+    #[test]
+    fn string_escapes_and_forward_equ() {
+        let out = assemble(
+            ".data\nx: .ascii \"\\x41\\101\\n\"\n.text\nil $3, LATER\n.equ LATER, 7\n",
+            "t.s",
+            &Options::default(),
+        )
+        .unwrap();
+        let data = &out.image[out.sections[1].1 as usize..][..3];
+        assert_eq!(data, b"AA\n");
+        assert_eq!(&out.image[0..4], &0x40800383u32.to_be_bytes()); // il $3,7
     }
 }
