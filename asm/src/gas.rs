@@ -275,6 +275,42 @@ const CHANNELS: &[(&str, u32)] = &[
 
 type Res<T> = Result<T, (usize, String)>;
 
+/// Operand parsing: values and warnings, or an error, each tagged with the index of the
+/// operand it concerns ([`WHOLE`] for the instruction as a whole).
+type OperandResult = Result<(Vec<i64>, Vec<(usize, String)>), (usize, String)>;
+const WHOLE: usize = usize::MAX;
+
+/// The 1-based column in `line` where operand `index` of `args` starts.
+fn operand_column(line: &str, args: &str, index: usize) -> Option<usize> {
+    let args = args.trim();
+    let start = line.find(args)?;
+    let mut depth = 0i32;
+    let mut seen = 0;
+    let mut at = 0;
+    for (i, c) in args.char_indices() {
+        match c {
+            '(' => depth += 1,
+            ')' => depth -= 1,
+            ',' if depth == 0 => {
+                seen += 1;
+                if seen == index + 1 {
+                    break;
+                }
+                at = i + 1;
+            }
+            _ => {}
+        }
+        if seen == index && i + 1 == at {
+            continue;
+        }
+    }
+    if seen < index {
+        return None;
+    }
+    let lead = args[at..].len() - args[at..].trim_start().len();
+    Some(start + at + lead + 1)
+}
+
 /// Bytes of SPU local store: the most a program can occupy.
 const LOCAL_STORE: usize = 256 * 1024;
 
@@ -1306,8 +1342,9 @@ impl<'o> Assembler<'o> {
             match self.operands(form, &texts, pc) {
                 Ok((values, warnings)) => {
                     if self.pass == 2 {
-                        for w in warnings {
-                            self.diag(Severity::Warning, line, col, w);
+                        for (index, w) in warnings {
+                            let c = operand_column(&line.text, args, index).unwrap_or(col);
+                            self.diag(Severity::Warning, line, c, w);
                         }
                     }
                     let word = encode(form, &values, pc);
@@ -1317,24 +1354,24 @@ impl<'o> Assembler<'o> {
                 Err(e) => last_err = Some(e),
             }
         }
-        let (c, m) = last_err.unwrap_or((0, "bad operands".into()));
+        let (index, m) = last_err.unwrap_or((WHOLE, "bad operands".into()));
         let arg_col = line.text.find(args.trim()).map(|p| p + 1).unwrap_or(col);
-        self.diag(
-            Severity::Error,
-            line,
-            if c == 0 { arg_col } else { arg_col + c },
-            m,
-        );
+        let c = if index == WHOLE {
+            arg_col
+        } else {
+            operand_column(&line.text, args, index).unwrap_or(arg_col)
+        };
+        self.diag(Severity::Error, line, c, m);
         self.emit(&[0; 4]);
     }
 
     /// Parses the operand texts for `form`, returning the values `encode` takes.
-    fn operands(&self, form: &FormInfo, texts: &[String], pc: u32) -> Res<(Vec<i64>, Vec<String>)> {
+    fn operands(&self, form: &FormInfo, texts: &[String], pc: u32) -> OperandResult {
         let kinds = form.operands;
         let expected = kinds.iter().filter(|k| **k != OperandKind::ParenRa).count();
         if texts.len() != expected {
             return Err((
-                0,
+                WHOLE,
                 format!(
                     "`{}` takes {expected} operand(s), got {}",
                     form.mnemonic,
@@ -1343,25 +1380,28 @@ impl<'o> Assembler<'o> {
             ));
         }
         let mut values = Vec::new();
-        let mut warnings = Vec::new();
-        let mut t = texts.iter();
+        let mut warnings: Vec<(usize, String)> = Vec::new();
+        let mut t = texts.iter().enumerate();
         let mut i = 0;
         while i < kinds.len() {
             let kind = kinds[i];
-            let text = t.next().unwrap();
+            let (index, text) = t.next().unwrap();
+            let at = |e: (usize, String)| (index, e.1);
+            let mut w = Vec::new();
             if kinds.get(i + 1) == Some(&OperandKind::ParenRa) {
                 let Some(open) = text.rfind('(') else {
-                    return Err((0, format!("expected `offset(register)`, got `{text}`")));
+                    return Err((index, format!("expected `offset(register)`, got `{text}`")));
                 };
                 let inner = text[open + 1..].trim_end().trim_end_matches(')');
                 let off_text = text[..open].trim();
                 let off = if off_text.is_empty() {
                     0
                 } else {
-                    self.eval(off_text)?.0
+                    self.eval(off_text).map_err(at)?.0
                 };
-                values.push(self.check_immediate(kind, off, pc, &mut warnings)?);
-                values.push(self.register(inner, OperandKind::Ra)?);
+                values.push(self.check_immediate(kind, off, pc, &mut w).map_err(at)?);
+                values.push(self.register(inner, OperandKind::Ra).map_err(at)?);
+                warnings.extend(w.into_iter().map(|m| (index, m)));
                 i += 2;
                 continue;
             }
@@ -1371,15 +1411,19 @@ impl<'o> Assembler<'o> {
                 | OperandKind::Rb
                 | OperandKind::Rc
                 | OperandKind::Ch
-                | OperandKind::Spr => self.register(text, kind)?,
+                | OperandKind::Spr => self.register(text, kind).map_err(at)?,
                 _ => {
                     if text.starts_with('$') {
-                        return Err((0, format!("expected an immediate, got register `{text}`")));
+                        return Err((
+                            index,
+                            format!("expected an immediate, got register `{text}`"),
+                        ));
                     }
-                    let v = self.old_style_immediate(text, &mut warnings)?;
-                    self.check_immediate(kind, v, pc, &mut warnings)?
+                    let v = self.old_style_immediate(text, &mut w).map_err(at)?;
+                    self.check_immediate(kind, v, pc, &mut w).map_err(at)?
                 }
             };
+            warnings.extend(w.into_iter().map(|m| (index, m)));
             values.push(v);
             i += 1;
         }

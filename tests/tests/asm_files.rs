@@ -147,4 +147,9 @@ asm_files! {
     sections => "sections.s",
     data => "data.s",
     symbols => "symbols.s",
+    macros => "macros.s",
+    control => "control.s",
+    expressions => "expr.s",
+    include => "include.s",
+    errors => "errors.s",
 }
