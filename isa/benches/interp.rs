@@ -1,0 +1,84 @@
+//! Simulated SPU instructions per host second on mixed loops (loads, float multiply-adds,
+//! shuffles, adds, a store, a hinted branch), timing model off: `cargo bench -p spu-isa`.
+//!
+//! `accumulating` is the loop of `spu bench` (its fma chain grows without bound, so after
+//! the first iterations every fma takes the float unit's exact path); `bounded` does the
+//! same work on values that stay in range, the common case in real kernels.
+
+use spu_isa::encode;
+use spu_isa::machine::{MainMemory, Spu, StopReason};
+use spu_isa::table::forms_named;
+use std::time::Instant;
+
+fn asm(lines: &[(&str, &[i64])]) -> Vec<u8> {
+    let mut out = Vec::new();
+    for (i, (m, ops)) in lines.iter().enumerate() {
+        let form = forms_named(m)
+            .find(|f| f.operands.len() == ops.len())
+            .unwrap_or_else(|| panic!("{m}"));
+        out.extend(encode(form, ops, 4 * i as u32).to_be_bytes());
+    }
+    out
+}
+
+/// The loop body starts at 24 (word 6); data at 0x1000.
+fn program(iterations: u32, accumulate: bool) -> Vec<u8> {
+    let (acc7, acc8) = if accumulate { (7, 8) } else { (10, 10) };
+    let mut image = asm(&[
+        ("ila", &[3, 0x1000]),
+        ("il", &[4, 0]),
+        ("ilhu", &[10, 0x3f80]),
+        ("ilhu", &[9, (iterations >> 16) as i64]),
+        ("iohl", &[9, (iterations & 0xffff) as i64]),
+        ("ila", &[11, 0x10203]),
+        // loop (24):
+        ("hbrr", &[24 + 36, 24]),
+        ("lqd", &[5, 0, 3]),
+        ("lqd", &[6, 16, 3]),
+        ("fma", &[7, 5, 6, acc7]),
+        ("fma", &[8, 6, 10, acc8]),
+        ("shufb", &[12, 5, 6, 11]),
+        ("a", &[4, 4, 12]),
+        ("ai", &[9, 9, -1]),
+        ("fa", &[13, 7, 8]),
+        ("stqd", &[13, 32, 3]),
+        ("brnz", &[9, 24]),
+        ("stop", &[0x2000]),
+    ]);
+    image.resize(0x1000, 0);
+    for f in [1.5f32, 2.0, 0.5, 3.0, 0.25, 1.0, 2.0, 4.0] {
+        image.extend(f.to_bits().to_be_bytes());
+    }
+    image.resize(0x1030, 0);
+    image
+}
+
+fn measure(name: &str, iterations: u32, accumulate: bool) {
+    let image = program(iterations, accumulate);
+    let mut best = f64::MAX;
+    let mut n = 0;
+    for _ in 0..3 {
+        let mut spu = Spu::new(0);
+        spu.load_image(&image);
+        let mut memory = MainMemory::zeroed(4096);
+        let t = Instant::now();
+        let stop = spu.run(&mut memory, u64::MAX);
+        let s = t.elapsed().as_secs_f64();
+        assert_eq!(stop, StopReason::Stop(0x2000), "{name}");
+        n = spu.instructions();
+        best = best.min(s);
+    }
+    println!(
+        "{name:>12}: {n} instructions in {best:.3} s = {:7.1} M simulated instructions per host second (timing off, best of 3)",
+        n as f64 / best / 1e6
+    );
+}
+
+fn main() {
+    let iterations = std::env::args()
+        .skip(1)
+        .find_map(|a| a.parse().ok())
+        .unwrap_or(10_000_000);
+    measure("bounded", iterations, false);
+    measure("accumulating", iterations, true);
+}
