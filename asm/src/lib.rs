@@ -2,6 +2,7 @@
 //! diagnostics that name file:line:column. Output is a flat local-store image and an SPU ELF.
 
 pub mod elf;
+mod expr;
 mod gas;
 
 pub use gas::{assemble, Diagnostic, Location, Options, Output, Severity};
