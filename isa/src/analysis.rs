@@ -20,8 +20,16 @@ pub struct RegUse {
 
 /// The register usage of an operation (independent of the operand values).
 pub fn regs(op: Op) -> RegUse {
-    let mut u = RegUse { reads_rt: false, writes_rt: false, reads_ra: false, reads_rb: false, reads_rc: false };
-    let Some(form) = crate::table::primary_form(op) else { return u };
+    let mut u = RegUse {
+        reads_rt: false,
+        writes_rt: false,
+        reads_ra: false,
+        reads_rb: false,
+        reads_rc: false,
+    };
+    let Some(form) = crate::table::primary_form(op) else {
+        return u;
+    };
     for kind in form.operands {
         match kind {
             OperandKind::Rt => u.writes_rt = true,
@@ -34,8 +42,8 @@ pub fn regs(op: Op) -> RegUse {
     use Op::*;
     match op {
         // RT is a source: stores, conditional branches, channel/SPR writes.
-        Stqd | Stqx | Stqa | Stqr | Brz | Brnz | Brhz | Brhnz | Biz | Binz | Bihz | Bihnz | Wrch
-        | Mtspr => {
+        Stqd | Stqx | Stqa | Stqr | Brz | Brnz | Brhz | Brhnz | Biz | Binz | Bihz | Bihnz
+        | Wrch | Mtspr => {
             u.reads_rt = true;
             u.writes_rt = false;
         }
@@ -65,7 +73,10 @@ pub fn operands(inst: Inst) -> Operands {
         u.reads_rc.then_some(inst.rc),
         u.reads_rt.then_some(inst.rt),
     ];
-    Operands { reads, writes: u.writes_rt.then_some(inst.rt) }
+    Operands {
+        reads,
+        writes: u.writes_rt.then_some(inst.rt),
+    }
 }
 
 /// Broad classes the timing model and statistics care about.
@@ -73,8 +84,21 @@ pub fn is_branch(op: Op) -> bool {
     use Op::*;
     matches!(
         op,
-        Br | Brsl | Bra | Brasl | Brz | Brnz | Brhz | Brhnz | Bi | Bisl | Iret | Bisled | Biz | Binz
-            | Bihz | Bihnz
+        Br | Brsl
+            | Bra
+            | Brasl
+            | Brz
+            | Brnz
+            | Brhz
+            | Brhnz
+            | Bi
+            | Bisl
+            | Iret
+            | Bisled
+            | Biz
+            | Binz
+            | Bihz
+            | Bihnz
     )
 }
 

@@ -7,7 +7,7 @@
 //! one of the 2^32 words means. Decoding never fails: a word that matches nothing decodes
 //! to [`Op::Unknown`] carrying the word.
 
-use crate::table::{Format, FormInfo, Op, OperandKind, FORMS, OP_INFO};
+use crate::table::{FormInfo, Format, Op, OperandKind, FORMS, OP_INFO};
 
 /// A decoded instruction: its operation and its fields, pre-extracted for the interpreter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -129,7 +129,15 @@ pub fn decode(word: u32) -> Inst {
         Format::RI18 => (low7, 0, ((word >> 7) & 0x3ffff) as i32),
         Format::LBTI => (low7, 0, 0),
     };
-    Inst { op, rt, ra, rb, rc, imm, word }
+    Inst {
+        op,
+        rt,
+        ra,
+        rb,
+        rc,
+        imm,
+        word,
+    }
 }
 
 /// The form a disassembler prints for a word: the operation's first listed form.
@@ -228,11 +236,13 @@ pub fn operand_value(kind: OperandKind, format: Format, word: u32, pc: u32) -> i
         OperandKind::X16 => field(7, 16) as i64,
         OperandKind::U18 => field(7, 18) as i64,
         OperandKind::Abs18 => field(7, 16) as i64 * 4,
-        OperandKind::Rel18 => {
-            ((pc as i64 + sext(field(7, 16), 16) as i64 * 4) & 0x3ffff) as i64
-        }
+        OperandKind::Rel18 => ((pc as i64 + sext(field(7, 16), 16) as i64 * 4) & 0x3ffff) as i64,
         OperandKind::BrInst => {
-            let high = if format == Format::LBTI { field(14, 2) } else { field(23, 2) };
+            let high = if format == Format::LBTI {
+                field(14, 2)
+            } else {
+                field(23, 2)
+            };
             let off = sext((high << 7) | field(0, 7), 9) as i64;
             (pc as i64 + off * 4) & 0xffff_ffff
         }

@@ -47,7 +47,10 @@ impl SymbolTable {
 
     /// Symbols defined exactly at `addr`.
     pub fn at(&self, addr: u32) -> impl Iterator<Item = &str> {
-        self.symbols.iter().filter(move |s| s.0 == addr).map(|s| s.1.as_str())
+        self.symbols
+            .iter()
+            .filter(move |s| s.0 == addr)
+            .map(|s| s.1.as_str())
     }
 
     pub fn is_empty(&self) -> bool {
@@ -58,7 +61,11 @@ impl SymbolTable {
 impl Symbolizer for SymbolTable {
     fn symbol_for(&self, addr: u32) -> Option<(&str, u32)> {
         let idx = self.symbols.partition_point(|s| s.0 <= addr);
-        let pick = if idx > 0 { self.symbols.get(idx - 1) } else { self.symbols.first() };
+        let pick = if idx > 0 {
+            self.symbols.get(idx - 1)
+        } else {
+            self.symbols.first()
+        };
         pick.map(|s| (s.1.as_str(), s.0))
     }
     fn has_symbol_at(&self, addr: u32) -> bool {
@@ -173,7 +180,10 @@ fn has_feature_suffix(op: Op) -> bool {
 /// How many leading hex digits objdump drops from 8-digit addresses for a section that
 /// ends at `end`: the leading zeros less one, rounded down to a multiple of 4.
 fn skipped_address_chars(end: u32) -> usize {
-    let zeros = format!("{end:08x}").bytes().take_while(|b| *b == b'0').count();
+    let zeros = format!("{end:08x}")
+        .bytes()
+        .take_while(|b| *b == b'0')
+        .count();
     if zeros == 8 {
         4
     } else if zeros == 0 {
@@ -270,7 +280,13 @@ mod tests {
 
     #[test]
     fn line_format() {
-        assert_eq!(line(0x40801503, 0, 0xb0, &NoSymbols), "   0:\t40 80 15 03 \til\t$3,42\t# 2a");
-        assert_eq!(line(0x40801503, 0x1000c, 0x12345, &NoSymbols), "   1000c:\t40 80 15 03 \til\t$3,42\t# 2a");
+        assert_eq!(
+            line(0x40801503, 0, 0xb0, &NoSymbols),
+            "   0:\t40 80 15 03 \til\t$3,42\t# 2a"
+        );
+        assert_eq!(
+            line(0x40801503, 0x1000c, 0x12345, &NoSymbols),
+            "   1000c:\t40 80 15 03 \til\t$3,42\t# 2a"
+        );
     }
 }

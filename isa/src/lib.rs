@@ -13,4 +13,4 @@ pub mod table;
 pub mod timing;
 
 pub use codec::{decode, encode, operand_values, Inst};
-pub use table::{Format, FormInfo, Op, OperandKind, Pipe, Unit, Visitor, FORMS, OP_INFO};
+pub use table::{FormInfo, Format, Op, OperandKind, Pipe, Unit, Visitor, FORMS, OP_INFO};

@@ -358,7 +358,10 @@ impl OperandKind {
 
     /// True for operands whose value is a local-store address (printed as an address).
     pub const fn is_address(self) -> bool {
-        matches!(self, OperandKind::Abs18 | OperandKind::Rel18 | OperandKind::BrInst)
+        matches!(
+            self,
+            OperandKind::Abs18 | OperandKind::Rel18 | OperandKind::BrInst
+        )
     }
 }
 
@@ -504,8 +507,17 @@ mod tests {
         let mut seen = std::collections::HashSet::new();
         for op in Op::ALL {
             let info = op.info();
-            assert!(seen.insert(info.opcode11), "duplicate opcode {:#x}", info.opcode11);
-            assert_eq!(info.opcode11 & !info.format.opcode_mask(), 0, "{}", info.name);
+            assert!(
+                seen.insert(info.opcode11),
+                "duplicate opcode {:#x}",
+                info.opcode11
+            );
+            assert_eq!(
+                info.opcode11 & !info.format.opcode_mask(),
+                0,
+                "{}",
+                info.name
+            );
         }
     }
 

@@ -4,7 +4,7 @@
 use proptest::prelude::*;
 use spu_isa::codec::{decode, encode, operand_values, primary_form_of};
 use spu_isa::disasm::{instruction_text, NoSymbols};
-use spu_isa::table::{Format, FormInfo, OperandKind, FORMS};
+use spu_isa::table::{FormInfo, Format, OperandKind, FORMS};
 
 /// Bits of a word that a form's operands occupy.
 fn field_mask(kind: OperandKind, format: Format) -> u32 {
@@ -15,7 +15,9 @@ fn field_mask(kind: OperandKind, format: Format) -> u32 {
         OperandKind::Rb => 0x7f << 14,
         OperandKind::Scale173 | OperandKind::Scale155 => 0xff << 14,
         OperandKind::S10 | OperandKind::S10b | OperandKind::Off14 => 0x3ff << 14,
-        OperandKind::S16 | OperandKind::X16 | OperandKind::Abs18 | OperandKind::Rel18 => 0xffff << 7,
+        OperandKind::S16 | OperandKind::X16 | OperandKind::Abs18 | OperandKind::Rel18 => {
+            0xffff << 7
+        }
         OperandKind::U18 => 0x3ffff << 7,
         OperandKind::BrInst if format == Format::LBTI => (3 << 14) | 0x7f,
         OperandKind::BrInst => (3 << 23) | 0x7f,
@@ -32,7 +34,9 @@ fn used_mask(form: &FormInfo) -> u32 {
         Sync | Hbr => 0x70 << 14,
         _ => 0,
     };
-    form.operands.iter().fold(opcode | features, |m, k| m | field_mask(*k, form.format))
+    form.operands
+        .iter()
+        .fold(opcode | features, |m, k| m | field_mask(*k, form.format))
 }
 
 /// A random operand value in the field's natural range, as an assembler would write it.

@@ -22,8 +22,15 @@ fn kernel(name: &str) {
         }
     };
     assert!(out.warnings.is_empty(), "{name}: {:?}", out.warnings);
-    assert!(out.image.len() >= 64, "{name}: image of {} bytes", out.image.len());
-    assert!(out.image.len() <= 256 * 1024, "{name}: larger than the local store");
+    assert!(
+        out.image.len() >= 64,
+        "{name}: image of {} bytes",
+        out.image.len()
+    );
+    assert!(
+        out.image.len() <= 256 * 1024,
+        "{name}: larger than the local store"
+    );
     let start = out.symbols.iter().find(|(n, _)| n == "_start").map(|s| s.1);
     assert_eq!(Some(out.entry), start, "{name}: entry is _start");
     let elf = read_elf(&out.elf).unwrap();
@@ -34,16 +41,30 @@ fn kernel(name: &str) {
         let a = *addr as usize;
         image[a..a + bytes.len()].copy_from_slice(bytes);
     }
-    assert_eq!(image, out.image, "{name}: ELF segments differ from the image");
-    assert!(elf.symbols.iter().any(|(n, a)| n == "_start" && *a == out.entry));
+    assert_eq!(
+        image, out.image,
+        "{name}: ELF segments differ from the image"
+    );
+    assert!(elf
+        .symbols
+        .iter()
+        .any(|(n, a)| n == "_start" && *a == out.entry));
     // No `.L` locals in the ELF symbol table.
     assert!(elf.symbols.iter().all(|(n, _)| !n.starts_with(".L")));
     // Every word of the code disassembles to an instruction.
     let text = elf.sections.iter().find(|s| s.0 == ".text").expect(".text");
     for (i, w) in text.2.chunks(4).enumerate() {
         let word = u32::from_be_bytes(w.try_into().unwrap());
-        let t = spu_isa::disasm::instruction_text(word, text.1 + 4 * i as u32, &spu_isa::disasm::NoSymbols);
-        assert!(!t.starts_with(".long"), "{name}: {:#x}: {word:08x} is not an instruction", text.1 + 4 * i as u32);
+        let t = spu_isa::disasm::instruction_text(
+            word,
+            text.1 + 4 * i as u32,
+            &spu_isa::disasm::NoSymbols,
+        );
+        assert!(
+            !t.starts_with(".long"),
+            "{name}: {:#x}: {word:08x} is not an instruction",
+            text.1 + 4 * i as u32
+        );
     }
     // Assembling is deterministic.
     let again = assemble(&src, name, &options()).unwrap();
@@ -65,5 +86,8 @@ fn kernels_need_their_include() {
     let path = format!("{}/../kernels/fill.s", env!("CARGO_MANIFEST_DIR"));
     let src = std::fs::read_to_string(&path).unwrap();
     let diags = assemble(&src, "fill.s", &Options::default()).unwrap_err();
-    assert!(diags.iter().any(|d| d.message.contains("layout.inc")), "{diags:?}");
+    assert!(
+        diags.iter().any(|d| d.message.contains("layout.inc")),
+        "{diags:?}"
+    );
 }
