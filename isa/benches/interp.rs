@@ -3,7 +3,8 @@
 //!
 //! `accumulating` is the loop of `spu bench` (its fma chain grows without bound, so after
 //! the first iterations every fma takes the float unit's exact path); `bounded` does the
-//! same work on values that stay in range, the common case in real kernels.
+//! same work on values that stay in range, the common case in real kernels; `integer`
+//! replaces the float operations with `selb` and `xor`.
 
 use spu_isa::encode;
 use spu_isa::machine::{MainMemory, Spu, StopReason};
@@ -22,8 +23,17 @@ fn asm(lines: &[(&str, &[i64])]) -> Vec<u8> {
 }
 
 /// The loop body starts at 24 (word 6); data at 0x1000.
-fn program(iterations: u32, accumulate: bool) -> Vec<u8> {
-    let (acc7, acc8) = if accumulate { (7, 8) } else { (10, 10) };
+fn program(iterations: u32, kind: &str) -> Vec<u8> {
+    let (acc7, acc8) = if kind == "accumulating" {
+        (7, 8)
+    } else {
+        (10, 10)
+    };
+    let (fma, fa) = if kind == "integer" {
+        ("selb", "xor")
+    } else {
+        ("fma", "fa")
+    };
     let mut image = asm(&[
         ("ila", &[3, 0x1000]),
         ("il", &[4, 0]),
@@ -35,12 +45,12 @@ fn program(iterations: u32, accumulate: bool) -> Vec<u8> {
         ("hbrr", &[24 + 36, 24]),
         ("lqd", &[5, 0, 3]),
         ("lqd", &[6, 16, 3]),
-        ("fma", &[7, 5, 6, acc7]),
-        ("fma", &[8, 6, 10, acc8]),
+        (fma, &[7, 5, 6, acc7]),
+        (fma, &[8, 6, 10, acc8]),
         ("shufb", &[12, 5, 6, 11]),
         ("a", &[4, 4, 12]),
         ("ai", &[9, 9, -1]),
-        ("fa", &[13, 7, 8]),
+        (fa, &[13, 7, 8]),
         ("stqd", &[13, 32, 3]),
         ("brnz", &[9, 24]),
         ("stop", &[0x2000]),
@@ -53,8 +63,8 @@ fn program(iterations: u32, accumulate: bool) -> Vec<u8> {
     image
 }
 
-fn measure(name: &str, iterations: u32, accumulate: bool) {
-    let image = program(iterations, accumulate);
+fn measure(name: &str, iterations: u32) {
+    let image = program(iterations, name);
     let mut best = f64::MAX;
     let mut n = 0;
     for _ in 0..3 {
@@ -74,11 +84,18 @@ fn measure(name: &str, iterations: u32, accumulate: bool) {
     );
 }
 
+/// Arguments: an iteration count and/or the names of the loops to run.
 fn main() {
-    let iterations = std::env::args()
-        .skip(1)
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let iterations = args
+        .iter()
         .find_map(|a| a.parse().ok())
         .unwrap_or(10_000_000);
-    measure("bounded", iterations, false);
-    measure("accumulating", iterations, true);
+    const LOOPS: [&str; 3] = ["bounded", "accumulating", "integer"];
+    let named = args.iter().any(|a| LOOPS.contains(&a.as_str()));
+    for name in LOOPS {
+        if !named || args.iter().any(|a| a == name) {
+            measure(name, iterations);
+        }
+    }
 }

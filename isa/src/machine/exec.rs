@@ -154,7 +154,7 @@ impl Core {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn load_quad(&self, addr: u32) -> Reg {
         let a = (addr & LS_MASK & !15) as usize;
         let b = &self.ls[a..a + 16];
@@ -162,7 +162,7 @@ impl Core {
         [w(0), w(1), w(2), w(3)]
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn store_quad(&mut self, addr: u32, v: Reg) -> u32 {
         let a = (addr & LS_MASK & !15) as usize;
         for i in 0..4 {
@@ -196,203 +196,254 @@ fn insertion_mask(t: u32, size: u32) -> Reg {
     from_bytes(b)
 }
 
+/// `shufb`: each control byte picks a byte of the 32-byte concatenation RA:RB by its low 5
+/// bits, or, when its top bit is set, a constant: 10xxxxxx → 0x00, 110xxxxx → 0xFF,
+/// 111xxxxx → 0x80.
+#[inline(always)]
 fn shufb(a: Reg, b: Reg, c: Reg) -> Reg {
-    let (x, y, z) = (bytes_of(a), bytes_of(b), bytes_of(c));
-    let mut out = [0u8; 16];
-    for i in 0..16 {
-        let s = z[i];
-        out[i] = if s >= 0xe0 {
-            0x80
-        } else if s >= 0xc0 {
-            0xff
-        } else if s >= 0x80 {
-            0
-        } else {
-            let k = (s & 0x1f) as usize;
-            if k < 16 {
-                x[k]
-            } else {
-                y[k - 16]
-            }
-        };
+    let mut t = [0u8; 32];
+    for i in 0..4 {
+        t[4 * i..4 * i + 4].copy_from_slice(&a[i].to_be_bytes());
+        t[16 + 4 * i..16 + 4 * i + 4].copy_from_slice(&b[i].to_be_bytes());
     }
-    from_bytes(out)
+    let special = (c[0] | c[1] | c[2] | c[3]) & 0x8080_8080 != 0;
+    let mut out = [0u32; 4];
+    for i in 0..4 {
+        let cw = c[i];
+        let mut w = 0u32;
+        for k in 0..4 {
+            let s = (cw >> (24 - 8 * k)) as u8;
+            let v = if special && s & 0x80 != 0 {
+                [0x00, 0x00, 0xff, 0x80][((s >> 5) & 3) as usize]
+            } else {
+                t[(s & 31) as usize]
+            };
+            w = (w << 8) | v as u32;
+        }
+        out[i] = w;
+    }
+    out
+}
+
+/// Writes register `rt` with one 16-byte store: operands are read with 16-byte loads, and
+/// a load that finds its bytes in four narrower stores still in flight misses store
+/// forwarding and stalls (a large cost in an interpreter that reads what it just wrote).
+#[inline(always)]
+pub fn put(regs: &mut [Reg; 128], rt: u8, v: Reg) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use core::arch::x86_64::{__m128i, _mm_set_epi32, _mm_storeu_si128};
+        let slot: *mut Reg = &mut regs[rt as usize & 127];
+        // SAFETY: `slot` is a valid, exclusively borrowed 16-byte register; SSE2 is part of
+        // the x86_64 baseline and the store is unaligned.
+        unsafe {
+            let x = _mm_set_epi32(v[3] as i32, v[2] as i32, v[1] as i32, v[0] as i32);
+            _mm_storeu_si128(slot as *mut __m128i, x);
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        regs[rt as usize & 127] = v;
+    }
 }
 
 /// Executes `inst` at `pc` on `core`. Channel instructions return [`Effect::Channel`].
-#[inline]
+#[inline(always)]
 pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
     use Op::*;
-    let r = &core.regs;
-    let ra = r[inst.ra as usize];
-    let rb = r[inst.rb as usize];
-    let rt_old = r[inst.rt as usize];
-    let rc = r[inst.rc as usize];
+    // Operands are read where an operation uses them and each operation writes its own
+    // result, so a result computed in vector registers is stored straight from them.
+    macro_rules! ra {
+        () => {
+            core.regs[inst.ra as usize & 127]
+        };
+    }
+    macro_rules! rb {
+        () => {
+            core.regs[inst.rb as usize & 127]
+        };
+    }
+    macro_rules! rc {
+        () => {
+            core.regs[inst.rc as usize & 127]
+        };
+    }
+    macro_rules! rt_old {
+        () => {
+            core.regs[inst.rt as usize & 127]
+        };
+    }
+    macro_rules! w {
+        ($e:expr $(,)?) => {{
+            let v: Reg = $e;
+            put(&mut core.regs, inst.rt, v)
+        }};
+    }
     let imm = inst.imm;
     let i10 = imm as u32;
     let next = pc.wrapping_add(4) & LS_MASK;
     let mut effect = Effect::Next;
-    let result: Option<Reg> = match inst.op {
+    match inst.op {
         // ---- loads and stores
-        Lqd => Some(core.load_quad(ra[0].wrapping_add((imm << 4) as u32))),
-        Lqx => Some(core.load_quad(ra[0].wrapping_add(rb[0]))),
-        Lqa => Some(core.load_quad((imm << 2) as u32)),
-        Lqr => Some(core.load_quad(pc.wrapping_add((imm << 2) as u32))),
+        Lqd => w!(core.load_quad(ra!()[0].wrapping_add((imm << 4) as u32))),
+        Lqx => w!(core.load_quad(ra!()[0].wrapping_add(rb!()[0]))),
+        Lqa => w!(core.load_quad((imm << 2) as u32)),
+        Lqr => w!(core.load_quad(pc.wrapping_add((imm << 2) as u32))),
         Stqd | Stqx | Stqa | Stqr => {
             let addr = match inst.op {
-                Stqd => ra[0].wrapping_add((imm << 4) as u32),
-                Stqx => ra[0].wrapping_add(rb[0]),
+                Stqd => ra!()[0].wrapping_add((imm << 4) as u32),
+                Stqx => ra!()[0].wrapping_add(rb!()[0]),
                 Stqa => (imm << 2) as u32,
                 _ => pc.wrapping_add((imm << 2) as u32),
             };
-            let a = core.store_quad(addr, rt_old);
+            let a = core.store_quad(addr, rt_old!());
             return Effect::Store { addr: a };
         }
         // ---- immediate loads
-        Il => Some(splat(imm as u32)),
-        Ilh => Some(splat_h(imm as u16)),
-        Ilhu => Some(splat((imm as u32) << 16)),
-        Ila => Some(splat(imm as u32 & 0x3ffff)),
-        Iohl => Some(map(rt_old, |t| t | (imm as u32 & 0xffff))),
+        Il => w!(splat(imm as u32)),
+        Ilh => w!(splat_h(imm as u16)),
+        Ilhu => w!(splat((imm as u32) << 16)),
+        Ila => w!(splat(imm as u32 & 0x3ffff)),
+        Iohl => w!(map(rt_old!(), |t| t | (imm as u32 & 0xffff))),
         Fsmbi => {
             let m = inst.u16();
             let mut b = [0u8; 16];
             for (i, byte) in b.iter_mut().enumerate() {
                 *byte = if m & (0x8000 >> i) != 0 { 0xff } else { 0 };
             }
-            Some(from_bytes(b))
+            w!(from_bytes(b))
         }
         // ---- integer arithmetic
-        A => Some(zip(ra, rb, u32::wrapping_add)),
-        Ah => Some(halves(ra, rb, u16::wrapping_add)),
-        Ai => Some(map(ra, |a| a.wrapping_add(i10))),
-        Ahi => Some(halves(ra, splat_h(imm as u16), u16::wrapping_add)),
-        Sf => Some(zip(ra, rb, |a, b| b.wrapping_sub(a))),
-        Sfh => Some(halves(ra, rb, |a, b| b.wrapping_sub(a))),
-        Sfi => Some(map(ra, |a| i10.wrapping_sub(a))),
-        Sfhi => Some(halves(ra, splat_h(imm as u16), |a, b| b.wrapping_sub(a))),
-        Addx => Some(zip3(ra, rb, rt_old, |a, b, t| {
+        A => w!(zip(ra!(), rb!(), u32::wrapping_add)),
+        Ah => w!(halves(ra!(), rb!(), u16::wrapping_add)),
+        Ai => w!(map(ra!(), |a| a.wrapping_add(i10))),
+        Ahi => w!(halves(ra!(), splat_h(imm as u16), u16::wrapping_add)),
+        Sf => w!(zip(ra!(), rb!(), |a, b| b.wrapping_sub(a))),
+        Sfh => w!(halves(ra!(), rb!(), |a, b| b.wrapping_sub(a))),
+        Sfi => w!(map(ra!(), |a| i10.wrapping_sub(a))),
+        Sfhi => w!(halves(ra!(), splat_h(imm as u16), |a, b| b.wrapping_sub(a))),
+        Addx => w!(zip3(ra!(), rb!(), rt_old!(), |a, b, t| {
             a.wrapping_add(b).wrapping_add(t & 1)
         })),
-        Sfx => Some(zip3(ra, rb, rt_old, |a, b, t| {
+        Sfx => w!(zip3(ra!(), rb!(), rt_old!(), |a, b, t| {
             b.wrapping_add(!a).wrapping_add(t & 1)
         })),
-        Cg => Some(zip(ra, rb, |a, b| ((a as u64 + b as u64) >> 32) as u32)),
-        Cgx => Some(zip3(ra, rb, rt_old, |a, b, t| {
+        Cg => w!(zip(ra!(), rb!(), |a, b| ((a as u64 + b as u64) >> 32) as u32)),
+        Cgx => w!(zip3(ra!(), rb!(), rt_old!(), |a, b, t| {
             ((a as u64 + b as u64 + (t & 1) as u64) >> 32) as u32
         })),
-        Bg => Some(zip(ra, rb, |a, b| (b >= a) as u32)),
-        Bgx => Some(zip3(ra, rb, rt_old, |a, b, t| {
+        Bg => w!(zip(ra!(), rb!(), |a, b| (b >= a) as u32)),
+        Bgx => w!(zip3(ra!(), rb!(), rt_old!(), |a, b, t| {
             if t & 1 != 0 {
                 (b >= a) as u32
             } else {
                 (b > a) as u32
             }
         })),
-        Mpy => Some(zip(ra, rb, |a, b| {
+        Mpy => w!(zip(ra!(), rb!(), |a, b| {
             ((a as i16 as i32) * (b as i16 as i32)) as u32
         })),
-        Mpyu => Some(zip(ra, rb, |a, b| (a & 0xffff) * (b & 0xffff))),
-        Mpyi => Some(map(ra, |a| {
+        Mpyu => w!(zip(ra!(), rb!(), |a, b| (a & 0xffff) * (b & 0xffff))),
+        Mpyi => w!(map(ra!(), |a| {
             ((a as i16 as i32) * (imm as i16 as i32)) as u32
         })),
-        Mpyui => Some(map(ra, |a| (a & 0xffff) * (imm as u32 & 0xffff))),
-        Mpya => Some(zip3(ra, rb, rc, |a, b, c| {
+        Mpyui => w!(map(ra!(), |a| (a & 0xffff) * (imm as u32 & 0xffff))),
+        Mpya => w!(zip3(ra!(), rb!(), rc!(), |a, b, c| {
             ((a as i16 as i32) * (b as i16 as i32)).wrapping_add(c as i32) as u32
         })),
-        Mpyh => Some(zip(ra, rb, |a, b| ((a >> 16) * (b & 0xffff)) << 16)),
-        Mpys => Some(zip(ra, rb, |a, b| {
+        Mpyh => w!(zip(ra!(), rb!(), |a, b| ((a >> 16) * (b & 0xffff)) << 16)),
+        Mpys => w!(zip(ra!(), rb!(), |a, b| {
             (((a as i16 as i32) * (b as i16 as i32)) >> 16) as u32
         })),
-        Mpyhh => Some(zip(ra, rb, |a, b| {
+        Mpyhh => w!(zip(ra!(), rb!(), |a, b| {
             (((a >> 16) as i16 as i32) * ((b >> 16) as i16 as i32)) as u32
         })),
-        Mpyhha => Some(zip3(ra, rb, rt_old, |a, b, t| {
+        Mpyhha => w!(zip3(ra!(), rb!(), rt_old!(), |a, b, t| {
             (((a >> 16) as i16 as i32) * ((b >> 16) as i16 as i32)).wrapping_add(t as i32) as u32
         })),
-        Mpyhhu => Some(zip(ra, rb, |a, b| (a >> 16) * (b >> 16))),
-        Mpyhhau => Some(zip3(ra, rb, rt_old, |a, b, t| {
+        Mpyhhu => w!(zip(ra!(), rb!(), |a, b| (a >> 16) * (b >> 16))),
+        Mpyhhau => w!(zip3(ra!(), rb!(), rt_old!(), |a, b, t| {
             ((a >> 16) * (b >> 16)).wrapping_add(t)
         })),
-        Clz => Some(map(ra, u32::leading_zeros)),
-        Cntb => Some(bytewise(ra, ra, |a, _| a.count_ones() as u8)),
-        Absdb => Some(bytewise(ra, rb, |a, b| a.abs_diff(b))),
-        Avgb => Some(bytewise(ra, rb, |a, b| {
+        Clz => w!(map(ra!(), u32::leading_zeros)),
+        Cntb => w!(bytewise(ra!(), ra!(), |a, _| a.count_ones() as u8)),
+        Absdb => w!(bytewise(ra!(), rb!(), |a, b| a.abs_diff(b))),
+        Avgb => w!(bytewise(ra!(), rb!(), |a, b| {
             ((a as u16 + b as u16 + 1) >> 1) as u8
         })),
-        Sumb => Some(zip(ra, rb, |a, b| {
+        Sumb => w!(zip(ra!(), rb!(), |a, b| {
             let s = |x: u32| x.to_be_bytes().iter().map(|v| *v as u32).sum::<u32>();
             (s(b) << 16) | s(a)
         })),
-        Xsbh => Some(map(ra, |a| {
+        Xsbh => w!(map(ra!(), |a| {
             let h = |x: u32| (x as u8 as i8 as i16 as u16) as u32;
             (h(a >> 16) << 16) | h(a)
         })),
-        Xshw => Some(map(ra, |a| a as u16 as i16 as i32 as u32)),
+        Xshw => w!(map(ra!(), |a| a as u16 as i16 as i32 as u32)),
         Xswd => {
-            let d = dwords(ra);
-            Some(from_dwords(d.map(|x| x as u32 as i32 as i64 as u64)))
+            let d = dwords(ra!());
+            w!(from_dwords(d.map(|x| x as u32 as i32 as i64 as u64)))
         }
         // ---- logical
-        And => Some(zip(ra, rb, |a, b| a & b)),
-        Andc => Some(zip(ra, rb, |a, b| a & !b)),
-        Andi => Some(map(ra, |a| a & i10)),
-        Andhi => Some(halves(ra, splat_h(imm as u16), |a, b| a & b)),
-        Andbi => Some(bytewise(ra, splat_b(imm as u8), |a, b| a & b)),
-        Or => Some(zip(ra, rb, |a, b| a | b)),
-        Orc => Some(zip(ra, rb, |a, b| a | !b)),
-        Ori => Some(map(ra, |a| a | i10)),
-        Orhi => Some(halves(ra, splat_h(imm as u16), |a, b| a | b)),
-        Orbi => Some(bytewise(ra, splat_b(imm as u8), |a, b| a | b)),
-        Orx => Some([ra[0] | ra[1] | ra[2] | ra[3], 0, 0, 0]),
-        Xor => Some(zip(ra, rb, |a, b| a ^ b)),
-        Xori => Some(map(ra, |a| a ^ i10)),
-        Xorhi => Some(halves(ra, splat_h(imm as u16), |a, b| a ^ b)),
-        Xorbi => Some(bytewise(ra, splat_b(imm as u8), |a, b| a ^ b)),
-        Nand => Some(zip(ra, rb, |a, b| !(a & b))),
-        Nor => Some(zip(ra, rb, |a, b| !(a | b))),
-        Eqv => Some(zip(ra, rb, |a, b| !(a ^ b))),
-        Selb => Some(zip3(ra, rb, rc, |a, b, c| (c & b) | (!c & a))),
-        Shufb => Some(shufb(ra, rb, rc)),
+        And => w!(zip(ra!(), rb!(), |a, b| a & b)),
+        Andc => w!(zip(ra!(), rb!(), |a, b| a & !b)),
+        Andi => w!(map(ra!(), |a| a & i10)),
+        Andhi => w!(halves(ra!(), splat_h(imm as u16), |a, b| a & b)),
+        Andbi => w!(bytewise(ra!(), splat_b(imm as u8), |a, b| a & b)),
+        Or => w!(zip(ra!(), rb!(), |a, b| a | b)),
+        Orc => w!(zip(ra!(), rb!(), |a, b| a | !b)),
+        Ori => w!(map(ra!(), |a| a | i10)),
+        Orhi => w!(halves(ra!(), splat_h(imm as u16), |a, b| a | b)),
+        Orbi => w!(bytewise(ra!(), splat_b(imm as u8), |a, b| a | b)),
+        Orx => w!([ra!()[0] | ra!()[1] | ra!()[2] | ra!()[3], 0, 0, 0]),
+        Xor => w!(zip(ra!(), rb!(), |a, b| a ^ b)),
+        Xori => w!(map(ra!(), |a| a ^ i10)),
+        Xorhi => w!(halves(ra!(), splat_h(imm as u16), |a, b| a ^ b)),
+        Xorbi => w!(bytewise(ra!(), splat_b(imm as u8), |a, b| a ^ b)),
+        Nand => w!(zip(ra!(), rb!(), |a, b| !(a & b))),
+        Nor => w!(zip(ra!(), rb!(), |a, b| !(a | b))),
+        Eqv => w!(zip(ra!(), rb!(), |a, b| !(a ^ b))),
+        Selb => w!(zip3(ra!(), rb!(), rc!(), |a, b, c| (c & b) | (!c & a))),
+        Shufb => w!(shufb(ra!(), rb!(), rc!())),
         // ---- compares
-        Ceq => Some(zip(ra, rb, |a, b| mask(a == b))),
-        Ceqh => Some(halves(ra, rb, |a, b| hmask(a == b))),
-        Ceqb => Some(bytewise(ra, rb, |a, b| if a == b { 0xff } else { 0 })),
-        Ceqi => Some(map(ra, |a| mask(a == i10))),
-        Ceqhi => Some(halves(ra, splat_h(imm as u16), |a, b| hmask(a == b))),
-        Ceqbi => Some(bytewise(ra, splat_b(imm as u8), |a, b| {
+        Ceq => w!(zip(ra!(), rb!(), |a, b| mask(a == b))),
+        Ceqh => w!(halves(ra!(), rb!(), |a, b| hmask(a == b))),
+        Ceqb => w!(bytewise(ra!(), rb!(), |a, b| if a == b { 0xff } else { 0 })),
+        Ceqi => w!(map(ra!(), |a| mask(a == i10))),
+        Ceqhi => w!(halves(ra!(), splat_h(imm as u16), |a, b| hmask(a == b))),
+        Ceqbi => w!(bytewise(ra!(), splat_b(imm as u8), |a, b| {
             if a == b {
                 0xff
             } else {
                 0
             }
         })),
-        Cgt => Some(zip(ra, rb, |a, b| mask((a as i32) > (b as i32)))),
-        Cgth => Some(halves(ra, rb, |a, b| hmask((a as i16) > (b as i16)))),
-        Cgtb => Some(bytewise(ra, rb, |a, b| {
+        Cgt => w!(zip(ra!(), rb!(), |a, b| mask((a as i32) > (b as i32)))),
+        Cgth => w!(halves(ra!(), rb!(), |a, b| hmask((a as i16) > (b as i16)))),
+        Cgtb => w!(bytewise(ra!(), rb!(), |a, b| {
             if (a as i8) > (b as i8) {
                 0xff
             } else {
                 0
             }
         })),
-        Cgti => Some(map(ra, |a| mask((a as i32) > imm))),
-        Cgthi => Some(halves(ra, splat_h(imm as u16), |a, b| {
+        Cgti => w!(map(ra!(), |a| mask((a as i32) > imm))),
+        Cgthi => w!(halves(ra!(), splat_h(imm as u16), |a, b| {
             hmask((a as i16) > (b as i16))
         })),
-        Cgtbi => Some(bytewise(ra, splat_b(imm as u8), |a, b| {
+        Cgtbi => w!(bytewise(ra!(), splat_b(imm as u8), |a, b| {
             if (a as i8) > (b as i8) {
                 0xff
             } else {
                 0
             }
         })),
-        Clgt => Some(zip(ra, rb, |a, b| mask(a > b))),
-        Clgth => Some(halves(ra, rb, |a, b| hmask(a > b))),
-        Clgtb => Some(bytewise(ra, rb, |a, b| if a > b { 0xff } else { 0 })),
-        Clgti => Some(map(ra, |a| mask(a > i10))),
-        Clgthi => Some(halves(ra, splat_h(imm as u16), |a, b| hmask(a > b))),
-        Clgtbi => Some(bytewise(ra, splat_b(imm as u8), |a, b| {
+        Clgt => w!(zip(ra!(), rb!(), |a, b| mask(a > b))),
+        Clgth => w!(halves(ra!(), rb!(), |a, b| hmask(a > b))),
+        Clgtb => w!(bytewise(ra!(), rb!(), |a, b| if a > b { 0xff } else { 0 })),
+        Clgti => w!(map(ra!(), |a| mask(a > i10))),
+        Clgthi => w!(halves(ra!(), splat_h(imm as u16), |a, b| hmask(a > b))),
+        Clgtbi => w!(bytewise(ra!(), splat_b(imm as u8), |a, b| {
             if a > b {
                 0xff
             } else {
@@ -402,11 +453,11 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         // ---- word and halfword shifts and rotates
         Shl | Shli => {
             let cnt = if inst.op == Shl {
-                rb
+                rb!()
             } else {
                 splat(imm as u32)
             };
-            Some(zip(ra, cnt, |a, c| {
+            w!(zip(ra!(), cnt, |a, c| {
                 let c = c & 0x3f;
                 if c > 31 {
                     0
@@ -417,11 +468,11 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         }
         Shlh | Shlhi => {
             let cnt = if inst.op == Shlh {
-                rb
+                rb!()
             } else {
                 splat_h(imm as u16)
             };
-            Some(halves(ra, cnt, |a, c| {
+            w!(halves(ra!(), cnt, |a, c| {
                 let c = c & 0x1f;
                 if c > 15 {
                     0
@@ -432,27 +483,27 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         }
         Rot | Roti => {
             let cnt = if inst.op == Rot {
-                rb
+                rb!()
             } else {
                 splat(imm as u32)
             };
-            Some(zip(ra, cnt, |a, c| a.rotate_left(c & 0x1f)))
+            w!(zip(ra!(), cnt, |a, c| a.rotate_left(c & 0x1f)))
         }
         Roth | Rothi => {
             let cnt = if inst.op == Roth {
-                rb
+                rb!()
             } else {
                 splat_h(imm as u16)
             };
-            Some(halves(ra, cnt, |a, c| a.rotate_left((c & 0xf) as u32)))
+            w!(halves(ra!(), cnt, |a, c| a.rotate_left((c & 0xf) as u32)))
         }
         Rotm | Rotmi => {
             let cnt = if inst.op == Rotm {
-                rb
+                rb!()
             } else {
                 splat(imm as u32)
             };
-            Some(zip(ra, cnt, |a, c| {
+            w!(zip(ra!(), cnt, |a, c| {
                 let c = c.wrapping_neg() & 0x3f;
                 if c > 31 {
                     0
@@ -463,22 +514,22 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         }
         Rotma | Rotmai => {
             let cnt = if inst.op == Rotma {
-                rb
+                rb!()
             } else {
                 splat(imm as u32)
             };
-            Some(zip(ra, cnt, |a, c| {
+            w!(zip(ra!(), cnt, |a, c| {
                 let c = c.wrapping_neg() & 0x3f;
                 ((a as i32) >> c.min(31)) as u32
             }))
         }
         Rothm | Rothmi => {
             let cnt = if inst.op == Rothm {
-                rb
+                rb!()
             } else {
                 splat_h(imm as u16)
             };
-            Some(halves(ra, cnt, |a, c| {
+            w!(halves(ra!(), cnt, |a, c| {
                 let c = c.wrapping_neg() & 0x1f;
                 if c > 15 {
                     0
@@ -489,89 +540,102 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         }
         Rotmah | Rotmahi => {
             let cnt = if inst.op == Rotmah {
-                rb
+                rb!()
             } else {
                 splat_h(imm as u16)
             };
-            Some(halves(ra, cnt, |a, c| {
+            w!(halves(ra!(), cnt, |a, c| {
                 let c = c.wrapping_neg() & 0x1f;
                 ((a as i16) >> c.min(15)) as u16
             }))
         }
         // ---- quadword shifts and rotates
         Shlqbi | Shlqbii => {
-            let c = if inst.op == Shlqbi { rb[0] } else { imm as u32 } & 7;
-            Some(from_u128(to_u128(ra) << c))
+            let c = if inst.op == Shlqbi {
+                rb!()[0]
+            } else {
+                imm as u32
+            } & 7;
+            w!(from_u128(to_u128(ra!()) << c))
         }
         Shlqby | Shlqbyi | Shlqbybi => {
             let c = match inst.op {
-                Shlqby => rb[0] & 0x1f,
+                Shlqby => rb!()[0] & 0x1f,
                 Shlqbyi => imm as u32 & 0x1f,
-                _ => (rb[0] >> 3) & 0x1f,
+                _ => (rb!()[0] >> 3) & 0x1f,
             };
-            Some(if c > 15 {
+            w!(if c > 15 {
                 [0; 4]
             } else {
-                from_u128(to_u128(ra) << (8 * c))
+                from_u128(to_u128(ra!()) << (8 * c))
             })
         }
         Rotqbi | Rotqbii => {
-            let c = if inst.op == Rotqbi { rb[0] } else { imm as u32 } & 7;
-            Some(from_u128(to_u128(ra).rotate_left(c)))
+            let c = if inst.op == Rotqbi {
+                rb!()[0]
+            } else {
+                imm as u32
+            } & 7;
+            w!(from_u128(to_u128(ra!()).rotate_left(c)))
         }
         Rotqby | Rotqbyi | Rotqbybi => {
             let c = match inst.op {
-                Rotqby => rb[0] & 0xf,
+                Rotqby => rb!()[0] & 0xf,
                 Rotqbyi => imm as u32 & 0xf,
-                _ => (rb[0] >> 3) & 0xf,
+                _ => (rb!()[0] >> 3) & 0xf,
             };
-            Some(from_u128(to_u128(ra).rotate_left(8 * c)))
+            w!(from_u128(to_u128(ra!()).rotate_left(8 * c)))
         }
         Rotqmbi | Rotqmbii => {
             let c = if inst.op == Rotqmbi {
-                rb[0]
+                rb!()[0]
             } else {
                 imm as u32
             }
             .wrapping_neg()
                 & 7;
-            Some(from_u128(to_u128(ra) >> c))
+            w!(from_u128(to_u128(ra!()) >> c))
         }
         Rotqmby | Rotqmbyi | Rotqmbybi => {
             let c = match inst.op {
-                Rotqmby => rb[0].wrapping_neg() & 0x1f,
+                Rotqmby => rb!()[0].wrapping_neg() & 0x1f,
                 Rotqmbyi => (imm as u32).wrapping_neg() & 0x1f,
-                _ => ((rb[0] >> 3).wrapping_neg()) & 0x1f,
+                _ => ((rb!()[0] >> 3).wrapping_neg()) & 0x1f,
             };
-            Some(if c > 15 {
+            w!(if c > 15 {
                 [0; 4]
             } else {
-                from_u128(to_u128(ra) >> (8 * c))
+                from_u128(to_u128(ra!()) >> (8 * c))
             })
         }
         // ---- gather and form select masks
-        Gb => Some([(0..4).fold(0, |m, i| m | ((ra[i] & 1) << (3 - i))), 0, 0, 0]),
+        Gb => w!([
+            (0..4).fold(0, |m, i| m | ((ra!()[i] & 1) << (3 - i))),
+            0,
+            0,
+            0
+        ]),
         Gbh => {
             let mut m = 0;
             for i in 0..4 {
-                m |= ((ra[i] >> 16) & 1) << (7 - 2 * i);
-                m |= (ra[i] & 1) << (6 - 2 * i);
+                m |= ((ra!()[i] >> 16) & 1) << (7 - 2 * i);
+                m |= (ra!()[i] & 1) << (6 - 2 * i);
             }
-            Some([m, 0, 0, 0])
+            w!([m, 0, 0, 0])
         }
         Gbb => {
-            let b = bytes_of(ra);
-            Some([
+            let b = bytes_of(ra!());
+            w!([
                 (0..16).fold(0, |m, i| m | (((b[i] & 1) as u32) << (15 - i))),
                 0,
                 0,
                 0,
             ])
         }
-        Fsm => Some([0, 1, 2, 3].map(|i| mask(ra[0] & (8 >> i) != 0))),
+        Fsm => w!([0, 1, 2, 3].map(|i| mask(ra!()[0] & (8 >> i) != 0))),
         Fsmh => {
-            let m = ra[0];
-            Some([0, 1, 2, 3].map(|i| {
+            let m = ra!()[0];
+            w!([0, 1, 2, 3].map(|i| {
                 let hi = if m & (0x80 >> (2 * i)) != 0 {
                     0xffff0000
                 } else {
@@ -586,17 +650,17 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
             }))
         }
         Fsmb => {
-            let m = ra[0];
+            let m = ra!()[0];
             let mut b = [0u8; 16];
             for (i, byte) in b.iter_mut().enumerate() {
                 *byte = if m & (0x8000 >> i) != 0 { 0xff } else { 0 };
             }
-            Some(from_bytes(b))
+            w!(from_bytes(b))
         }
         Cbd | Chd | Cwd | Cdd | Cbx | Chx | Cwx | Cdx => {
             let t = match inst.op {
-                Cbd | Chd | Cwd | Cdd => ra[0].wrapping_add(imm as u32),
-                _ => ra[0].wrapping_add(rb[0]),
+                Cbd | Chd | Cwd | Cdd => ra!()[0].wrapping_add(imm as u32),
+                _ => ra!()[0].wrapping_add(rb!()[0]),
             };
             let size = match inst.op {
                 Cbd | Cbx => 1,
@@ -604,51 +668,108 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
                 Cwd | Cwx => 4,
                 _ => 8,
             };
-            Some(insertion_mask(t, size))
+            w!(insertion_mask(t, size))
         }
         // ---- single precision
-        Fa => Some(fl2(core, ra, rb, float::fa_flags)),
-        Fs => Some(fl2(core, ra, rb, float::fs_flags)),
-        Fm => Some(fl2(core, ra, rb, float::fm_flags)),
-        Fma => Some(fl3(core, ra, rb, rc, float::fma_flags)),
-        Fms => Some(fl3(core, ra, rb, rc, float::fms_flags)),
-        Fnms => Some(fl3(core, ra, rb, rc, float::fnms_flags)),
-        Fceq => Some(zip(ra, rb, |a, b| mask(float::fceq(a, b)))),
-        Fcgt => Some(zip(ra, rb, |a, b| mask(float::fcgt(a, b)))),
-        Fcmeq => Some(zip(ra, rb, |a, b| mask(float::fcmeq(a, b)))),
-        Fcmgt => Some(zip(ra, rb, |a, b| mask(float::fcmgt(a, b)))),
+        Fa => {
+            let (a, b) = (ra!(), rb!());
+            w!(sp4(a, b, b, add_ok, |x, y, _| x + y).unwrap_or_else(|| fl2(
+                core,
+                a,
+                b,
+                float::fa_flags
+            )))
+        }
+        Fs => {
+            let (a, b) = (ra!(), rb!());
+            w!(sp4(a, b, b, add_ok, |x, y, _| x - y).unwrap_or_else(|| fl2(
+                core,
+                a,
+                b,
+                float::fs_flags
+            )))
+        }
+        Fm => {
+            let (a, b) = (ra!(), rb!());
+            w!(sp4(a, b, b, mul_ok, |x, y, _| x * y).unwrap_or_else(|| fl2(
+                core,
+                a,
+                b,
+                float::fm_flags
+            )))
+        }
+        Fma => {
+            let (a, b, c) = (ra!(), rb!(), rc!());
+            w!(
+                sp4(a, b, c, fma_ok, |x, y, z| x * y + z).unwrap_or_else(|| fl3(
+                    core,
+                    a,
+                    b,
+                    c,
+                    float::fma_flags
+                ))
+            )
+        }
+        Fms => {
+            let (a, b, c) = (ra!(), rb!(), rc!());
+            w!(
+                sp4(a, b, c, fma_ok, |x, y, z| x * y - z).unwrap_or_else(|| fl3(
+                    core,
+                    a,
+                    b,
+                    c,
+                    float::fms_flags
+                ))
+            )
+        }
+        Fnms => {
+            let (a, b, c) = (ra!(), rb!(), rc!());
+            w!(
+                sp4(a, b, c, fma_ok, |x, y, z| z - x * y).unwrap_or_else(|| fl3(
+                    core,
+                    a,
+                    b,
+                    c,
+                    float::fnms_flags
+                ))
+            )
+        }
+        Fceq => w!(zip(ra!(), rb!(), |a, b| mask(float::fceq(a, b)))),
+        Fcgt => w!(zip(ra!(), rb!(), |a, b| mask(float::fcgt(a, b)))),
+        Fcmeq => w!(zip(ra!(), rb!(), |a, b| mask(float::fcmeq(a, b)))),
+        Fcmgt => w!(zip(ra!(), rb!(), |a, b| mask(float::fcmgt(a, b)))),
         Frest => {
             let f = &mut core.fpscr;
-            Some([0, 1, 2, 3].map(|i| float::frest_flags(ra[i], f, i)))
+            w!([0, 1, 2, 3].map(|i| float::frest_flags(ra!()[i], f, i)))
         }
         Frsqest => {
             let f = &mut core.fpscr;
-            Some([0, 1, 2, 3].map(|i| float::frsqest_flags(ra[i], f, i)))
+            w!([0, 1, 2, 3].map(|i| float::frsqest_flags(ra!()[i], f, i)))
         }
-        Fi => Some(zip(ra, rb, float::fi)),
-        Cflts => Some(map(ra, |a| float::cflts(a, imm as u32))),
-        Cfltu => Some(map(ra, |a| float::cfltu(a, imm as u32))),
+        Fi => w!(zip(ra!(), rb!(), float::fi)),
+        Cflts => w!(map(ra!(), |a| float::cflts(a, imm as u32))),
+        Cfltu => w!(map(ra!(), |a| float::cfltu(a, imm as u32))),
         Csflt => {
             let f = &mut core.fpscr;
-            Some([0, 1, 2, 3].map(|i| float::csflt_flags(ra[i], imm as u32, f, i)))
+            w!([0, 1, 2, 3].map(|i| float::csflt_flags(ra!()[i], imm as u32, f, i)))
         }
         Cuflt => {
             let f = &mut core.fpscr;
-            Some([0, 1, 2, 3].map(|i| float::cuflt_flags(ra[i], imm as u32, f, i)))
+            w!([0, 1, 2, 3].map(|i| float::cuflt_flags(ra!()[i], imm as u32, f, i)))
         }
         // ---- double precision
         Dfa | Dfs | Dfm => {
-            let (a, b) = (dwords(ra), dwords(rb));
+            let (a, b) = (dwords(ra!()), dwords(rb!()));
             let f = &mut core.fpscr;
             let op = match inst.op {
                 Dfa => float::dfa,
                 Dfs => float::dfs,
                 _ => float::dfm,
             };
-            Some(from_dwords([op(a[0], b[0], f, 0), op(a[1], b[1], f, 1)]))
+            w!(from_dwords([op(a[0], b[0], f, 0), op(a[1], b[1], f, 1)]))
         }
         Dfma | Dfms | Dfnms | Dfnma => {
-            let (a, b, t) = (dwords(ra), dwords(rb), dwords(rt_old));
+            let (a, b, t) = (dwords(ra!()), dwords(rb!()), dwords(rt_old!()));
             let f = &mut core.fpscr;
             let op = match inst.op {
                 Dfma => float::dfma,
@@ -656,25 +777,25 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
                 Dfnms => float::dfnms,
                 _ => float::dfnma,
             };
-            Some(from_dwords([
+            w!(from_dwords([
                 op(a[0], b[0], t[0], f, 0),
                 op(a[1], b[1], t[1], f, 1),
             ]))
         }
         Fesd => {
             let f = &mut core.fpscr;
-            Some(from_dwords([
-                float::fesd(ra[0], f, 0),
-                float::fesd(ra[2], f, 1),
+            w!(from_dwords([
+                float::fesd(ra!()[0], f, 0),
+                float::fesd(ra!()[2], f, 1),
             ]))
         }
         Frds => {
-            let a = dwords(ra);
+            let a = dwords(ra!());
             let f = &mut core.fpscr;
-            Some([float::frds(a[0], f, 0), 0, float::frds(a[1], f, 1), 0])
+            w!([float::frds(a[0], f, 0), 0, float::frds(a[1], f, 1), 0])
         }
         Dfceq | Dfcmeq | Dfcgt | Dfcmgt => {
-            let (a, b) = (dwords(ra), dwords(rb));
+            let (a, b) = (dwords(ra!()), dwords(rb!()));
             let f = &mut core.fpscr;
             let op = match inst.op {
                 Dfceq => float::dfceq,
@@ -684,15 +805,15 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
             };
             let m0 = op(a[0], b[0], f, 0);
             let m1 = op(a[1], b[1], f, 1);
-            Some(from_dwords([
+            w!(from_dwords([
                 if m0 { u64::MAX } else { 0 },
                 if m1 { u64::MAX } else { 0 },
             ]))
         }
         Dftsv => {
-            let a = dwords(ra);
+            let a = dwords(ra!());
             let u = imm as u32 & 0x7f;
-            Some(from_dwords(a.map(|x| {
+            w!(from_dwords(a.map(|x| {
                 if float::dftsv(x, u) {
                     u64::MAX
                 } else {
@@ -700,10 +821,9 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
                 }
             })))
         }
-        Fscrrd => Some(core.fpscr.read()),
+        Fscrrd => w!(core.fpscr.read()),
         Fscrwr => {
-            core.fpscr.write(ra);
-            None
+            core.fpscr.write(ra!());
         }
         // ---- branches
         Br | Bra | Brsl | Brasl => {
@@ -718,13 +838,12 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
                 target,
             };
             if matches!(inst.op, Brsl | Brasl) {
-                Some([next, 0, 0, 0])
+                w!([next, 0, 0, 0])
             } else {
-                None
             }
         }
         Brz | Brnz | Brhz | Brhnz => {
-            let t = rt_old[0];
+            let t = rt_old!()[0];
             let taken = match inst.op {
                 Brz => t == 0,
                 Brnz => t != 0,
@@ -735,7 +854,6 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
                 taken,
                 target: pc.wrapping_add((imm << 2) as u32) & LS_MASK & !3,
             };
-            None
         }
         Bi | Bisl | Biz | Binz | Bihz | Bihnz | Iret | Bisled => {
             let fb = inst.feature_bits();
@@ -744,24 +862,23 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
             } else if fb & 0x10 != 0 {
                 core.interrupts_enabled = true;
             }
-            let t = rt_old[0];
+            let t = rt_old!()[0];
             let (taken, target) = match inst.op {
                 Iret => (true, core.srr0),
-                Bisled => (core.event_pending, ra[0]),
-                Biz => (t == 0, ra[0]),
-                Binz => (t != 0, ra[0]),
-                Bihz => (t & 0xffff == 0, ra[0]),
-                Bihnz => (t & 0xffff != 0, ra[0]),
-                _ => (true, ra[0]),
+                Bisled => (core.event_pending, ra!()[0]),
+                Biz => (t == 0, ra!()[0]),
+                Binz => (t != 0, ra!()[0]),
+                Bihz => (t & 0xffff == 0, ra!()[0]),
+                Bihnz => (t & 0xffff != 0, ra!()[0]),
+                _ => (true, ra!()[0]),
             };
             effect = Effect::Branch {
                 taken,
                 target: target & LS_MASK & !3,
             };
             if matches!(inst.op, Bisl | Bisled) {
-                Some([next, 0, 0, 0])
+                w!([next, 0, 0, 0])
             } else {
-                None
             }
         }
         Hbr | Hbra | Hbrr => {
@@ -770,7 +887,7 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
             }
             let branch = pc.wrapping_add((inst.hint_offset() << 2) as u32) & LS_MASK;
             let target = match inst.op {
-                Hbr => ra[0],
+                Hbr => ra!()[0],
                 Hbra => (imm << 2) as u32,
                 _ => pc.wrapping_add((imm << 2) as u32),
             } & LS_MASK
@@ -779,9 +896,9 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         }
         // ---- halts and stops
         Heq | Heqi | Hgt | Hgti | Hlgt | Hlgti => {
-            let a = ra[0];
+            let a = ra!()[0];
             let b = if matches!(inst.op, Heq | Hgt | Hlgt) {
-                rb[0]
+                rb!()[0]
             } else {
                 imm as u32
             };
@@ -793,19 +910,82 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
             return if halt { Effect::Halt } else { Effect::Next };
         }
         Stop | Stopd => return Effect::Stop((inst.word & 0x3fff) as u16),
-        Nop | Lnop | Sync | Dsync => None,
-        Mfspr => Some([0; 4]),
-        Mtspr => None,
+        Nop | Lnop | Sync | Dsync => {}
+        Mfspr => w!([0; 4]),
+        Mtspr => {}
         Rdch | Wrch | Rchcnt => return Effect::Channel,
         Unknown => return Effect::Illegal,
-    };
-    if let Some(v) = result {
-        core.regs[inst.rt as usize] = v;
     }
     effect
 }
 
-fn fl2(core: &mut Core, a: Reg, b: Reg, f: fn(u32, u32, &mut float::Fpscr, usize) -> u32) -> Reg {
+// Four-lane fast path for the single-precision arithmetic (the argument of the float
+// unit's own fast paths): when every operand is normal (exponent 1..254) and the exact
+// result needs at most 53 bits, f64 arithmetic on the operands is exact, and truncating a
+// result in the normal range toward zero is dropping its low bits; a zero result is +0.
+// No flag can arise on that path. If any lane falls outside it, all four lanes take
+// `float`'s exact per-lane functions, which also raise the flags.
+
+#[inline(always)]
+fn sp_exp(x: u32) -> u32 {
+    (x >> 23) & 0xff
+}
+#[inline(always)]
+fn sp_normal(x: u32) -> bool {
+    sp_exp(x).wrapping_sub(1) < 254
+}
+#[inline(always)]
+fn add_ok(a: u32, b: u32, _: u32) -> bool {
+    // 24-bit significands at most 28 binades apart: the sum needs at most 53 bits.
+    sp_normal(a) & sp_normal(b) & (sp_exp(a).abs_diff(sp_exp(b)) <= 28)
+}
+#[inline(always)]
+fn mul_ok(a: u32, b: u32, _: u32) -> bool {
+    sp_normal(a) & sp_normal(b)
+}
+#[inline(always)]
+fn fma_ok(a: u32, b: u32, c: u32) -> bool {
+    // The product's 48 bits start at binade ea+eb-300, the addend's 24 at ec-150.
+    let lsb_p = sp_exp(a) as i32 + sp_exp(b) as i32 - 300;
+    let lsb_c = sp_exp(c) as i32 - 150;
+    let hi = (lsb_p + 48).max(lsb_c + 24);
+    sp_normal(a) & sp_normal(b) & sp_normal(c) & (hi - lsb_p.min(lsb_c) <= 52)
+}
+
+#[inline(always)]
+fn sp4(
+    a: Reg,
+    b: Reg,
+    c: Reg,
+    ok: impl Fn(u32, u32, u32) -> bool,
+    f: impl Fn(f64, f64, f64) -> f64,
+) -> Option<Reg> {
+    let mut out = [0u32; 4];
+    let mut good = true;
+    for i in 0..4 {
+        let x = f32::from_bits(a[i]) as f64;
+        let y = f32::from_bits(b[i]) as f64;
+        let z = f32::from_bits(c[i]) as f64;
+        let r = f(x, y, z);
+        let bits = r.to_bits();
+        let e = ((bits >> 52) & 0x7ff) as i32 - 1023 + 127;
+        let zero = r == 0.0;
+        good &= ok(a[i], b[i], c[i]) & (zero | (e >= 1) & (e <= 254));
+        let v = ((bits >> 63) as u32) << 31
+            | (e as u32 & 0xff) << 23
+            | ((bits >> 29) as u32 & 0x7f_ffff);
+        out[i] = if zero { 0 } else { v };
+    }
+    good.then_some(out)
+}
+
+#[inline(always)]
+fn fl2(
+    core: &mut Core,
+    a: Reg,
+    b: Reg,
+    f: impl Fn(u32, u32, &mut float::Fpscr, usize) -> u32,
+) -> Reg {
     let s = &mut core.fpscr;
     [
         f(a[0], b[0], s, 0),
@@ -815,12 +995,13 @@ fn fl2(core: &mut Core, a: Reg, b: Reg, f: fn(u32, u32, &mut float::Fpscr, usize
     ]
 }
 
+#[inline(always)]
 fn fl3(
     core: &mut Core,
     a: Reg,
     b: Reg,
     c: Reg,
-    f: fn(u32, u32, u32, &mut float::Fpscr, usize) -> u32,
+    f: impl Fn(u32, u32, u32, &mut float::Fpscr, usize) -> u32,
 ) -> Reg {
     let s = &mut core.fpscr;
     [

@@ -438,6 +438,14 @@ impl Spu {
     /// is only read; writes wait for [`apply_quantum`].
     pub fn run_quantum(&mut self, memory: &MainMemory, until: u64) -> Option<StopReason> {
         while self.cycle < until {
+            if self.timing.is_none() {
+                self.run_fast(until);
+                if self.cycle >= until {
+                    break;
+                }
+            }
+            // One instruction the fast loop leaves to this general path (channels, stops,
+            // halts, illegal words), or any instruction with the timing model on.
             let pc = self.pc;
             let inst = self.fetch(pc);
             let issue = match &mut self.timing {
@@ -525,6 +533,51 @@ impl Spu {
             };
         }
         None
+    }
+
+    /// The timing-off inner loop: one cycle per instruction, pre-decoded words, no
+    /// per-instruction bookkeeping beyond the program counter. It runs until `until` or
+    /// the first instruction that needs the SPU around the core (a channel, stop, halt or
+    /// illegal word), which it leaves unexecuted for the general path; those have no
+    /// effect on the core before that point.
+    #[inline(never)]
+    fn run_fast(&mut self, until: u64) {
+        let budget = until.saturating_sub(self.cycle);
+        let mut pc = self.pc;
+        let mut done = 0u64;
+        let core = &mut self.core;
+        let decoded = &mut self.decoded[..];
+        while done < budget {
+            let w = (pc >> 2) as usize & (LS_SIZE / 4 - 1);
+            let mut inst = decoded[w];
+            if inst.op == Op::Unknown {
+                if inst.word != STALE.word {
+                    break;
+                }
+                let b = &core.ls[4 * w..4 * w + 4];
+                inst = decode(u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
+                decoded[w] = inst;
+                if inst.op == Op::Unknown {
+                    break;
+                }
+            }
+            match execute(core, inst, pc) {
+                Effect::Next | Effect::Hint { .. } => pc = (pc + 4) & LS_MASK,
+                Effect::Branch { taken, target } => {
+                    pc = if taken { target } else { (pc + 4) & LS_MASK }
+                }
+                Effect::Store { addr } => {
+                    let s = (addr & LS_MASK) as usize / 4;
+                    decoded[s..s + 4].fill(STALE);
+                    pc = (pc + 4) & LS_MASK;
+                }
+                _ => break,
+            }
+            done += 1;
+        }
+        self.pc = pc;
+        self.instructions += done;
+        self.cycle += done;
     }
 
     fn finish(&mut self, issue: u64) {
