@@ -111,7 +111,10 @@ pub struct Core {
     pub fpscr: float::Fpscr,
     pub interrupts_enabled: bool,
     pub srr0: u32,
+    /// Whether SPU_RdEventStat has a count (for `bisled`), valid while
+    /// `event_pending_known` is set by the SPU around that one instruction.
     pub event_pending: bool,
+    pub event_pending_known: bool,
 }
 
 /// Local store size and the mask that wraps addresses into it.
@@ -151,6 +154,7 @@ impl Core {
             interrupts_enabled: false,
             srr0: 0,
             event_pending: false,
+            event_pending_known: false,
         }
     }
 
@@ -856,6 +860,10 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
             };
         }
         Bi | Bisl | Biz | Binz | Bihz | Bihnz | Iret | Bisled => {
+            if inst.op == Bisled && !core.event_pending_known {
+                // The event state lives in the SPU around the core: let it decide.
+                return Effect::Channel;
+            }
             let fb = inst.feature_bits();
             if fb & 0x20 != 0 {
                 core.interrupts_enabled = false;

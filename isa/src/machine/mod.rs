@@ -150,16 +150,31 @@ pub mod ch {
     pub const WR_OUT_INTR_MBOX: u8 = 30;
 }
 
-/// Event bits of SPU_RdEventStat.
+/// Event bits of SPU_RdEventStat, SPU_WrEventMask and SPU_WrEventAck (the values of the
+/// SDK's `spu_mfcio.h`).
 pub mod event {
-    pub const LR: u32 = 0x400; // lock-line reservation lost
+    /// Multisource synchronisation (accepted in the mask, never raised here).
+    pub const MULTI_SRC_SYNC: u32 = 0x1000;
+    /// Privileged attention (never raised here).
+    pub const PRIV_ATTN: u32 = 0x800;
+    /// Lock-line reservation lost.
+    pub const LR: u32 = 0x400;
     pub const SIGNAL1: u32 = 0x200;
     pub const SIGNAL2: u32 = 0x100;
-    pub const OUT_INTR_MBOX: u32 = 0x20;
-    pub const OUT_MBOX: u32 = 0x10;
-    pub const TAG_GROUP: u32 = 0x8;
-    pub const IN_MBOX: u32 = 0x4;
+    /// The outbound mailbox became available (the host read it).
+    pub const OUT_MBOX: u32 = 0x80;
+    /// The outbound interrupt mailbox became available.
+    pub const OUT_INTR_MBOX: u32 = 0x40;
+    /// The decrementer went from 0 to -1.
+    pub const DECREMENTER: u32 = 0x20;
+    /// The inbound mailbox holds a value.
+    pub const IN_MBOX: u32 = 0x10;
+    /// The MFC command queue has a free slot (never raised here: a full queue stalls).
+    pub const QUEUE_VACANCY: u32 = 0x8;
+    /// A DMA list element with stall-and-notify completed.
     pub const LIST_STALL: u32 = 0x2;
+    /// A tag-status update request (any/all) is satisfied.
+    pub const TAG_GROUP: u32 = 0x1;
 }
 
 #[derive(Clone, Debug)]
@@ -207,9 +222,12 @@ pub struct Spu {
     pub host_feeds: bool,
     dec_value: u32,
     dec_written_at: u64,
+    /// When the decrementer goes from 0 to -1 (raising its event), if it will.
+    dec_event_at: Option<u64>,
+    /// Cycles per decrementer tick (the timebase); 1 unless the host sets it.
+    pub decrementer_cycles_per_tick: u64,
     event_mask: u32,
     event_status: u32,
-    srr0: u32,
     // MFC
     lsa: u32,
     eah: u32,
@@ -272,9 +290,10 @@ impl Spu {
             host_feeds: false,
             dec_value: 0,
             dec_written_at: 0,
+            dec_event_at: None,
+            decrementer_cycles_per_tick: 1,
             event_mask: 0,
             event_status: 0,
-            srr0: 0,
             lsa: 0,
             eah: 0,
             eal: 0,
@@ -390,10 +409,35 @@ impl Spu {
         true
     }
     pub fn read_outbound_mailbox(&mut self) -> Option<u32> {
-        self.out_mbox.take()
+        let v = self.out_mbox.take();
+        if v.is_some() {
+            self.event_status |= event::OUT_MBOX;
+        }
+        v
     }
     pub fn read_outbound_interrupt_mailbox(&mut self) -> Option<u32> {
-        self.out_intr_mbox.take()
+        let v = self.out_intr_mbox.take();
+        if v.is_some() {
+            self.event_status |= event::OUT_INTR_MBOX;
+        }
+        v
+    }
+    /// Entries waiting in the inbound mailbox (0..4).
+    pub fn inbound_mailbox_len(&self) -> usize {
+        self.in_mbox.len()
+    }
+    /// Pending events (SPU_RdEventStat before the mask).
+    pub fn event_status(&self) -> u32 {
+        self.event_status
+    }
+    /// The interrupt-enable bit (set by the E forms of the indirect branches, cleared by
+    /// the D forms and when an interrupt is taken).
+    pub fn interrupts_enabled(&self) -> bool {
+        self.core.interrupts_enabled
+    }
+    /// SRR0: where `iret` returns to (SPU_WrSRR0 / SPU_RdSRR0; an interrupt sets it).
+    pub fn srr0(&self) -> u32 {
+        self.core.srr0
     }
     /// Host (or another SPU's `sndsig`) writes a signal-notification register (0 or 1).
     pub fn write_signal(&mut self, which: usize, value: u32) {
@@ -445,14 +489,32 @@ impl Spu {
                 }
             }
             // One instruction the fast loop leaves to this general path (channels, stops,
-            // halts, illegal words), or any instruction with the timing model on.
+            // halts, illegal words, `bisled`, anything while interrupts are enabled), or
+            // any instruction with the timing model on.
+            if self.core.interrupts_enabled {
+                self.update_events(self.cycle);
+                if self.event_status & self.event_mask != 0 {
+                    // The SPU interrupt: SRR0 gets the next instruction's address,
+                    // interrupts are disabled and execution continues at 0.
+                    self.core.srr0 = self.pc;
+                    self.core.interrupts_enabled = false;
+                    self.pc = 0;
+                }
+            }
             let pc = self.pc;
             let inst = self.fetch(pc);
+            if inst.op == Op::Bisled {
+                self.update_events(self.cycle);
+                self.core.event_pending = self.event_status & self.event_mask != 0;
+                self.core.event_pending_known = true;
+            }
             let issue = match &mut self.timing {
                 Some(t) => t.issue(pc, inst),
                 None => self.cycle,
             };
-            match execute(&mut self.core, inst, pc) {
+            let effect = execute(&mut self.core, inst, pc);
+            self.core.event_pending_known = false;
+            match effect {
                 Effect::Next => self.pc = (pc + 4) & LS_MASK,
                 Effect::Branch { taken, target } => {
                     if let Some(t) = &mut self.timing {
@@ -542,6 +604,9 @@ impl Spu {
     /// effect on the core before that point.
     #[inline(never)]
     fn run_fast(&mut self, until: u64) {
+        if self.core.interrupts_enabled {
+            return;
+        }
         let budget = until.saturating_sub(self.cycle);
         let mut pc = self.pc;
         let mut done = 0u64;
@@ -564,7 +629,11 @@ impl Spu {
             match execute(core, inst, pc) {
                 Effect::Next | Effect::Hint { .. } => pc = (pc + 4) & LS_MASK,
                 Effect::Branch { taken, target } => {
-                    pc = if taken { target } else { (pc + 4) & LS_MASK }
+                    pc = if taken { target } else { (pc + 4) & LS_MASK };
+                    if core.interrupts_enabled {
+                        done += 1;
+                        break;
+                    }
                 }
                 Effect::Store { addr } => {
                     let s = (addr & LS_MASK) as usize / 4;
@@ -600,8 +669,28 @@ impl Spu {
                 i += 1;
             }
         }
-        if self.tag_done_mask() & self.tag_mask != 0 {
-            self.event_status |= event::TAG_GROUP;
+        if let Some(mode) = self.tag_update {
+            let done = self.tag_done_mask() & self.tag_mask;
+            let satisfied = match mode {
+                1 => done != 0 || self.tag_mask == 0,
+                2 => done == self.tag_mask,
+                _ => true,
+            };
+            if satisfied {
+                self.event_status |= event::TAG_GROUP;
+            }
+        }
+    }
+
+    /// Brings time-driven state up to `now`: completed DMA (and the tag-group event) and
+    /// the decrementer event.
+    fn update_events(&mut self, now: u64) {
+        self.complete_dma(now);
+        if let Some(t) = self.dec_event_at {
+            if t <= now {
+                self.event_status |= event::DECREMENTER;
+                self.dec_event_at = None;
+            }
         }
     }
 
@@ -630,12 +719,20 @@ impl Spu {
 
     fn read_channel(&mut self, channel: u8, now: u64) -> Result<u32, ChannelOutcome> {
         use ch::*;
-        self.complete_dma(now);
+        self.update_events(now);
         Ok(match channel {
             RD_EVENT_STAT => {
                 let pending = self.event_status & self.event_mask;
                 if pending == 0 {
-                    return Err(match self.queue.iter().map(|c| c.complete).min() {
+                    let dec = self
+                        .dec_event_at
+                        .filter(|_| self.event_mask & event::DECREMENTER != 0);
+                    let dma = self.queue.iter().map(|c| c.complete).min();
+                    let next = match (dma, dec) {
+                        (Some(a), Some(b)) => Some(a.min(b)),
+                        (a, b) => a.or(b),
+                    };
+                    return Err(match next {
                         Some(t) => ChannelOutcome::WaitUntil(t),
                         None if self.atomic_pending => ChannelOutcome::WaitBoundary,
                         None if self.host_feeds => ChannelOutcome::Host,
@@ -657,13 +754,15 @@ impl Spu {
                     }
                 }
             }
-            RD_DEC => self
-                .dec_value
-                .wrapping_sub((now - self.dec_written_at) as u32),
+            RD_DEC => self.dec_value.wrapping_sub(
+                (now.saturating_sub(self.dec_written_at) / self.decrementer_cycles_per_tick.max(1))
+                    as u32,
+            ),
             RD_EVENT_MASK => self.event_mask,
             RD_TAG_MASK => self.tag_mask,
-            RD_MACH_STAT => 0,
-            RD_SRR0 => self.srr0,
+            // Bit 0: interrupts enabled (not in isolation mode: bit 1 clear).
+            RD_MACH_STAT => self.core.interrupts_enabled as u32,
+            RD_SRR0 => self.core.srr0,
             RD_TAG_STAT => {
                 let Some(mode) = self.tag_update.take() else {
                     return Err(ChannelOutcome::Never);
@@ -718,7 +817,7 @@ impl Spu {
 
     fn channel_count(&mut self, channel: u8, now: u64) -> u32 {
         use ch::*;
-        self.complete_dma(now);
+        self.update_events(now);
         match channel {
             RD_IN_MBOX => self.in_mbox.len() as u32,
             WR_OUT_MBOX => self.out_mbox.is_none() as u32,
@@ -770,15 +869,17 @@ impl Spu {
         memory: &MainMemory,
     ) -> ChannelOutcome {
         use ch::*;
-        self.complete_dma(now);
+        self.update_events(now);
         match channel {
             WR_EVENT_MASK => self.event_mask = v,
             WR_EVENT_ACK => self.event_status &= !v,
             WR_DEC => {
                 self.dec_value = v;
                 self.dec_written_at = now;
+                let tick = self.decrementer_cycles_per_tick.max(1);
+                self.dec_event_at = Some(now + (v as u64 + 1) * tick);
             }
-            WR_SRR0 => self.srr0 = v,
+            WR_SRR0 => self.core.srr0 = v,
             LSA => self.lsa = v,
             EAH => self.eah = v,
             EAL => self.eal = v,
