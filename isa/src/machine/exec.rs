@@ -161,17 +161,15 @@ impl Core {
     #[inline(always)]
     pub fn load_quad(&self, addr: u32) -> Reg {
         let a = (addr & LS_MASK & !15) as usize;
-        let b = &self.ls[a..a + 16];
-        let w = |i: usize| u32::from_be_bytes([b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]]);
-        [w(0), w(1), w(2), w(3)]
+        let q: [u8; 16] = self.ls[a..a + 16].try_into().unwrap();
+        from_u128(u128::from_be_bytes(q))
     }
 
     #[inline(always)]
     pub fn store_quad(&mut self, addr: u32, v: Reg) -> u32 {
         let a = (addr & LS_MASK & !15) as usize;
-        for i in 0..4 {
-            self.ls[a + 4 * i..a + 4 * i + 4].copy_from_slice(&v[i].to_be_bytes());
-        }
+        let q: &mut [u8; 16] = (&mut self.ls[a..a + 16]).try_into().unwrap();
+        *q = to_u128(v).to_be_bytes();
         a as u32
     }
 }
@@ -257,30 +255,36 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
     use Op::*;
     // Operands are read where an operation uses them and each operation writes its own
     // result, so a result computed in vector registers is stored straight from them.
+    let (i_ra, i_rb, i_rc, i_rt) = (
+        inst.ra as usize & 127,
+        inst.rb as usize & 127,
+        inst.rc as usize & 127,
+        inst.rt as usize & 127,
+    );
     macro_rules! ra {
         () => {
-            core.regs[inst.ra as usize & 127]
+            core.regs[i_ra]
         };
     }
     macro_rules! rb {
         () => {
-            core.regs[inst.rb as usize & 127]
+            core.regs[i_rb]
         };
     }
     macro_rules! rc {
         () => {
-            core.regs[inst.rc as usize & 127]
+            core.regs[i_rc]
         };
     }
     macro_rules! rt_old {
         () => {
-            core.regs[inst.rt as usize & 127]
+            core.regs[i_rt]
         };
     }
     macro_rules! w {
         ($e:expr $(,)?) => {{
             let v: Reg = $e;
-            put(&mut core.regs, inst.rt, v)
+            put(&mut core.regs, i_rt as u8, v)
         }};
     }
     let imm = inst.imm;
@@ -614,7 +618,10 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         }
         // ---- gather and form select masks
         Gb => w!([
-            (0..4).fold(0, |m, i| m | ((ra!()[i] & 1) << (3 - i))),
+            {
+                let a = ra!();
+                (0..4).fold(0, |m, i| m | ((a[i] & 1) << (3 - i)))
+            },
             0,
             0,
             0
@@ -636,7 +643,10 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
                 0,
             ])
         }
-        Fsm => w!([0, 1, 2, 3].map(|i| mask(ra!()[0] & (8 >> i) != 0))),
+        Fsm => {
+            let m = ra!()[0];
+            w!([0, 1, 2, 3].map(|i| mask(m & (8 >> i) != 0)))
+        }
         Fsmh => {
             let m = ra!()[0];
             w!([0, 1, 2, 3].map(|i| {
@@ -744,22 +754,34 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         Fcmgt => w!(zip(ra!(), rb!(), |a, b| mask(float::fcmgt(a, b)))),
         Frest => {
             let f = &mut core.fpscr;
-            w!([0, 1, 2, 3].map(|i| float::frest_flags(ra!()[i], f, i)))
+            {
+                let a = ra!();
+                w!([0, 1, 2, 3].map(|i| float::frest_flags(a[i], f, i)))
+            }
         }
         Frsqest => {
             let f = &mut core.fpscr;
-            w!([0, 1, 2, 3].map(|i| float::frsqest_flags(ra!()[i], f, i)))
+            {
+                let a = ra!();
+                w!([0, 1, 2, 3].map(|i| float::frsqest_flags(a[i], f, i)))
+            }
         }
         Fi => w!(zip(ra!(), rb!(), float::fi)),
         Cflts => w!(map(ra!(), |a| float::cflts(a, imm as u32))),
         Cfltu => w!(map(ra!(), |a| float::cfltu(a, imm as u32))),
         Csflt => {
             let f = &mut core.fpscr;
-            w!([0, 1, 2, 3].map(|i| float::csflt_flags(ra!()[i], imm as u32, f, i)))
+            {
+                let a = ra!();
+                w!([0, 1, 2, 3].map(|i| float::csflt_flags(a[i], imm as u32, f, i)))
+            }
         }
         Cuflt => {
             let f = &mut core.fpscr;
-            w!([0, 1, 2, 3].map(|i| float::cuflt_flags(ra!()[i], imm as u32, f, i)))
+            {
+                let a = ra!();
+                w!([0, 1, 2, 3].map(|i| float::cuflt_flags(a[i], imm as u32, f, i)))
+            }
         }
         // ---- double precision
         Dfa | Dfs | Dfm => {

@@ -602,8 +602,35 @@ impl Spu {
     /// the first instruction that needs the SPU around the core (a channel, stop, halt or
     /// illegal word), which it leaves unexecuted for the general path; those have no
     /// effect on the core before that point.
-    #[inline(never)]
     fn run_fast(&mut self, until: u64) {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2")
+            && std::is_x86_feature_detected!("bmi2")
+            && std::is_x86_feature_detected!("lzcnt")
+            && std::is_x86_feature_detected!("popcnt")
+        {
+            // SAFETY: the features were just detected on this CPU.
+            unsafe { self.run_fast_avx2(until) };
+            return;
+        }
+        self.run_fast_generic(until)
+    }
+
+    /// The same loop compiled for AVX2-class x86_64 (byte shuffles for the big-endian
+    /// loads, stores and `shufb`, `lzcnt`, `popcnt`), chosen at run time.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt,sse4.1,ssse3")]
+    unsafe fn run_fast_avx2(&mut self, until: u64) {
+        self.run_fast_body(until)
+    }
+
+    #[inline(never)]
+    fn run_fast_generic(&mut self, until: u64) {
+        self.run_fast_body(until)
+    }
+
+    #[inline(always)]
+    fn run_fast_body(&mut self, until: u64) {
         if self.core.interrupts_enabled {
             return;
         }
@@ -614,17 +641,20 @@ impl Spu {
         let decoded = &mut self.decoded[..];
         while done < budget {
             let w = (pc >> 2) as usize & (LS_SIZE / 4 - 1);
-            let mut inst = decoded[w];
+            let inst = decoded[w];
             if inst.op == Op::Unknown {
                 if inst.word != STALE.word {
                     break;
                 }
+                // Decode the stale word and take it again from the array (one path
+                // into the dispatch keeps the instruction in registers).
                 let b = &core.ls[4 * w..4 * w + 4];
-                inst = decode(u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
-                decoded[w] = inst;
-                if inst.op == Op::Unknown {
+                let fresh = decode(u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
+                decoded[w] = fresh;
+                if fresh.op == Op::Unknown {
                     break;
                 }
+                continue;
             }
             match execute(core, inst, pc) {
                 Effect::Next | Effect::Hint { .. } => pc = (pc + 4) & LS_MASK,
