@@ -400,3 +400,51 @@ fn channel_counts() {
     assert_eq!(spu.reg(4), [1, 0, 0, 0]);
     assert_eq!(spu.reg(5), [16, 0, 0, 0]);
 }
+
+#[test]
+fn dma_errors_report_the_command_and_its_operands() {
+    // The stop names the command and the LS address, EA, size and tag it carried.
+    match dma_error(0x8004, 0x1000, 32, 3, 0x42) {
+        StopReason::DmaError {
+            pc,
+            cmd,
+            lsa,
+            ea,
+            size,
+            tag,
+            reason,
+        } => {
+            assert_eq!((cmd, lsa, ea, size, tag), (0x42, 0x8004, 0x1000, 32, 3));
+            // The twelfth instruction of `dma` is the wrch to MFC_Cmd.
+            assert_eq!(pc, 0x2c);
+            assert!(reason.contains("low 4 bits"), "{reason}");
+        }
+        other => panic!("{other:?}"),
+    }
+    match dma_error(0x8000, 0x1000, 16, 40, 0x20) {
+        StopReason::DmaError { tag, cmd, .. } => assert_eq!((tag, cmd), (40, 0x20)),
+        other => panic!("{other:?}"),
+    }
+    // A list whose second element reaches past main memory: the element is reported.
+    // Elements: (16 bytes from EA 0x200), (64 bytes from EA 0xfff0).
+    let words = [16u32, 0x200, 64, 0xfff0];
+    let mut spu = load(&(dma(0x8000, 0x7000, 16, 6, 0x44)));
+    for (i, w) in words.iter().enumerate() {
+        spu.write_ls(0x7000 + 4 * i as u32, &w.to_be_bytes());
+    }
+    match spu.run(&mut memory(), 1_000_000) {
+        StopReason::DmaError {
+            cmd,
+            lsa,
+            ea,
+            size,
+            tag,
+            reason,
+            ..
+        } => {
+            assert_eq!((cmd, lsa, ea, size, tag), (0x44, 0x8010, 0xfff0, 64, 6));
+            assert!(reason.contains("list element at 0x7008"), "{reason}");
+        }
+        other => panic!("{other:?}"),
+    }
+}

@@ -11,6 +11,20 @@
 //! boundary, so an SPU waiting on `MFC_RdAtomicStat` for it waits until then. The outcome
 //! depends only on simulated time, never on which host thread ran which SPU.
 //!
+//! # Channels, events and interrupts
+//! Reading an empty channel or writing a full one waits: until the next DMA completion or
+//! decrementer event when one will make it ready, until the next quantum boundary for a
+//! `putllc` outcome, otherwise the SPU stops with [`StopReason::Blocked`] (the host can
+//! fill a mailbox or signal and run it again; [`Spu::run`] turns that into
+//! [`StopReason::Deadlock`] unless [`Spu::host_feeds`] is set). Event bits are those of
+//! the SDK's `spu_mfcio.h` ([`event`]); the decrementer counts down one tick every
+//! [`Spu::decrementer_cycles_per_tick`] cycles and raises its event when it goes from 0
+//! to -1. With interrupts enabled (the E forms of the indirect branches) an enabled
+//! pending event interrupts before the next instruction: SRR0 gets its address,
+//! interrupts are disabled and execution continues at 0; `iret` returns to SRR0.
+//! `sndsig`/`sndsigb`/`sndsigf` and `barrier`/`eieio`/`sync` are accepted and do nothing
+//! (commands complete in order here, so fences and barriers are already honoured).
+//!
 //! # DMA timing
 //! One DMA engine per SPU moves one command at a time: a command completes at
 //! `max(issue + latency, previous completion) + bytes / bytes-per-cycle`. With the timing
@@ -84,8 +98,16 @@ pub enum StopReason {
         pc: u32,
         word: u32,
     },
+    /// An MFC command the hardware would reject: the command, the local-store address,
+    /// effective address, size and tag it was issued with (for a list, those of the
+    /// offending element), and why.
     DmaError {
         pc: u32,
+        cmd: u8,
+        lsa: u32,
+        ea: u64,
+        size: u32,
+        tag: u32,
         reason: String,
     },
     /// Blocked on a channel nothing will ever make ready.
@@ -108,7 +130,18 @@ impl std::fmt::Display for StopReason {
             StopReason::IllegalInstruction { pc, word } => {
                 write!(f, "illegal instruction {word:#010x} at {pc:#x}")
             }
-            StopReason::DmaError { pc, reason } => write!(f, "DMA error at {pc:#x}: {reason}"),
+            StopReason::DmaError {
+                pc,
+                cmd,
+                lsa,
+                ea,
+                size,
+                tag,
+                reason,
+            } => write!(
+                f,
+                "DMA error at {pc:#x}: {reason} (command {cmd:#x}, LS {lsa:#x}, EA {ea:#x}, size {size}, tag {tag})"
+            ),
             StopReason::Deadlock { pc, channel } => {
                 write!(f, "deadlock at {pc:#x} on channel {channel}")
             }
@@ -246,6 +279,8 @@ pub struct Spu {
     writes: Vec<LoggedWrite>,
     seq: u64,
     timing_config: TimingConfig,
+    /// The command being issued, for a DmaError: (cmd, lsa, ea, size, tag).
+    dma_ctx: (u8, u32, u64, u32, u32),
 }
 
 /// The marker of a stale pre-decoded word: `Unknown` carrying a word that is not unknown
@@ -311,6 +346,7 @@ impl Spu {
             writes: Vec::new(),
             seq: 0,
             timing_config: TimingConfig::default(),
+            dma_ctx: (0, 0, 0, 0, 0),
         }
     }
 
@@ -584,7 +620,16 @@ impl Spu {
                     }
                     ChannelOutcome::Error(reason) => {
                         self.finish(issue);
-                        return Some(StopReason::DmaError { pc, reason });
+                        let (cmd, lsa, ea, size, tag) = self.dma_ctx;
+                        return Some(StopReason::DmaError {
+                            pc,
+                            cmd,
+                            lsa,
+                            ea,
+                            size,
+                            tag,
+                            reason,
+                        });
                     }
                 },
             }
@@ -602,30 +647,8 @@ impl Spu {
     /// the first instruction that needs the SPU around the core (a channel, stop, halt or
     /// illegal word), which it leaves unexecuted for the general path; those have no
     /// effect on the core before that point.
-    fn run_fast(&mut self, until: u64) {
-        #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx2")
-            && std::is_x86_feature_detected!("bmi2")
-            && std::is_x86_feature_detected!("lzcnt")
-            && std::is_x86_feature_detected!("popcnt")
-        {
-            // SAFETY: the features were just detected on this CPU.
-            unsafe { self.run_fast_avx2(until) };
-            return;
-        }
-        self.run_fast_generic(until)
-    }
-
-    /// The same loop compiled for AVX2-class x86_64 (byte shuffles for the big-endian
-    /// loads, stores and `shufb`, `lzcnt`, `popcnt`), chosen at run time.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt,sse4.1,ssse3")]
-    unsafe fn run_fast_avx2(&mut self, until: u64) {
-        self.run_fast_body(until)
-    }
-
     #[inline(never)]
-    fn run_fast_generic(&mut self, until: u64) {
+    fn run_fast(&mut self, until: u64) {
         self.run_fast_body(until)
     }
 
@@ -1000,6 +1023,13 @@ impl Spu {
 
     fn mfc_command(&mut self, cmd: u32, now: u64, memory: &MainMemory) -> ChannelOutcome {
         let tag = self.tag_id;
+        self.dma_ctx = (
+            cmd as u8,
+            self.lsa,
+            ((self.eah as u64) << 32) | self.eal as u64,
+            self.size,
+            tag,
+        );
         if tag > 31 && !matches!(cmd, 0xd0 | 0xb4 | 0xb0 | 0xb8) {
             return ChannelOutcome::Error(format!("tag {tag} is out of range 0..31"));
         }
@@ -1143,6 +1173,7 @@ impl Spu {
             );
             let size = e0 & 0x7fff;
             let ea = ((eah as u64) << 32) | e1 as u64;
+            self.dma_ctx = (cmd, lsa, ea, size, tag as u32);
             if let Err(e) = self.check_transfer(lsa, ea, size, memory) {
                 return ChannelOutcome::Error(format!("list element at {list:#x}: {e}"));
             }
