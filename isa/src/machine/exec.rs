@@ -687,35 +687,41 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         // ---- single precision
         Fa => {
             let (a, b) = (ra!(), rb!());
-            w!(sp4(a, b, b, add_ok, |x, y, _| x + y).unwrap_or_else(|| fl2(
-                core,
-                a,
-                b,
-                float::fa_flags
-            )))
+            w!(
+                sp4(a, b, b, normal2, |x, y, _| two_sum(x, y)).unwrap_or_else(|| fl2(
+                    core,
+                    a,
+                    b,
+                    float::fa_flags
+                ))
+            )
         }
         Fs => {
             let (a, b) = (ra!(), rb!());
-            w!(sp4(a, b, b, add_ok, |x, y, _| x - y).unwrap_or_else(|| fl2(
-                core,
-                a,
-                b,
-                float::fs_flags
-            )))
+            w!(
+                sp4(a, b, b, normal2, |x, y, _| two_sum(x, -y)).unwrap_or_else(|| fl2(
+                    core,
+                    a,
+                    b,
+                    float::fs_flags
+                ))
+            )
         }
         Fm => {
             let (a, b) = (ra!(), rb!());
-            w!(sp4(a, b, b, mul_ok, |x, y, _| x * y).unwrap_or_else(|| fl2(
-                core,
-                a,
-                b,
-                float::fm_flags
-            )))
+            w!(
+                sp4(a, b, b, normal2, |x, y, _| (x * y, 0.0)).unwrap_or_else(|| fl2(
+                    core,
+                    a,
+                    b,
+                    float::fm_flags
+                ))
+            )
         }
         Fma => {
             let (a, b, c) = (ra!(), rb!(), rc!());
             w!(
-                sp4(a, b, c, fma_ok, |x, y, z| x * y + z).unwrap_or_else(|| fl3(
+                sp4(a, b, c, normal3, |x, y, z| two_sum(x * y, z)).unwrap_or_else(|| fl3(
                     core,
                     a,
                     b,
@@ -727,7 +733,7 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         Fms => {
             let (a, b, c) = (ra!(), rb!(), rc!());
             w!(
-                sp4(a, b, c, fma_ok, |x, y, z| x * y - z).unwrap_or_else(|| fl3(
+                sp4(a, b, c, normal3, |x, y, z| two_sum(x * y, -z)).unwrap_or_else(|| fl3(
                     core,
                     a,
                     b,
@@ -739,7 +745,7 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         Fnms => {
             let (a, b, c) = (ra!(), rb!(), rc!());
             w!(
-                sp4(a, b, c, fma_ok, |x, y, z| z - x * y).unwrap_or_else(|| fl3(
+                sp4(a, b, c, normal3, |x, y, z| two_sum(z, -(x * y))).unwrap_or_else(|| fl3(
                     core,
                     a,
                     b,
@@ -949,37 +955,33 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
     effect
 }
 
-// Four-lane fast path for the single-precision arithmetic (the argument of the float
-// unit's own fast paths): when every operand is normal (exponent 1..254) and the exact
-// result needs at most 53 bits, f64 arithmetic on the operands is exact, and truncating a
-// result in the normal range toward zero is dropping its low bits; a zero result is +0.
-// No flag can arise on that path. If any lane falls outside it, all four lanes take
-// `float`'s exact per-lane functions, which also raise the flags.
+// Four-lane fast path for the single-precision arithmetic. With every operand normal
+// (exponent 1..254), f64 holds each operand and each product exactly, and an error-free
+// sum (TwoSum) gives the exact result as `s + err` with |err| <= ulp(s)/2. Truncating that
+// toward zero to 24 bits is truncating `s`, except when `s` is itself a single-precision
+// value and `err` points toward zero: then the result is the next single toward zero. A
+// result outside the normal range (overflow, underflow, exponent 255) and any lane with a
+// zero, denormal or exponent-255 operand send all four lanes to `float`'s exact per-lane
+// functions, which also raise the flags; on the fast path no flag can arise.
 
 #[inline(always)]
-fn sp_exp(x: u32) -> u32 {
-    (x >> 23) & 0xff
-}
-#[inline(always)]
 fn sp_normal(x: u32) -> bool {
-    sp_exp(x).wrapping_sub(1) < 254
+    ((x >> 23) & 0xff).wrapping_sub(1) < 254
 }
 #[inline(always)]
-fn add_ok(a: u32, b: u32, _: u32) -> bool {
-    // 24-bit significands at most 28 binades apart: the sum needs at most 53 bits.
-    sp_normal(a) & sp_normal(b) & (sp_exp(a).abs_diff(sp_exp(b)) <= 28)
-}
-#[inline(always)]
-fn mul_ok(a: u32, b: u32, _: u32) -> bool {
+fn normal2(a: u32, b: u32, _: u32) -> bool {
     sp_normal(a) & sp_normal(b)
 }
 #[inline(always)]
-fn fma_ok(a: u32, b: u32, c: u32) -> bool {
-    // The product's 48 bits start at binade ea+eb-300, the addend's 24 at ec-150.
-    let lsb_p = sp_exp(a) as i32 + sp_exp(b) as i32 - 300;
-    let lsb_c = sp_exp(c) as i32 - 150;
-    let hi = (lsb_p + 48).max(lsb_c + 24);
-    sp_normal(a) & sp_normal(b) & sp_normal(c) & (hi - lsb_p.min(lsb_c) <= 52)
+fn normal3(a: u32, b: u32, c: u32) -> bool {
+    sp_normal(a) & sp_normal(b) & sp_normal(c)
+}
+/// Knuth's TwoSum: `s = fl(a + b)` and `err` with `s + err == a + b` exactly.
+#[inline(always)]
+fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
 }
 
 #[inline(always)]
@@ -988,7 +990,7 @@ fn sp4(
     b: Reg,
     c: Reg,
     ok: impl Fn(u32, u32, u32) -> bool,
-    f: impl Fn(f64, f64, f64) -> f64,
+    f: impl Fn(f64, f64, f64) -> (f64, f64),
 ) -> Option<Reg> {
     let mut out = [0u32; 4];
     let mut good = true;
@@ -996,14 +998,17 @@ fn sp4(
         let x = f32::from_bits(a[i]) as f64;
         let y = f32::from_bits(b[i]) as f64;
         let z = f32::from_bits(c[i]) as f64;
-        let r = f(x, y, z);
+        let (r, err) = f(x, y, z);
         let bits = r.to_bits();
         let e = ((bits >> 52) & 0x7ff) as i32 - 1023 + 127;
         let zero = r == 0.0;
-        good &= ok(a[i], b[i], c[i]) & (zero | (e >= 1) & (e <= 254));
         let v = ((bits >> 63) as u32) << 31
             | (e as u32 & 0xff) << 23
             | ((bits >> 29) as u32 & 0x7f_ffff);
+        let on_grid = bits & 0x1fff_ffff == 0;
+        let toward_zero = (err != 0.0) & ((err < 0.0) != (r < 0.0));
+        let v = v.wrapping_sub((on_grid & toward_zero) as u32);
+        good &= ok(a[i], b[i], c[i]) & (zero | ((((e - 1) as u32) < 254) & (v & 0x7f80_0000 != 0)));
         out[i] = if zero { 0 } else { v };
     }
     good.then_some(out)
@@ -1040,4 +1045,158 @@ fn fl3(
         f(a[2], b[2], c[2], s, 2),
         f(a[3], b[3], c[3], s, 3),
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn f(x: f32) -> u32 {
+        x.to_bits()
+    }
+
+    /// The fast path must take these cases (all operands normal, result normal) and agree
+    /// with the float unit's exact functions bit for bit.
+    #[test]
+    fn four_lane_fast_path_matches_the_exact_functions() {
+        let p60 = f(2f32.powi(-30));
+        let cases: &[(u32, u32, u32)] = &[
+            // 1 - 2^-60: f64 rounds to 1.0 (a single), the error points toward zero, so
+            // truncation gives the single just below 1.0 (0x3f7fffff).
+            (p60, p60 | 0x8000_0000, f(1.0)),
+            // 1 + 2^-60 truncates to 1.0.
+            (p60, p60, f(1.0)),
+            // -1 + 2^-60 truncates toward zero: -0x3f7fffff.
+            (p60, p60, f(-1.0)),
+            // An exact zero: +0.
+            (f(1.5), f(2.0), f(-3.0)),
+            (f(3.0e30), f(2.5e7), f(-1.0)),
+            (0x3fffffff, 0x3fffffff, 0x3f800001),
+        ];
+        for &(a, b, c) in cases {
+            let ra = [a; 4];
+            let rb = [b; 4];
+            let rc = [c; 4];
+            let fma = sp4(ra, rb, rc, normal3, |x, y, z| two_sum(x * y, z)).expect("fast");
+            assert_eq!(fma[0], float::fma(a, b, c), "fma {a:#x} {b:#x} {c:#x}");
+            let fms = sp4(ra, rb, rc, normal3, |x, y, z| two_sum(x * y, -z)).expect("fast");
+            assert_eq!(fms[0], float::fms(a, b, c), "fms {a:#x} {b:#x} {c:#x}");
+            let fnms = sp4(ra, rb, rc, normal3, |x, y, z| two_sum(z, -(x * y))).expect("fast");
+            assert_eq!(fnms[0], float::fnms(a, b, c), "fnms {a:#x} {b:#x} {c:#x}");
+            let fa = sp4(ra, rc, rc, normal2, |x, y, _| two_sum(x, y)).expect("fast");
+            assert_eq!(fa[0], float::fa(a, c), "fa {a:#x} {c:#x}");
+            let fs = sp4(ra, rc, rc, normal2, |x, y, _| two_sum(x, -y)).expect("fast");
+            assert_eq!(fs[0], float::fs(a, c), "fs {a:#x} {c:#x}");
+        }
+        assert_eq!(
+            sp4(
+                [p60; 4],
+                [p60 | 0x8000_0000; 4],
+                [f(1.0); 4],
+                normal3,
+                |x, y, z| { two_sum(x * y, z) }
+            )
+            .unwrap()[0],
+            0x3f7f_ffff
+        );
+    }
+
+    #[test]
+    fn four_lane_fast_path_declines_what_it_cannot_do_exactly() {
+        // A zero or denormal operand, an exponent-255 operand, a result below the normal
+        // range, a result that rounds up to exponent 255.
+        let min = 0x0080_0000; // 2^-126
+        let declined = [
+            (0u32, f(1.0)),
+            (0x0000_0001, f(1.0)),
+            (0x7f80_0000, f(1.0)),
+            (min, f(0.5)),
+            (0x7f7f_ffff, f(2.0)),
+        ];
+        for (a, b) in declined {
+            assert!(
+                sp4([a; 4], [b; 4], [b; 4], normal2, |x, y, _| (x * y, 0.0)).is_none(),
+                "{a:#x} * {b:#x}"
+            );
+        }
+        // Subtracting down to exactly the smallest normal stays on the fast path; one step
+        // further (a decrement below it) does not.
+        let just_above = min + 1;
+        assert_eq!(
+            sp4([just_above; 4], [min; 4], [0; 4], normal2, |x, y, _| {
+                two_sum(x, -y)
+            }),
+            None,
+            "the difference 2^-149 is far below the normal range"
+        );
+    }
+
+    /// 200k random operand triples (wide exponent spread, short and full mantissas, some
+    /// zeros, denormals and exponent-255 values): whatever the fast path returns equals
+    /// the float unit's exact functions.
+    #[test]
+    fn four_lane_fast_path_agrees_on_random_operands() {
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let mut val = |r: u64| -> u32 {
+            let sign = (r as u32) & 0x8000_0000;
+            let exp = match (r >> 40) % 16 {
+                0 => 0,
+                1 => 255,
+                2 => 1,
+                _ => 90 + ((r >> 8) % 76) as u32,
+            };
+            let mant = ((r >> 16) as u32 & 0x7f_ffff) & (0x7f_ffff << ((r >> 48) % 24));
+            sign | exp << 23 | mant
+        };
+        let mut fast = 0;
+        for _ in 0..50_000 {
+            let a: Reg = [0; 4].map(|_| val(next()));
+            let b: Reg = [0; 4].map(|_| val(next()));
+            let c: Reg = [0; 4].map(|_| val(next()));
+            type Exact = fn(u32, u32, u32) -> u32;
+            let ops: [(Option<Reg>, Exact); 6] = [
+                (sp4(a, b, c, normal2, |x, y, _| two_sum(x, y)), |a, b, _| {
+                    float::fa(a, b)
+                }),
+                (
+                    sp4(a, b, c, normal2, |x, y, _| two_sum(x, -y)),
+                    |a, b, _| float::fs(a, b),
+                ),
+                (sp4(a, b, c, normal2, |x, y, _| (x * y, 0.0)), |a, b, _| {
+                    float::fm(a, b)
+                }),
+                (
+                    sp4(a, b, c, normal3, |x, y, z| two_sum(x * y, z)),
+                    float::fma,
+                ),
+                (
+                    sp4(a, b, c, normal3, |x, y, z| two_sum(x * y, -z)),
+                    float::fms,
+                ),
+                (
+                    sp4(a, b, c, normal3, |x, y, z| two_sum(z, -(x * y))),
+                    float::fnms,
+                ),
+            ];
+            for (k, (got, exact)) in ops.iter().enumerate() {
+                if let Some(r) = got {
+                    fast += 1;
+                    for i in 0..4 {
+                        assert_eq!(
+                            r[i],
+                            exact(a[i], b[i], c[i]),
+                            "op {k} lane {i}: {a:x?} {b:x?} {c:x?}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(fast > 20_000, "the fast path ran {fast} times");
+    }
 }
