@@ -996,7 +996,9 @@ impl Spu {
                 "transfer size {size} is not 1, 2, 4, 8 or a multiple of 16 up to 16384"
             ));
         }
-        if size < 16 {
+        if size == 0 {
+            // A zero-length transfer moves nothing and completes its tag.
+        } else if size < 16 {
             if lsa % size != 0 || ea % size as u64 != 0 {
                 return Err(format!(
                     "{size}-byte transfer with LS {lsa:#x} / EA {ea:#x} not naturally aligned"
