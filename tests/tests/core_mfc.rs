@@ -448,3 +448,22 @@ fn dma_errors_report_the_command_and_its_operands() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn main_memory_host_helpers_are_big_endian_and_bounded() {
+    let mut m = MainMemory::zeroed(32);
+    m.write_u32(4, 0x0102_0304);
+    assert_eq!(&m.bytes()[4..8], &[1, 2, 3, 4]);
+    m.write_f32(8, 1.5);
+    assert_eq!(m.read_u32(8), 0x3fc0_0000);
+    assert_eq!(m.read_f32(8), 1.5);
+    assert!(m.write_bytes(28, &[9, 8, 7, 6]));
+    assert!(!m.write_bytes(29, &[9, 8, 7, 6]), "past the end");
+    assert!(!m.write_bytes(u64::MAX, &[1]), "overflowing address");
+    assert_eq!(m.read_bytes(28, 4), Some(&[9u8, 8, 7, 6][..]));
+    assert_eq!(m.read_bytes(30, 4), None);
+    // Out-of-range word accesses read 0 and write nothing.
+    assert_eq!(m.read_u32(30), 0);
+    m.write_u32(30, 0xffff_ffff);
+    assert_eq!(&m.bytes()[28..32], &[9, 8, 7, 6]);
+}

@@ -79,6 +79,33 @@ impl MainMemory {
             b.copy_from_slice(&value.to_be_bytes());
         }
     }
+    pub fn read_f32(&self, addr: u32) -> f32 {
+        f32::from_bits(self.read_u32(addr))
+    }
+    pub fn write_f32(&mut self, addr: u32, value: f32) {
+        self.write_u32(addr, value.to_bits())
+    }
+    /// `len` bytes from `addr`, or `None` if they are not all inside main memory.
+    pub fn read_bytes(&self, addr: u64, len: usize) -> Option<&[u8]> {
+        let end = addr.checked_add(len as u64)?;
+        self.bytes.get(addr as usize..usize::try_from(end).ok()?)
+    }
+    /// Writes `data` at `addr`; false (and nothing written) if it does not fit.
+    pub fn write_bytes(&mut self, addr: u64, data: &[u8]) -> bool {
+        let Some(end) = addr.checked_add(data.len() as u64) else {
+            return false;
+        };
+        match usize::try_from(end)
+            .ok()
+            .and_then(|end| self.bytes.get_mut(addr as usize..end))
+        {
+            Some(dst) => {
+                dst.copy_from_slice(data);
+                true
+            }
+            None => false,
+        }
+    }
     fn range(&self, ea: u64, size: u32) -> Option<std::ops::Range<usize>> {
         let end = ea.checked_add(size as u64)?;
         (end <= self.bytes.len() as u64).then_some(ea as usize..end as usize)
