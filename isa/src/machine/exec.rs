@@ -1014,7 +1014,8 @@ fn sp4(
     good.then_some(out)
 }
 
-#[inline(always)]
+#[cold]
+#[inline(never)]
 fn fl2(
     core: &mut Core,
     a: Reg,
@@ -1030,7 +1031,8 @@ fn fl2(
     ]
 }
 
-#[inline(always)]
+#[cold]
+#[inline(never)]
 fn fl3(
     core: &mut Core,
     a: Reg,
