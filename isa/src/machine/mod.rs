@@ -265,7 +265,7 @@ struct LoggedWrite {
 pub struct Spu {
     pub index: u32,
     core: Core,
-    decoded: Vec<Inst>,
+    decoded: Box<[Inst; LS_SIZE / 4]>,
     pc: u32,
     instructions: u64,
     cycle: u64,
@@ -339,7 +339,10 @@ impl Spu {
         Spu {
             index,
             core: Core::new(),
-            decoded: vec![decode(0); LS_SIZE / 4],
+            decoded: vec![decode(0); LS_SIZE / 4]
+                .into_boxed_slice()
+                .try_into()
+                .unwrap(),
             pc: 0,
             instructions: 0,
             cycle: 0,
@@ -431,7 +434,7 @@ impl Spu {
         self.core.regs[n & 127] = value;
     }
     pub fn ls(&self) -> &[u8] {
-        &self.core.ls
+        &self.core.ls[..]
     }
     /// Writes local store from the host (re-decoding what it covers).
     pub fn write_ls(&mut self, addr: u32, bytes: &[u8]) {
@@ -688,7 +691,7 @@ impl Spu {
         let mut pc = self.pc;
         let mut done = 0u64;
         let core = &mut self.core;
-        let decoded = &mut self.decoded[..];
+        let decoded = &mut *self.decoded;
         while done < budget {
             let w = (pc >> 2) as usize & (LS_SIZE / 4 - 1);
             let inst = decoded[w];
