@@ -287,11 +287,9 @@ fn putllc_without_reservation_fails_and_putlluc_succeeds() {
     assert_eq!(mem.read_u32(0x2000), 7);
 }
 
-// Known gaps, recorded as ignored tests (see the report): the machine applies an SPU's own
-// main-memory writes only at the quantum boundary, so a get/getllar after a completed
-// put/putlluc of the same SPU in the same quantum reads stale data; and transfers of 16
-// bytes or more are required to be 16-byte aligned, where shared/isa/README.md only asks
-// that LS and EA share their low 4 bits.
+// Formerly recorded gaps, now fixed in the machine (38b5f08): an SPU sees its own
+// completed main-memory writes within a quantum, and transfers of 16 bytes or more need LS
+// and EA to share only their low 4 bits.
 
 #[test]
 fn getllar_after_own_putlluc_sees_the_new_line() {
@@ -466,4 +464,270 @@ fn main_memory_host_helpers_are_big_endian_and_bounded() {
     assert_eq!(m.read_u32(30), 0);
     m.write_u32(30, 0xffff_ffff);
     assert_eq!(&m.bytes()[28..32], &[9, 8, 7, 6]);
+}
+
+// ---------------------------------------------------------------------------------------
+// Second pass: the transfer sizes one by one, put lists, ordering by fence and barrier, the
+// 4-deep inbound mailbox, 100 + 100 atomic increments, the decrementer.
+
+#[test]
+fn get_then_put_round_trip_for_every_small_size_and_16k() {
+    // For each size, get EA -> LS and put LS -> a second EA with the same low 4 bits; only
+    // the `size` bytes at each destination change (sizes below 16 need natural alignment,
+    // so the offsets below are multiples of the size).
+    for (size, off) in [
+        (1u32, 0x7u32),
+        (2, 0x6),
+        (4, 0xc),
+        (8, 0x8),
+        (16, 0),
+        (16384, 0),
+    ] {
+        let (ls, ea_in, ea_out) = (0x4000 + off, 0x1000 + off, 0x8000 + off);
+        let mut body = dma(ls, ea_in, size, 9, 0x40);
+        body += &wait(1 << 9, 2, 10);
+        body += &dma(ls, ea_out, size, 9, 0x20);
+        body += &wait(1 << 9, 2, 11);
+        let mut spu = load(&body);
+        let mut mem = memory();
+        let orig = mem.clone();
+        assert_eq!(
+            spu.run(&mut mem, 10_000_000),
+            StopReason::Stop(0x100),
+            "size {size}"
+        );
+        let (ls, ea_in, ea_out, n) = (ls as usize, ea_in as usize, ea_out as usize, size as usize);
+        assert_eq!(
+            &spu.ls()[ls..ls + n],
+            &orig.bytes()[ea_in..ea_in + n],
+            "get {size}"
+        );
+        assert_eq!(spu.ls()[ls - 1], 0, "byte before the get, size {size}");
+        assert_eq!(spu.ls()[ls + n], 0, "byte after the get, size {size}");
+        assert_eq!(
+            &mem.bytes()[ea_out..ea_out + n],
+            &orig.bytes()[ea_in..ea_in + n]
+        );
+        assert_eq!(
+            &mem.bytes()[..ea_out],
+            &orig.bytes()[..ea_out],
+            "before put {size}"
+        );
+        assert_eq!(
+            &mem.bytes()[ea_out + n..],
+            &orig.bytes()[ea_out + n..],
+            "after put {size}"
+        );
+        assert_eq!((spu.reg(10)[0], spu.reg(11)[0]), (1 << 9, 1 << 9));
+    }
+}
+
+#[test]
+fn each_bad_dma_rule_separately() {
+    // One case per rule from the transfer rules (shared/isa/README.md), each next to a
+    // passing neighbour that differs only in the offending field.
+    let is_err = |s: &StopReason| matches!(s, StopReason::DmaError { .. });
+    // Size: 1, 2, 4, 8 or a multiple of 16 up to 16 KiB. (Size 0 is a multiple of 16 and
+    // is not tested either way.)
+    for size in [3u32, 5, 12, 17, 16384 + 16] {
+        assert!(
+            is_err(&dma_error(0x8000, 0x1000, size, 0, 0x40)),
+            "size {size}"
+        );
+    }
+    // Natural alignment below 16 bytes (LS and EA both).
+    assert!(is_err(&dma_error(0x8001, 0x1002, 2, 0, 0x40)));
+    assert!(is_err(&dma_error(0x8004, 0x1004, 8, 0, 0x40)));
+    // The MFC moves small transfers within one quadword lane, so LS and EA must also share
+    // their low 4 bits below 16 bytes (CBE Handbook; the 8-byte case in the table above).
+    assert!(is_err(&dma_error(0x8002, 0x1006, 2, 0, 0x40)));
+    assert!(is_err(&dma_error(0x8001, 0x1003, 1, 0, 0x40)));
+    // LS and EA low 4 bits differ for 16 bytes and more.
+    assert!(is_err(&dma_error(0x8000, 0x1008, 16, 0, 0x20)));
+    // EA beyond main memory (64 KiB here): the last byte at 0x10000 is outside.
+    assert!(is_err(&dma_error(0x8000, 0xfff0, 32, 0, 0x20)));
+    assert!(is_err(&dma_error(0x8000, 0x10000, 1, 0, 0x40)));
+    // Tags 0..31.
+    assert!(is_err(&dma_error(0x8000, 0x1000, 16, 32, 0x40)));
+    assert!(is_err(&dma_error(0x8000, 0x1000, 16, 0xffff, 0x40)));
+    // Neighbours that must work.
+    for (lsa, ea, size, tag) in [
+        (0x8003u32, 0x1003u32, 1u32, 0u32),
+        (0x8006, 0x1006, 2, 31),
+        (0x8008, 0x1008, 8, 31),
+        (0x8008, 0x1008, 16, 0),
+        (0x8000, 0xffe0, 32, 0),
+        (0x800f, 0xffff, 1, 0), // the very last byte of memory
+    ] {
+        let mut body = dma(lsa, ea, size, tag, 0x40);
+        // `ila` holds 18 bits: build the tag-31 mask with ilhu.
+        body += &format!(
+            "ilhu $70, {}\n iohl $70, {}\n",
+            (1u32 << tag) >> 16,
+            (1u32 << tag) & 0xffff
+        );
+        body += "wrch $MFC_WrTagMask, $70\n il $70, 2\n wrch $MFC_WrTagUpdate, $70\n rdch $10, $MFC_RdTagStat\n";
+        let mut spu = load(&body);
+        assert_eq!(
+            spu.run(&mut memory(), 1_000_000),
+            StopReason::Stop(0x100),
+            "{lsa:x} {ea:x} {size} {tag}"
+        );
+    }
+}
+
+#[test]
+fn getl_gathers_several_elements_and_putl_scatters_them() {
+    // A list element is (size, EA low); the LS address advances by each element's size.
+    // getl: 16 from 0x1000, 48 from 0x2030 (LS 0x8010, same low bits 0), 128 from 0x3100.
+    let list = [16u32, 0x1000, 48, 0x2010, 128, 0x3100];
+    // putl back out to other places from the same LS range.
+    let plist = [16u32, 0x5000, 48, 0x6010, 128, 0x7100];
+    let mut body = dma(0x8000, 0x7000, 24, 4, 0x44);
+    body += &wait(1 << 4, 2, 10);
+    body += &dma(0x8000, 0x7080, 24, 5, 0x24);
+    body += &wait(1 << 5, 2, 11);
+    let mut spu = load(&body);
+    let words: Vec<u8> = list.iter().flat_map(|w| w.to_be_bytes()).collect();
+    spu.write_ls(0x7000, &words);
+    let words: Vec<u8> = plist.iter().flat_map(|w| w.to_be_bytes()).collect();
+    spu.write_ls(0x7080, &words);
+    let mut mem = memory();
+    let orig = mem.clone();
+    assert_eq!(spu.run(&mut mem, 10_000_000), StopReason::Stop(0x100));
+    let o = orig.bytes();
+    assert_eq!(&spu.ls()[0x8000..0x8010], &o[0x1000..0x1010]);
+    assert_eq!(&spu.ls()[0x8010..0x8040], &o[0x2010..0x2040]);
+    assert_eq!(&spu.ls()[0x8040..0x80c0], &o[0x3100..0x3180]);
+    assert_eq!(spu.ls()[0x80c0], 0, "nothing beyond the last element");
+    let m = mem.bytes();
+    assert_eq!(&m[0x5000..0x5010], &o[0x1000..0x1010]);
+    assert_eq!(&m[0x6010..0x6040], &o[0x2010..0x2040]);
+    assert_eq!(&m[0x7100..0x7180], &o[0x3100..0x3180]);
+    assert_eq!(&m[0x5010..0x6010], &o[0x5010..0x6010]);
+}
+
+#[test]
+fn fence_and_barrier_order_commands_within_a_tag_group() {
+    // put LS 0x8000 -> EA 0x3000, then getf EA 0x3000 -> LS 0x9000 in the same tag group:
+    // the fence makes the get start after the put, so it reads the put's data (11).
+    // Then getb (barrier) EA 0x3000 -> LS 0xa000 after a putb of new data (22) on tag 2,
+    // and a plain `barrier` (0xc0) between a put of 33 and a get of it on tag 3.
+    let mut body = String::new();
+    body += "il $40, 11\n stqa $40, 0x8000\n il $40, 22\n stqa $40, 0x8010\n";
+    body += "il $40, 33\n stqa $40, 0x8020\n";
+    body += &dma(0x8000, 0x3000, 16, 1, 0x20); // put
+    body += &dma(0x9000, 0x3000, 16, 1, 0x42); // getf
+    body += &dma(0x8010, 0x3010, 16, 2, 0x21); // putb
+    body += &dma(0xa000, 0x3010, 16, 2, 0x41); // getb
+    body += &dma(0x8020, 0x3020, 16, 3, 0x20); // put
+    body += &dma(0, 0, 0, 3, 0xc0); // barrier
+    body += &dma(0xb000, 0x3020, 16, 3, 0x40); // get
+    body += &wait(0b1110, 2, 10);
+    let mut spu = load(&body);
+    let mut mem = memory();
+    assert_eq!(spu.run(&mut mem, 10_000_000), StopReason::Stop(0x100));
+    assert_eq!(ls_words(&spu, 0x9000, 4), vec![11; 4]);
+    assert_eq!(ls_words(&spu, 0xa000, 4), vec![22; 4]);
+    assert_eq!(ls_words(&spu, 0xb000, 4), vec![33; 4]);
+    assert_eq!(mem.read_u32(0x3000), 11);
+    assert_eq!(mem.read_u32(0x3010), 22);
+    assert_eq!(mem.read_u32(0x3020), 33);
+}
+
+#[test]
+fn inbound_mailbox_gives_four_values_in_order_then_a_fifth_read_deadlocks() {
+    let body = "rdch $3, $SPU_RdInMbox\n rdch $4, $SPU_RdInMbox\n rdch $5, $SPU_RdInMbox\n\
+                rdch $6, $SPU_RdInMbox\n rchcnt $8, $SPU_RdInMbox\n rdch $7, $SPU_RdInMbox\n";
+    let mut spu = load(body);
+    for v in [10, 20, 30, 40] {
+        assert!(spu.write_inbound_mailbox(v));
+    }
+    assert!(
+        !spu.write_inbound_mailbox(50),
+        "the fifth write does not fit"
+    );
+    let stop = spu.run(&mut memory(), 100_000);
+    assert!(
+        matches!(stop, StopReason::Deadlock { channel: 29, .. }),
+        "{stop:?}"
+    );
+    assert_eq!(
+        [spu.reg(3)[0], spu.reg(4)[0], spu.reg(5)[0], spu.reg(6)[0]],
+        [10, 20, 30, 40],
+        "FIFO order"
+    );
+    assert_eq!(spu.reg(8)[0], 0, "count after four reads");
+    // The outbound mailbox: one entry, read back by the host once.
+    let mut spu = load("il $3, 0x1234\n wrch $SPU_WrOutMbox, $3\n rchcnt $4, $SPU_WrOutMbox\n");
+    assert_eq!(spu.run(&mut memory(), 100_000), StopReason::Stop(0x100));
+    assert_eq!(spu.reg(4)[0], 0, "no room left after one write");
+    assert_eq!(spu.read_outbound_mailbox(), Some(0x1234));
+    assert_eq!(spu.read_outbound_mailbox(), None);
+}
+
+/// Two SPUs driven like loader/src/runtime.rs: each quantum, every unfinished SPU runs to
+/// `until` against the shared memory view, then `apply_quantum` publishes their writes.
+#[test]
+fn two_spus_increment_a_shared_counter_100_times_each() {
+    let mut spus = vec![atomic_incrementer(100), atomic_incrementer(100)];
+    spus[1].index = 1;
+    let mut mem = MainMemory::zeroed(64 * 1024);
+    let mut finished = [false; 2];
+    let mut until = 0;
+    while !finished.iter().all(|d| *d) {
+        until += 500;
+        assert!(until < 200_000_000, "no progress");
+        for (i, s) in spus.iter_mut().enumerate() {
+            if !finished[i] {
+                if let Some(stop) = s.run_quantum(&mem, until) {
+                    assert_eq!(stop, StopReason::Stop(0x100), "SPU {i}");
+                    finished[i] = true;
+                }
+            }
+        }
+        apply_quantum(&mut spus, &mut mem);
+    }
+    assert_eq!(mem.read_u32(0x2000), 200);
+    // The incrementer adds 1 to all four words of the first quadword (`ai` on the whole
+    // register); the rest of the 128-byte line stays zero.
+    for w in 0..4 {
+        assert_eq!(mem.read_u32(0x2000 + 4 * w), 200);
+    }
+    assert!(mem.bytes()[0x2010..0x2080].iter().all(|b| *b == 0));
+}
+
+#[test]
+fn decrementer_counts_down_and_wraps_below_zero() {
+    // Write 100000, spin 200 iterations (3 instructions each), read; spin again, read.
+    // The decrementer ticks once per cycle (timebase 1), so each read is lower than the
+    // one before and at least the instructions in between have elapsed.
+    let spin =
+        |label: &str| format!("il $77, 200\n{label}: ai $77, $77, -1\n nop\n brnz $77, {label}\n");
+    let mut body = String::from("ila $3, 100000\n wrch $SPU_WrDec, $3\n");
+    body += &spin("a");
+    body += "rdch $4, $SPU_RdDec\n";
+    body += &spin("b");
+    body += "rdch $5, $SPU_RdDec\n";
+    // Write 5 and spin: it passes 0 and reads as a large (negative) count.
+    body += "il $3, 5\n wrch $SPU_WrDec, $3\n";
+    body += &spin("c");
+    body += "rdch $6, $SPU_RdDec\n";
+    let mut spu = load(&body);
+    assert_eq!(spu.run(&mut memory(), 10_000_000), StopReason::Stop(0x100));
+    let (d1, d2, d3) = (spu.reg(4)[0], spu.reg(5)[0], spu.reg(6)[0]);
+    assert!(d1 < 100_000 - 600 && d1 > 100_000 - 50_000, "{d1}");
+    assert!(d2 < d1 - 600, "{d1} {d2}");
+    assert!(d3 > 0xffff_0000, "wrapped below zero: {d3:#x}");
+    // A slower timebase (10 cycles per tick) counts ten times slower.
+    let mut spu = load(&body);
+    spu.decrementer_cycles_per_tick = 10;
+    assert_eq!(spu.run(&mut memory(), 10_000_000), StopReason::Stop(0x100));
+    let (e1, e2) = (spu.reg(4)[0], spu.reg(5)[0]);
+    assert!(e1 > d1 && e2 > d2, "{e1} {e2}");
+    let (fast, slow) = (d1 - d2, e1 - e2);
+    assert!(
+        slow * 10 <= fast + 10 && slow * 10 + 10 >= fast,
+        "{fast} {slow}"
+    );
 }

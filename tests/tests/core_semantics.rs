@@ -1442,3 +1442,62 @@ fn double_precision_rounding_modes_flags_and_overflow() {
     assert_eq!(s.reg(7)[1..3], [0x800, 0x800]);
     assert_eq!(s.reg(10), [0; 4]);
 }
+
+/// Formats all 128 registers as `$N: w0 w1 w2 w3`.
+fn register_dump(spu: &Spu) -> String {
+    (0..128)
+        .map(|n| {
+            let r = spu.reg(n);
+            format!(
+                "${n}: {:08x} {:08x} {:08x} {:08x}\n",
+                r[0], r[1], r[2], r[3]
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn register_dump_after_a_small_mixed_program() {
+    // Expected (checked by hand against the accepted snapshot):
+    //  $3  il -1                          ffffffff x4
+    //  $4  ilhu 0x1234; iohl 0x5678       12345678 x4
+    //  $5  ila 0x3ffff                    0003ffff x4
+    //  $6  a $4,$5                        12385677 x4
+    //  $7  fsmbi 0xf00f                   ffffffff 00000000 00000000 ffffffff
+    //  $8  selb $4,$3,$7                  ffffffff 12345678 12345678 ffffffff
+    //  $9  shlqbyi $4,2                   56781234 56781234 56781234 56780000
+    //  $10 rotqbyi $8,4                   12345678 12345678 ffffffff ffffffff
+    //  $11 cwd 8($0)                      10111213 14151617 00010203 1c1d1e1f
+    //  $12 shufb $4,$5,$11                0003ffff 0003ffff 12345678 0003ffff
+    //  $13 mpyu $4,$4 = 0x5678^2          1d34d840 x4
+    //  $14 clz $5 (18 significant bits)   0000000e x4
+    //  $15 clgt $3,$4                     ffffffff x4
+    //  $16 xsbh $4 (0x34, 0x78 positive)  00340078 x4
+    //  $17 brsl at 0x3c to 0x40           00000040 00000000 00000000 00000000
+    //  $18 sf $4,$5 = 0x3ffff - 0x12345678 edcfa987 x4
+    // and every other register zero.
+    let (spu, stop) = run(
+        &[
+            ("il", &[3, -1]),
+            ("ilhu", &[4, 0x1234]),
+            ("iohl", &[4, 0x5678]),
+            ("ila", &[5, 0x3ffff]),
+            ("a", &[6, 4, 5]),
+            ("fsmbi", &[7, 0xf00f]),
+            ("selb", &[8, 4, 3, 7]),
+            ("shlqbyi", &[9, 4, 2]),
+            ("rotqbyi", &[10, 8, 4]),
+            ("cwd", &[11, 8, 0]),
+            ("shufb", &[12, 4, 5, 11]),
+            ("mpyu", &[13, 4, 4]),
+            ("clz", &[14, 5]),
+            ("clgt", &[15, 3, 4]),
+            ("xsbh", &[16, 4]),
+            ("brsl", &[17, 0x40]),
+            ("sf", &[18, 4, 5]),
+        ],
+        &[],
+    );
+    assert_eq!(stop, StopReason::Stop(0x3fff));
+    insta::assert_snapshot!(register_dump(&spu));
+}
