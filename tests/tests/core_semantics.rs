@@ -152,8 +152,9 @@ fn quadword_shifts_and_rotates() {
     e[..13].copy_from_slice(&[3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15]);
     assert_eq!(rr("shlqby", a, s(3)), bytes(e));
     assert_eq!(rr("shlqby", a, s(16)), [0; 4]);
-    assert_eq!(rr("shlqby", a, s(35)), bytes(e)); // 35 & 31 = 3
-                                                  // rotqby: low 4 bits.
+    // 35 & 31 = 3
+    assert_eq!(rr("shlqby", a, s(35)), bytes(e));
+    // rotqby: low 4 bits.
     assert_eq!(rr("rotqby", a, s(17)), seq(1).map(|w| w & 0x0f0f_0f0f));
     // The "bi" forms take bits 0x78 of the count, i.e. count >> 3.
     assert_eq!(rr("shlqbybi", a, s(3 * 8 + 7)), bytes(e));
@@ -433,10 +434,12 @@ fn conversions_scale_and_saturate() {
     assert_eq!(ri("cflts", [0xbfc0_0000; 4], 0)[0], (-1i32) as u32); // -1.5
     assert_eq!(ri("cflts", [0x4f00_0000; 4], 0)[0], 0x7fff_ffff); // 2^31
     assert_eq!(ri("cflts", [0xdf00_0000; 4], 0)[0], 0x8000_0000); // -2^63
-    assert_eq!(ri("cflts", [0x3f00_0000; 4], 1)[0], 1); // 0.5 * 2^1
-    assert_eq!(ri("cfltu", [0xbf80_0000; 4], 0)[0], 0); // negative -> 0
-    assert_eq!(ri("cfltu", [0x4f80_0000; 4], 0)[0], u32::MAX); // 2^32
-                                                               // csflt/cuflt rt, ra, scale: int to float, divided by 2^scale.
+
+    // 0.5 * 2^1 = 1; cfltu: negative -> 0, and 2^32 saturates.
+    assert_eq!(ri("cflts", [0x3f00_0000; 4], 1)[0], 1);
+    assert_eq!(ri("cfltu", [0xbf80_0000; 4], 0)[0], 0);
+    assert_eq!(ri("cfltu", [0x4f80_0000; 4], 0)[0], u32::MAX);
+    // csflt/cuflt rt, ra, scale: int to float, divided by 2^scale.
     assert_eq!(ri("csflt", [(-2i32) as u32; 4], 0)[0], 0xc000_0000);
     assert_eq!(ri("csflt", [1; 4], 1)[0], 0x3f00_0000);
     assert_eq!(ri("cuflt", [u32::MAX; 4], 0)[0], 0x4f7f_ffff); // truncated, not 2^32
@@ -449,8 +452,9 @@ fn dw(v: u64) -> R {
 #[test]
 fn double_precision_rounding_modes_and_flags() {
     let one_ = 0x3ff0_0000_0000_0000u64;
-    let tiny = 0x3ca0_0000_0000_0000u64; // 2^-53: half an ulp of 1.0
-                                         // Nearest even: 1 + 2^-53 -> 1.0, and the inexact flag is raised.
+    // 2^-53: half an ulp of 1.0
+    let tiny = 0x3ca0_0000_0000_0000u64;
+    // Nearest even: 1 + 2^-53 -> 1.0, and the inexact flag is raised.
     let (spu, _) = run(
         &[("dfa", &[3, 4, 5]), ("fscrrd", &[7])],
         &[(4, dw(one_)), (5, dw(tiny))],
@@ -1324,10 +1328,12 @@ fn conversion_saturation_and_scales() {
     assert_eq!(ri("cflts", [0xcf00_0000; 4], 0)[0], 0x8000_0000); // -2^31 exactly
     assert_eq!(ri("cflts", [0xcf80_0000; 4], 0)[0], 0x8000_0000); // -2^32 saturates
     assert_eq!(ri("cflts", [0x7fff_ffff; 4], 0)[0], 0x7fff_ffff); // largest SPU float
-    assert_eq!(ri("cflts", [0x3fc0_0000; 4], 1)[0], 3); // 1.5 * 2
-    assert_eq!(ri("cflts", [F1; 4], 127)[0], 0x7fff_ffff); // 2^127
-    assert_eq!(ri("cflts", [0x0040_0000; 4], 127)[0], 0); // denormal is zero
-                                                          // cfltu: negatives give 0, 2^32 and beyond give 0xffffffff.
+
+    // 1.5 * 2 = 3; 2^127 saturates; a denormal is zero.
+    assert_eq!(ri("cflts", [0x3fc0_0000; 4], 1)[0], 3);
+    assert_eq!(ri("cflts", [F1; 4], 127)[0], 0x7fff_ffff);
+    assert_eq!(ri("cflts", [0x0040_0000; 4], 127)[0], 0);
+    // cfltu: negatives give 0, 2^32 and beyond give 0xffffffff.
     assert_eq!(ri("cfltu", [0x4f7f_ffff; 4], 0)[0], 0xffff_ff00);
     assert_eq!(ri("cfltu", [0xbf00_0000; 4], 0)[0], 0);
     assert_eq!(ri("cfltu", [0xcf00_0000; 4], 0)[0], 0);
@@ -1500,4 +1506,89 @@ fn register_dump_after_a_small_mixed_program() {
     );
     assert_eq!(stop, StopReason::Stop(0x3fff));
     insta::assert_snapshot!(register_dump(&spu));
+}
+
+#[test]
+fn logical_operations_bitwise() {
+    // a = ff00ff00, b = 0ff00ff0: every combination of bit pairs appears.
+    let (a, b) = ([0xff00_ff00; 4], [0x0ff0_0ff0; 4]);
+    assert_eq!(rr("and", a, b)[0], 0x0f00_0f00);
+    assert_eq!(rr("or", a, b)[0], 0xfff0_fff0);
+    assert_eq!(rr("xor", a, b)[0], 0xf0f0_f0f0);
+    assert_eq!(rr("nand", a, b)[0], 0xf0ff_f0ff);
+    assert_eq!(rr("nor", a, b)[0], 0x000f_000f);
+    // andc is a & !b, orc a | !b
+    assert_eq!(rr("andc", a, b)[0], 0xf000_f000);
+    assert_eq!(rr("orc", a, b)[0], 0xff0f_ff0f);
+    // eqv is !(a ^ b).
+    assert_eq!(rr("eqv", a, b)[0], 0x0f0f_0f0f);
+    // Immediate forms: andi/ori/xori sign-extend I10 to 32 bits; xorhi to 16; xorbi uses
+    // the low 8 bits.
+    assert_eq!(ri("andi", a, -256)[0], 0xff00_ff00);
+    assert_eq!(ri("xori", a, -1)[0], 0x00ff_00ff);
+    assert_eq!(ri("xorhi", a, 0x1ff)[0], 0xfeff_feff); // each ff00 ^ 01ff = feff
+    assert_eq!(ri("xorbi", a, 0x0f)[0], 0xf00f_f00f);
+}
+
+#[test]
+fn indirect_halfword_branches_test_the_low_halfword() {
+    // bihz rt,ra / bihnz rt,ra: condition on bits 16..31 of rt's preferred slot.
+    let go = |m: &str, t: u32| {
+        run(
+            &[(m, &[4, 5]), ("stop", &[1]), ("stop", &[2])],
+            &[(4, [t, 0, 0, 0]), (5, [8, 0, 0, 0])],
+        )
+        .1
+    };
+    assert_eq!(go("bihz", 0xffff_0000), StopReason::Stop(2));
+    assert_eq!(go("bihz", 0x0000_0001), StopReason::Stop(1));
+    assert_eq!(go("bihnz", 0xffff_0000), StopReason::Stop(1));
+    assert_eq!(go("bihnz", 0x0000_8000), StopReason::Stop(2));
+    assert_eq!(go("binz", 0xffff_0000), StopReason::Stop(2));
+}
+
+#[test]
+fn float_compares_with_extended_range_and_zero() {
+    // Exponent 255 numbers are ordinary: 0x7fffffff > 0x7f800000; -0 is not below +0;
+    // a denormal compares equal to (not greater than) zero.
+    assert_eq!(
+        rr(
+            "fcgt",
+            [0x7fff_ffff, 0, 0x0000_0001, 0xff80_0000],
+            [0x7f80_0000, 0x8000_0000, 0, 0xffff_ffff]
+        ),
+        [M, 0, 0, M]
+    );
+    assert_eq!(rr("fcmgt", [0xffff_ffff; 4], [0x7f80_0000; 4])[0], M);
+}
+
+#[test]
+fn double_precision_nan_and_invalid() {
+    let both = |x: u64| [(x >> 32) as u32, x as u32, (x >> 32) as u32, x as u32];
+    // A quiet NaN operand gives the default QNaN and sets NAN (bit 9) in word 1 and 2;
+    // a signalling NaN also sets INV (bit 10); inf - inf is invalid.
+    let (spu, _) = run(
+        &[("dfa", &[3, 4, 5]), ("fscrrd", &[7])],
+        &[
+            (4, both(0x7ff8_0000_0000_1234)),
+            (5, both(0x3ff0_0000_0000_0000)),
+        ],
+    );
+    assert_eq!(spu.reg(3), both(0x7ff8_0000_0000_0000));
+    assert_eq!(spu.reg(7)[1] & 0x0600, 0x0200);
+    let (spu, _) = run(
+        &[("dfm", &[3, 4, 5]), ("fscrrd", &[7])],
+        &[
+            (4, both(0x7ff0_0000_0000_0001)),
+            (5, both(0x3ff0_0000_0000_0000)),
+        ],
+    );
+    assert_eq!(spu.reg(3), both(0x7ff8_0000_0000_0000));
+    assert_eq!(spu.reg(7)[1] & 0x0600, 0x0600);
+    let (spu, _) = run(
+        &[("dfs", &[3, 4, 4]), ("fscrrd", &[7])],
+        &[(4, both(0x7ff0_0000_0000_0000))],
+    );
+    assert_eq!(spu.reg(3), both(0x7ff8_0000_0000_0000));
+    assert_ne!(spu.reg(7)[2] & 0x0400, 0);
 }
