@@ -728,72 +728,27 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         // ---- single precision
         Fa => {
             let (a, b) = (ra!(), rb!());
-            w!(
-                sp4(a, b, b, normal2, |x, y, _| two_sum(x, y)).unwrap_or_else(|| fl2(
-                    core,
-                    a,
-                    b,
-                    float::fa_flags
-                ))
-            )
+            w!(sp4v::<SP_FA>(a, b, b).unwrap_or_else(|| fl2(core, a, b, float::fa_flags)))
         }
         Fs => {
             let (a, b) = (ra!(), rb!());
-            w!(
-                sp4(a, b, b, normal2, |x, y, _| two_sum(x, -y)).unwrap_or_else(|| fl2(
-                    core,
-                    a,
-                    b,
-                    float::fs_flags
-                ))
-            )
+            w!(sp4v::<SP_FS>(a, b, b).unwrap_or_else(|| fl2(core, a, b, float::fs_flags)))
         }
         Fm => {
             let (a, b) = (ra!(), rb!());
-            w!(
-                sp4(a, b, b, normal2, |x, y, _| (x * y, 0.0)).unwrap_or_else(|| fl2(
-                    core,
-                    a,
-                    b,
-                    float::fm_flags
-                ))
-            )
+            w!(sp4v::<SP_FM>(a, b, b).unwrap_or_else(|| fl2(core, a, b, float::fm_flags)))
         }
         Fma => {
             let (a, b, c) = (ra!(), rb!(), rc!());
-            w!(
-                sp4(a, b, c, normal3, |x, y, z| two_sum(x * y, z)).unwrap_or_else(|| fl3(
-                    core,
-                    a,
-                    b,
-                    c,
-                    float::fma_flags
-                ))
-            )
+            w!(sp4v::<SP_FMA>(a, b, c).unwrap_or_else(|| fl3(core, a, b, c, float::fma_flags)))
         }
         Fms => {
             let (a, b, c) = (ra!(), rb!(), rc!());
-            w!(
-                sp4(a, b, c, normal3, |x, y, z| two_sum(x * y, -z)).unwrap_or_else(|| fl3(
-                    core,
-                    a,
-                    b,
-                    c,
-                    float::fms_flags
-                ))
-            )
+            w!(sp4v::<SP_FMS>(a, b, c).unwrap_or_else(|| fl3(core, a, b, c, float::fms_flags)))
         }
         Fnms => {
             let (a, b, c) = (ra!(), rb!(), rc!());
-            w!(
-                sp4(a, b, c, normal3, |x, y, z| two_sum(z, -(x * y))).unwrap_or_else(|| fl3(
-                    core,
-                    a,
-                    b,
-                    c,
-                    float::fnms_flags
-                ))
-            )
+            w!(sp4v::<SP_FNMS>(a, b, c).unwrap_or_else(|| fl3(core, a, b, c, float::fnms_flags)))
         }
         Fceq => w!(zip(ra!(), rb!(), |a, b| mask(float::fceq(a, b)))),
         Fcgt => w!(zip(ra!(), rb!(), |a, b| mask(float::fcgt(a, b)))),
@@ -1005,19 +960,23 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
 // zero, denormal or exponent-255 operand send all four lanes to `float`'s exact per-lane
 // functions, which also raise the flags; on the fast path no flag can arise.
 
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 #[inline(always)]
 fn sp_normal(x: u32) -> bool {
     ((x >> 23) & 0xff).wrapping_sub(1) < 254
 }
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 #[inline(always)]
 fn normal2(a: u32, b: u32, _: u32) -> bool {
     sp_normal(a) & sp_normal(b)
 }
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 #[inline(always)]
 fn normal3(a: u32, b: u32, c: u32) -> bool {
     sp_normal(a) & sp_normal(b) & sp_normal(c)
 }
 /// Knuth's TwoSum: `s = fl(a + b)` and `err` with `s + err == a + b` exactly.
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 #[inline(always)]
 fn two_sum(a: f64, b: f64) -> (f64, f64) {
     let s = a + b;
@@ -1025,6 +984,7 @@ fn two_sum(a: f64, b: f64) -> (f64, f64) {
     (s, (a - (s - bb)) + (b - bb))
 }
 
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 #[inline(always)]
 fn sp4(
     a: Reg,
@@ -1053,6 +1013,148 @@ fn sp4(
         out[i] = if zero { 0 } else { v };
     }
     good.then_some(out)
+}
+
+/// Operation selectors of [`sp4v`].
+const SP_FA: u8 = 0;
+const SP_FS: u8 = 1;
+const SP_FM: u8 = 2;
+const SP_FMA: u8 = 3;
+const SP_FMS: u8 = 4;
+const SP_FNMS: u8 = 5;
+
+/// [`sp4`] for operation `K`, on x86_64 with SSE2 two lanes at a time (same algorithm,
+/// same lanes declined).
+#[inline(always)]
+fn sp4v<const K: u8>(a: Reg, b: Reg, c: Reg) -> Option<Reg> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        unsafe { sp4_sse2::<K>(a, b, c) }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        match K {
+            SP_FA => sp4(a, b, c, normal2, |x, y, _| two_sum(x, y)),
+            SP_FS => sp4(a, b, c, normal2, |x, y, _| two_sum(x, -y)),
+            SP_FM => sp4(a, b, c, normal2, |x, y, _| (x * y, 0.0)),
+            SP_FMA => sp4(a, b, c, normal3, |x, y, z| two_sum(x * y, z)),
+            SP_FMS => sp4(a, b, c, normal3, |x, y, z| two_sum(x * y, -z)),
+            _ => sp4(a, b, c, normal3, |x, y, z| two_sum(z, -(x * y))),
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn sp4_sse2<const K: u8>(a: Reg, b: Reg, c: Reg) -> Option<Reg> {
+    use core::arch::x86_64::*;
+    let va = _mm_loadu_si128(a.as_ptr() as *const __m128i);
+    let vb = _mm_loadu_si128(b.as_ptr() as *const __m128i);
+    let vc = _mm_loadu_si128(c.as_ptr() as *const __m128i);
+    // Every operand normal: exponent field in 1..254.
+    let normal = |v: __m128i| {
+        let e = _mm_and_si128(_mm_srli_epi32(v, 23), _mm_set1_epi32(0xff));
+        _mm_and_si128(
+            _mm_cmpgt_epi32(e, _mm_setzero_si128()),
+            _mm_cmplt_epi32(e, _mm_set1_epi32(255)),
+        )
+    };
+    let mut ok = _mm_and_si128(normal(va), normal(vb));
+    if K >= SP_FMA {
+        ok = _mm_and_si128(ok, normal(vc));
+    }
+    if _mm_movemask_ps(_mm_castsi128_ps(ok)) != 0xf {
+        return None;
+    }
+    let sign = _mm_castsi128_pd(_mm_set1_epi64x(i64::MIN));
+    let two_sum = |x: __m128d, y: __m128d| {
+        let s = _mm_add_pd(x, y);
+        let bb = _mm_sub_pd(s, x);
+        let err = _mm_add_pd(_mm_sub_pd(x, _mm_sub_pd(s, bb)), _mm_sub_pd(y, bb));
+        (s, err)
+    };
+    // Lanes 0,1 then 2,3 as f64 pairs: (s, err) with s + err the exact result.
+    let half = |shift: bool| {
+        let pick = |v: __m128i| {
+            let f = _mm_castsi128_ps(v);
+            _mm_cvtps_pd(if shift { _mm_movehl_ps(f, f) } else { f })
+        };
+        let (x, y, z) = (pick(va), pick(vb), pick(vc));
+        match K {
+            SP_FA => two_sum(x, y),
+            SP_FS => two_sum(x, _mm_xor_pd(y, sign)),
+            SP_FM => (_mm_mul_pd(x, y), _mm_setzero_pd()),
+            SP_FMA => two_sum(_mm_mul_pd(x, y), z),
+            SP_FMS => two_sum(_mm_mul_pd(x, y), _mm_xor_pd(z, sign)),
+            _ => two_sum(z, _mm_xor_pd(_mm_mul_pd(x, y), sign)),
+        }
+    };
+    let (s0, e0) = half(false);
+    let (s1, e1) = half(true);
+    // Gather dword `k` of each 64-bit lane of two vectors into four dwords.
+    let lo = |p: __m128i, q: __m128i| {
+        _mm_castps_si128(_mm_shuffle_ps::<0b10_00_10_00>(
+            _mm_castsi128_ps(p),
+            _mm_castsi128_ps(q),
+        ))
+    };
+    let hi = |p: __m128i, q: __m128i| {
+        _mm_castps_si128(_mm_shuffle_ps::<0b11_01_11_01>(
+            _mm_castsi128_ps(p),
+            _mm_castsi128_ps(q),
+        ))
+    };
+    let (b0, b1) = (_mm_castpd_si128(s0), _mm_castpd_si128(s1));
+    // Single bits without the sign: (bits >> 29) - (896 << 23), low dword.
+    let bias = _mm_set1_epi64x(896 << 23);
+    let t0 = _mm_sub_epi64(_mm_srli_epi64(b0, 29), bias);
+    let t1 = _mm_sub_epi64(_mm_srli_epi64(b1, 29), bias);
+    let high = hi(b0, b1);
+    let sign32 = _mm_and_si128(high, _mm_set1_epi32(i32::MIN));
+    let v = _mm_or_si128(lo(t0, t1), sign32);
+    // The f64 exponent 897..1150 (single exponent 1..254).
+    let e64 = _mm_and_si128(_mm_srli_epi32(high, 20), _mm_set1_epi32(0x7ff));
+    let in_range = _mm_and_si128(
+        _mm_cmpgt_epi32(e64, _mm_set1_epi32(896)),
+        _mm_cmplt_epi32(e64, _mm_set1_epi32(1151)),
+    );
+    let zero = lo(
+        _mm_castpd_si128(_mm_cmpeq_pd(s0, _mm_setzero_pd())),
+        _mm_castpd_si128(_mm_cmpeq_pd(s1, _mm_setzero_pd())),
+    );
+    let on_grid = _mm_cmpeq_epi32(
+        _mm_and_si128(lo(b0, b1), _mm_set1_epi32(0x1fff_ffff)),
+        _mm_setzero_si128(),
+    );
+    let err_nz = lo(
+        _mm_castpd_si128(_mm_cmpneq_pd(e0, _mm_setzero_pd())),
+        _mm_castpd_si128(_mm_cmpneq_pd(e1, _mm_setzero_pd())),
+    );
+    let opposite = _mm_srai_epi32(
+        hi(
+            _mm_xor_si128(_mm_castpd_si128(e0), b0),
+            _mm_xor_si128(_mm_castpd_si128(e1), b1),
+        ),
+        31,
+    );
+    let dec = _mm_and_si128(on_grid, _mm_and_si128(err_nz, opposite));
+    let v = _mm_add_epi32(v, dec);
+    let exp_nz = _mm_xor_si128(
+        _mm_cmpeq_epi32(
+            _mm_and_si128(v, _mm_set1_epi32(0x7f80_0000)),
+            _mm_setzero_si128(),
+        ),
+        _mm_set1_epi32(-1),
+    );
+    let good = _mm_or_si128(zero, _mm_and_si128(in_range, exp_nz));
+    if _mm_movemask_ps(_mm_castsi128_ps(good)) != 0xf {
+        return None;
+    }
+    let r = _mm_andnot_si128(zero, v);
+    let mut out = [0u32; 4];
+    _mm_storeu_si128(out.as_mut_ptr() as *mut __m128i, r);
+    Some(out)
 }
 
 #[cold]
@@ -1272,5 +1374,74 @@ mod tests {
             shufb(a, b, [0x80c0_e01f, 0x9fdf_ff00, 0x0302_0100, 0x1312_1110]),
             [0x00ff_801f, 0x00ff_8000, 0x0302_0100, 0x1312_1110]
         );
+    }
+
+    /// The SSE2 path declines and computes exactly what the scalar path does.
+    #[test]
+    fn vector_and_scalar_fast_paths_agree() {
+        let mut x = 0x0123_4567_89ab_cdefu64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let mut val = |r: u64| -> u32 {
+            let sign = (r as u32) & 0x8000_0000;
+            let exp = match (r >> 40) % 16 {
+                0 => 0,
+                1 => 255,
+                2 => 1,
+                3 => 254,
+                _ => 60 + ((r >> 8) % 136) as u32,
+            };
+            let mant = ((r >> 16) as u32 & 0x7f_ffff) & (0x7f_ffff << ((r >> 48) % 24));
+            sign | exp << 23 | mant
+        };
+        let mut agree = 0;
+        for i in 0..100_000 {
+            // Mostly all-normal registers, so that the result checks are exercised.
+            let pick = |v: u32| {
+                if i % 4 == 0 {
+                    v
+                } else {
+                    (v & 0x807f_ffff) | (((v >> 23) & 0xff).clamp(40, 200) << 23)
+                }
+            };
+            let a: Reg = [0; 4].map(|_| pick(val(next())));
+            let b: Reg = [0; 4].map(|_| pick(val(next())));
+            let c: Reg = [0; 4].map(|_| pick(val(next())));
+            let pairs = [
+                (
+                    sp4v::<SP_FA>(a, b, c),
+                    sp4(a, b, c, normal2, |x, y, _| two_sum(x, y)),
+                ),
+                (
+                    sp4v::<SP_FS>(a, b, c),
+                    sp4(a, b, c, normal2, |x, y, _| two_sum(x, -y)),
+                ),
+                (
+                    sp4v::<SP_FM>(a, b, c),
+                    sp4(a, b, c, normal2, |x, y, _| (x * y, 0.0)),
+                ),
+                (
+                    sp4v::<SP_FMA>(a, b, c),
+                    sp4(a, b, c, normal3, |x, y, z| two_sum(x * y, z)),
+                ),
+                (
+                    sp4v::<SP_FMS>(a, b, c),
+                    sp4(a, b, c, normal3, |x, y, z| two_sum(x * y, -z)),
+                ),
+                (
+                    sp4v::<SP_FNMS>(a, b, c),
+                    sp4(a, b, c, normal3, |x, y, z| two_sum(z, -(x * y))),
+                ),
+            ];
+            for (k, (v, s)) in pairs.iter().enumerate() {
+                assert_eq!(v, s, "op {k}: {a:x?} {b:x?} {c:x?}");
+                agree += v.is_some() as u32;
+            }
+        }
+        assert!(agree > 100_000, "{agree}");
     }
 }
