@@ -5,86 +5,116 @@
 # atomic getllar/putllc increment, traces each tile as 64 packets of 8x8 rays, and writes
 # one 1 KiB block per packet to the frame buffer at FB + (tile*64 + packet)*1024:
 #   +0 hit triangle index[64] (0xffffffff = miss), +256 distance t[64] (along the
-#   unnormalised camera ray), +512 eye-light shade 0xGGGGGGff[64], +768 reserved.
+#   unnormalised camera ray), +512 eye-light shade 0xGGGGGGff[64], +768 reserved (zero).
 # Pixels within a packet are row-major (ray i = row*8 + col). When no tile is left it
 # writes its statistics (STAT_*) to STATS + index*128, sends 1 to its outbound mailbox and
 # stops with code 0x2000.
 #
-# Data layouts come from loader::layout (node: min.xyz, link | max.xyz, count<<2|axis;
-# sibling pairs share a 64-byte line; triangle: Wald's projection record + indices).
+# Traversal (paper section 4.1, Wald/Boulos/Shirley 2007) works on sibling pairs: one step
+# takes an inner node the packet enters and tests both of its children at once, each with
+# the first active ray's slab test and the packet's interval-arithmetic (IA) frustum test.
+# The two children's tests are independent, so they fill each other's latencies. The BVH
+# cache keeps each pair axis-major (transposed when the line is filled on a miss):
+#   +0  (min0.x, max0.x, min1.x, max1.x)   +16 the same for y   +32 for z
+#   +48 (link0', meta0, link1', meta1)     link' = child-pair byte offset (inner) or
+#                                          first triangle (leaf); meta = count<<2 | axis
+# so a step needs no horizontal reductions: per axis, the planes are put in (near, far)
+# order for the first ray (PERMk), and every slab test becomes "max over the axes of
+# (entry, -exit)" with the exit negated in the odd lanes by the multipliers themselves.
+# The multipliers carry a factor (1 -/+ 2^-16) that widens every box a little, so rounding
+# can only make a box test say "hit", never drop a ray that reaches a triangle.
+#
+# Main-memory layouts come from loader::layout (node: min.xyz, link | max.xyz,
+# count<<2|axis; sibling pairs share a 64-byte line; triangle: Wald's projection record).
 
         .include "layout.inc"
 
-# ---- register names (never starting with sp/lr/rp/fp: the assembler reads those as $1/$0/$127)
-        .set ZERO, 10           # 0.0 / 0
-        .set ONE, 11            # 1.0f
-        .set BIG, 12            # 1e30f
-        .set NBIG, 13           # -1e30f
-        .set ORIG, 14           # camera origin (x, y, z, 0)
-        .set PAT0, 15           # shufb patterns splatting word 0..3
-        .set PAT1, 16
-        .set PAT2, 17
-        .set PAT3, 18
-        .set M3, 19             # mask of lane 3
-        .set EANODES, 20
-        .set EATRIS, 21
-        .set EAFB, 22
-        .set EACNT, 23
-        .set EASTATS, 24
-        .set BTAGS, 25          # BVH cache: tags (16 bytes per line), data (64 bytes per line)
-        .set BDATA, 26
-        .set BMASK, 27
-        .set TTAGS, 28          # triangle cache
-        .set TDATA, 29
-        .set TMASK, 30
-        .set DIR00, 31          # camera: ray direction of pixel (0,0); per-pixel steps
-        .set DU, 32
-        .set DV, 33
-        .set TILESX, 34
-        .set NTILES, 35
-        .set MYID, 36
-        .set DUX, 37
-        .set DUY, 38
-        .set DUZ, 39
-        .set DVX, 40
-        .set DVY, 41
-        .set DVZ, 42
-        .set HALF, 43           # 0.5f
-# statistics (preferred slot integers)
-        .set S_PACKETS, 44
-        .set S_STEPS, 45
-        .set S_M1SUM, 46        # -(first-ray misses): early hits = steps + M1SUM
-        .set S_EESUM, 47        # -(early exits)
-        .set S_TRIS, 48         # triangle tests after culling
-        .set S_CULLED, 49
-        .set S_BMISS, 50
-        .set S_TLOOK, 51
-        .set S_TMISS, 52
-        .set S_LEAVES, 53
-# packet state
-        .set RLO, 54            # per axis smallest / largest reciprocal direction
-        .set RHI, 55
-        .set SGN, 56            # all-ones lanes where every direction is negative
-        .set MIXED, 57          # all-ones lanes where directions have both signs
-        .set PTMAX, 58          # splat: largest hit distance in the packet
-        .set ENFILL, 59         # IA-test fill values for mixed axes and lane 3
-        .set EXFILL, 60
-        .set FMASK, 61          # MIXED | M3
-        .set STK, 62            # traversal stack pointer (entries of 16 bytes)
-        .set STKBASE, 63
-        .set NODE, 64
-        .set FIRST, 65          # index of the first active ray
-        .set FR_R, 66           # first ray: 1/d (x, y, z, 0) and o/d
-        .set FR_OR, 67
-        .set FT_ADDR, 68        # address of the first ray's t vector, and its splat pattern
-        .set FT_PAT, 69
-        .set TILE, 70
-        .set PKT, 71
-        .set OUTSEL, 72         # which output buffer (0/1024)
-        .set TX, 73
-        .set TY, 74
-        .set COLF0, 75
-        .set COLF1, 76
+# ---- registers (never names starting with sp/lr/rp/fp: the assembler reads those as $1/$0/$127)
+# frame constants
+        .set ZERO, 2            # 0.0 / 0
+        .set ONE, 3             # 1.0f
+        .set BIG, 4             # 1e30f
+        .set NBIG, 5            # -1e30f
+        .set ORIG, 6            # camera origin (x, y, z, 0)
+        .set PAT0, 7            # shufb patterns splatting word 0..3
+        .set PAT1, 8
+        .set PAT2, 9
+        .set PAT3, 10
+        .set M3, 11             # mask of lane 3
+        .set EANODES, 12
+        .set EATRIS, 13
+        .set BTAGS, 14          # BVH cache: tags (16 bytes per line), lines of 64 bytes
+        .set BDATA, 15
+        .set BDATA16, 16        # BDATA + 16, + 32, + 48 (lqx bases for the line's quads)
+        .set BDATA32, 17
+        .set BDATA48, 18
+        .set BMASK64, 19        # (lines - 1) * 64
+        .set TTAGS, 20          # triangle cache
+        .set TDATA, 21
+        .set TMASK, 22
+# statistics (preferred-slot integers, or vectors summed at the end)
+        .set S_TRIS, 23         # triangle tests after culling
+        .set S_CULLED, 24
+        .set S_BMISS, 25
+        .set S_TLOOK, 26
+        .set S_TMISS, 27
+        .set S_LEAVES, 28
+        .set S_PACKETS, 29
+        .set S_STEPS, 30        # pair steps (two box tests each)
+        .set M1V, 31            # sum of first-ray miss masks (two lanes per child)
+        .set EEV, 32            # sum of early-exit masks (two lanes per child)
+        .set OXS, 33            # origin x, y, z splats
+        .set OYS, 34
+        .set OZS, 35
+        .set SWAP, 36           # shufb pattern swapping the words of each pair
+        .set SIGNS, 37          # 0x80000000 in every lane
+        .set NEGODD, 38         # 0x80000000 in lanes 1 and 3
+        .set TBL, 39            # decision table
+        .set STKBASE, 40
+        .set ROOTST, 41         # the root as a traversal state
+        .set EMPTY, 42          # the scene has no triangle
+# packet constants
+        .set PAX, 43            # IA multipliers: (lo(1-e), -lo(1+e), lo(1-e), -lo(1+e)), lo = min 1/d
+        .set PAY, 44
+        .set PAZ, 45
+        .set PBX, 46            # the same with hi = max 1/d
+        .set PBY, 47
+        .set PBZ, 48
+        .set OFFX, 49           # -1e30 on axes where directions have both signs (no IA bound)
+        .set OFFY, 50
+        .set OFFZ, 51
+        .set F2, 52             # (0, -tmax, 0, -tmax): tmax = the packet's largest hit distance
+# first-ray data (set_first)
+        .set RX1, 53            # (r(1-e), -r(1+e), r(1-e), -r(1+e)), r = 1/d of the first ray
+        .set RY1, 54
+        .set RZ1, 55
+        .set PERMX, 56          # identity or pair swap: planes in (near, far) order
+        .set PERMY, 57
+        .set PERMZ, 58
+        .set NEGS, 59           # per axis 128 when the first ray points down it (near = child 1)
+        .set FT_ADDR, 60        # address of the first ray's t vector, and its splat pattern
+        .set FT_PAT, 61
+        .set FIRST, 62          # index of the first active ray (splat)
+# traversal state
+        .set CUR, 63            # (link', meta, first, 0) of the node being expanded
+        .set STK, 64            # stack pointer: entries are states, 16 bytes
+# temporaries: $66..$127
+
+# ---- cold per-frame values kept in local store (lqa/stqa vars+V_*)
+        .set V_TILE, 0
+        .set V_PKT, 16
+        .set V_OUTSEL, 32       # which output buffer (0/1024)
+        .set V_TX, 48
+        .set V_TY, 64
+        .set V_EAFB, 80
+        .set V_EACNT, 96
+        .set V_EASTATS, 112
+        .set V_TILESX, 128
+        .set V_NTILES, 144
+        .set V_MYID, 160
+        .set V_DIR00, 176
+        .set V_DU, 192
+        .set V_DV, 208
 
 # ---- local-store data
         .data
@@ -92,11 +122,17 @@
 params:         .space 128
 lockbuf:        .space 128
 statbuf:        .space 128
+vars:           .space 256
+nodebuf:        .space 64
         .align 4
 k_pat:          .long 0x00010203, 0x00010203, 0x00010203, 0x00010203
                 .long 0x04050607, 0x04050607, 0x04050607, 0x04050607
                 .long 0x08090a0b, 0x08090a0b, 0x08090a0b, 0x08090a0b
                 .long 0x0c0d0e0f, 0x0c0d0e0f, 0x0c0d0e0f, 0x0c0d0e0f
+k_tpat:         .long 0x80808080, 0x00010203, 0x80808080, 0x00010203  # lane k to lanes 1, 3
+                .long 0x80808080, 0x04050607, 0x80808080, 0x04050607
+                .long 0x80808080, 0x08090a0b, 0x80808080, 0x08090a0b
+                .long 0x80808080, 0x0c0d0e0f, 0x80808080, 0x0c0d0e0f
 k_lanege:       .long -1, -1, -1, -1        # lanes >= k, k = 0..3
                 .long 0, -1, -1, -1
                 .long 0, 0, -1, -1
@@ -118,30 +154,69 @@ k_phi:          .long 0x08090a0b, 0x18191a1b, 0x0c0d0e0f, 0x1c1d1e1f
 k_pa:           .long 0x00010203, 0x04050607, 0x10111213, 0x14151617
 k_pb:           .long 0x08090a0b, 0x0c0d0e0f, 0x18191a1b, 0x1c1d1e1f
 k_pxyz:         .long 0x00010203, 0x10111213, 0x80808080, 0x80808080   # (a0, b0, 0, 0)
-k_pxyz2:        .long 0x00010203, 0x04050607, 0x10111213, 0x80808080   # (a0, a1, b0, 0)
 k_entry:        .long 0x00010203, 0x10111213, 0x80808080, 0x80808080
+k_root:         .long 0x0c0d0e0f, 0x1c1d1e1f, 0x80808080, 0x80808080   # (link, meta, 0, 0)
 k_bg:           .long 0x000000ff, 0x000000ff, 0x000000ff, 0x000000ff
+k_ident:        .long 0x00010203, 0x04050607, 0x08090a0b, 0x0c0d0e0f
+k_swap:         .long 0x04050607, 0x00010203, 0x0c0d0e0f, 0x08090a0b
+k_negodd:       .long 0, 0x80000000, 0, 0x80000000
+k_oddmask:      .long 0, -1, 0, -1
+k_evenmask:     .long -1, 0, -1, 0
+k_lane1:        .long 0, -1, 0, 0
+k_lane2:        .long 0, 0, -1, 0
+k_n128:         .long 128, 128, 128, 0
+k_child0:       .long -1, -1, 0, 0
+k_child1:       .long 0, 0, -1, -1
+k_word0:        .long -1, 0, 0, 0
+k_word1:        .long 0, -1, 0, 0
+k_eps:          .long 0x3f7fff00, 0xbf800080, 0x3f7fff00, 0xbf800080   # 1-2^-16, -(1+2^-16)
+k_epslo:        .long 0x3f7fff00, 0x3f7fff00, 0x3f7fff00, 0x3f7fff00
+k_epshi:        .long 0x3f800080, 0x3f800080, 0x3f800080, 0x3f800080
+k_shade:        .long 0x03030380, 0x07070780, 0x0b0b0b80, 0x0f0f0f80   # byte 3 of each word x3
+k_ff:           .long 0x000000ff, 0x000000ff, 0x000000ff, 0x000000ff
+k_c255:         .long 255, 255, 255, 255
+k_abs:          .long 0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff
+
+# The step's decision, indexed by (first-ray misses as gb bits & 5) | near child << 1, in
+# 64-byte entries: shufb pattern of the next state and of the pushed state (from the line's
+# (link', meta) quad and the children's first rays), stack delta, pop mask.
+# gb bits: 0 both enter, 1 (3 & 5) child 1 does not, 4 (12 & 5) child 0 does not, 5 neither.
+        .macro  child c
+        .long   0x00010203 + 0x08080808*\c, 0x04050607 + 0x08080808*\c, 0x10111213 + 0x04040404*\c, 0x80808080
+        .endm
+        .macro  decision next, push, delta, popm
+        child   \next
+        child   \push
+        .long   \delta, 0, 0, 0
+        .long   \popm, \popm, \popm, \popm
+        .endm
+        .align 6
+k_decide:
+        decision 0, 1, 16, 0    # 0: both, child 0 near: go to 0, push 1
+        decision 0, 1, 0, 0     # 1: child 0 only
+        decision 1, 0, 16, 0    # 2: both, child 1 near: go to 1, push 0
+        decision 0, 1, 0, 0     # 3: child 0 only
+        decision 1, 0, 0, 0     # 4: child 1 only
+        decision 0, 1, -16, -1  # 5: neither: pop
+        decision 1, 0, 0, 0     # 6: child 1 only
+        decision 0, 1, -16, -1  # 7: neither: pop
 
         .align 4
-ray_dx:         .space 256      # structure of arrays, 16 vectors of 4 rays each
-ray_dy:         .space 256      # (dx, dy, dz must stay contiguous: k_axoff)
+ray_dx:         .space 256      # structure of arrays, 16 vectors of 4 rays each, contiguous
+ray_dy:         .space 256      # in this order (stores use offsets from ray_dx)
 ray_dz:         .space 256
 ray_rx:         .space 256
 ray_ry:         .space 256
 ray_rz:         .space 256
-ray_orx:        .space 256
-ray_ory:        .space 256
-ray_orz:        .space 256
 ray_t:          .space 256
 ray_id:         .space 256
 ray_nd:         .space 256      # cosine numerator: (n.d)/|n| of the hit
 ray_invd:       .space 256      # 1/|d|
-aos_r:          .space 1024     # per ray (1/dx, 1/dy, 1/dz, 0)
-aos_or:         .space 1024     # per ray (ox/dx, oy/dy, oz/dz, 0)
 corners:        .space 48       # corner rays' x, y, z (rays 0, 7, 56, 63)
         .align 7
 outbuf:         .space 2048     # two packet result blocks, alternating
-stack:          .space 2048     # traversal stack: (node, first) per entry
+        .space  16              # below the stack: what popping an empty stack reads
+stack:          .space 2048     # traversal stack
         .align 7
 cache_area:                     # carved at start: BVH tags, BVH lines, triangle tags, lines
 
@@ -149,284 +224,321 @@ cache_area:                     # carved at start: BVH tags, BVH lines, triangle
         .text
         .global _start
 _start:
-        il      $2, 0
-        ori     MYID, $3, 0
+        il      ZERO, 0
+        stqa    $3, vars+V_MYID
         # fetch the parameter block
-        ila     $5, params
-        il      $6, 128
-        il      $7, 0
-        wrch    $MFC_LSA, $5
-        wrch    $MFC_EAH, $2
+        ila     $66, params
+        il      $67, 128
+        il      $68, 0
+        wrch    $MFC_LSA, $66
+        wrch    $MFC_EAH, ZERO
         wrch    $MFC_EAL, $4
-        wrch    $MFC_Size, $6
-        wrch    $MFC_TagID, $7
-        il      $8, 0x40
-        wrch    $MFC_Cmd, $8
-        il      $8, 1
-        wrch    $MFC_WrTagMask, $8
-        il      $8, 2
-        wrch    $MFC_WrTagUpdate, $8
-        rdch    $8, $MFC_RdTagStat
+        wrch    $MFC_Size, $67
+        wrch    $MFC_TagID, $68
+        il      $69, 0x40
+        wrch    $MFC_Cmd, $69
+        il      $69, 1
+        wrch    $MFC_WrTagMask, $69
+        il      $69, 2
+        wrch    $MFC_WrTagUpdate, $69
+        rdch    $69, $MFC_RdTagStat
 
         # constants
-        il      ZERO, 0
         ilhu    ONE, 0x3f80
-        ilhu    HALF, 0x3f00
         ilhu    BIG, 0x7149
         iohl    BIG, 0xf2ca
         ilhu    NBIG, 0xf149
         iohl    NBIG, 0xf2ca
-        ila     $5, k_pat
-        lqd     PAT0, 0($5)
-        lqd     PAT1, 16($5)
-        lqd     PAT2, 32($5)
-        lqd     PAT3, 48($5)
+        ila     $66, k_pat
+        lqd     PAT0, 0($66)
+        lqd     PAT1, 16($66)
+        lqd     PAT2, 32($66)
+        lqd     PAT3, 48($66)
         lqa     M3, k_m3
-        lqa     COLF0, k_colf0
-        lqa     COLF1, k_colf1
+        lqa     SWAP, k_swap
+        ilhu    SIGNS, 0x8000
+        lqa     NEGODD, k_negodd
+        ila     TBL, k_decide
+        ila     STKBASE, stack
 
         # parameters
-        ila     $5, params
-        lqd     $6, PARAM_EA_NODES($5)        # quad 0: nodes, tris, fb, counter
-        ori     EANODES, $6, 0
-        rotqbyi EATRIS, $6, 4
-        rotqbyi EAFB, $6, 8
-        rotqbyi EACNT, $6, 12
-        lqd     $6, PARAM_WIDTH($5)           # quad 1: width, height, tiles_x, num_tiles
-        rotqbyi TILESX, $6, 8
-        rotqbyi NTILES, $6, 12
-        lqd     ORIG, PARAM_ORIGIN($5)
-        lqd     DIR00, PARAM_DIR00($5)
-        lqd     DU, PARAM_DU($5)
-        lqd     DV, PARAM_DV($5)
+        ila     $66, params
+        lqd     $67, PARAM_EA_NODES($66)      # quad 0: nodes, tris, fb, counter
+        ori     EANODES, $67, 0
+        rotqbyi EATRIS, $67, 4
+        rotqbyi $68, $67, 8
+        stqa    $68, vars+V_EAFB
+        rotqbyi $68, $67, 12
+        stqa    $68, vars+V_EACNT
+        lqd     $67, PARAM_WIDTH($66)         # quad 1: width, height, tiles_x, num_tiles
+        rotqbyi $68, $67, 8
+        stqa    $68, vars+V_TILESX
+        rotqbyi $68, $67, 12
+        stqa    $68, vars+V_NTILES
+        lqd     ORIG, PARAM_ORIGIN($66)
+        lqd     $68, PARAM_DIR00($66)
+        lqd     $69, PARAM_DU($66)
+        lqd     $70, PARAM_DV($66)
         andc    ORIG, ORIG, M3
-        andc    DIR00, DIR00, M3
-        andc    DU, DU, M3
-        andc    DV, DV, M3
-        shufb   DUX, DU, DU, PAT0
-        shufb   DUY, DU, DU, PAT1
-        shufb   DUZ, DU, DU, PAT2
-        shufb   DVX, DV, DV, PAT0
-        shufb   DVY, DV, DV, PAT1
-        shufb   DVZ, DV, DV, PAT2
-        lqd     $6, PARAM_BVH_LOG2($5)        # quad 6: bvh log2, tri log2, stats EA
-        rotqbyi EASTATS, $6, 8
+        andc    $68, $68, M3
+        andc    $69, $69, M3
+        andc    $70, $70, M3
+        stqa    $68, vars+V_DIR00
+        stqa    $69, vars+V_DU
+        stqa    $70, vars+V_DV
+        shufb   OXS, ORIG, ORIG, PAT0
+        shufb   OYS, ORIG, ORIG, PAT1
+        shufb   OZS, ORIG, ORIG, PAT2
+        lqd     $67, PARAM_BVH_LOG2($66)      # quad 6: bvh log2, tri log2, stats EA
+        rotqbyi $68, $67, 8
+        stqa    $68, vars+V_EASTATS
         # carve the caches: lines = 1 << log2
-        il      $7, 1
-        shl     $8, $7, $6                    # BVH lines
-        rotqbyi $9, $6, 4
-        shl     $9, $7, $9                    # triangle lines
-        ai      BMASK, $8, -1
-        ai      TMASK, $9, -1
+        il      $69, 1
+        shl     $70, $69, $67                 # BVH lines
+        rotqbyi $71, $67, 4
+        shl     $71, $69, $71                 # triangle lines
+        ai      BMASK64, $70, -1
+        shli    BMASK64, BMASK64, 6
+        ai      TMASK, $71, -1
         ila     BTAGS, cache_area
-        shli    $10, $8, 4
-        a       BDATA, BTAGS, $10
-        shli    $10, $8, 6
-        a       TTAGS, BDATA, $10
-        shli    $10, $9, 4
-        a       TDATA, TTAGS, $10
-        il      ZERO, 0
+        shli    $72, $70, 4
+        a       BDATA, BTAGS, $72
+        ai      BDATA16, BDATA, 16
+        ai      BDATA32, BDATA, 32
+        ai      BDATA48, BDATA, 48
+        shli    $72, $70, 6
+        a       TTAGS, BDATA, $72
+        shli    $72, $71, 4
+        a       TDATA, TTAGS, $72
         # invalidate every tag of both caches
-        il      $10, -1
-        ori     $11, BTAGS, 0
-1:      stqd    $10, 0($11)
-        ai      $11, $11, 16
-        ai      $8, $8, -1
-        brnz    $8, 1b
-        ori     $11, TTAGS, 0
-1:      stqd    $10, 0($11)
-        ai      $11, $11, 16
-        ai      $9, $9, -1
-        brnz    $9, 1b
-        il      ZERO, 0
-        ilhu    ONE, 0x3f80
-        ilhu    BIG, 0x7149
-        iohl    BIG, 0xf2ca
+        il      $72, -1
+        ori     $73, BTAGS, 0
+1:      stqd    $72, 0($73)
+        ai      $73, $73, 16
+        ai      $70, $70, -1
+        brnz    $70, 1b
+        ori     $73, TTAGS, 0
+1:      stqd    $72, 0($73)
+        ai      $73, $73, 16
+        ai      $71, $71, -1
+        brnz    $71, 1b
+        # the reserved quarter of both output blocks stays zero
+        ila     $73, outbuf+768
+        il      $74, 16
+1:      stqd    ZERO, 0($73)
+        stqd    ZERO, 1024($73)
+        ai      $73, $73, 16
+        ai      $74, $74, -1
+        brnz    $74, 1b
+
+        # the root node as a traversal state (link', meta, 0, 0); an inner root whose link
+        # is 0 marks the empty scene (see loader::layout)
+        ila     $66, nodebuf
+        il      $67, 32
+        wrch    $MFC_LSA, $66
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, EANODES
+        wrch    $MFC_Size, $67
+        wrch    $MFC_TagID, ZERO
+        il      $67, 0x40
+        wrch    $MFC_Cmd, $67
+        il      $67, 1
+        wrch    $MFC_WrTagMask, $67
+        il      $67, 2
+        wrch    $MFC_WrTagUpdate, $67
+        rdch    $67, $MFC_RdTagStat
+        lqd     $67, 0($66)
+        lqd     $68, 16($66)
+        lqa     $69, k_root
+        shufb   $70, $67, $68, $69            # (link, meta, 0, 0)
+        rotqbyi $71, $70, 4
+        rotmi   $71, $71, -2                  # triangle count
+        ceqi    $72, $71, 0                   # inner
+        shli    $73, $70, 5                   # child-pair byte offset
+        lqa     $74, k_word0
+        and     $72, $72, $74                 # lane 0 only
+        selb    ROOTST, $70, $73, $72
+        ceqi    EMPTY, $70, 0                 # link 0 ...
+        and     EMPTY, EMPTY, $72             # ... of an inner root
 
         # statistics
         il      S_PACKETS, 0
         il      S_STEPS, 0
-        il      S_M1SUM, 0
-        il      S_EESUM, 0
+        il      M1V, 0
+        il      EEV, 0
         il      S_TRIS, 0
         il      S_CULLED, 0
         il      S_BMISS, 0
         il      S_TLOOK, 0
         il      S_TMISS, 0
         il      S_LEAVES, 0
-        ila     STKBASE, stack
-        il      OUTSEL, 0
+        stqa    ZERO, vars+V_OUTSEL
 
 # ---- take the next tile: atomic fetch-and-increment of the shared counter
 next_tile:
-        ila     $5, lockbuf
-        lqa     $9, k_inc0
-2:      wrch    $MFC_LSA, $5
+        ila     $66, lockbuf
+        lqa     $69, k_inc0
+        lqa     $70, vars+V_EACNT
+2:      wrch    $MFC_LSA, $66
         wrch    $MFC_EAH, ZERO
-        wrch    $MFC_EAL, EACNT
-        il      $6, 0xd0                      # getllar
-        wrch    $MFC_Cmd, $6
-        rdch    $7, $MFC_RdAtomicStat
-        lqd     $8, 0($5)
-        a       $80, $8, $9
-        stqd    $80, 0($5)
-        wrch    $MFC_LSA, $5
+        wrch    $MFC_EAL, $70
+        il      $67, 0xd0                     # getllar
+        wrch    $MFC_Cmd, $67
+        rdch    $68, $MFC_RdAtomicStat
+        lqd     $71, 0($66)
+        a       $72, $71, $69
+        stqd    $72, 0($66)
+        wrch    $MFC_LSA, $66
         wrch    $MFC_EAH, ZERO
-        wrch    $MFC_EAL, EACNT
-        il      $6, 0xb4                      # putllc
-        wrch    $MFC_Cmd, $6
-        rdch    $7, $MFC_RdAtomicStat
-        andi    $7, $7, 1
-        brnz    $7, 2b                        # reservation lost: retry
-        clgt    $7, NTILES, $8
-        brz     $7, frame_done
-        ori     TILE, $8, 0
+        wrch    $MFC_EAL, $70
+        il      $67, 0xb4                     # putllc
+        wrch    $MFC_Cmd, $67
+        rdch    $68, $MFC_RdAtomicStat
+        andi    $68, $68, 1
+        brnz    $68, 2b                       # reservation lost: retry
+        lqa     $73, vars+V_NTILES
+        clgt    $68, $73, $71
+        brz     $68, frame_done
+        stqa    $71, vars+V_TILE
         # tile coordinates: TY = TILE / TILESX, TX = TILE % TILESX (few tiles per row)
-        il      TY, 0
-        ori     TX, TILE, 0
-3:      clgt    $7, TILESX, TX
-        brnz    $7, 4f
-        sf      TX, TILESX, TX
-        ai      TY, TY, 1
+        lqa     $74, vars+V_TILESX
+        il      $75, 0
+        ori     $76, $71, 0
+3:      clgt    $68, $74, $76
+        brnz    $68, 4f
+        sf      $76, $74, $76
+        ai      $75, $75, 1
         br      3b
-4:      il      PKT, 0
+4:      stqa    $76, vars+V_TX
+        stqa    $75, vars+V_TY
+        stqa    ZERO, vars+V_PKT
 
 packet_loop:
         # ---- ray generation: d = dir00 + (px0 + col)*du + (py0 + row)*dv
-        andi    $5, PKT, 7
-        rotmi   $6, PKT, -3
-        shli    $7, TX, 6
-        shli    $8, TY, 6
-        shli    $5, $5, 3
-        shli    $6, $6, 3
-        a       $5, $5, $7                    # px0
-        a       $6, $6, $8                    # py0
-        csflt   $5, $5, 0
-        csflt   $6, $6, 0
-        shufb   $5, $5, $5, PAT0
-        shufb   $6, $6, $6, PAT0
-        fma     $7, $5, DU, DIR00
-        fma     $7, $6, DV, $7                # base direction (x, y, z, 0)
-        shufb   $80, $7, $7, PAT0             # bx
-        shufb   $81, $7, $7, PAT1             # by
-        shufb   $82, $7, $7, PAT2             # bz
-        shufb   $83, ORIG, ORIG, PAT0         # ox
-        shufb   $84, ORIG, ORIG, PAT1
-        shufb   $85, ORIG, ORIG, PAT2
-        lqa     $86, k_plo
-        lqa     $87, k_phi
-        lqa     $88, k_pa
-        lqa     $89, k_pb
+        lqa     $66, vars+V_PKT
+        lqa     $67, vars+V_TX
+        lqa     $68, vars+V_TY
+        lqa     $73, vars+V_DIR00
+        lqa     $74, vars+V_DU
+        lqa     $75, vars+V_DV
+        andi    $69, $66, 7
+        rotmi   $70, $66, -3
+        shli    $71, $67, 6
+        shli    $72, $68, 6
+        shli    $69, $69, 3
+        shli    $70, $70, 3
+        a       $69, $69, $71                 # px0
+        a       $70, $70, $72                 # py0
+        csflt   $69, $69, 0
+        csflt   $70, $70, 0
+        shufb   $69, $69, $69, PAT0
+        shufb   $70, $70, $70, PAT0
+        shufb   $77, $74, $74, PAT0           # du, dv splats
+        shufb   $78, $74, $74, PAT1
+        fma     $76, $69, $74, $73
+        shufb   $79, $74, $74, PAT2
+        shufb   $80, $75, $75, PAT0
+        fma     $76, $70, $75, $76            # base direction (x, y, z, 0)
+        shufb   $81, $75, $75, PAT1
+        shufb   $82, $75, $75, PAT2
+        lqa     $86, k_ccol
+        lqa     $87, k_crow
+        shufb   $83, $76, $76, PAT0           # base x, y, z splats
+        shufb   $84, $76, $76, PAT1
+        shufb   $85, $76, $76, PAT2
+        lqa     $91, k_colf0
+        lqa     $92, k_colf1
         # corner rays (0, 7, 56, 63) for the packet frustum
-        lqa     $90, k_ccol
-        lqa     $91, k_crow
-        fma     $92, $91, DVX, $80
-        fma     $92, $90, DUX, $92
-        fma     $93, $91, DVY, $81
-        fma     $93, $90, DUY, $93
-        fma     $94, $91, DVZ, $82
-        fma     $94, $90, DUZ, $94
-        ila     $95, corners
-        stqd    $92, 0($95)
-        stqd    $93, 16($95)
-        stqd    $94, 32($95)
+        fma     $93, $87, $80, $83
+        fma     $94, $87, $81, $84
+        fma     $95, $87, $82, $85
+        ila     $88, ray_dx                   # vector pointer
+        il      $89, 0                        # row (float)
+        fma     $93, $86, $77, $93
+        fma     $94, $86, $78, $94
+        fma     $95, $86, $79, $95
+        il      $90, 8                        # rows left
+        il      $118, -1
+        stqa    $93, corners
+        stqa    $94, corners+16
+        stqa    $95, corners+32
 
-        il      $95, 0                        # byte offset of vector j
-        il      $96, 0                        # row (float)
-        ila     $97, aos_r
-        ila     $98, aos_or
-        il      $99, 8                        # rows left
-5:      fma     $100, $96, DVX, $80           # row part
-        fma     $101, $96, DVY, $81
-        fma     $102, $96, DVZ, $82
-        il      $103, 2                       # two vectors per row
-        ori     $104, COLF0, 0
-6:      fma     $105, $104, DUX, $100         # dx
-        fma     $106, $104, DUY, $101         # dy
-        fma     $107, $104, DUZ, $102         # dz
-        frest   $108, $105
-        frest   $109, $106
-        frest   $110, $107
-        fi      $108, $105, $108
-        fi      $109, $106, $109
-        fi      $110, $107, $110
-        fnms    $111, $105, $108, ONE
-        fnms    $112, $106, $109, ONE
-        fnms    $113, $107, $110, ONE
-        fma     $108, $111, $108, $108        # rx (one Newton step)
-        fma     $109, $112, $109, $109
-        fma     $110, $113, $110, $110
-        fm      $111, $83, $108               # ox/dx
-        fm      $112, $84, $109
-        fm      $113, $85, $110
-        fm      $114, $105, $105              # |d|^2
-        fma     $114, $106, $106, $114
-        fma     $114, $107, $107, $114
-        frsqest $115, $114
-        fi      $115, $114, $115              # 1/|d|, ~12 bits: enough for shading
-        ila     $116, ray_dx
-        stqx    $105, $116, $95
-        ila     $116, ray_dy
-        stqx    $106, $116, $95
-        ila     $116, ray_dz
-        stqx    $107, $116, $95
-        ila     $116, ray_rx
-        stqx    $108, $116, $95
-        ila     $116, ray_ry
-        stqx    $109, $116, $95
-        ila     $116, ray_rz
-        stqx    $110, $116, $95
-        ila     $116, ray_orx
-        stqx    $111, $116, $95
-        ila     $116, ray_ory
-        stqx    $112, $116, $95
-        ila     $116, ray_orz
-        stqx    $113, $116, $95
-        ila     $116, ray_t
-        stqx    BIG, $116, $95
-        ila     $116, ray_id
-        il      $117, -1
-        stqx    $117, $116, $95
-        ila     $116, ray_nd
-        stqx    ZERO, $116, $95
-        ila     $116, ray_invd
-        stqx    $115, $116, $95
-        # transpose (rx, ry, rz) into four per-ray quadwords
-        shufb   $117, $108, $109, $86         # rx0 ry0 rx1 ry1
-        shufb   $118, $110, ZERO, $86         # rz0 0 rz1 0
-        shufb   $119, $108, $109, $87         # rx2 ry2 rx3 ry3
-        shufb   $120, $110, ZERO, $87
-        shufb   $121, $117, $118, $88         # ray 0
-        shufb   $122, $117, $118, $89         # ray 1
-        shufb   $123, $119, $120, $88         # ray 2
-        shufb   $124, $119, $120, $89         # ray 3
-        fm      $125, $121, ORIG
-        fm      $126, $122, ORIG
-        fm      $127, $123, ORIG
-        fm      $117, $124, ORIG
-        stqd    $121, 0($97)
-        stqd    $122, 16($97)
-        stqd    $123, 32($97)
-        stqd    $124, 48($97)
-        stqd    $125, 0($98)
-        stqd    $126, 16($98)
-        stqd    $127, 32($98)
-        stqd    $117, 48($98)
-        ai      $97, $97, 64
-        ai      $98, $98, 64
-        ai      $95, $95, 16
-        ori     $104, COLF1, 0
-        ai      $103, $103, -1
-        brnz    $103, 6b
-        fa      $96, $96, ONE
-        ai      $99, $99, -1
-        brnz    $99, 5b
+        # two vectors (one row) per pass
+        hbrr    .Lrow_br, .Lrow
+.Lrow:  fma     $93, $89, $80, $83            # row part
+        fma     $94, $89, $81, $84
+        fma     $95, $89, $82, $85
+        fma     $96, $91, $77, $93            # dx, dy, dz of columns 0-3
+        fma     $97, $91, $78, $94
+        fma     $98, $91, $79, $95
+        fma     $99, $92, $77, $93            # columns 4-7
+        frest   $102, $96
+        fma     $100, $92, $78, $94
+        frest   $103, $97
+        fma     $101, $92, $79, $95
+        frest   $104, $98
+        fm      $114, $96, $96                # |d|^2
+        frest   $105, $99
+        fm      $115, $99, $99
+        frest   $106, $100
+        fi      $102, $96, $102
+        frest   $107, $101
+        fi      $103, $97, $103
+        stqd    $96, 0($88)
+        fi      $104, $98, $104
+        stqd    $97, 256($88)
+        fi      $105, $99, $105
+        stqd    $98, 512($88)
+        fi      $106, $100, $106
+        stqd    $99, 16($88)
+        fi      $107, $101, $107
+        stqd    $100, 272($88)
+        fnms    $108, $96, $102, ONE
+        stqd    $101, 528($88)
+        fnms    $109, $97, $103, ONE
+        stqd    BIG, 1536($88)
+        fnms    $110, $98, $104, ONE
+        stqd    BIG, 1552($88)
+        fnms    $111, $99, $105, ONE
+        stqd    $118, 1792($88)
+        fnms    $112, $100, $106, ONE
+        stqd    $118, 1808($88)
+        fnms    $113, $101, $107, ONE
+        stqd    ZERO, 2048($88)
+        fma     $102, $108, $102, $102        # 1/d, one Newton step
+        stqd    ZERO, 2064($88)
+        fma     $103, $109, $103, $103
+        fma     $104, $110, $104, $104
+        fma     $105, $111, $105, $105
+        fma     $106, $112, $106, $106
+        fma     $107, $113, $107, $107
+        fma     $114, $97, $97, $114
+        stqd    $102, 768($88)
+        fma     $115, $100, $100, $115
+        stqd    $103, 1024($88)
+        fma     $114, $98, $98, $114
+        stqd    $104, 1280($88)
+        fma     $115, $101, $101, $115
+        stqd    $105, 784($88)
+        fa      $89, $89, ONE
+        stqd    $106, 1040($88)
+        ai      $90, $90, -1
+        stqd    $107, 1296($88)
+        frsqest $116, $114
+        frsqest $117, $115
+        fi      $116, $114, $116              # 1/|d|, ~12 bits: enough for shading
+        fi      $117, $115, $117
+        stqd    $116, 2304($88)
+        stqd    $117, 2320($88)
+        ai      $88, $88, 32
+.Lrow_br:
+        brnz    $90, .Lrow
 
-        # ---- packet frustum for interval-arithmetic box tests: per-axis 1/d range
-        ila     $95, corners
-        lqd     $92, 0($95)
-        lqd     $93, 16($95)
-        lqd     $94, 32($95)
+        # ---- packet frustum for the IA box tests: per axis the range of 1/d over the
+        # corner rays (1/d is monotonic in d where the sign does not change)
+        lqa     $92, corners
+        lqa     $93, corners+16
+        lqa     $94, corners+32
         frest   $100, $92
         frest   $101, $93
         frest   $102, $94
@@ -439,7 +551,7 @@ packet_loop:
         fma     $100, $103, $100, $100
         fma     $101, $104, $101, $101
         fma     $102, $105, $102, $102
-        # min and max over the four corners, per axis (results in every lane):
+        # min and max over the four corners, per axis, in every lane:
         # $100..$102 = min of 1/dx, 1/dy, 1/dz; $103..$105 = max
         .irp    R, 100, 101, 102
         rotqbyi $106, $\R, 8
@@ -453,272 +565,343 @@ packet_loop:
         selb    $\R, $108, $110, $112
         selb    (\R+3), $109, $111, $113
         .endr
-        lqa     $106, k_pxyz
-        shufb   $107, $100, $101, $106        # (minx, miny, 0, 0)
-        shufb   $108, $103, $104, $106        # (maxx, maxy, 0, 0)
-        rotqbyi $109, M3, 4                   # mask of lane 2
-        selb    RLO, $107, $102, $109
-        selb    RHI, $108, $105, $109
-        fcgt    SGN, ZERO, RHI                # every direction negative
-        fcgt    MIXED, ZERO, RLO
-        andc    MIXED, MIXED, SGN             # signs differ across the packet
-        andc    SGN, SGN, M3
-        andc    MIXED, MIXED, M3
-        or      FMASK, MIXED, M3
-        selb    ENFILL, NBIG, ZERO, M3
-        ori     PTMAX, BIG, 0
-        selb    EXFILL, BIG, PTMAX, M3
+        lqa     $106, k_eps
+        .irp    K, 0, 1, 2
+        fcgt    $107, ZERO, (\K+100)          # some direction negative
+        fcgt    $108, ZERO, (\K+103)          # every direction negative
+        andc    $107, $107, $108              # both signs: no IA bound on this axis
+        fm      (\K+PAX), (\K+100), $106
+        fm      (\K+PBX), (\K+103), $106
+        andc    (\K+PAX), (\K+PAX), $107
+        andc    (\K+PBX), (\K+PBX), $107
+        and     (\K+OFFX), NBIG, $107
+        .endr
+        lqa     $106, k_oddmask
+        and     F2, NBIG, $106                # (0, -1e30, 0, -1e30)
 
-        # ---- traversal
+        # ---- traversal from the root's children
         ori     STK, STKBASE, 0
-        il      NODE, 0
         il      FIRST, 0
         brsl    $0, set_first
+        ori     CUR, ROOTST, 0
+        brnz    EMPTY, packet_done
+        br      .Lnewcur
 
+# ---- one traversal step: test both children of CUR (an inner node the packet enters)
+# $68/$70/$71: the pair's x/y/z planes, $73: (link', meta) of both children, $76: near
+# child's table offset, $77: the entry a pop takes, $112: first-ray miss mask
+# (lanes child 0, 0, 1, 1), $118: the children's first active rays.
 trav:
-        hbrr    .Lstep_br, trav               # every step ends by looping back here
+        hbrr    .Lloop_br, trav               # every step ends by looping back here
         ai      S_STEPS, S_STEPS, 1
-        # BVH cache lookup (direct mapped on the sibling pair)
-        rotmi   $80, NODE, -1                 # pair
-        and     $81, $80, BMASK               # slot
-        andi    $82, NODE, 1
-        shli    $83, $81, 4
-        shli    $84, $81, 6
-        shli    $82, $82, 5
-        a       $84, $84, $82
-        lqx     $85, BTAGS, $83
-        a       $86, BDATA, $84               # node address in the cache
-        lqd     $87, 0($86)                   # (min, link)
-        lqd     $88, 16($86)                  # (max, count << 2 | axis)
-        lqd     $89, 0(FT_ADDR)
-        ceq     $90, $85, $80
-        brz     $90, bvh_miss
-bvh_hit:
-        shufb   $89, $89, $89, FT_PAT         # first ray's t, every lane
-        # first-ray slab test
-        fms     $91, $87, FR_R, FR_OR
-        fms     $92, $88, FR_R, FR_OR
-        # interval-arithmetic test of the whole packet
-        selb    $93, $87, $88, SGN            # near planes
-        selb    $94, $88, $87, SGN            # far planes
-        fcgt    $95, $91, $92
-        fs      $93, $93, ORIG
-        fs      $94, $94, ORIG
-        selb    $96, $91, $92, $95            # per-axis entry
-        selb    $97, $92, $91, $95            # per-axis exit
-        fm      $98, $93, RLO
-        fm      $99, $93, RHI
-        fm      $100, $94, RLO
-        fm      $101, $94, RHI
-        selb    $96, $96, ZERO, M3
-        selb    $97, $97, $89, M3
-        fcgt    $102, $98, $99
-        fcgt    $103, $100, $101
-        selb    $104, $98, $99, $102          # packet entry bound per axis
-        selb    $105, $101, $100, $103        # packet exit bound per axis
-        rotqbyi $106, $96, 8
-        rotqbyi $107, $97, 8
-        selb    $104, $104, ENFILL, FMASK
-        selb    $105, $105, EXFILL, FMASK
-        fcgt    $108, $106, $96
-        fcgt    $109, $97, $107
-        rotqbyi $110, $104, 8
-        rotqbyi $111, $105, 8
-        selb    $96, $96, $106, $108          # max
-        selb    $97, $97, $107, $109          # min
-        fcgt    $112, $110, $104
-        fcgt    $113, $105, $111
-        rotqbyi $106, $96, 4
-        rotqbyi $107, $97, 4
-        selb    $104, $104, $110, $112
-        selb    $105, $105, $111, $113
-        fcgt    $108, $106, $96
-        fcgt    $109, $97, $107
-        rotqbyi $110, $104, 4
-        rotqbyi $111, $105, 4
-        selb    $96, $96, $106, $108          # first ray: largest entry
-        selb    $97, $97, $107, $109          # first ray: smallest exit
-        fcgt    $112, $110, $104
-        fcgt    $113, $105, $111
-        selb    $104, $104, $110, $112
-        selb    $105, $105, $111, $113
-        fcgt    $114, $96, $97                # first ray misses
-        fcgt    $115, $104, $105              # the packet's frustum misses
-        rotqbyi $116, $88, 12                 # count << 2 | axis
-        a       S_M1SUM, S_M1SUM, $114
-        and     $117, $114, $115
-        a       S_EESUM, S_EESUM, $117
-        andc    $118, $114, $115              # first ray missed, frustum undecided
-        brnz    $118, slow                    # the third case: the only one that branches
-
-# ---- one step ends branch-free: descend into the node ($114 = 0) or pop ($114 = -1).
-# Both are computed; the push is stored either way (when popping it lands above the top).
-step:
-        rotmi   $117, $116, -2                # triangle count (0: inner node)
-        andc    $119, $117, $114              # a leaf we descend into
-        brnz    $119, leaf
-        rotqbyi $118, $87, 12                 # first child
-        andi    $119, $116, 3                 # split axis
-        shli    $119, $119, 2
-        rotqby  $120, FR_R, $119              # first ray's 1/d on that axis
-        fcgt    $121, ZERO, $120              # -1 when it points down the axis
-        lqd     $81, -16(STK)                 # the entry a pop takes
-        sf      $124, $121, $118              # near child: first + (negative)
-        a       $122, $118, $121
-        ai      $122, $122, 1                 # far child
-        lqa     $123, k_entry
-        shufb   $123, $122, FIRST, $123
-        ceq     $80, STK, STKBASE
-        stqd    $123, 0(STK)
-        ai      $125, STK, 16
-        ai      $126, STK, -16
-        and     $80, $80, $114                # popping an empty stack: the packet is done
-        brnz    $80, packet_done
-        rotqbyi $82, $81, 4                   # popped first active ray
-        selb    STK, $125, $126, $114
-        selb    NODE, $124, $81, $114
-        selb    $82, FIRST, $82, $114
-        ceq     $83, $82, FIRST
-        brz     $83, first_changed
-.Lstep_br:
+.Llookup:
+        and     $66, CUR, BMASK64             # the pair's cache line
+        rotqbyi $67, CUR, 4                   # meta
+        rotmi   $72, $66, -2                  # its tag
+        lqx     $68, BDATA, $66
+        andi    $69, $67, 3                   # split axis
+        lqx     $70, BDATA16, $66
+        shli    $69, $69, 2
+        lqx     $71, BDATA32, $66
+        lqx     $73, BDATA48, $66
+        lqd     $74, 0(FT_ADDR)               # the first ray's t
+        lqx     $75, BTAGS, $72
+        rotqby  $76, NEGS, $69                # near child (0 / 128)
+        lqd     $77, -16(STK)
+        shufb   $78, $68, $68, PERMX          # planes in (near, far) order
+        shufb   $79, $70, $70, PERMY
+        shufb   $80, $71, $71, PERMZ
+        shufb   $81, $74, $74, FT_PAT         # (0, t, 0, t)
+        fs      $82, $78, OXS                 # plane - origin
+        fs      $83, $79, OYS
+        fs      $84, $80, OZS
+        xor     $81, $81, NEGODD              # (0, -t, 0, -t)
+        fm      $85, $82, RX1                 # first ray: (entry, -exit) per child
+        fm      $86, $83, RY1
+        fm      $87, $84, RZ1
+        fma     $88, $82, PAX, OFFX           # packet: both bounds, min taken below
+        fma     $89, $82, PBX, OFFX
+        fma     $90, $83, PAY, OFFY
+        fma     $91, $83, PBY, OFFY
+        fma     $92, $84, PAZ, OFFZ
+        fma     $93, $84, PBZ, OFFZ
+        fcgt    $94, $85, $86
+        fcgt    $95, $87, $81
+        selb    $96, $86, $85, $94            # max(x, y)
+        selb    $97, $81, $87, $95            # max(z, fill)
+        fcgt    $98, $88, $89
+        fcgt    $99, $90, $91
+        fcgt    $100, $92, $93
+        fcgt    $101, $96, $97
+        selb    $102, $88, $89, $98           # min per axis
+        selb    $103, $90, $91, $99
+        selb    $104, $92, $93, $100
+        selb    $105, $97, $96, $101          # first ray: (entry, -exit) over all axes
+        fcgt    $106, $102, $103
+        fcgt    $107, $104, F2
+        shufb   $108, $105, $105, SWAP
+        selb    $109, $103, $102, $106
+        selb    $110, F2, $104, $107
+        xor     $108, $108, SIGNS             # (exit, -entry)
+        fcgt    $111, $109, $110
+        fcgt    $112, $105, $108              # the first ray misses (entry > exit)
+        selb    $113, $110, $109, $111        # packet: (entry, -exit) over all axes
+        ceq     $114, $75, CUR                # the line holds this pair
+        shufb   $115, $113, $113, SWAP
+        brz     $114, bvh_miss
+        xor     $115, $115, SIGNS
+        a       M1V, M1V, $112
+        fcgt    $116, $113, $115              # the frustum misses
+        gb      $117, $112
+        ori     $118, FIRST, 0
+        andc    $119, $112, $116              # undecided: first ray misses, frustum not
+        and     $120, $112, $116              # early exits
+        gb      $121, $119
+        a       EEV, EEV, $120
+        andi    $117, $117, 5
+        brnz    $121, slow                    # the third case: the only one that branches
+.Ldecide:
+        shli    $117, $117, 6
+        a       $117, $117, $76
+        a       $117, $117, TBL
+        lqd     $122, 0($117)                 # next-state pattern
+        lqd     $123, 16($117)                # pushed-state pattern
+        lqd     $124, 32($117)                # stack delta
+        lqd     $125, 48($117)                # pop mask
+        ceq     $126, STK, STKBASE
+        shufb   $122, $73, $118, $122
+        shufb   $123, $73, $118, $123
+        and     $126, $126, $125              # popping an empty stack: the packet is done
+        selb    CUR, $122, $77, $125
+        stqd    $123, 0(STK)                  # stored either way; kept when delta = 16
+        brnz    $126, packet_done
+        a       STK, STK, $124
+.Lnewcur:
+        shufb   $127, CUR, CUR, PAT2          # its first active ray
+        rotqbyi $66, CUR, 4
+        ceq     $127, $127, FIRST
+        rotmi   $66, $66, -2                  # triangle count: a leaf
+        brz     $127, first_changed
+        brnz    $66, leaf
+.Lloop_br:
         br      trav
+
 first_changed:
-        ori     FIRST, $82, 0
+        shufb   FIRST, CUR, CUR, PAT2
         brsl    $0, set_first
-        br      trav
+        br      .Lnewcur
 
-        # ---- neither test decided: look for the first ray (from FIRST on) that hits
+# ---- the third case: the first ray misses a child the frustum does not rule out. Find the
+# first ray from FIRST on that enters it; none means the child is skipped.
 slow:
+        brz     $119, .Lslow1
+        shufb   $80, $68, $68, PAT0           # child 0: min, max planes
+        shufb   $81, $68, $68, PAT1
+        shufb   $82, $70, $70, PAT0
+        shufb   $83, $70, $70, PAT1
+        shufb   $84, $71, $71, PAT0
+        shufb   $85, $71, $71, PAT1
+        brsl    $0, find_first
+        ceqi    $98, $97, -1
+        brnz    $98, .Lslow1
+        lqa     $98, k_child0
+        andc    $112, $112, $98
+        shufb   $99, $97, $97, PAT0
+        lqa     $98, k_word0
+        selb    $118, $118, $99, $98
+.Lslow1:
+        rotqbyi $90, $119, 8
+        brz     $90, .Lslow_done
+        shufb   $80, $68, $68, PAT2           # child 1
+        shufb   $81, $68, $68, PAT3
+        shufb   $82, $70, $70, PAT2
+        shufb   $83, $70, $70, PAT3
+        shufb   $84, $71, $71, PAT2
+        shufb   $85, $71, $71, PAT3
+        brsl    $0, find_first
+        ceqi    $98, $97, -1
+        brnz    $98, .Lslow_done
+        lqa     $98, k_child1
+        andc    $112, $112, $98
+        shufb   $99, $97, $97, PAT0
+        lqa     $98, k_word1
+        selb    $118, $118, $99, $98
+.Lslow_done:
+        gb      $117, $112
+        andi    $117, $117, 5
+        br      .Ldecide
 
-        # ---- neither test decided: look for the first ray (from FIRST on) that hits
-        shufb   $80, $87, $87, PAT0           # box planes, splat
-        shufb   $81, $87, $87, PAT1
-        shufb   $82, $87, $87, PAT2
-        shufb   $83, $88, $88, PAT0
-        shufb   $84, $88, $88, PAT1
-        shufb   $85, $88, $88, PAT2
+# find_first: the first ray from FIRST on whose slab intervals with the box ($80/$81 min/max
+# x, $82/$83 y, $84/$85 z planes, splats) overlap within [0, t], widened by 1 -/+ 2^-16;
+# its index in $97, or -1. Uses $86..$111, $113..$116.
+find_first:
+        fs      $80, $80, OXS
+        fs      $81, $81, OXS
+        fs      $82, $82, OYS
+        fs      $83, $83, OYS
+        fs      $84, $84, OZS
+        fs      $85, $85, OZS
         rotmi   $86, FIRST, -2
         shli    $86, $86, 4                   # byte offset of FIRST's vector
-        andi    $90, FIRST, 3
-        shli    $90, $90, 4
-        ila     $91, k_lanege
-        lqx     $92, $91, $90                 # lanes at or after FIRST
-7:      ila     $93, ray_rx
-        lqx     $94, $93, $86
-        ila     $93, ray_ry
-        lqx     $95, $93, $86
-        ila     $93, ray_rz
-        lqx     $96, $93, $86
-        ila     $93, ray_orx
-        lqx     $97, $93, $86
-        ila     $93, ray_ory
-        lqx     $98, $93, $86
-        ila     $93, ray_orz
-        lqx     $99, $93, $86
-        ila     $93, ray_t
-        lqx     $100, $93, $86
-        fms     $101, $80, $94, $97
-        fms     $102, $83, $94, $97
-        fms     $103, $81, $95, $98
-        fms     $104, $84, $95, $98
-        fms     $105, $82, $96, $99
-        fms     $106, $85, $96, $99
-        fcgt    $107, $101, $102
-        fcgt    $108, $103, $104
-        fcgt    $109, $105, $106
-        selb    $110, $101, $102, $107        # entry x
-        selb    $111, $102, $101, $107        # exit x
-        selb    $112, $103, $104, $108
-        selb    $113, $104, $103, $108
-        selb    $114, $105, $106, $109
-        selb    $115, $106, $105, $109
-        fcgt    $107, $112, $110
-        fcgt    $108, $111, $113
-        selb    $110, $110, $112, $107
-        selb    $111, $111, $113, $108
-        fcgt    $107, $114, $110
-        fcgt    $108, $111, $115
-        selb    $110, $110, $114, $107
-        selb    $111, $111, $115, $108
-        fcgt    $107, ZERO, $110
-        fcgt    $108, $111, $100
-        selb    $110, $110, ZERO, $107        # entry >= 0
-        selb    $111, $111, $100, $108        # exit <= t
-        fcgt    $107, $110, $111              # misses
-        andc    $107, $92, $107               # active lanes that hit
-        gb      $108, $107
-        brnz    $108, 8f
-        lqa     $92, k_lanege                 # later vectors: all lanes
+        andi    $87, FIRST, 3
+        shli    $87, $87, 4
+        ila     $88, k_lanege
+        lqx     $89, $88, $87                 # lanes at or after FIRST
+        lqa     $113, k_epslo
+        lqa     $114, k_epshi
+        ila     $88, ray_rx
+1:      a       $90, $88, $86
+        lqd     $91, 0($90)                   # 1/dx
+        lqd     $92, 256($90)                 # 1/dy
+        lqd     $93, 512($90)                 # 1/dz
+        lqd     $94, 768($90)                 # t
+        fm      $95, $80, $91
+        fm      $96, $81, $91
+        fm      $98, $82, $92
+        fm      $99, $83, $92
+        fm      $100, $84, $93
+        fm      $101, $85, $93
+        fcgt    $102, $95, $96
+        fcgt    $103, $98, $99
+        fcgt    $104, $100, $101
+        selb    $105, $95, $96, $102          # entry x
+        selb    $106, $96, $95, $102          # exit x
+        selb    $107, $98, $99, $103
+        selb    $108, $99, $98, $103
+        selb    $109, $100, $101, $104
+        selb    $110, $101, $100, $104
+        fcgt    $102, $107, $105
+        fcgt    $103, $106, $108
+        selb    $105, $105, $107, $102
+        selb    $106, $106, $108, $103
+        fcgt    $102, $109, $105
+        fcgt    $103, $106, $110
+        selb    $105, $105, $109, $102
+        selb    $106, $106, $110, $103
+        fcgt    $102, ZERO, $105
+        fcgt    $103, $106, $94
+        selb    $105, $105, ZERO, $102        # entry >= 0
+        selb    $106, $106, $94, $103         # exit <= t
+        fm      $105, $105, $113
+        fm      $106, $106, $114
+        fcgt    $102, $105, $106              # misses
+        andc    $102, $89, $102               # active lanes that enter
+        gb      $103, $102
+        brnz    $103, 2f
+        lqa     $89, k_lanege                 # later vectors: all lanes
         ai      $86, $86, 16
-        ceqi    $109, $86, 256
-        brz     $109, 7b
-        il      $114, -1                      # no ray hits the box: pop
-        br      step
-8:      clz     $108, $108                    # first lane = clz - 28
-        ai      $108, $108, -28
-        rotmi   FIRST, $86, -2
-        a       FIRST, FIRST, $108
-        brsl    $0, set_first
-        rotqbyi $116, $88, 12
-        il      $114, 0                       # descend with the new first ray
-        br      step
+        ceqi    $104, $86, 256
+        brz     $104, 1b
+        il      $97, -1
+        bi      $0
+2:      clz     $103, $103                    # first lane = clz - 28
+        ai      $103, $103, -28
+        rotmi   $97, $86, -2
+        a       $97, $97, $103
+        bi      $0
 
+# ---- BVH cache miss: fetch the pair, store it axis-major in its line, redo the lookup.
 bvh_miss:
-        # $80 pair, $81 slot, $83 slot*16, $86 node address in the cache line
         ai      S_BMISS, S_BMISS, 1
-        stqx    $80, BTAGS, $83               # the line now holds this pair
-        shli    $85, $80, 6
-        a       $85, $85, EANODES             # effective address of the pair
-        shli    $91, $81, 6
-        a       $92, BDATA, $91               # the cache line
-        wrch    $MFC_LSA, $92
+        stqx    CUR, BTAGS, $72               # the line now holds this pair
+        a       $80, CUR, EANODES             # the pair's effective address
+        ila     $81, nodebuf
+        il      $82, 64
+        il      $83, 1
+        il      $84, 0x40
+        wrch    $MFC_LSA, $81
         wrch    $MFC_EAH, ZERO
-        wrch    $MFC_EAL, $85
-        il      $91, 64
-        wrch    $MFC_Size, $91
-        il      $91, 1
-        wrch    $MFC_TagID, $91
-        il      $91, 0x40
-        wrch    $MFC_Cmd, $91
-        il      $91, 2
-        wrch    $MFC_WrTagMask, $91
-        wrch    $MFC_WrTagUpdate, $91
-        rdch    $91, $MFC_RdTagStat
-        lqd     $87, 0($86)
-        lqd     $88, 16($86)
-        lqd     $89, 0(FT_ADDR)
-        br      bvh_hit
+        wrch    $MFC_EAL, $80
+        wrch    $MFC_Size, $82
+        wrch    $MFC_TagID, $83
+        wrch    $MFC_Cmd, $84
+        il      $83, 2
+        wrch    $MFC_WrTagMask, $83
+        wrch    $MFC_WrTagUpdate, $83
+        rdch    $83, $MFC_RdTagStat
+        lqd     $84, 0($81)                   # (min0, link0)
+        lqd     $85, 16($81)                  # (max0, meta0)
+        lqd     $86, 32($81)
+        lqd     $87, 48($81)
+        lqa     $88, k_plo
+        lqa     $89, k_phi
+        lqa     $90, k_pa
+        lqa     $91, k_pb
+        shufb   $92, $84, $85, $88            # (min0.x, max0.x, min0.y, max0.y)
+        shufb   $93, $86, $87, $88
+        shufb   $94, $84, $85, $89            # (min0.z, max0.z, link0, meta0)
+        shufb   $95, $86, $87, $89
+        shufb   $96, $92, $93, $90            # x planes of both children
+        shufb   $97, $92, $93, $91            # y
+        shufb   $98, $94, $95, $90            # z
+        shufb   $99, $94, $95, $91            # (link0, meta0, link1, meta1)
+        rotmi   $100, $99, -2
+        ceqi    $100, $100, 0                 # lanes 1, 3: inner child
+        shufb   $100, $100, $100, SWAP
+        lqa     $101, k_evenmask
+        and     $100, $100, $101
+        shli    $101, $99, 5                  # link * 32: the child pair's byte offset
+        selb    $99, $99, $101, $100
+        a       $102, BDATA, $66
+        stqd    $96, 0($102)
+        stqd    $97, 16($102)
+        stqd    $98, 32($102)
+        stqd    $99, 48($102)
+        br      .Llookup
 
-# ---- set_first: derive the first ray's cached data from FIRST
+# ---- set_first: the first ray's data from FIRST (splat)
 set_first:
-        shli    $80, FIRST, 4
-        ila     $81, aos_r
-        lqx     FR_R, $81, $80
-        ila     $81, aos_or
-        lqx     FR_OR, $81, $80
-        rotmi   $82, FIRST, -2
-        shli    $82, $82, 4
-        ila     $81, ray_t
-        a       FT_ADDR, $81, $82
-        andi    $83, FIRST, 3
-        shli    $83, $83, 4
-        ila     $81, k_pat
-        lqx     FT_PAT, $81, $83
+        rotmi   $100, FIRST, -2
+        shli    $100, $100, 4                 # its vector's byte offset
+        andi    $101, FIRST, 3
+        shli    $101, $101, 4                 # its lane * 16
+        ila     $102, ray_rx
+        a       $102, $102, $100
+        lqd     $103, 0($102)
+        lqd     $104, 256($102)
+        lqd     $105, 512($102)
+        ila     $106, k_pat
+        lqx     $107, $106, $101
+        ila     $106, k_tpat
+        lqx     FT_PAT, $106, $101
+        ila     $106, ray_t
+        a       FT_ADDR, $106, $100
+        shufb   $103, $103, $103, $107        # 1/d splats
+        shufb   $104, $104, $104, $107
+        shufb   $105, $105, $105, $107
+        lqa     $106, k_eps
+        fm      RX1, $103, $106
+        fm      RY1, $104, $106
+        fm      RZ1, $105, $106
+        fcgt    $108, ZERO, $103              # points down the axis
+        fcgt    $109, ZERO, $104
+        fcgt    $110, ZERO, $105
+        lqa     $111, k_ident
+        selb    PERMX, $111, SWAP, $108
+        selb    PERMY, $111, SWAP, $109
+        selb    PERMZ, $111, SWAP, $110
+        lqa     $111, k_lane1
+        selb    $108, $108, $109, $111
+        lqa     $111, k_lane2
+        selb    $108, $108, $110, $111
+        lqa     $111, k_n128
+        and     NEGS, $108, $111
         bi      $0
 
 # ---- leaf: test the active rays against each triangle of the leaf
 leaf:
         ai      S_LEAVES, S_LEAVES, 1
-        rotqbyi $78, $87, 12                  # first triangle
-        ori     $79, $117, 0                  # count
+        ori     $66, CUR, 0                   # first triangle
+        rotqbyi $67, CUR, 4
+        rotmi   $67, $67, -2                  # count
 tri_loop:
         ai      S_TLOOK, S_TLOOK, 1
-        and     $80, $78, TMASK
+        and     $80, $66, TMASK
         shli    $81, $80, 4
         shli    $82, $80, 6
         lqx     $83, TTAGS, $81
         a       $84, TDATA, $82
-        ceq     $85, $83, $78
+        ceq     $85, $83, $66
         brz     $85, tri_miss                 # hits fall through
 .Ltri_hit:
         lqd     $86, TRI_N_U($84)              # (n_u, n_v, n_d, k)
@@ -732,27 +915,27 @@ tri_loop:
         lqx     $92, $90, $89
         shufb   $92, ORIG, ORIG, $92          # origin in (k, u, v) order
         # per-triangle splats, live through the ray loop
-        shufb   $2, $86, $86, PAT0            # n_u
-        shufb   $3, $86, $86, PAT1            # n_v
+        shufb   $68, $86, $86, PAT0            # n_u
+        shufb   $69, $86, $86, PAT1            # n_v
         shufb   $93, $86, $86, PAT2           # n_d
-        shufb   $5, $87, $87, PAT0            # b_nu
-        shufb   $6, $87, $87, PAT1            # b_nv
-        shufb   $7, $87, $87, PAT2            # b_d
-        shufb   $8, $88, $88, PAT0            # c_nu
-        shufb   $9, $88, $88, PAT1            # c_nv
+        shufb   $71, $87, $87, PAT0            # b_nu
+        shufb   $72, $87, $87, PAT1            # b_nv
+        shufb   $73, $87, $87, PAT2            # b_d
+        shufb   $74, $88, $88, PAT0            # c_nu
+        shufb   $75, $88, $88, PAT1            # c_nv
         shufb   $120, $88, $88, PAT2          # c_d
         shufb   $94, $92, $92, PAT0           # o_k
         shufb   $121, $92, $92, PAT1          # o_u
         shufb   $122, $92, $92, PAT2          # o_v
-        fs      $4, $93, $94
-        fnms    $4, $2, $121, $4
-        fnms    $4, $3, $122, $4              # num = n_d - o_k - n_u o_u - n_v o_v
-        fm      $95, $2, $2
-        fma     $95, $3, $3, $95
+        fs      $70, $93, $94
+        fnms    $70, $68, $121, $70
+        fnms    $70, $69, $122, $70              # num = n_d - o_k - n_u o_u - n_v o_v
+        fm      $95, $68, $68
+        fma     $95, $69, $69, $95
         fa      $95, $95, ONE
         frsqest $96, $95
         fi      $123, $95, $96                # 1/|n|, n = (1, n_u, n_v) in (k, u, v)
-        shufb   $124, $78, $78, PAT0          # triangle index
+        shufb   $124, $66, $66, PAT0          # triangle index
         ila     $97, ray_dx
         rotqbyi $98, $91, 4
         rotqbyi $99, $91, 8
@@ -767,19 +950,19 @@ tri_loop:
         lqx     $103, $97, $100               # corner d_k
         lqx     $104, $97, $101               # corner d_u
         lqx     $105, $97, $102               # corner d_v
-        fma     $106, $2, $104, $103
-        fma     $106, $3, $105, $106          # den = n.d
+        fma     $106, $68, $104, $103
+        fma     $106, $69, $105, $106          # den = n.d
         frest   $107, $106
         fi      $107, $106, $107
         fnms    $108, $106, $107, ONE
         fma     $107, $108, $107, $107
-        fm      $107, $4, $107                # t
+        fm      $107, $70, $107                # t
         fma     $108, $107, $104, $121        # hit u
         fma     $109, $107, $105, $122        # hit v
-        fma     $110, $5, $108, $7
-        fma     $110, $6, $109, $110          # beta
-        fma     $111, $8, $108, $120
-        fma     $111, $9, $109, $111          # gamma
+        fma     $110, $71, $108, $73
+        fma     $110, $72, $109, $110          # beta
+        fma     $111, $74, $108, $120
+        fma     $111, $75, $109, $111          # gamma
         fa      $112, $110, $111
         fcgt    $113, $107, ZERO              # in front
         fcgt    $114, ZERO, $110
@@ -816,10 +999,10 @@ ray_loop:
         .endr
         ai      $119, $119, -64
         .irp    J, 0, 1, 2, 3
-        fma     (\J+92), $2, (\J+84), (\J+80)
+        fma     (\J+92), $68, (\J+84), (\J+80)
         .endr
         .irp    J, 0, 1, 2, 3
-        fma     (\J+92), $3, (\J+88), (\J+92)   # den
+        fma     (\J+92), $69, (\J+88), (\J+92)   # den
         .endr
         .irp    J, 0, 1, 2, 3
         frest   (\J+96), (\J+92)
@@ -834,19 +1017,19 @@ ray_loop:
         fma     (\J+96), (\J+80), (\J+96), (\J+96)
         .endr
         .irp    J, 0, 1, 2, 3
-        fm      (\J+96), $4, (\J+96)       # t
+        fm      (\J+96), $70, (\J+96)       # t
         .endr
         .irp    J, 0, 1, 2, 3
         fma     (\J+80), (\J+96), (\J+84), $121   # hit u
         fma     (\J+84), (\J+96), (\J+88), $122   # hit v
         .endr
         .irp    J, 0, 1, 2, 3
-        fma     (\J+88), $5, (\J+80), $7
-        fma     (\J+80), $8, (\J+80), $120
+        fma     (\J+88), $71, (\J+80), $73
+        fma     (\J+80), $74, (\J+80), $120
         .endr
         .irp    J, 0, 1, 2, 3
-        fma     (\J+88), $6, (\J+84), (\J+88)     # beta
-        fma     (\J+80), $9, (\J+84), (\J+80)     # gamma
+        fma     (\J+88), $72, (\J+84), (\J+88)     # beta
+        fma     (\J+80), $75, (\J+84), (\J+80)     # gamma
         .endr
         ila     $116, ray_t
         a       $116, $116, $119
@@ -896,36 +1079,55 @@ ray_loop:
 .Lray_br:
         brz     $112, ray_loop
 tri_next:
-        ai      $78, $78, 1
-        ai      $79, $79, -1
-        brnz    $79, tri_loop
+        ai      $66, $66, 1
+        ai      $67, $67, -1
+        brnz    $67, tri_loop
         # the packet's largest t shrinks as rays hit: refresh the IA exit bound
-        hbrr    .Lleaf_br, step
         ila     $80, ray_t
-        lqd     $81, 0($80)
-        il      $82, 15
-10:     ai      $80, $80, 16
-        lqd     $83, 0($80)
-        fcgt    $84, $83, $81
-        selb    $81, $81, $83, $84
-        ai      $82, $82, -1
-        brnz    $82, 10b
+        .irp    J, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
+        lqd     (\J+81), \J*16($80)
+        .endr
+        .irp    J, 0, 2, 4, 6, 8, 10, 12, 14
+        fcgt    (\J+100), (\J+82), (\J+81)
+        .endr
+        .irp    J, 0, 2, 4, 6, 8, 10, 12, 14
+        selb    (\J+81), (\J+81), (\J+82), (\J+100)
+        .endr
+        .irp    J, 0, 4, 8, 12
+        fcgt    (\J+100), (\J+83), (\J+81)
+        .endr
+        .irp    J, 0, 4, 8, 12
+        selb    (\J+81), (\J+81), (\J+83), (\J+100)
+        .endr
+        fcgt    $100, $85, $81
+        fcgt    $101, $93, $89
+        selb    $81, $81, $85, $100
+        selb    $89, $89, $93, $101
+        fcgt    $100, $89, $81
+        selb    $81, $81, $89, $100
         rotqbyi $83, $81, 8
         fcgt    $84, $83, $81
         selb    $81, $81, $83, $84
         rotqbyi $83, $81, 4
         fcgt    $84, $83, $81
-        selb    PTMAX, $81, $83, $84
-        selb    EXFILL, BIG, PTMAX, M3
-        il      $114, -1                      # then pop
-.Lleaf_br:
-        br      step
+        selb    $81, $81, $83, $84            # the largest t, every lane
+        lqa     $84, k_oddmask
+        and     $81, $81, $84
+        xor     F2, $81, NEGODD               # (0, -tmax, 0, -tmax)
+
+# ---- pop: continue with the entry on top of the stack, or finish the packet
+pop:
+        ceq     $126, STK, STKBASE
+        lqd     CUR, -16(STK)
+        ai      STK, STK, -16
+        brnz    $126, packet_done
+        br      .Lnewcur
 
 tri_miss:
         # triangle cache miss: fetch the 64-byte record, then test it
         ai      S_TMISS, S_TMISS, 1
-        stqx    $78, TTAGS, $81
-        shli    $85, $78, 6
+        stqx    $66, TTAGS, $81
+        shli    $85, $66, 6
         a       $85, $85, EATRIS
         wrch    $MFC_LSA, $84
         wrch    $MFC_EAH, ZERO
@@ -945,10 +1147,11 @@ tri_miss:
 # ---- the packet is done: shade and send its results
 packet_done:
         ai      S_PACKETS, S_PACKETS, 1
+        lqa     $66, vars+V_OUTSEL
         ila     $80, outbuf
-        a       $80, $80, OUTSEL
+        a       $80, $80, $66
         # wait until this buffer's previous transfer (tag 2 + OUTSEL/1024) is done
-        rotmi   $81, OUTSEL, -10
+        rotmi   $81, $66, -10
         ai      $81, $81, 2
         il      $82, 1
         shl     $82, $82, $81
@@ -956,59 +1159,69 @@ packet_done:
         il      $83, 2
         wrch    $MFC_WrTagUpdate, $83
         rdch    $83, $MFC_RdTagStat
-        ila     $84, ray_id
-        ila     $85, ray_t
-        ila     $86, ray_nd
-        ila     $87, ray_invd
-        lqa     $88, k_bg
-        il      $89, 0
-        il      $90, 255
-        il      $91, 16
-11:     lqx     $92, $84, $89
-        lqx     $93, $85, $89
-        lqx     $94, $86, $89
-        lqx     $95, $87, $89
-        fm      $96, $94, $95                 # cosine (signed)
-        andi    $96, $96, -1
-        shli    $96, $96, 1
-        rotmi   $96, $96, -1                  # |cosine|
-        cfltu   $96, $96, 8                   # * 256
-        clgt    $97, $96, $90
-        selb    $96, $96, $90, $97            # clamp to 255
-        shli    $98, $96, 8
-        or      $98, $98, $96
-        shli    $99, $98, 16
-        or      $98, $98, $99
-        shli    $98, $98, 8
-        ori     $98, $98, 0xff                # gray, opaque
-        ceqi    $97, $92, -1
-        selb    $98, $98, $88, $97            # background for misses
-        a       $99, $80, $89
-        stqd    $92, 0($99)
-        stqd    $93, 256($99)
-        stqd    $98, 512($99)
-        stqd    ZERO, 768($99)
-        ai      $89, $89, 16
-        ai      $91, $91, -1
-        brnz    $91, 11b
+        ila     $84, ray_dx
+        lqa     $85, k_bg
+        lqa     $86, k_shade
+        lqa     $87, k_abs
+        lqa     $88, k_c255
+        # four vectors per pass: shade = |n.d / |n| * 1/|d|| * 256, clamped to 255, gray
+        .irp    J, 0, 64, 128, 192
+        .irp    K, 0, 16, 32, 48
+        lqd     (\K/16+90), \J+\K+1792($84)  # id
+        lqd     (\K/16+94), \J+\K+2048($84)  # n.d/|n|
+        lqd     (\K/16+98), \J+\K+2304($84)  # 1/|d|
+        lqd     (\K/16+102), \J+\K+1536($84) # t
+        .endr
+        .irp    K, 0, 1, 2, 3
+        fm      (\K+94), (\K+94), (\K+98)     # cosine (signed)
+        ceqi    (\K+106), (\K+90), -1         # miss
+        .endr
+        .irp    K, 0, 1, 2, 3
+        and     (\K+94), (\K+94), $87
+        stqd    (\K+90), \J+\K*16($80)
+        .endr
+        .irp    K, 0, 1, 2, 3
+        cfltu   (\K+94), (\K+94), 8           # * 256
+        stqd    (\K+102), \J+\K*16+256($80)
+        .endr
+        .irp    K, 0, 1, 2, 3
+        clgt    (\K+98), (\K+94), $88
+        .endr
+        .irp    K, 0, 1, 2, 3
+        selb    (\K+94), (\K+94), $88, (\K+98) # clamp to 255
+        .endr
+        .irp    K, 0, 1, 2, 3
+        shufb   (\K+94), (\K+94), (\K+94), $86 # gray, opaque
+        .endr
+        .irp    K, 0, 1, 2, 3
+        selb    (\K+94), (\K+94), $85, (\K+106) # background for misses
+        .endr
+        .irp    K, 0, 1, 2, 3
+        stqd    (\K+94), \J+\K*16+512($80)
+        .endr
+        .endr
         # put the 1 KiB block to FB + (tile*64 + packet)*1024
-        shli    $92, TILE, 6
-        a       $92, $92, PKT
+        lqa     $92, vars+V_TILE
+        lqa     $93, vars+V_PKT
+        lqa     $94, vars+V_EAFB
+        shli    $92, $92, 6
+        a       $92, $92, $93
         shli    $92, $92, 10
-        a       $92, $92, EAFB
+        a       $92, $92, $94
+        il      $95, 1024
+        il      $96, 0x20
         wrch    $MFC_LSA, $80
         wrch    $MFC_EAH, ZERO
         wrch    $MFC_EAL, $92
-        il      $93, 1024
-        wrch    $MFC_Size, $93
+        wrch    $MFC_Size, $95
         wrch    $MFC_TagID, $81
-        il      $93, 0x20
-        wrch    $MFC_Cmd, $93
-        il      $93, 1024
-        xor     OUTSEL, OUTSEL, $93
-        ai      PKT, PKT, 1
-        ceqi    $93, PKT, 64
-        brz     $93, packet_loop
+        wrch    $MFC_Cmd, $96
+        xor     $66, $66, $95
+        stqa    $66, vars+V_OUTSEL
+        ai      $93, $93, 1
+        stqa    $93, vars+V_PKT
+        ceqi    $97, $93, 64
+        brz     $97, packet_loop
         br      next_tile
 
 # ---- no tiles left: statistics, end-of-frame message, stop
@@ -1018,29 +1231,42 @@ frame_done:
         il      $80, 2
         wrch    $MFC_WrTagUpdate, $80
         rdch    $80, $MFC_RdTagStat
+        # the mask sums count -1 twice per child box: sum the lanes, halve
+        .irp    V, M1V, EEV
+        rotqbyi $81, \V, 8
+        a       \V, \V, $81
+        rotqbyi $81, \V, 4
+        a       \V, \V, $81
+        rotmai  \V, \V, -1
+        .endr
+        shli    $82, S_STEPS, 1               # box tests: two per pair step
         ila     $80, statbuf
         lqa     $81, k_entry
-        shufb   $82, S_PACKETS, S_STEPS, $81
-        stqd    $82, STAT_PACKETS($80)        # (packets, steps, -, -)
-        shufb   $82, S_M1SUM, S_EESUM, $81
-        stqd    $82, STAT_M1SUM($80)
-        shufb   $82, S_TRIS, S_CULLED, $81
-        stqd    $82, STAT_TRIS($80)
-        shufb   $82, S_BMISS, S_LEAVES, $81
-        stqd    $82, STAT_BMISS($80)
-        shufb   $82, S_TLOOK, S_TMISS, $81
-        stqd    $82, STAT_TLOOK($80)
-        shli    $83, MYID, 7
-        a       $83, $83, EASTATS
+        shufb   $83, S_PACKETS, $82, $81
+        stqd    $83, STAT_PACKETS($80)        # (packets, box tests, -, -)
+        shufb   $83, M1V, EEV, $81
+        stqd    $83, STAT_M1SUM($80)
+        shufb   $83, S_TRIS, S_CULLED, $81
+        stqd    $83, STAT_TRIS($80)
+        shufb   $83, S_BMISS, S_LEAVES, $81
+        stqd    $83, STAT_BMISS($80)
+        shufb   $83, S_TLOOK, S_TMISS, $81
+        stqd    $83, STAT_TLOOK($80)
+        shufb   $83, S_STEPS, ZERO, $81
+        stqd    $83, STAT_BLOOK($80)          # (BVH lookups = pair steps, -)
+        lqa     $84, vars+V_MYID
+        lqa     $85, vars+V_EASTATS
+        shli    $83, $84, 7
+        a       $83, $83, $85
+        il      $84, 128
+        il      $85, 4
+        il      $86, 0x20
         wrch    $MFC_LSA, $80
         wrch    $MFC_EAH, ZERO
         wrch    $MFC_EAL, $83
-        il      $84, 128
         wrch    $MFC_Size, $84
-        il      $84, 4
-        wrch    $MFC_TagID, $84
-        il      $84, 0x20
-        wrch    $MFC_Cmd, $84
+        wrch    $MFC_TagID, $85
+        wrch    $MFC_Cmd, $86
         il      $84, 16
         wrch    $MFC_WrTagMask, $84
         il      $84, 2

@@ -123,6 +123,9 @@ pub struct KernelStats {
     pub leaves: u64,
     pub triangle_lookups: u64,
     pub triangle_cache_misses: u64,
+    /// BVH-cache lookups (one per traversal step of the pair kernel, which tests both
+    /// children of a node in one step).
+    pub bvh_lookups: u64,
 }
 
 pub const STAT_PACKETS: usize = 0;
@@ -130,6 +133,7 @@ pub const STAT_M1SUM: usize = 16;
 pub const STAT_TRIS: usize = 32;
 pub const STAT_BMISS: usize = 48;
 pub const STAT_TLOOK: usize = 64;
+pub const STAT_BLOOK: usize = 80;
 
 impl KernelStats {
     /// Decodes one SPU's block (see the kernel's `frame_done`).
@@ -154,6 +158,7 @@ impl KernelStats {
             leaves: word(STAT_BMISS + 4) as u64,
             triangle_lookups: word(STAT_TLOOK) as u64,
             triangle_cache_misses: word(STAT_TLOOK + 4) as u64,
+            bvh_lookups: word(STAT_BLOOK) as u64,
         }
     }
 
@@ -168,6 +173,7 @@ impl KernelStats {
         self.leaves += other.leaves;
         self.triangle_lookups += other.triangle_lookups;
         self.triangle_cache_misses += other.triangle_cache_misses;
+        self.bvh_lookups += other.bvh_lookups;
     }
 }
 
@@ -187,6 +193,7 @@ pub fn spu_include() -> String {
         ("STAT_TRIS", STAT_TRIS),
         ("STAT_BMISS", STAT_BMISS),
         ("STAT_TLOOK", STAT_TLOOK),
+        ("STAT_BLOOK", STAT_BLOOK),
     ] {
         out.push_str(&format!("        .set {name}, {value}\n"));
     }

@@ -129,7 +129,7 @@ impl FrameRun {
             per(k.triangles_culled),
             pct(k.early_exits, k.traversal_steps),
             pct(k.early_hits, k.traversal_steps),
-            100.0 - pct(k.bvh_cache_misses, k.traversal_steps),
+            100.0 - pct(k.bvh_cache_misses, if k.bvh_lookups > 0 { k.bvh_lookups } else { k.traversal_steps }),
             100.0 - pct(k.triangle_cache_misses, k.triangle_lookups),
             per_spu_mrays
         );

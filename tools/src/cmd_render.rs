@@ -53,6 +53,10 @@ pub struct Args {
     /// Simulated cycles per SPU before giving up.
     #[arg(long, default_value_t = 200_000_000_000)]
     max_cycles: u64,
+    /// Write the kernel's annotated profile (per instruction: executions, cycles, stalls
+    /// by cause, dual issue; then per label and totals), merged over all SPEs.
+    #[arg(long)]
+    profile: Option<PathBuf>,
 }
 
 /// Loads a built-in scene by name, or a file.
@@ -212,7 +216,55 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         );
         std::fs::write(path, json).map_err(|e| format!("{}: {e}", path.display()))?;
     }
+    if let Some(path) = &args.profile {
+        let text = kernel_profile(&run, args.fill)?;
+        std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The annotated listing of the kernel that ran, from its image and symbols.
+fn kernel_profile(run: &spu_loader::runtime::FrameRun, fill: bool) -> Result<String, String> {
+    use spu_isa::disasm::{instruction_text, SymbolTable};
+    use spu_isa::profile::{annotated_listing, ListingLine, ListingOptions};
+    let profile = run
+        .profile
+        .as_ref()
+        .ok_or("no profile: the timing model was off (SPU_NO_TIMING)")?;
+    let (source, name) = if fill {
+        (spu_loader::runtime::FILL_SOURCE, "kernels/fill.s")
+    } else {
+        (spu_loader::runtime::RAYTRACE_SOURCE, "kernels/raytrace.s")
+    };
+    let program = spu_loader::runtime::assemble_kernel(source, name)?;
+    let table = SymbolTable::new(
+        program
+            .symbols
+            .iter()
+            .map(|(n, a)| (*a, n.clone()))
+            .collect(),
+    );
+    let mut addresses: Vec<u32> = profile.addresses().map(|(a, _)| a).collect();
+    addresses.sort_unstable();
+    let mut lines = Vec::new();
+    for addr in addresses {
+        let mut names: Vec<&str> = table.at(addr).collect();
+        names.sort_unstable();
+        lines.extend(names.into_iter().map(|n| ListingLine::Label(n.to_string())));
+        let word = program
+            .image
+            .get(addr as usize..addr as usize + 4)
+            .map_or(0, |b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
+        lines.push(ListingLine::Inst {
+            addr,
+            text: instruction_text(word, addr, &table).replace('\t', " "),
+        });
+    }
+    let opts = ListingOptions {
+        range: None,
+        executed_only: true,
+    };
+    Ok(annotated_listing(profile, &lines, &opts))
 }
 
 fn write_png(
