@@ -40,7 +40,7 @@
         .set PAT1, 8
         .set PAT2, 9
         .set PAT3, 10
-        .set M3, 11             # mask of lane 3
+        .set OR1X, 11           # first ray: origin * RX1 plus a margin (see set_first)
         .set EANODES, 12
         .set EATRIS, 13
         .set BTAGS, 14          # BVH cache: tags (16 bytes per line), lines of 64 bytes
@@ -55,11 +55,11 @@
 # statistics (preferred-slot integers, or vectors summed at the end)
         .set S_TRIS, 23         # triangle tests after culling
         .set S_CULLED, 24
-        .set S_BMISS, 25
+        .set OR1Y, 25
         .set S_TLOOK, 26
-        .set S_TMISS, 27
-        .set S_LEAVES, 28
-        .set S_PACKETS, 29
+        .set OBX, 27            # the same for PB
+        .set OBY, 28
+        .set OBZ, 29
         .set S_STEPS, 30        # pair steps (two box tests each)
         .set M1V, 31            # sum of first-ray miss masks (two lanes per child)
         .set EEV, 32            # sum of early-exit masks (two lanes per child)
@@ -69,10 +69,10 @@
         .set SWAP, 36           # shufb pattern swapping the words of each pair
         .set SIGNS, 37          # 0x80000000 in every lane
         .set NEGODD, 38         # 0x80000000 in lanes 1 and 3
-        .set TBL, 39            # decision table
+        .set OR1Z, 39
         .set STKBASE, 40
         .set ROOTST, 41         # the root as a traversal state
-        .set EMPTY, 42          # the scene has no triangle
+        .set NEGTAB, 42         # negtab: per axis all-ones when the first ray points down it
 # packet constants
         .set PAX, 43            # IA multipliers: (lo(1-e), -lo(1+e), lo(1-e), -lo(1+e)), lo = min 1/d
         .set PAY, 44
@@ -80,9 +80,9 @@
         .set PBX, 46            # the same with hi = max 1/d
         .set PBY, 47
         .set PBZ, 48
-        .set OFFX, 49           # -1e30 on axes where directions have both signs (no IA bound)
-        .set OFFY, 50
-        .set OFFZ, 51
+        .set OAX, 49            # IA offsets: -origin * PA (PB) minus a margin, or -1e30 on
+        .set OAY, 50            # axes where directions have both signs (no IA bound there)
+        .set OAZ, 51
         .set F2, 52             # (0, -tmax, 0, -tmax): tmax = the packet's largest hit distance
 # first-ray data (set_first)
         .set RX1, 53            # (r(1-e), -r(1+e), r(1-e), -r(1+e)), r = 1/d of the first ray
@@ -91,13 +91,14 @@
         .set PERMX, 56          # identity or pair swap: planes in (near, far) order
         .set PERMY, 57
         .set PERMZ, 58
-        .set NEGS, 59           # per axis 128 when the first ray points down it (near = child 1)
+        .set S_SPARE, 59
         .set FT_ADDR, 60        # address of the first ray's t vector, and its splat pattern
         .set FT_PAT, 61
         .set FIRST, 62          # index of the first active ray (splat)
 # traversal state
         .set CUR, 63            # (link', meta, first, 0) of the node being expanded
         .set STK, 64            # stack pointer: entries are states, 16 bytes
+        .set S_SPARE2, 65
 # temporaries: $66..$127
 
 # ---- cold per-frame values kept in local store (lqa/stqa vars+V_*)
@@ -115,6 +116,11 @@
         .set V_DIR00, 176
         .set V_DU, 192
         .set V_DV, 208
+        .set V_BMISS, 224       # statistics of the rarer events
+        .set V_TMISS, 240
+        .set V_LEAVES, 256
+        .set V_PACKETS, 272
+        .set V_EMPTY, 288       # the scene has no triangle
 
 # ---- local-store data
         .data
@@ -122,8 +128,9 @@
 params:         .space 128
 lockbuf:        .space 128
 statbuf:        .space 128
-vars:           .space 256
+vars:           .space 320
 nodebuf:        .space 64
+negtab:         .space 48
         .align 4
 k_pat:          .long 0x00010203, 0x00010203, 0x00010203, 0x00010203
                 .long 0x04050607, 0x04050607, 0x04050607, 0x04050607
@@ -169,6 +176,9 @@ k_child0:       .long -1, -1, 0, 0
 k_child1:       .long 0, 0, -1, -1
 k_word0:        .long -1, 0, 0, 0
 k_word1:        .long 0, -1, 0, 0
+k_pc0:          .long 0x00010203, 0x04050607, 0x10111213, 0x80808080   # state of child 0
+k_pc1:          .long 0x08090a0b, 0x0c0d0e0f, 0x14151617, 0x80808080   # ... of child 1
+k_eps20:        .long 0x35800000, 0x35800000, 0x35800000, 0x35800000   # 2^-20
 k_eps:          .long 0x3f7fff00, 0xbf800080, 0x3f7fff00, 0xbf800080   # 1-2^-16, -(1+2^-16)
 k_epslo:        .long 0x3f7fff00, 0x3f7fff00, 0x3f7fff00, 0x3f7fff00
 k_epshi:        .long 0x3f800080, 0x3f800080, 0x3f800080, 0x3f800080
@@ -176,30 +186,6 @@ k_shade:        .long 0x03030380, 0x07070780, 0x0b0b0b80, 0x0f0f0f80   # byte 3 
 k_ff:           .long 0x000000ff, 0x000000ff, 0x000000ff, 0x000000ff
 k_c255:         .long 255, 255, 255, 255
 k_abs:          .long 0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff
-
-# The step's decision, indexed by (first-ray misses as gb bits & 5) | near child << 1, in
-# 64-byte entries: shufb pattern of the next state and of the pushed state (from the line's
-# (link', meta) quad and the children's first rays), stack delta, pop mask.
-# gb bits: 0 both enter, 1 (3 & 5) child 1 does not, 4 (12 & 5) child 0 does not, 5 neither.
-        .macro  child c
-        .long   0x00010203 + 0x08080808*\c, 0x04050607 + 0x08080808*\c, 0x10111213 + 0x04040404*\c, 0x80808080
-        .endm
-        .macro  decision next, push, delta, popm
-        child   \next
-        child   \push
-        .long   \delta, 0, 0, 0
-        .long   \popm, \popm, \popm, \popm
-        .endm
-        .align 6
-k_decide:
-        decision 0, 1, 16, 0    # 0: both, child 0 near: go to 0, push 1
-        decision 0, 1, 0, 0     # 1: child 0 only
-        decision 1, 0, 16, 0    # 2: both, child 1 near: go to 1, push 0
-        decision 0, 1, 0, 0     # 3: child 0 only
-        decision 1, 0, 0, 0     # 4: child 1 only
-        decision 0, 1, -16, -1  # 5: neither: pop
-        decision 1, 0, 0, 0     # 6: child 1 only
-        decision 0, 1, -16, -1  # 7: neither: pop
 
         .align 4
 ray_dx:         .space 256      # structure of arrays, 16 vectors of 4 rays each, contiguous
@@ -254,11 +240,11 @@ _start:
         lqd     PAT1, 16($66)
         lqd     PAT2, 32($66)
         lqd     PAT3, 48($66)
-        lqa     M3, k_m3
+        lqa     $75, k_m3
         lqa     SWAP, k_swap
         ilhu    SIGNS, 0x8000
         lqa     NEGODD, k_negodd
-        ila     TBL, k_decide
+        ila     NEGTAB, negtab
         ila     STKBASE, stack
 
         # parameters
@@ -279,10 +265,10 @@ _start:
         lqd     $68, PARAM_DIR00($66)
         lqd     $69, PARAM_DU($66)
         lqd     $70, PARAM_DV($66)
-        andc    ORIG, ORIG, M3
-        andc    $68, $68, M3
-        andc    $69, $69, M3
-        andc    $70, $70, M3
+        andc    ORIG, ORIG, $75
+        andc    $68, $68, $75
+        andc    $69, $69, $75
+        andc    $70, $70, $75
         stqa    $68, vars+V_DIR00
         stqa    $69, vars+V_DU
         stqa    $70, vars+V_DV
@@ -357,21 +343,25 @@ _start:
         shli    $73, $70, 5                   # child-pair byte offset
         lqa     $74, k_word0
         and     $72, $72, $74                 # lane 0 only
+        ceqi    $75, $70, 0                   # link 0 ...
+        and     $75, $75, $72                 # ... of an inner root: empty
+        stqa    $75, vars+V_EMPTY
         selb    ROOTST, $70, $73, $72
-        ceqi    EMPTY, $70, 0                 # link 0 ...
-        and     EMPTY, EMPTY, $72             # ... of an inner root
+        lqa     $74, k_word1
+        shli    $73, ROOTST, 4                # meta << 4: axis * 16 in bits 4-5
+        selb    ROOTST, ROOTST, $73, $74
 
         # statistics
-        il      S_PACKETS, 0
         il      S_STEPS, 0
         il      M1V, 0
         il      EEV, 0
         il      S_TRIS, 0
         il      S_CULLED, 0
-        il      S_BMISS, 0
         il      S_TLOOK, 0
-        il      S_TMISS, 0
-        il      S_LEAVES, 0
+        stqa    ZERO, vars+V_BMISS
+        stqa    ZERO, vars+V_TMISS
+        stqa    ZERO, vars+V_LEAVES
+        stqa    ZERO, vars+V_PACKETS
         stqa    ZERO, vars+V_OUTSEL
 
 # ---- take the next tile: atomic fetch-and-increment of the shared counter
@@ -565,7 +555,11 @@ packet_loop:
         selb    $\R, $108, $110, $112
         selb    (\R+3), $109, $111, $113
         .endr
+        # A box test computes plane * PA + OA with OA = -origin * PA - |origin * PA| * 2^-20
+        # (the margin covers the rounding of the product it replaces; -1e30 on mixed axes)
         lqa     $106, k_eps
+        lqa     $111, k_eps20
+        lqa     $112, k_abs
         .irp    K, 0, 1, 2
         fcgt    $107, ZERO, (\K+100)          # some direction negative
         fcgt    $108, ZERO, (\K+103)          # every direction negative
@@ -574,7 +568,15 @@ packet_loop:
         fm      (\K+PBX), (\K+103), $106
         andc    (\K+PAX), (\K+PAX), $107
         andc    (\K+PBX), (\K+PBX), $107
-        and     (\K+OFFX), NBIG, $107
+        and     $109, NBIG, $107
+        fm      $110, (\K+OXS), (\K+PAX)
+        and     $113, $110, $112
+        fma     $110, $113, $111, $110
+        fs      (\K+OAX), $109, $110
+        fm      $110, (\K+OXS), (\K+PBX)
+        and     $113, $110, $112
+        fma     $110, $113, $111, $110
+        fs      (\K+OBX), $109, $110
         .endr
         lqa     $106, k_oddmask
         and     F2, NBIG, $106                # (0, -1e30, 0, -1e30)
@@ -584,106 +586,164 @@ packet_loop:
         il      FIRST, 0
         brsl    $0, set_first
         ori     CUR, ROOTST, 0
-        brnz    EMPTY, packet_done
+        lqa     $66, vars+V_EMPTY
+        brnz    $66, packet_done
         br      .Lnewcur
 
 # ---- one traversal step: test both children of CUR (an inner node the packet enters)
 # $68/$70/$71: the pair's x/y/z planes, $73: (link', meta) of both children, $76: near
 # child's table offset, $77: the entry a pop takes, $112: first-ray miss mask
 # (lanes child 0, 0, 1, 1), $118: the children's first active rays.
+        .align  3                             # pairs: even pipe at 8k, odd pipe at 8k+4
 trav:
-        hbrr    .Lloop_br, trav               # every step ends by looping back here
-        ai      S_STEPS, S_STEPS, 1
-.Llookup:
         and     $66, CUR, BMASK64             # the pair's cache line
-        rotqbyi $67, CUR, 4                   # meta
-        rotmi   $72, $66, -2                  # its tag
-        lqx     $68, BDATA, $66
-        andi    $69, $67, 3                   # split axis
-        lqx     $70, BDATA16, $66
-        shli    $69, $69, 2
-        lqx     $71, BDATA32, $66
-        lqx     $73, BDATA48, $66
+        hbrr    .Lloop_br, trav
+        ai      S_STEPS, S_STEPS, 1
         lqd     $74, 0(FT_ADDR)               # the first ray's t
+        rotmi   $72, $66, -2                  # its tag's offset
+        lqx     $68, BDATA, $66               # x planes (min0, max0, min1, max1)
+        nop
+        lqx     $70, BDATA16, $66             # y
+        nop
+        lqx     $71, BDATA32, $66             # z
+        nop
+        rotqbyi $67, CUR, 4                   # meta << 4
+        nop
         lqx     $75, BTAGS, $72
-        rotqby  $76, NEGS, $69                # near child (0 / 128)
-        lqd     $77, -16(STK)
-        shufb   $78, $68, $68, PERMX          # planes in (near, far) order
-        shufb   $79, $70, $70, PERMY
-        shufb   $80, $71, $71, PERMZ
-        shufb   $81, $74, $74, FT_PAT         # (0, t, 0, t)
-        fs      $82, $78, OXS                 # plane - origin
-        fs      $83, $79, OYS
-        fs      $84, $80, OZS
-        xor     $81, $81, NEGODD              # (0, -t, 0, -t)
-        fm      $85, $82, RX1                 # first ray: (entry, -exit) per child
-        fm      $86, $83, RY1
-        fm      $87, $84, RZ1
-        fma     $88, $82, PAX, OFFX           # packet: both bounds, min taken below
-        fma     $89, $82, PBX, OFFX
-        fma     $90, $83, PAY, OFFY
-        fma     $91, $83, PBY, OFFY
-        fma     $92, $84, PAZ, OFFZ
-        fma     $93, $84, PBZ, OFFZ
-        fcgt    $94, $85, $86
-        fcgt    $95, $87, $81
-        selb    $96, $86, $85, $94            # max(x, y)
-        selb    $97, $81, $87, $95            # max(z, fill)
-        fcgt    $98, $88, $89
-        fcgt    $99, $90, $91
-        fcgt    $100, $92, $93
-        fcgt    $101, $96, $97
-        selb    $102, $88, $89, $98           # min per axis
-        selb    $103, $90, $91, $99
-        selb    $104, $92, $93, $100
-        selb    $105, $97, $96, $101          # first ray: (entry, -exit) over all axes
-        fcgt    $106, $102, $103
+        nop
+        shufb   $83, $74, $74, FT_PAT         # (0, t, 0, t)
+        nop
+        shufb   $80, $68, $68, PERMX          # planes in (near, far) order for the first ray
+        andi    $69, $67, 0x30                # split axis * 16
+        shufb   $81, $70, $70, PERMY
+        nop
+        shufb   $82, $71, $71, PERMZ
+        xor     $83, $83, NEGODD              # (0, -t, 0, -t)
+        lqx     $76, NEGTAB, $69              # all ones: child 1 is the near one
+        fms     $84, $80, RX1, OR1X           # first ray: (entry, -exit) per child and axis
+        lqx     $73, BDATA48, $66             # (link', meta) of both children
+        fms     $85, $81, RY1, OR1Y
+        lqd     $77, -16(STK)                 # the entry a pop takes
+        fms     $86, $82, RZ1, OR1Z
+        lqa     $78, k_pc0
+        fma     $87, $80, PAX, OAX            # packet: both bounds, the smaller taken
+        lqa     $79, k_pc1
+        fma     $88, $80, PBX, OBX
+        lnop
+        fma     $89, $81, PAY, OAY
+        lnop
+        fma     $90, $81, PBY, OBY
+        lnop
+        fma     $91, $82, PAZ, OAZ
+        lnop
+        fma     $92, $82, PBZ, OBZ
+        lnop
+        fcgt    $93, $84, $85
+        lnop
+        fcgt    $95, $86, $83
+        lnop
+        selb    $94, $85, $84, $93            # max(x, y)
+        lnop
+        selb    $96, $83, $86, $95            # max(z, t)
+        lnop
+        fcgt    $99, $87, $88
+        lnop
+        fcgt    $97, $94, $96
+        lnop
+        fcgt    $101, $89, $90
+        lnop
+        fcgt    $103, $91, $92
+        lnop
+        selb    $98, $96, $94, $97            # first ray: (entry, -exit) over the axes
+        lnop
+        selb    $100, $87, $88, $99
+        lnop
+        selb    $102, $89, $90, $101
+        shufb   $111, $98, $98, SWAP
+        selb    $104, $91, $92, $103
+        lnop
+        fcgt    $105, $100, $102
+        lnop
         fcgt    $107, $104, F2
-        shufb   $108, $105, $105, SWAP
-        selb    $109, $103, $102, $106
-        selb    $110, F2, $104, $107
-        xor     $108, $108, SIGNS             # (exit, -entry)
-        fcgt    $111, $109, $110
-        fcgt    $112, $105, $108              # the first ray misses (entry > exit)
-        selb    $113, $110, $109, $111        # packet: (entry, -exit) over all axes
-        ceq     $114, $75, CUR                # the line holds this pair
-        shufb   $115, $113, $113, SWAP
-        brz     $114, bvh_miss
-        xor     $115, $115, SIGNS
+        lnop
+        selb    $106, $102, $100, $105
+        lnop
+        selb    $108, F2, $104, $107
+        lnop
+        xor     $111, $111, SIGNS             # (exit, -entry)
+        lnop
+        fcgt    $109, $106, $108
+        lnop
+        fcgt    $112, $98, $111               # the first ray misses (lanes child 0, 0, 1, 1)
+        lnop
+        selb    $110, $108, $106, $109        # packet: (entry, -exit) over the axes
+        lnop
+        ceq     $115, $75, CUR                # the line holds this pair
+        shufb   $116, $112, $112, PAT0        # child 0 missed, every lane
+        ceq     $93, STK, STKBASE
+        shufb   $113, $110, $110, SWAP
+        nop
+        shufb   $117, $112, $112, PAT2        # child 1 missed
+        or      $118, $116, $76
+        lnop
+        xor     $113, $113, SIGNS
+        lnop
+        andc    $118, $118, $117              # go to child 1
+        lnop
+        fcgt    $114, $110, $113              # the frustum misses
+        lnop
+        selb    $119, $78, $79, $118          # next state's pattern
+        brz     $115, bvh_miss
+        selb    $120, $79, $78, $118          # pushed state's pattern
+        lnop
+        a       $124, $116, $117
+        shufb   $122, $73, FIRST, $119
+        andc    $125, $112, $114              # undecided: the first ray misses, the frustum not
+        shufb   $123, $73, FIRST, $120
+        shli    $124, $124, 4                 # -32, -16, 0: stack delta - 16
+        lnop
+        and     $127, $112, $114              # early exits
+        gb      $126, $125
+        and     $121, $116, $117              # neither: pop
+        lnop
         a       M1V, M1V, $112
-        fcgt    $116, $113, $115              # the frustum misses
-        gb      $117, $112
-        ori     $118, FIRST, 0
-        andc    $119, $112, $116              # undecided: first ray misses, frustum not
-        and     $120, $112, $116              # early exits
-        gb      $121, $119
-        a       EEV, EEV, $120
-        andi    $117, $117, 5
-        brnz    $121, slow                    # the third case: the only one that branches
-.Ldecide:
-        shli    $117, $117, 6
-        a       $117, $117, $76
-        a       $117, $117, TBL
-        lqd     $122, 0($117)                 # next-state pattern
-        lqd     $123, 16($117)                # pushed-state pattern
-        lqd     $124, 32($117)                # stack delta
-        lqd     $125, 48($117)                # pop mask
-        ceq     $126, STK, STKBASE
-        shufb   $122, $73, $118, $122
-        shufb   $123, $73, $118, $123
-        and     $126, $126, $125              # popping an empty stack: the packet is done
-        selb    CUR, $122, $77, $125
-        stqd    $123, 0(STK)                  # stored either way; kept when delta = 16
-        brnz    $126, packet_done
+        lnop
+        a       EEV, EEV, $127
+        lnop
+        and     $93, $93, $121                # popping an empty stack: the packet is done
+        brnz    $126, slow                    # the third case: the only one that branches
+        selb    CUR, $122, $77, $121
+        lnop
+        nop
+        stqd    $123, 0(STK)                  # stored either way; kept when both children go
+        nop
+        brnz    $93, packet_done
         a       STK, STK, $124
-.Lnewcur:
-        shufb   $127, CUR, CUR, PAT2          # its first active ray
-        rotqbyi $66, CUR, 4
-        ceq     $127, $127, FIRST
-        rotmi   $66, $66, -2                  # triangle count: a leaf
-        brz     $127, first_changed
-        brnz    $66, leaf
+        rotqbyi $97, CUR, 4
+        nop
+        shufb   $95, CUR, CUR, PAT2           # its first active ray
+        ai      STK, STK, 16
+        lnop
+        rotmi   $97, $97, -6                  # triangle count: a leaf
+        lnop
+        ceq     $95, $95, FIRST
+        lnop
+        nop
+        brz     $95, first_changed
+        nop
+        brnz    $97, leaf
+        nop
 .Lloop_br:
+        br      trav
+
+# ---- a new state from a pop or a changed first ray: a leaf, or the next step
+.Lnewcur:
+        shufb   $95, CUR, CUR, PAT2           # its first active ray
+        rotqbyi $97, CUR, 4
+        ceq     $95, $95, FIRST
+        rotmi   $97, $97, -6                  # triangle count: a leaf
+        brz     $95, first_changed
+        brnz    $97, leaf
         br      trav
 
 first_changed:
@@ -694,7 +754,8 @@ first_changed:
 # ---- the third case: the first ray misses a child the frustum does not rule out. Find the
 # first ray from FIRST on that enters it; none means the child is skipped.
 slow:
-        brz     $119, .Lslow1
+        ori     $126, FIRST, 0                # the children's first active rays
+        brz     $125, .Lslow1
         shufb   $80, $68, $68, PAT0           # child 0: min, max planes
         shufb   $81, $68, $68, PAT1
         shufb   $82, $70, $70, PAT0
@@ -708,9 +769,9 @@ slow:
         andc    $112, $112, $98
         shufb   $99, $97, $97, PAT0
         lqa     $98, k_word0
-        selb    $118, $118, $99, $98
+        selb    $126, $126, $99, $98
 .Lslow1:
-        rotqbyi $90, $119, 8
+        rotqbyi $90, $125, 8
         brz     $90, .Lslow_done
         shufb   $80, $68, $68, PAT2           # child 1
         shufb   $81, $68, $68, PAT3
@@ -725,11 +786,30 @@ slow:
         andc    $112, $112, $98
         shufb   $99, $97, $97, PAT0
         lqa     $98, k_word1
-        selb    $118, $118, $99, $98
+        selb    $126, $126, $99, $98
 .Lslow_done:
-        gb      $117, $112
-        andi    $117, $117, 5
-        br      .Ldecide
+        # the step's decision again, with the children's own first rays
+        shufb   $116, $112, $112, PAT0
+        shufb   $117, $112, $112, PAT2
+        lqa     $78, k_pc0
+        lqa     $79, k_pc1
+        or      $118, $116, $76
+        andc    $118, $118, $117
+        selb    $119, $78, $79, $118
+        selb    $120, $79, $78, $118
+        and     $121, $116, $117
+        shufb   $122, $73, $126, $119
+        shufb   $123, $73, $126, $120
+        a       $124, $116, $117
+        shli    $124, $124, 4
+        ceq     $93, STK, STKBASE
+        and     $93, $93, $121
+        selb    CUR, $122, $77, $121
+        stqd    $123, 0(STK)
+        brnz    $93, packet_done
+        a       STK, STK, $124
+        ai      STK, STK, 16
+        br      .Lnewcur
 
 # find_first: the first ray from FIRST on whose slab intervals with the box ($80/$81 min/max
 # x, $82/$83 y, $84/$85 z planes, splats) overlap within [0, t], widened by 1 -/+ 2^-16;
@@ -802,7 +882,10 @@ find_first:
 
 # ---- BVH cache miss: fetch the pair, store it axis-major in its line, redo the lookup.
 bvh_miss:
-        ai      S_BMISS, S_BMISS, 1
+        lqa     $80, vars+V_BMISS
+        ai      S_STEPS, S_STEPS, -1          # the step runs again
+        ai      $80, $80, 1
+        stqa    $80, vars+V_BMISS
         stqx    CUR, BTAGS, $72               # the line now holds this pair
         a       $80, CUR, EANODES             # the pair's effective address
         ila     $81, nodebuf
@@ -842,12 +925,15 @@ bvh_miss:
         and     $100, $100, $101
         shli    $101, $99, 5                  # link * 32: the child pair's byte offset
         selb    $99, $99, $101, $100
+        lqa     $101, k_oddmask
+        shli    $100, $99, 4                  # meta << 4: axis * 16 in bits 4-5
+        selb    $99, $99, $100, $101
         a       $102, BDATA, $66
         stqd    $96, 0($102)
         stqd    $97, 16($102)
         stqd    $98, 32($102)
         stqd    $99, 48($102)
-        br      .Llookup
+        br      trav
 
 # ---- set_first: the first ray's data from FIRST (splat)
 set_first:
@@ -880,20 +966,32 @@ set_first:
         selb    PERMX, $111, SWAP, $108
         selb    PERMY, $111, SWAP, $109
         selb    PERMZ, $111, SWAP, $110
-        lqa     $111, k_lane1
-        selb    $108, $108, $109, $111
-        lqa     $111, k_lane2
-        selb    $108, $108, $110, $111
-        lqa     $111, k_n128
-        and     NEGS, $108, $111
+        stqd    $108, 0(NEGTAB)               # near child is child 1 when negative
+        stqd    $109, 16(NEGTAB)
+        stqd    $110, 32(NEGTAB)
+        # OR1 = origin * RX1 + |origin * RX1| * 2^-20: plane * RX1 - OR1 is the slab
+        # distance less a margin that covers the rounding of the product it replaces
+        lqa     $111, k_eps20
+        lqa     $112, k_abs
+        fm      $103, OXS, RX1
+        fm      $104, OYS, RY1
+        fm      $105, OZS, RZ1
+        and     $106, $103, $112
+        and     $107, $104, $112
+        and     $108, $105, $112
+        fma     OR1X, $106, $111, $103
+        fma     OR1Y, $107, $111, $104
+        fma     OR1Z, $108, $111, $105
         bi      $0
 
 # ---- leaf: test the active rays against each triangle of the leaf
 leaf:
-        ai      S_LEAVES, S_LEAVES, 1
+        lqa     $80, vars+V_LEAVES
         ori     $66, CUR, 0                   # first triangle
         rotqbyi $67, CUR, 4
-        rotmi   $67, $67, -2                  # count
+        ai      $80, $80, 1
+        rotmi   $67, $67, -6                  # count (meta << 4 >> 2 ... see bvh_miss)
+        stqa    $80, vars+V_LEAVES
 tri_loop:
         ai      S_TLOOK, S_TLOOK, 1
         and     $80, $66, TMASK
@@ -1125,7 +1223,9 @@ pop:
 
 tri_miss:
         # triangle cache miss: fetch the 64-byte record, then test it
-        ai      S_TMISS, S_TMISS, 1
+        lqa     $86, vars+V_TMISS
+        ai      $86, $86, 1
+        stqa    $86, vars+V_TMISS
         stqx    $66, TTAGS, $81
         shli    $85, $66, 6
         a       $85, $85, EATRIS
@@ -1146,7 +1246,9 @@ tri_miss:
 
 # ---- the packet is done: shade and send its results
 packet_done:
-        ai      S_PACKETS, S_PACKETS, 1
+        lqa     $66, vars+V_PACKETS
+        ai      $66, $66, 1
+        stqa    $66, vars+V_PACKETS
         lqa     $66, vars+V_OUTSEL
         ila     $80, outbuf
         a       $80, $80, $66
@@ -1242,15 +1344,19 @@ frame_done:
         shli    $82, S_STEPS, 1               # box tests: two per pair step
         ila     $80, statbuf
         lqa     $81, k_entry
-        shufb   $83, S_PACKETS, $82, $81
+        lqa     $84, vars+V_PACKETS
+        shufb   $83, $84, $82, $81
         stqd    $83, STAT_PACKETS($80)        # (packets, box tests, -, -)
         shufb   $83, M1V, EEV, $81
         stqd    $83, STAT_M1SUM($80)
         shufb   $83, S_TRIS, S_CULLED, $81
         stqd    $83, STAT_TRIS($80)
-        shufb   $83, S_BMISS, S_LEAVES, $81
+        lqa     $84, vars+V_BMISS
+        lqa     $85, vars+V_LEAVES
+        shufb   $83, $84, $85, $81
         stqd    $83, STAT_BMISS($80)
-        shufb   $83, S_TLOOK, S_TMISS, $81
+        lqa     $85, vars+V_TMISS
+        shufb   $83, S_TLOOK, $85, $81
         stqd    $83, STAT_TLOOK($80)
         shufb   $83, S_STEPS, ZERO, $81
         stqd    $83, STAT_BLOOK($80)          # (BVH lookups = pair steps, -)
