@@ -447,80 +447,212 @@ packet_loop:
         fma     $93, $86, $77, $93
         fma     $94, $86, $78, $94
         fma     $95, $86, $79, $95
-        il      $90, 8                        # rows left
+        il      $90, 4                        # row pairs left
         il      $118, -1
         stqa    $93, corners
         stqa    $94, corners+16
         stqa    $95, corners+32
 
-        # two vectors (one row) per pass
+        # four vectors (two rows) per pass, scheduled into even/odd pairs
+        .align  3
+.Lrow:
+        fa      $86, $89, ONE   # the second row
         hbrr    .Lrow_br, .Lrow
-.Lrow:  fma     $93, $89, $80, $83            # row part
+        fma     $93, $89, $80, $83   # row part
+        lnop
         fma     $94, $89, $81, $84
+        lnop
         fma     $95, $89, $82, $85
-        fma     $96, $91, $77, $93            # dx, dy, dz of columns 0-3
+        lnop
+        fa      $89, $89, ONE
+        lnop
+        ai      $90, $90, -1
+        lnop
+        fma     $66, $86, $80, $83
+        lnop
+        fma     $67, $86, $81, $84
+        lnop
+        fma     $68, $86, $82, $85
+        lnop
+        fma     $96, $91, $77, $93   # dx, dy, dz of columns 0-3
+        lnop
         fma     $97, $91, $78, $94
+        lnop
         fma     $98, $91, $79, $95
-        fma     $99, $92, $77, $93            # columns 4-7
-        frest   $102, $96
+        lnop
+        fma     $99, $92, $77, $93   # columns 4-7
+        lnop
         fma     $100, $92, $78, $94
-        frest   $103, $97
+        lnop
         fma     $101, $92, $79, $95
+        lnop
+        fma     $69, $91, $77, $66
+        frest   $102, $96
+        fma     $70, $91, $78, $67
+        frest   $103, $97
+        fma     $71, $91, $79, $68
         frest   $104, $98
-        fm      $114, $96, $96                # |d|^2
+        fma     $72, $92, $77, $66
         frest   $105, $99
-        fm      $115, $99, $99
+        fma     $73, $92, $78, $67
         frest   $106, $100
-        fi      $102, $96, $102
+        fma     $74, $92, $79, $68
         frest   $107, $101
-        fi      $103, $97, $103
+        fi      $102, $96, $102
         stqd    $96, 0($88)
-        fi      $104, $98, $104
+        fi      $103, $97, $103
         stqd    $97, 256($88)
-        fi      $105, $99, $105
+        fi      $104, $98, $104
         stqd    $98, 512($88)
-        fi      $106, $100, $106
+        fi      $105, $99, $105
         stqd    $99, 16($88)
-        fi      $107, $101, $107
+        fi      $106, $100, $106
         stqd    $100, 272($88)
-        fnms    $108, $96, $102, ONE
+        fi      $107, $101, $107
         stqd    $101, 528($88)
+        fm      $114, $96, $96   # |d|^2
+        stqd    $69, 32($88)
+        fm      $115, $99, $99
+        stqd    $70, 288($88)
+        fm      $66, $69, $69
+        stqd    $71, 544($88)
+        fm      $67, $72, $72
+        frest   $75, $69
+        fnms    $108, $96, $102, ONE
+        frest   $76, $70
         fnms    $109, $97, $103, ONE
-        stqd    BIG, 1536($88)
-        fnms    $110, $98, $104, ONE
-        stqd    BIG, 1552($88)
-        fnms    $111, $99, $105, ONE
-        stqd    $118, 1792($88)
-        fnms    $112, $100, $106, ONE
-        stqd    $118, 1808($88)
-        fnms    $113, $101, $107, ONE
-        stqd    ZERO, 2048($88)
-        fma     $102, $108, $102, $102        # 1/d, one Newton step
-        stqd    ZERO, 2064($88)
-        fma     $103, $109, $103, $103
-        fma     $104, $110, $104, $104
-        fma     $105, $111, $105, $105
-        fma     $106, $112, $106, $106
-        fma     $107, $113, $107, $107
+        frest   $87, $71
         fma     $114, $97, $97, $114
-        stqd    $102, 768($88)
+        frest   $119, $72
+        fi      $75, $69, $75
+        frest   $120, $73
+        fi      $76, $70, $76
+        frest   $121, $74
+        fi      $87, $71, $87
+        stqd    $72, 48($88)
+        fi      $119, $72, $119
+        stqd    $73, 304($88)
+        fi      $120, $73, $120
+        stqd    $74, 560($88)
+        fi      $121, $74, $121
+        lnop
         fma     $115, $100, $100, $115
-        stqd    $103, 1024($88)
+        lnop
+        fma     $66, $70, $70, $66
+        lnop
+        fma     $67, $73, $73, $67
+        lnop
+        fnms    $110, $98, $104, ONE
+        lnop
+        fnms    $111, $99, $105, ONE
+        lnop
+        fnms    $112, $100, $106, ONE
+        lnop
+        fnms    $113, $101, $107, ONE
+        lnop
+        fnms    $122, $69, $75, ONE
+        lnop
+        fnms    $123, $70, $76, ONE
+        lnop
+        fnms    $124, $71, $87, ONE
+        lnop
+        fnms    $125, $72, $119, ONE
+        lnop
+        fnms    $126, $73, $120, ONE
+        lnop
+        fnms    $127, $74, $121, ONE
+        lnop
         fma     $114, $98, $98, $114
-        stqd    $104, 1280($88)
+        lnop
         fma     $115, $101, $101, $115
+        lnop
+        fma     $66, $71, $71, $66
+        lnop
+        fma     $67, $74, $74, $67
+        lnop
+        fma     $102, $108, $102, $102   # 1/d, one Newton step
+        lnop
+        fma     $103, $109, $103, $103
+        lnop
+        fma     $104, $110, $104, $104
+        frsqest $116, $114
+        fma     $105, $111, $105, $105
+        frsqest $117, $115
+        fma     $106, $112, $106, $106
+        frsqest $68, $66
+        fma     $107, $113, $107, $107
+        frsqest $86, $67
+        fma     $75, $122, $75, $75
+        lnop
+        fma     $76, $123, $76, $76
+        lnop
+        fma     $87, $124, $87, $87
+        lnop
+        fma     $119, $125, $119, $119
+        lnop
+        fma     $120, $126, $120, $120
+        lnop
+        fma     $121, $127, $121, $121
+        lnop
+        fi      $116, $114, $116   # 1/|d|, ~12 bits: enough for shading
+        stqd    $102, 768($88)
+        fi      $117, $115, $117
+        stqd    $103, 1024($88)
+        fi      $68, $66, $68
+        stqd    $104, 1280($88)
+        fi      $86, $67, $86
         stqd    $105, 784($88)
         fa      $89, $89, ONE
         stqd    $106, 1040($88)
-        ai      $90, $90, -1
+        nop
         stqd    $107, 1296($88)
-        frsqest $116, $114
-        frsqest $117, $115
-        fi      $116, $114, $116              # 1/|d|, ~12 bits: enough for shading
-        fi      $117, $115, $117
+        nop
+        stqd    $75, 800($88)
+        nop
+        stqd    $76, 1056($88)
+        nop
+        stqd    $87, 1312($88)
+        nop
+        stqd    $119, 816($88)
+        nop
+        stqd    $120, 1072($88)
+        nop
+        stqd    $121, 1328($88)
+        nop
         stqd    $116, 2304($88)
+        nop
         stqd    $117, 2320($88)
-        ai      $88, $88, 32
+        nop
+        stqd    $68, 2336($88)
+        nop
+        stqd    $86, 2352($88)
+        nop
+        stqd    BIG, 1536($88)
+        nop
+        stqd    BIG, 1552($88)
+        nop
+        stqd    BIG, 1568($88)
+        nop
+        stqd    BIG, 1584($88)
+        nop
+        stqd    $118, 1792($88)
+        nop
+        stqd    $118, 1808($88)
+        nop
+        stqd    $118, 1824($88)
+        nop
+        stqd    $118, 1840($88)
+        nop
+        stqd    ZERO, 2048($88)
+        nop
+        stqd    ZERO, 2064($88)
+        nop
+        stqd    ZERO, 2080($88)
+        nop
+        stqd    ZERO, 2096($88)
+        ai      $88, $88, 64
+        lnop
+        nop
 .Lrow_br:
         brnz    $90, .Lrow
 
@@ -1001,181 +1133,410 @@ tri_loop:
         a       $84, TDATA, $82
         ceq     $85, $83, $66
         brz     $85, tri_miss                 # hits fall through
+        # (scheduled into even/odd pairs: the record's splats, the corner-ray frustum cull
+        # of the triangle, the first active group's offset)
+        .align  3
 .Ltri_hit:
-        lqd     $86, TRI_N_U($84)              # (n_u, n_v, n_d, k)
-        lqd     $87, TRI_B_NU($84)             # (b_nu, b_nv, b_d, -)
-        lqd     $88, TRI_C_NU($84)             # (c_nu, c_nv, c_d, -)
-        rotqbyi $89, $86, 12                  # k
-        shli    $89, $89, 4
         ila     $90, k_axoff
-        lqx     $91, $90, $89                 # (k, u, v) array offsets
-        ila     $90, k_kuv
-        lqx     $92, $90, $89
-        shufb   $92, ORIG, ORIG, $92          # origin in (k, u, v) order
-        # per-triangle splats, live through the ray loop
-        shufb   $68, $86, $86, PAT0            # n_u
-        shufb   $69, $86, $86, PAT1            # n_v
-        shufb   $93, $86, $86, PAT2           # n_d
-        shufb   $71, $87, $87, PAT0            # b_nu
-        shufb   $72, $87, $87, PAT1            # b_nv
-        shufb   $73, $87, $87, PAT2            # b_d
-        shufb   $74, $88, $88, PAT0            # c_nu
-        shufb   $75, $88, $88, PAT1            # c_nv
-        shufb   $120, $88, $88, PAT2          # c_d
-        shufb   $94, $92, $92, PAT0           # o_k
-        shufb   $121, $92, $92, PAT1          # o_u
-        shufb   $122, $92, $92, PAT2          # o_v
-        fs      $70, $93, $94
-        fnms    $70, $68, $121, $70
-        fnms    $70, $69, $122, $70              # num = n_d - o_k - n_u o_u - n_v o_v
-        fm      $95, $68, $68
-        fma     $95, $69, $69, $95
-        fa      $95, $95, ONE
-        frsqest $96, $95
-        fi      $123, $95, $96                # 1/|n|, n = (1, n_u, n_v) in (k, u, v)
-        shufb   $124, $66, $66, PAT0          # triangle index
+        lqd     $86, TRI_N_U($84)   # (n_u, n_v, n_d, k)
         ila     $97, ray_dx
+        lqd     $87, TRI_B_NU($84)   # (b_nu, b_nv, b_d, -)
+        rotmi   $119, FIRST, -4
+        lqd     $88, TRI_C_NU($84)   # (c_nu, c_nv, c_d, -)
+        nop
+        shufb   $124, $66, $66, PAT0   # triangle index
+        shli    $119, $119, 6   # byte offset of the first group
+        rotqbyi $89, $86, 12   # k
+        nop
+        shufb   $68, $86, $86, PAT0   # n_u
+        nop
+        shufb   $69, $86, $86, PAT1   # n_v
+        nop
+        shufb   $93, $86, $86, PAT2   # n_d
+        shli    $89, $89, 4
+        shufb   $71, $87, $87, PAT0   # b_nu
+        fm      $95, $68, $68
+        shufb   $73, $87, $87, PAT2   # b_d
+        nop
+        shufb   $74, $88, $88, PAT0   # c_nu
+        nop
+        shufb   $120, $88, $88, PAT2   # c_d
+        nop
+        lqx     $91, $90, $89   # (k, u, v) array offsets
+        ila     $90, k_kuv
+        shufb   $72, $87, $87, PAT1   # b_nv
+        nop
+        shufb   $75, $88, $88, PAT1   # c_nv
+        fma     $95, $69, $69, $95
+        lqx     $92, $90, $89
+        a       $125, $97, $91   # base of d_k
         rotqbyi $98, $91, 4
-        rotqbyi $99, $91, 8
-        a       $125, $97, $91                # base of d_k
-        a       $126, $97, $98                # d_u
-        a       $127, $97, $99                # d_v
-        # frustum culling with the packet's corner rays (0, 7, 56, 63)
-        ila     $97, corners
         rotmi   $100, $91, -4
+        rotqbyi $99, $91, 8
+        fa      $95, $95, ONE
+        shufb   $92, ORIG, ORIG, $92   # origin in (k, u, v) order
+        a       $126, $97, $98   # d_u
+        lnop
+        a       $127, $97, $99   # d_v
+        lnop
         rotmi   $101, $98, -4
+        lnop
+        ila     $97, corners
+        shufb   $94, $92, $92, PAT0   # o_k
         rotmi   $102, $99, -4
-        lqx     $103, $97, $100               # corner d_k
-        lqx     $104, $97, $101               # corner d_u
-        lqx     $105, $97, $102               # corner d_v
+        shufb   $121, $92, $92, PAT1   # o_u
+        nop
+        lqx     $103, $97, $100   # corner d_k
+        nop
+        lqx     $104, $97, $101   # corner d_u
+        fs      $70, $93, $94
+        shufb   $122, $92, $92, PAT2   # o_v
+        nop
+        lqx     $105, $97, $102   # corner d_v
+        nop
+        frsqest $96, $95
         fma     $106, $68, $104, $103
-        fma     $106, $69, $105, $106          # den = n.d
+        lnop
+        fnms    $70, $68, $121, $70
+        lnop
+        fi      $123, $95, $96   # 1/|n|, n = (1, n_u, n_v) in (k, u, v)
+        lnop
+        fma     $106, $69, $105, $106   # den = n.d
+        lnop
+        fnms    $70, $69, $122, $70   # num = n_d - o_k - n_u o_u - n_v o_v
+        lnop
+        nop
         frest   $107, $106
         fi      $107, $106, $107
+        lnop
         fnms    $108, $106, $107, ONE
+        lnop
         fma     $107, $108, $107, $107
-        fm      $107, $70, $107                # t
-        fma     $108, $107, $104, $121        # hit u
-        fma     $109, $107, $105, $122        # hit v
+        lnop
+        fm      $107, $70, $107   # t
+        lnop
+        fma     $108, $107, $104, $121   # hit u
+        lnop
+        fma     $109, $107, $105, $122   # hit v
+        lnop
+        fcgt    $113, $107, ZERO   # in front
+        lnop
         fma     $110, $71, $108, $73
-        fma     $110, $72, $109, $110          # beta
+        lnop
         fma     $111, $74, $108, $120
-        fma     $111, $75, $109, $111          # gamma
-        fa      $112, $110, $111
-        fcgt    $113, $107, ZERO              # in front
+        lnop
+        fma     $110, $72, $109, $110   # beta
+        lnop
+        fma     $111, $75, $109, $111   # gamma
+        lnop
         fcgt    $114, ZERO, $110
+        lnop
+        fa      $112, $110, $111
+        lnop
         fcgt    $115, ZERO, $111
-        fcgt    $116, $112, ONE
+        lnop
         and     $114, $114, $113
+        lnop
         and     $115, $115, $113
-        and     $116, $116, $113
-        gb      $113, $113
+        lnop
+        nop
         gb      $114, $114
+        nop
         gb      $115, $115
-        gb      $116, $116
-        ceqi    $113, $113, 0                 # every corner behind
-        ceqi    $114, $114, 15                # every corner outside one edge
+        fcgt    $116, $112, ONE
+        lnop
+        and     $116, $116, $113
+        lnop
+        ceqi    $114, $114, 15   # every corner outside one edge
+        gb      $113, $113
         ceqi    $115, $115, 15
+        gb      $116, $116
+        ceqi    $113, $113, 0   # every corner behind
+        lnop
         ceqi    $116, $116, 15
+        lnop
         or      $113, $113, $114
+        lnop
         or      $115, $115, $116
+        lnop
         or      $113, $113, $115
-        sf      S_CULLED, $113, S_CULLED      # +1 when culled
+        lnop
+        sf      S_CULLED, $113, S_CULLED   # +1 when culled
+        lnop
+        nop
         brnz    $113, tri_next
         ai      S_TRIS, S_TRIS, 1
 
-        # the active rays, four vectors (16 rays) per pass, from FIRST's group on
-        rotmi   $119, FIRST, -4
-        shli    $119, $119, 6                 # byte offset of the first group
+        # (scheduled into even/odd pairs from the 4-vector test: loads, den = n.d, t,
+        # barycentrics, hit = t in (0, t_old) and inside, selb updates of t, id, n.d/|n|)
+        .align  3
 ray_loop:
-        hbrr    .Lray_br, ray_loop
-        .irp    J, 0, 1, 2, 3
-        lqx     (\J+80), $125, $119          # d_k
-        lqx     (\J+84), $126, $119          # d_u
-        lqx     (\J+88), $127, $119          # d_v
-        ai      $119, $119, 16
-        .endr
-        ai      $119, $119, -64
-        .irp    J, 0, 1, 2, 3
-        fma     (\J+92), $68, (\J+84), (\J+80)
-        .endr
-        .irp    J, 0, 1, 2, 3
-        fma     (\J+92), $69, (\J+88), (\J+92)   # den
-        .endr
-        .irp    J, 0, 1, 2, 3
-        frest   (\J+96), (\J+92)
-        .endr
-        .irp    J, 0, 1, 2, 3
-        fi      (\J+96), (\J+92), (\J+96)
-        .endr
-        .irp    J, 0, 1, 2, 3
-        fnms    (\J+80), (\J+92), (\J+96), ONE
-        .endr
-        .irp    J, 0, 1, 2, 3
-        fma     (\J+96), (\J+80), (\J+96), (\J+96)
-        .endr
-        .irp    J, 0, 1, 2, 3
-        fm      (\J+96), $70, (\J+96)       # t
-        .endr
-        .irp    J, 0, 1, 2, 3
-        fma     (\J+80), (\J+96), (\J+84), $121   # hit u
-        fma     (\J+84), (\J+96), (\J+88), $122   # hit v
-        .endr
-        .irp    J, 0, 1, 2, 3
-        fma     (\J+88), $71, (\J+80), $73
-        fma     (\J+80), $74, (\J+80), $120
-        .endr
-        .irp    J, 0, 1, 2, 3
-        fma     (\J+88), $72, (\J+84), (\J+88)     # beta
-        fma     (\J+80), $75, (\J+84), (\J+80)     # gamma
-        .endr
         ila     $116, ray_t
-        a       $116, $116, $119
+        lnop
         ila     $117, ray_id
-        a       $117, $117, $119
+        lqx     $80, $125, $119   # d_k
         ila     $118, ray_nd
+        lqx     $84, $126, $119   # d_u
+        nop
+        lqx     $88, $127, $119   # d_v
+        ai      $119, $119, 16
+        lnop
+        nop
+        lqx     $81, $125, $119   # d_k
+        nop
+        lqx     $85, $126, $119   # d_u
+        fma     $92, $68, $84, $80
+        lqx     $89, $127, $119   # d_v
+        ai      $119, $119, 16
+        lnop
+        nop
+        lqx     $82, $125, $119   # d_k
+        nop
+        lqx     $86, $126, $119   # d_u
+        fma     $93, $68, $85, $81
+        lqx     $90, $127, $119   # d_v
+        ai      $119, $119, 16
+        lnop
+        fma     $92, $69, $88, $92   # den
+        lnop
+        nop
+        lqx     $83, $125, $119   # d_k
+        nop
+        lqx     $87, $126, $119   # d_u
+        fma     $94, $68, $86, $82
+        lqx     $91, $127, $119   # d_v
+        fma     $93, $69, $89, $93   # den
+        lnop
+        ai      $119, $119, 16
+        lnop
+        nop
+        frest   $96, $92
+        ai      $119, $119, -64
+        lnop
+        fma     $95, $68, $87, $83
+        lnop
+        fma     $94, $69, $90, $94   # den
+        lnop
+        fi      $96, $92, $96
+        frest   $97, $93
+        a       $116, $116, $119
+        lnop
+        a       $117, $117, $119
+        lnop
         a       $118, $118, $119
-        .irp    J, 0, 1, 2, 3
-        lqd     (\J+100), \J*16($116)       # current t
-        fa      (\J+84), (\J+88), (\J+80)  # beta + gamma
-        .endr
-        .irp    J, 0, 1, 2, 3
-        or      (\J+88), (\J+88), (\J+80)  # sign bit: beta < 0 or gamma < 0
-        fcgt    (\J+84), (\J+84), ONE       # beta + gamma > 1
-        .endr
-        .irp    J, 0, 1, 2, 3
-        fcgt    (\J+80), (\J+100), (\J+96) # t < current
-        fcgt    (\J+104), (\J+96), ZERO     # t > 0
-        .endr
-        .irp    J, 0, 1, 2, 3
-        rotmai  (\J+88), (\J+88), -31       # all ones when negative
-        and     (\J+80), (\J+80), (\J+104)
-        .endr
-        .irp    J, 0, 1, 2, 3
-        or      (\J+88), (\J+88), (\J+84)
-        .endr
-        .irp    J, 0, 1, 2, 3
-        andc    (\J+80), (\J+80), (\J+88)  # hit
-        .endr
-        .irp    J, 0, 1, 2, 3
-        lqd     (\J+104), \J*16($117)
-        lqd     (\J+108), \J*16($118)
-        fm      (\J+92), (\J+92), $123      # n.d / |n|
-        selb    (\J+100), (\J+100), (\J+96), (\J+80)
-        .endr
-        .irp    J, 0, 1, 2, 3
-        selb    (\J+104), (\J+104), $124, (\J+80)
-        selb    (\J+108), (\J+108), (\J+92), (\J+80)
-        stqd    (\J+100), \J*16($116)
-        .endr
-        .irp    J, 0, 1, 2, 3
-        stqd    (\J+104), \J*16($117)
-        stqd    (\J+108), \J*16($118)
-        .endr
+        lqd     $100, 0($116)   # current t
+        fma     $95, $69, $91, $95   # den
+        lqd     $101, 16($116)   # current t
+        fi      $97, $93, $97
+        frest   $98, $94
         ai      $119, $119, 64
+        lqd     $102, 32($116)   # current t
+        fnms    $80, $92, $96, ONE
+        lqd     $103, 48($116)   # current t
+        fm      $92, $92, $123   # n.d / |n|
+        lqd     $108, 0($118)
+        fi      $98, $94, $98
+        lqd     $109, 16($118)
         ceqi    $112, $119, 256
+        frest   $99, $95
+        nop
+        lqd     $110, 32($118)
+        fnms    $81, $93, $97, ONE
+        lqd     $111, 48($118)
+        fma     $96, $80, $96, $96
+        lnop
+        fi      $99, $95, $99
+        lnop
+        fm      $93, $93, $123   # n.d / |n|
+        lnop
+        fnms    $82, $94, $98, ONE
+        lnop
+        fm      $94, $94, $123   # n.d / |n|
+        lnop
+        fma     $97, $81, $97, $97
+        lnop
+        fm      $96, $70, $96   # t
+        lnop
+        fnms    $83, $95, $99, ONE
+        lnop
+        fma     $98, $82, $98, $98
+        lnop
+        fm      $95, $95, $123   # n.d / |n|
+        lnop
+        fm      $97, $70, $97   # t
+        lnop
+        fma     $80, $96, $84, $121   # hit u
+        lnop
+        fma     $84, $96, $88, $122   # hit v
+        lnop
+        fma     $99, $83, $99, $99
+        lnop
+        fm      $98, $70, $98   # t
+        lnop
+        fcgt    $104, $96, ZERO   # t > 0
+        lnop
+        fma     $81, $97, $85, $121   # hit u
+        lnop
+        fma     $85, $97, $89, $122   # hit v
+        lnop
+        fma     $88, $71, $80, $73
+        lnop
+        fm      $99, $70, $99   # t
+        lnop
+        fma     $82, $98, $86, $121   # hit u
+        lnop
+        fma     $86, $98, $90, $122   # hit v
+        lnop
+        fma     $89, $71, $81, $73
+        lnop
+        fma     $80, $74, $80, $120
+        lnop
+        fma     $81, $74, $81, $120
+        lnop
+        fma     $83, $99, $87, $121   # hit u
+        lnop
+        fma     $87, $99, $91, $122   # hit v
+        lnop
+        fma     $90, $71, $82, $73
+        lnop
+        fma     $82, $74, $82, $120
+        lnop
+        fma     $88, $72, $84, $88   # beta
+        lnop
+        fma     $80, $75, $84, $80   # gamma
+        lnop
+        fma     $91, $71, $83, $73
+        lnop
+        fma     $83, $74, $83, $120
+        lnop
+        fma     $89, $72, $85, $89   # beta
+        lnop
+        fma     $81, $75, $85, $81   # gamma
+        lnop
+        fma     $90, $72, $86, $90   # beta
+        lnop
+        fma     $82, $75, $86, $82   # gamma
+        lnop
+        fma     $91, $72, $87, $91   # beta
+        lnop
+        fma     $83, $75, $87, $83   # gamma
+        lnop
+        fa      $84, $88, $80   # beta + gamma
+        lnop
+        fa      $85, $89, $81   # beta + gamma
+        lnop
+        or      $88, $88, $80   # sign bit: beta < 0 or gamma < 0
+        lnop
+        fa      $86, $90, $82   # beta + gamma
+        lnop
+        or      $89, $89, $81   # sign bit: beta < 0 or gamma < 0
+        lnop
+        fa      $87, $91, $83   # beta + gamma
+        lnop
+        or      $90, $90, $82   # sign bit: beta < 0 or gamma < 0
+        lnop
+        or      $91, $91, $83   # sign bit: beta < 0 or gamma < 0
+        lnop
+        fcgt    $80, $100, $96   # t < current
+        lnop
+        fcgt    $81, $101, $97   # t < current
+        lnop
+        fcgt    $105, $97, ZERO   # t > 0
+        lnop
+        fcgt    $82, $102, $98   # t < current
+        lnop
+        fcgt    $106, $98, ZERO   # t > 0
+        lnop
+        fcgt    $83, $103, $99   # t < current
+        lnop
+        fcgt    $107, $99, ZERO   # t > 0
+        lnop
+        rotmai  $88, $88, -31   # all ones when negative
+        lnop
+        and     $80, $80, $104
+        lnop
+        rotmai  $89, $89, -31   # all ones when negative
+        lqd     $104, 0($117)
+        rotmai  $90, $90, -31   # all ones when negative
+        lnop
+        rotmai  $91, $91, -31   # all ones when negative
+        lnop
+        fcgt    $84, $84, ONE   # beta + gamma > 1
+        lnop
+        fcgt    $85, $85, ONE   # beta + gamma > 1
+        lnop
+        fcgt    $86, $86, ONE   # beta + gamma > 1
+        lnop
+        fcgt    $87, $87, ONE   # beta + gamma > 1
+        lnop
+        and     $81, $81, $105
+        hbrr    .Lray_br, ray_loop
+        and     $82, $82, $106
+        lqd     $105, 16($117)
+        and     $83, $83, $107
+        lqd     $106, 32($117)
+        or      $88, $88, $84
+        lqd     $107, 48($117)
+        or      $89, $89, $85
+        lnop
+        or      $90, $90, $86
+        lnop
+        or      $91, $91, $87
+        lnop
+        andc    $80, $80, $88   # hit
+        lnop
+        andc    $81, $81, $89   # hit
+        lnop
+        andc    $82, $82, $90   # hit
+        lnop
+        andc    $83, $83, $91   # hit
+        lnop
+        selb    $100, $100, $96, $80
+        lnop
+        selb    $101, $101, $97, $81
+        lnop
+        selb    $102, $102, $98, $82
+        lnop
+        selb    $103, $103, $99, $83
+        lnop
+        selb    $104, $104, $124, $80
+        lnop
+        selb    $108, $108, $92, $80
+        lnop
+        selb    $105, $105, $124, $81
+        stqd    $100, 0($116)
+        selb    $109, $109, $93, $81
+        lnop
+        selb    $106, $106, $124, $82
+        stqd    $101, 16($116)
+        selb    $110, $110, $94, $82
+        lnop
+        selb    $107, $107, $124, $83
+        stqd    $102, 32($116)
+        selb    $111, $111, $95, $83
+        lnop
+        nop
+        stqd    $103, 48($116)
+        nop
+        stqd    $104, 0($117)
+        nop
+        stqd    $108, 0($118)
+        nop
+        stqd    $105, 16($117)
+        nop
+        stqd    $109, 16($118)
+        nop
+        stqd    $106, 32($117)
+        nop
+        stqd    $110, 32($118)
+        nop
+        stqd    $107, 48($117)
+        nop
+        stqd    $111, 48($118)
+        nop
 .Lray_br:
         brz     $112, ray_loop
+
 tri_next:
         ai      $66, $66, 1
         ai      $67, $67, -1
