@@ -151,6 +151,7 @@ k_kuv:          .long 0x00010203, 0x04050607, 0x08090a0b, 0x0c0d0e0f   # origin 
                 .long 0x04050607, 0x08090a0b, 0x00010203, 0x0c0d0e0f
                 .long 0x08090a0b, 0x00010203, 0x04050607, 0x0c0d0e0f
 k_m3:           .long 0, 0, 0, -1
+k_idx:          .long 0, 1, 2, 3
 k_inc0:         .long 1, 0, 0, 0
 k_colf0:        .float 0.0, 1.0, 2.0, 3.0
 k_colf1:        .float 4.0, 5.0, 6.0, 7.0
@@ -945,7 +946,7 @@ slow:
 
 # find_first: the first ray from FIRST on whose slab intervals with the box ($80/$81 min/max
 # x, $82/$83 y, $84/$85 z planes, splats) overlap within [0, t], widened by 1 -/+ 2^-16;
-# its index in $97, or -1. Uses $86..$111, $113..$116.
+# its index in $97, or -1. Uses $80..$111, $113..$124, $127.
 find_first:
         fs      $80, $80, OXS
         fs      $81, $81, OXS
@@ -953,63 +954,176 @@ find_first:
         fs      $83, $83, OYS
         fs      $84, $84, OZS
         fs      $85, $85, OZS
-        rotmi   $86, FIRST, -2
-        shli    $86, $86, 4                   # byte offset of FIRST's vector
-        andi    $87, FIRST, 3
-        shli    $87, $87, 4
-        ila     $88, k_lanege
-        lqx     $89, $88, $87                 # lanes at or after FIRST
+        rotmi   $86, FIRST, -3
+        shli    $86, $86, 5                   # byte offset of the even vector at or below FIRST's
+        rotmi   $117, $86, -2                 # its first ray
+        lqa     $90, k_idx
+        a       $117, $117, $90               # the ray indices of its lanes
+        ai      $89, FIRST, -1
         lqa     $113, k_epslo
         lqa     $114, k_epshi
         ila     $88, ray_rx
-1:      a       $90, $88, $86
-        lqd     $91, 0($90)                   # 1/dx
-        lqd     $92, 256($90)                 # 1/dy
-        lqd     $93, 512($90)                 # 1/dz
-        lqd     $94, 768($90)                 # t
-        fm      $95, $80, $91
-        fm      $96, $81, $91
-        fm      $98, $82, $92
-        fm      $99, $83, $92
-        fm      $100, $84, $93
-        fm      $101, $85, $93
-        fcgt    $102, $95, $96
-        fcgt    $103, $98, $99
-        fcgt    $104, $100, $101
-        selb    $105, $95, $96, $102          # entry x
-        selb    $106, $96, $95, $102          # exit x
-        selb    $107, $98, $99, $103
-        selb    $108, $99, $98, $103
-        selb    $109, $100, $101, $104
-        selb    $110, $101, $100, $104
-        fcgt    $102, $107, $105
-        fcgt    $103, $106, $108
-        selb    $105, $105, $107, $102
-        selb    $106, $106, $108, $103
-        fcgt    $102, $109, $105
-        fcgt    $103, $106, $110
-        selb    $105, $105, $109, $102
-        selb    $106, $106, $110, $103
-        fcgt    $102, ZERO, $105
-        fcgt    $103, $106, $94
-        selb    $105, $105, ZERO, $102        # entry >= 0
-        selb    $106, $106, $94, $103         # exit <= t
-        fm      $105, $105, $113
-        fm      $106, $106, $114
-        fcgt    $102, $105, $106              # misses
-        andc    $102, $89, $102               # active lanes that enter
-        gb      $103, $102
-        brnz    $103, 2f
-        lqa     $89, k_lanege                 # later vectors: all lanes
-        ai      $86, $86, 16
+        # two vectors per pass (scheduled into even/odd pairs)
+        .align  3
+1:
+        a       $90, $88, $86
+        lnop
+        cgt     $91, $117, $89
+        lnop
+        ai      $92, $117, 4
+        lqd     $93, 0($90)
+        ai      $86, $86, 32
+        lqd     $94, 256($90)
+        cgt     $95, $92, $89
+        lqd     $96, 512($90)
+        ai      $117, $117, 8
+        lqd     $98, 16($90)
         ceqi    $104, $86, 256
+        lqd     $99, 272($90)
+        nop
+        lqd     $100, 528($90)
+        fm      $101, $80, $93
+        lqd     $102, 768($90)
+        fm      $105, $81, $93
+        lqd     $106, 784($90)
+        fm      $107, $82, $94
+        lnop
+        fm      $108, $83, $94
+        lnop
+        fm      $109, $84, $96
+        lnop
+        fm      $110, $85, $96
+        lnop
+        fm      $111, $80, $98
+        lnop
+        fm      $116, $81, $98
+        lnop
+        fm      $118, $82, $99
+        lnop
+        fm      $119, $83, $99
+        lnop
+        fm      $120, $84, $100
+        lnop
+        fm      $121, $85, $100
+        lnop
+        fcgt    $122, $101, $105
+        lnop
+        fcgt    $123, $107, $108
+        lnop
+        fcgt    $124, $109, $110
+        lnop
+        selb    $127, $101, $105, $122
+        lnop
+        selb    $87, $105, $101, $122
+        lnop
+        selb    $92, $107, $108, $123
+        lnop
+        selb    $93, $108, $107, $123
+        lnop
+        selb    $94, $109, $110, $124
+        lnop
+        selb    $96, $110, $109, $124
+        lnop
+        fcgt    $98, $127, $92
+        lnop
+        fcgt    $99, $94, ZERO
+        lnop
+        fcgt    $100, $87, $93
+        lnop
+        fcgt    $122, $96, $102
+        lnop
+        fcgt    $101, $111, $116
+        lnop
+        fcgt    $105, $118, $119
+        lnop
+        fcgt    $108, $120, $121
+        lnop
+        selb    $123, $92, $127, $98
+        lnop
+        selb    $107, ZERO, $94, $99
+        lnop
+        selb    $109, $87, $93, $100
+        lnop
+        selb    $124, $96, $102, $122
+        lnop
+        selb    $110, $111, $116, $101
+        lnop
+        selb    $98, $116, $111, $101
+        lnop
+        selb    $127, $118, $119, $105
+        lnop
+        selb    $92, $119, $118, $105
+        lnop
+        selb    $99, $120, $121, $108
+        lnop
+        selb    $94, $121, $120, $108
+        lnop
+        fcgt    $87, $123, $107
+        lnop
+        fcgt    $93, $109, $124
+        lnop
+        fcgt    $100, $110, $127
+        lnop
+        fcgt    $102, $99, ZERO
+        lnop
+        fcgt    $122, $98, $92
+        lnop
+        fcgt    $96, $94, $106
+        lnop
+        selb    $116, $107, $123, $87
+        lnop
+        selb    $111, $109, $124, $93
+        lnop
+        selb    $101, $127, $110, $100
+        lnop
+        selb    $119, ZERO, $99, $102
+        lnop
+        selb    $105, $98, $92, $122
+        lnop
+        selb    $118, $94, $106, $96
+        lnop
+        fm      $108, $116, $113
+        lnop
+        fm      $121, $111, $114
+        lnop
+        fcgt    $120, $101, $119
+        lnop
+        fcgt    $87, $105, $118
+        lnop
+        selb    $123, $119, $101, $120
+        lnop
+        selb    $107, $105, $118, $87
+        lnop
+        fm      $124, $123, $113
+        lnop
+        fm      $93, $107, $114
+        lnop
+        fcgt    $109, $108, $121
+        lnop
+        andc    $127, $91, $109
+        lnop
+        nop
+        gb      $100, $127
+        fcgt    $110, $124, $93
+        lnop
+        andc    $99, $95, $110
+        lnop
+        shli    $102, $100, 4
+        lnop
+        nop
+        gb      $98, $99
+        or      $103, $102, $98
+        lnop
+        nop
+        brnz    $103, 2f
+        nop
         brz     $104, 1b
+
         il      $97, -1
         bi      $0
-2:      clz     $103, $103                    # first lane = clz - 28
-        ai      $103, $103, -28
-        rotmi   $97, $86, -2
-        a       $97, $97, $103
+2:      clz     $103, $103                    # 8 lanes: the first = clz - 24
+        ai      $103, $103, -32               # (less the 8 rays $117 has moved on)
+        a       $97, $117, $103
         bi      $0
 
 # ---- BVH cache miss: fetch the pair, store it axis-major in its line, redo the lookup.
