@@ -657,71 +657,252 @@ packet_loop:
 .Lrow_br:
         brnz    $90, .Lrow
 
-        # ---- packet frustum for the IA box tests: per axis the range of 1/d over the
-        # corner rays (1/d is monotonic in d where the sign does not change)
-        lqa     $92, corners
-        lqa     $93, corners+16
-        lqa     $94, corners+32
-        frest   $100, $92
-        frest   $101, $93
-        frest   $102, $94
-        fi      $100, $92, $100
-        fi      $101, $93, $101
-        fi      $102, $94, $102
-        fnms    $103, $92, $100, ONE
-        fnms    $104, $93, $101, ONE
-        fnms    $105, $94, $102, ONE
-        fma     $100, $103, $100, $100
-        fma     $101, $104, $101, $101
-        fma     $102, $105, $102, $102
-        # min and max over the four corners, per axis, in every lane:
-        # $100..$102 = min of 1/dx, 1/dy, 1/dz; $103..$105 = max
-        .irp    R, 100, 101, 102
-        rotqbyi $106, $\R, 8
-        fcgt    $107, $\R, $106
-        selb    $108, $\R, $106, $107
-        selb    $109, $106, $\R, $107
-        rotqbyi $110, $108, 4
-        rotqbyi $111, $109, 4
-        fcgt    $112, $108, $110
-        fcgt    $113, $111, $109
-        selb    $\R, $108, $110, $112
-        selb    (\R+3), $109, $111, $113
-        .endr
-        # A box test computes plane * PA + OA with OA = -origin * PA - |origin * PA| * 2^-20
-        # (the margin covers the rounding of the product it replaces; -1e30 on mixed axes)
-        lqa     $106, k_eps
-        lqa     $111, k_eps20
-        lqa     $112, k_abs
-        .irp    K, 0, 1, 2
-        fcgt    $107, ZERO, (\K+100)          # some direction negative
-        fcgt    $108, ZERO, (\K+103)          # every direction negative
-        andc    $107, $107, $108              # both signs: no IA bound on this axis
-        fm      (\K+PAX), (\K+100), $106
-        fm      (\K+PBX), (\K+103), $106
-        andc    (\K+PAX), (\K+PAX), $107
-        andc    (\K+PBX), (\K+PBX), $107
-        and     $109, NBIG, $107
-        fm      $110, (\K+OXS), (\K+PAX)
-        and     $113, $110, $112
-        fma     $110, $113, $111, $110
-        fs      (\K+OAX), $109, $110
-        fm      $110, (\K+OXS), (\K+PBX)
-        and     $113, $110, $112
-        fma     $110, $113, $111, $110
-        fs      (\K+OBX), $109, $110
-        .endr
-        lqa     $106, k_oddmask
-        and     F2, NBIG, $106                # (0, -1e30, 0, -1e30)
-
-        # ---- traversal from the root's children
-        ori     STK, STKBASE, 0
+        # ---- packet setup, scheduled into even/odd pairs: the frustum for the IA box tests
+        # (per axis the range of 1/d over the corner rays, which bounds every ray's 1/d
+        # where the sign does not change), its multipliers and offsets (see trav), and the
+        # first ray's data (set_first) for ray 0; then traversal from the root's children.
+        # A box test computes plane * PA + OA with OA = -origin * PA - |origin * PA| * 2^-20:
+        # the margin covers the rounding of the product it replaces; OA = -1e30 where the
+        # directions have both signs and give no bound.
+        .align  3
+.Lsetup:
         il      FIRST, 0
-        brsl    $0, set_first
+        lqa     $66, corners
+        ila     $106, k_pat
+        lqa     $67, corners+16
+        andi    $101, FIRST, 3
+        lqa     $68, corners+32
+        rotmi   $100, FIRST, -2
+        lqa     $69, k_eps
+        shli    $101, $101, 4   # its lane * 16
+        lqa     $70, k_abs
+        ila     $102, ray_rx
+        lqa     $71, k_eps20
+        ori     STK, STKBASE, 0
+        frest   $72, $66
+        shli    $100, $100, 4   # its vector's byte offset
+        frest   $73, $67
+        nop
+        frest   $74, $68
+        nop
+        lqx     $107, $106, $101
+        fi      $72, $66, $72
+        lqa     $75, k_oddmask
+        fi      $73, $67, $73
+        lqa     $111, k_ident
+        fi      $74, $68, $74
+        lnop
+        ila     $106, k_tpat
+        lnop
+        a       $102, $102, $100
+        lnop
+        nop
+        lqx     FT_PAT, $106, $101
+        ila     $106, ray_t
+        lqd     $103, 0($102)
+        fnms    $76, $66, $72, ONE
+        lqd     $104, 256($102)
+        fnms    $77, $67, $73, ONE
+        lqd     $105, 512($102)
+        fnms    $78, $68, $74, ONE
+        lnop
+        a       FT_ADDR, $106, $100
+        lnop
+        and     F2, NBIG, $75
+        lqa     $106, k_eps
+        nop
+        shufb   $103, $103, $103, $107   # 1/d splats
+        fma     $79, $76, $72, $72
+        shufb   $104, $104, $104, $107
+        fma     $80, $77, $73, $73
+        shufb   $105, $105, $105, $107
+        fma     $81, $78, $74, $74
+        lnop
+        fcgt    $108, ZERO, $103   # points down the axis
+        lnop
+        fm      RX1, $103, $106
+        lnop
+        fm      RY1, $104, $106
+        lnop
+        fm      RZ1, $105, $106
+        rotqbyi $82, $79, 8
+        fcgt    $109, ZERO, $104
+        rotqbyi $83, $80, 8
+        fcgt    $110, ZERO, $105
+        rotqbyi $84, $81, 8
+        selb    PERMX, $111, SWAP, $108
+        lnop
+        fcgt    $85, $79, $82
+        lnop
+        fcgt    $86, $80, $83
+        lnop
+        fcgt    $87, $81, $84
+        lnop
+        selb    $88, $79, $82, $85
+        lnop
+        selb    $89, $82, $79, $85
+        lnop
+        selb    $90, $80, $83, $86
+        rotqbyi $91, $88, 4
+        selb    $92, $83, $80, $86
+        rotqbyi $93, $89, 4
+        selb    $94, $81, $84, $87
+        rotqbyi $95, $90, 4
+        selb    $96, $84, $81, $87
+        rotqbyi $97, $92, 4
+        fcgt    $98, $88, $91
+        rotqbyi $99, $94, 4
+        fcgt    $113, $93, $89
+        rotqbyi $114, $96, 4
+        fcgt    $115, $90, $95
+        lnop
+        fcgt    $116, $97, $92
+        lnop
+        fcgt    $117, $94, $99
+        lnop
+        fcgt    $118, $114, $96
+        lnop
+        selb    $119, $88, $91, $98
+        lnop
+        selb    $120, $89, $93, $113
+        lnop
+        selb    $121, $90, $95, $115
+        lnop
+        selb    $122, $92, $97, $116
+        lnop
+        selb    $123, $94, $99, $117
+        lnop
+        selb    $124, $96, $114, $118
+        lnop
+        fm      $125, $119, $69
+        lnop
+        fm      $126, $120, $69
+        lnop
+        fm      $127, $121, $69
+        lnop
+        fm      $66, $122, $69
+        lnop
+        fm      $67, $123, $69
+        lnop
+        fm      $68, $124, $69
+        lnop
+        fcgt    $75, ZERO, $119
+        lnop
+        fcgt    $72, ZERO, $120
+        lnop
+        fcgt    $76, ZERO, $121
+        lnop
+        fcgt    $73, ZERO, $122
+        lnop
+        fcgt    $77, ZERO, $123
+        lnop
+        fcgt    $74, ZERO, $124
+        lnop
+        andc    $78, $75, $72
+        lnop
+        andc    $79, $76, $73
+        lnop
+        andc    $82, $77, $74
+        lnop
+        andc    $43, $125, $78
+        lnop
+        andc    $46, $126, $78
+        lnop
+        andc    $44, $127, $79
+        lnop
+        andc    $47, $66, $79
+        lnop
+        andc    $45, $67, $82
+        lnop
+        andc    $48, $68, $82
+        lnop
+        fm      $85, $33, $43
+        lnop
+        fm      $86, $33, $46
+        lnop
+        fm      $80, $34, $44
+        lnop
+        fm      $83, $34, $47
+        lnop
+        fm      $87, $35, $45
+        lnop
+        fm      $84, $35, $48
+        lnop
+        and     $81, $85, $70
+        lnop
+        and     $91, $86, $70
+        lnop
+        and     $88, $80, $70
+        lnop
+        and     $98, $83, $70
+        lnop
+        and     $89, $87, $70
+        lnop
+        and     $113, $84, $70
+        lnop
+        fma     $93, $81, $71, $85
+        lnop
+        fma     $90, $91, $71, $86
+        lnop
+        fma     $95, $88, $71, $80
+        lnop
+        fma     $115, $98, $71, $83
+        lnop
+        fma     $92, $89, $71, $87
+        lnop
+        fma     $97, $113, $71, $84
+        lnop
+        and     $116, NBIG, $78
+        lnop
+        and     $94, NBIG, $79
+        lnop
+        and     $117, NBIG, $82
+        lnop
+        fs      $49, $116, $93
+        lnop
+        fs      $27, $116, $90
+        lnop
+        fs      $50, $94, $95
+        lnop
+        fs      $28, $94, $115
+        lnop
+        fs      $51, $117, $92
+        lnop
+        fs      $29, $117, $97
+        lnop
+        selb    PERMY, $111, SWAP, $109
+        lnop
+        selb    PERMZ, $111, SWAP, $110
+        lnop
+        fm      $103, OXS, RX1
+        stqd    $108, 0(NEGTAB)   # near child is child 1 when negative
+        fm      $104, OYS, RY1
+        stqd    $109, 16(NEGTAB)
+        fm      $105, OZS, RZ1
+        stqd    $110, 32(NEGTAB)
         ori     CUR, ROOTST, 0
-        lqa     $66, vars+V_EMPTY
-        brnz    $66, packet_done
+        lqa     $112, k_abs
+        nop
+        lqa     $111, k_eps20
+        nop
+        lqa     $99, vars+V_EMPTY
+        and     $106, $103, $112
+        lnop
+        and     $107, $104, $112
+        lnop
+        and     $108, $105, $112
+        lnop
+        fma     OR1X, $106, $111, $103
+        lnop
+        fma     OR1Y, $107, $111, $104
+        lnop
+        fma     OR1Z, $108, $111, $105
+        lnop
+        nop
+        brnz    $99, packet_done
+        nop
         br      .Lnewcur
+
 
 # ---- one traversal step: test both children of CUR (an inner node the packet enters)
 # $68/$70/$71: the pair's x/y/z planes, $73: (link', meta) of both children, $76: near
