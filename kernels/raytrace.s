@@ -1419,6 +1419,28 @@ leaf:
         ai      $80, $80, 1
         rotmi   $67, $67, -6                  # count (meta << 4 >> 2 ... see bvh_miss)
         stqa    $80, vars+V_LEAVES
+        # bring every missing triangle of the leaf into the cache with one wait: the
+        # DMAs queue back to back, so a leaf pays the memory latency once
+        ori     $76, $66, 0
+        ori     $77, $67, 0
+        il      $78, 0                        # any miss
+        il      $79, 64
+        hbrr    .Lpf_br, .Lpf
+.Lpf:   and     $80, $76, TMASK
+        shli    $81, $80, 4
+        lqx     $82, TTAGS, $81
+        ceq     $83, $82, $76
+        brz     $83, .Lpf_miss                # hits fall through
+.Lpf_next:
+        ai      $76, $76, 1
+        ai      $77, $77, -1
+.Lpf_br:
+        brnz    $77, .Lpf
+        brz     $78, tri_loop
+        il      $86, 2
+        wrch    $MFC_WrTagMask, $86
+        wrch    $MFC_WrTagUpdate, $86
+        rdch    $86, $MFC_RdTagStat
 tri_loop:
         ai      S_TLOOK, S_TLOOK, 1
         and     $80, $66, TMASK
@@ -1876,6 +1898,26 @@ pop:
         ai      STK, STK, -16
         brnz    $126, packet_done
         br      .Lnewcur
+
+.Lpf_miss:
+        stqx    $76, TTAGS, $81               # the line now holds this triangle
+        shli    $84, $80, 6
+        a       $84, $84, TDATA
+        shli    $85, $76, 6
+        a       $85, $85, EATRIS
+        il      $86, 1
+        il      $87, 0x40
+        wrch    $MFC_LSA, $84
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $85
+        wrch    $MFC_Size, $79
+        wrch    $MFC_TagID, $86
+        wrch    $MFC_Cmd, $87
+        lqa     $88, vars+V_TMISS
+        il      $78, 1
+        ai      $88, $88, 1
+        stqa    $88, vars+V_TMISS
+        br      .Lpf_next
 
 tri_miss:
         # triangle cache miss: fetch the 64-byte record, then test it
