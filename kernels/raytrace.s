@@ -179,6 +179,8 @@ k_word0:        .long -1, 0, 0, 0
 k_word1:        .long 0, -1, 0, 0
 k_pc0:          .long 0x00010203, 0x04050607, 0x10111213, 0x80808080   # state of child 0
 k_pc1:          .long 0x08090a0b, 0x0c0d0e0f, 0x14151617, 0x80808080   # ... of child 1
+k_ntol:         .long 0xb5800000, 0xb5800000, 0xb5800000, 0xb5800000   # -2^-20
+k_onetol:       .long 0x3f800008, 0x3f800008, 0x3f800008, 0x3f800008   # 1 + 2^-20
 k_eps20:        .long 0x35800000, 0x35800000, 0x35800000, 0x35800000   # 2^-20
 k_eps:          .long 0x3f7fff00, 0xbf800080, 0x3f7fff00, 0xbf800080   # 1-2^-16, -(1+2^-16)
 k_epslo:        .long 0x3f7fff00, 0x3f7fff00, 0x3f7fff00, 0x3f7fff00
@@ -1584,275 +1586,269 @@ tri_loop:
         brnz    $113, tri_next
         ai      S_TRIS, S_TRIS, 1
 
+        # the inside test admits barycentrics down to -2^-20 (and a sum up to 1 + 2^-20),
+        # so a ray through the shared edge of two triangles hits one of them whatever
+        # the truncating arithmetic makes of the edge; the nearer hit wins as usual
+        lqa     $76, k_ntol
+        lqa     $77, k_onetol
         # (scheduled into even/odd pairs from the 4-vector test: loads, den = n.d, t,
         # barycentrics, hit = t in (0, t_old) and inside, selb updates of t, id, n.d/|n|)
         .align  3
 ray_loop:
-        ila     $116, ray_t
+        ila     $59, ray_t
+        lqx     $65, $125, $119
+        ila     $78, ray_id
+        lqx     $79, $126, $119
+        ila     $80, ray_nd
+        lqx     $81, $127, $119
+        a       $82, $59, $119
         lnop
-        ila     $117, ray_id
-        lqx     $80, $125, $119   # d_k
-        ila     $118, ray_nd
-        lqx     $84, $126, $119   # d_u
-        nop
-        lqx     $88, $127, $119   # d_v
+        a       $83, $78, $119
+        lnop
+        a       $84, $80, $119
+        lqd     $85, 0($82)
         ai      $119, $119, 16
-        lnop
+        lqd     $86, 16($82)
+        fma     $87, $68, $79, $65
+        lqd     $88, 32($82)
         nop
-        lqx     $81, $125, $119   # d_k
+        lqx     $89, $125, $119
         nop
-        lqx     $85, $126, $119   # d_u
-        fma     $92, $68, $84, $80
-        lqx     $89, $127, $119   # d_v
+        lqx     $90, $126, $119
+        nop
+        lqx     $91, $127, $119
         ai      $119, $119, 16
-        lnop
+        lqd     $92, 48($82)
         nop
-        lqx     $82, $125, $119   # d_k
+        lqd     $93, 0($83)
+        fma     $87, $69, $81, $87
+        lqx     $94, $125, $119
         nop
-        lqx     $86, $126, $119   # d_u
-        fma     $93, $68, $85, $81
-        lqx     $90, $127, $119   # d_v
+        lqx     $95, $126, $119
+        fma     $96, $68, $90, $89
+        lqx     $97, $127, $119
         ai      $119, $119, 16
-        lnop
-        fma     $92, $69, $88, $92   # den
-        lnop
+        lqd     $98, 0($84)
         nop
-        lqx     $83, $125, $119   # d_k
+        lqd     $99, 16($83)
         nop
-        lqx     $87, $126, $119   # d_u
-        fma     $94, $68, $86, $82
-        lqx     $91, $127, $119   # d_v
-        fma     $93, $69, $89, $93   # den
-        lnop
+        lqx     $100, $125, $119
+        fm      $101, $87, $123
+        lqx     $102, $126, $119
+        fma     $103, $68, $95, $94
+        lqx     $104, $127, $119
+        fma     $96, $69, $91, $96
+        frest   $105, $87
         ai      $119, $119, 16
-        lnop
+        lqd     $106, 16($84)
         nop
-        frest   $96, $92
-        ai      $119, $119, -64
-        lnop
-        fma     $95, $68, $87, $83
-        lnop
-        fma     $94, $69, $90, $94   # den
-        lnop
-        fi      $96, $92, $96
-        frest   $97, $93
-        a       $116, $116, $119
-        lnop
-        a       $117, $117, $119
-        lnop
-        a       $118, $118, $119
-        lqd     $100, 0($116)   # current t
-        fma     $95, $69, $91, $95   # den
-        lqd     $101, 16($116)   # current t
-        fi      $97, $93, $97
-        frest   $98, $94
-        ai      $119, $119, 64
-        lqd     $102, 32($116)   # current t
-        fnms    $80, $92, $96, ONE
-        lqd     $103, 48($116)   # current t
-        fm      $92, $92, $123   # n.d / |n|
-        lqd     $108, 0($118)
-        fi      $98, $94, $98
-        lqd     $109, 16($118)
+        lqd     $107, 32($83)
         ceqi    $112, $119, 256
-        frest   $99, $95
-        nop
-        lqd     $110, 32($118)
-        fnms    $81, $93, $97, ONE
-        lqd     $111, 48($118)
-        fma     $96, $80, $96, $96
+        lqd     $108, 32($84)
+        fma     $109, $68, $102, $100
+        lqd     $110, 48($83)
+        fma     $103, $69, $97, $103
+        lqd     $111, 48($84)
+        fi      $105, $87, $105
+        frest   $113, $96
+        fm      $114, $96, $123
         lnop
-        fi      $99, $95, $99
+        fma     $109, $69, $104, $109
         lnop
-        fm      $93, $93, $123   # n.d / |n|
+        fi      $113, $96, $113
+        frest   $115, $103
+        fm      $116, $103, $123
         lnop
-        fnms    $82, $94, $98, ONE
+        fnms    $117, $87, $105, ONE
         lnop
-        fm      $94, $94, $123   # n.d / |n|
+        fi      $115, $103, $115
         lnop
-        fma     $97, $81, $97, $97
+        fm      $118, $109, $123
+        frest   $59, $109
+        fnms    $78, $96, $113, ONE
         lnop
-        fm      $96, $70, $96   # t
+        fma     $117, $117, $105, $105
         lnop
-        fnms    $83, $95, $99, ONE
+        fi      $59, $109, $59
         lnop
-        fma     $98, $82, $98, $98
+        fnms    $80, $103, $115, ONE
         lnop
-        fm      $95, $95, $123   # n.d / |n|
+        fma     $78, $78, $113, $113
         lnop
-        fm      $97, $70, $97   # t
+        fm      $65, $70, $117
         lnop
-        fma     $80, $96, $84, $121   # hit u
+        fnms    $89, $109, $59, ONE
         lnop
-        fma     $84, $96, $88, $122   # hit v
+        fma     $80, $80, $115, $115
         lnop
-        fma     $99, $83, $99, $99
+        fm      $94, $70, $78
         lnop
-        fm      $98, $70, $98   # t
+        fma     $79, $65, $79, $121
         lnop
-        fcgt    $104, $96, ZERO   # t > 0
+        fma     $81, $65, $81, $122
         lnop
-        fma     $81, $97, $85, $121   # hit u
+        fma     $89, $89, $59, $59
         lnop
-        fma     $85, $97, $89, $122   # hit v
+        fm      $100, $70, $80
         lnop
-        fma     $88, $71, $80, $73
+        fcgt    $87, $85, $65
         lnop
-        fm      $99, $70, $99   # t
+        fma     $90, $94, $90, $121
         lnop
-        fma     $82, $98, $86, $121   # hit u
+        fma     $96, $71, $79, $73
         lnop
-        fma     $86, $98, $90, $122   # hit v
+        fma     $105, $74, $79, $120
         lnop
-        fma     $89, $71, $81, $73
+        fm      $103, $70, $89
         lnop
-        fma     $80, $74, $80, $120
+        fma     $95, $100, $95, $121
         lnop
-        fma     $81, $74, $81, $120
+        fma     $91, $94, $91, $122
         lnop
-        fma     $83, $99, $87, $121   # hit u
+        fma     $113, $71, $90, $73
         lnop
-        fma     $87, $99, $91, $122   # hit v
+        fma     $117, $74, $90, $120
         lnop
-        fma     $90, $71, $82, $73
+        fma     $97, $100, $97, $122
         lnop
-        fma     $82, $74, $82, $120
+        fma     $102, $103, $102, $121
         lnop
-        fma     $88, $72, $84, $88   # beta
+        fma     $109, $71, $95, $73
         lnop
-        fma     $80, $75, $84, $80   # gamma
+        fma     $115, $74, $95, $120
         lnop
-        fma     $91, $71, $83, $73
+        fma     $104, $103, $104, $122
         lnop
-        fma     $83, $74, $83, $120
+        fma     $96, $72, $81, $96
         lnop
-        fma     $89, $72, $85, $89   # beta
+        fma     $105, $75, $81, $105
         lnop
-        fma     $81, $75, $85, $81   # gamma
+        fma     $78, $71, $102, $73
         lnop
-        fma     $90, $72, $86, $90   # beta
+        fma     $59, $74, $102, $120
         lnop
-        fma     $82, $75, $86, $82   # gamma
+        fma     $113, $72, $91, $113
         lnop
-        fma     $91, $72, $87, $91   # beta
+        fma     $117, $75, $91, $117
         lnop
-        fma     $83, $75, $87, $83   # gamma
+        fma     $109, $72, $97, $109
         lnop
-        fa      $84, $88, $80   # beta + gamma
+        fma     $115, $75, $97, $115
         lnop
-        fa      $85, $89, $81   # beta + gamma
+        fma     $78, $72, $104, $78
         lnop
-        or      $88, $88, $80   # sign bit: beta < 0 or gamma < 0
+        fma     $59, $75, $104, $59
         lnop
-        fa      $86, $90, $82   # beta + gamma
+        fa      $80, $96, $105
         lnop
-        or      $89, $89, $81   # sign bit: beta < 0 or gamma < 0
+        fa      $79, $113, $117
         lnop
-        fa      $87, $91, $83   # beta + gamma
+        fcgt    $89, $76, $96
         lnop
-        or      $90, $90, $82   # sign bit: beta < 0 or gamma < 0
+        fa      $90, $109, $115
         lnop
-        or      $91, $91, $83   # sign bit: beta < 0 or gamma < 0
+        fcgt    $95, $76, $105
         lnop
-        fcgt    $80, $100, $96   # t < current
+        fa      $81, $78, $59
         lnop
-        fcgt    $81, $101, $97   # t < current
+        fcgt    $102, $76, $113
         lnop
-        fcgt    $105, $97, ZERO   # t > 0
+        fcgt    $91, $76, $117
         lnop
-        fcgt    $82, $102, $98   # t < current
+        fcgt    $97, $76, $109
         lnop
-        fcgt    $106, $98, ZERO   # t > 0
+        fcgt    $104, $76, $115
         lnop
-        fcgt    $83, $103, $99   # t < current
+        fcgt    $96, $76, $78
         lnop
-        fcgt    $107, $99, ZERO   # t > 0
+        fcgt    $105, $76, $59
         lnop
-        rotmai  $88, $88, -31   # all ones when negative
+        fcgt    $113, $80, $77
         lnop
-        and     $80, $80, $104
+        fcgt    $117, $65, ZERO
         lnop
-        rotmai  $89, $89, -31   # all ones when negative
-        lqd     $104, 0($117)
-        rotmai  $90, $90, -31   # all ones when negative
+        or      $89, $89, $95
         lnop
-        rotmai  $91, $91, -31   # all ones when negative
+        fcgt    $109, $79, $77
         lnop
-        fcgt    $84, $84, ONE   # beta + gamma > 1
+        fcgt    $115, $86, $94
         lnop
-        fcgt    $85, $85, ONE   # beta + gamma > 1
+        fcgt    $78, $94, ZERO
         lnop
-        fcgt    $86, $86, ONE   # beta + gamma > 1
+        or      $102, $102, $91
         lnop
-        fcgt    $87, $87, ONE   # beta + gamma > 1
+        fcgt    $59, $90, $77
         lnop
-        and     $81, $81, $105
+        fcgt    $80, $88, $100
+        lnop
+        fcgt    $95, $100, ZERO
+        lnop
+        or      $97, $97, $104
+        lnop
+        fcgt    $79, $81, $77
+        lnop
+        fcgt    $91, $92, $103
+        lnop
+        fcgt    $90, $103, ZERO
+        lnop
+        or      $96, $96, $105
+        lnop
+        and     $87, $87, $117
+        lnop
+        or      $89, $89, $113
+        lnop
+        and     $115, $115, $78
+        lnop
+        or      $102, $102, $109
+        lnop
+        and     $80, $80, $95
+        lnop
+        or      $97, $97, $59
         hbrr    .Lray_br, ray_loop
-        and     $82, $82, $106
-        lqd     $105, 16($117)
-        and     $83, $83, $107
-        lqd     $106, 32($117)
-        or      $88, $88, $84
-        lqd     $107, 48($117)
-        or      $89, $89, $85
+        and     $91, $91, $90
         lnop
-        or      $90, $90, $86
+        or      $96, $96, $79
         lnop
-        or      $91, $91, $87
+        andc    $104, $87, $89
         lnop
-        andc    $80, $80, $88   # hit
+        andc    $81, $115, $102
         lnop
-        andc    $81, $81, $89   # hit
+        andc    $105, $80, $97
         lnop
-        andc    $82, $82, $90   # hit
+        andc    $117, $91, $96
         lnop
-        andc    $83, $83, $91   # hit
+        selb    $85, $85, $65, $104
         lnop
-        selb    $100, $100, $96, $80
+        selb    $93, $93, $124, $104
         lnop
-        selb    $101, $101, $97, $81
-        lnop
-        selb    $102, $102, $98, $82
-        lnop
-        selb    $103, $103, $99, $83
-        lnop
-        selb    $104, $104, $124, $80
-        lnop
-        selb    $108, $108, $92, $80
-        lnop
-        selb    $105, $105, $124, $81
-        stqd    $100, 0($116)
-        selb    $109, $109, $93, $81
-        lnop
-        selb    $106, $106, $124, $82
-        stqd    $101, 16($116)
-        selb    $110, $110, $94, $82
-        lnop
-        selb    $107, $107, $124, $83
-        stqd    $102, 32($116)
-        selb    $111, $111, $95, $83
-        lnop
+        selb    $98, $98, $101, $104
+        stqd    $85, 0($82)
+        selb    $86, $86, $94, $81
+        stqd    $93, 0($83)
+        selb    $99, $99, $124, $81
+        stqd    $98, 0($84)
+        selb    $106, $106, $114, $81
+        stqd    $86, 16($82)
+        selb    $88, $88, $100, $105
+        stqd    $99, 16($83)
+        selb    $107, $107, $124, $105
+        stqd    $106, 16($84)
+        selb    $108, $108, $116, $105
+        stqd    $88, 32($82)
+        selb    $92, $92, $103, $117
+        stqd    $107, 32($83)
+        selb    $110, $110, $124, $117
+        stqd    $108, 32($84)
+        selb    $111, $111, $118, $117
+        stqd    $92, 48($82)
         nop
-        stqd    $103, 48($116)
+        stqd    $110, 48($83)
         nop
-        stqd    $104, 0($117)
-        nop
-        stqd    $108, 0($118)
-        nop
-        stqd    $105, 16($117)
-        nop
-        stqd    $109, 16($118)
-        nop
-        stqd    $106, 32($117)
-        nop
-        stqd    $110, 32($118)
-        nop
-        stqd    $107, 48($117)
-        nop
-        stqd    $111, 48($118)
+        stqd    $111, 48($84)
         nop
 .Lray_br:
         brz     $112, ray_loop
+
 
 tri_next:
         ai      $66, $66, 1
