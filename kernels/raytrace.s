@@ -912,38 +912,50 @@ packet_loop:
 # (lanes child 0, 0, 1, 1), $118: the children's first active rays.
         .align  3                             # pairs: even pipe at 8k, odd pipe at 8k+4
 trav:
-        and     $66, CUR, BMASK64             # the pair's cache line
+        and     $66, CUR, BMASK64   # the pair's cache line
         hbrr    .Lloop_br, trav
-        ai      S_STEPS, S_STEPS, 1
-        lqd     $74, 0(FT_ADDR)               # the first ray's t
-        rotmi   $72, $66, -2                  # its tag's offset
-        lqx     $68, BDATA, $66               # x planes (min0, max0, min1, max1)
         nop
-        lqx     $70, BDATA16, $66             # y
+        rotqbyi $67, CUR, 4   # meta << 4
+        rotmi   $72, $66, -2   # its tag's offset
+        lqx     $68, BDATA, $66   # x planes (min0, max0, min1, max1)
         nop
-        lqx     $71, BDATA32, $66             # z
+        lqx     $70, BDATA16, $66   # y
         nop
-        rotqbyi $67, CUR, 4                   # meta << 4
+        lqx     $71, BDATA32, $66   # z
+        andi    $69, $67, 0x30   # split axis * 16
+        lqd     $74, 0(FT_ADDR)   # the first ray's t
+        rotmi   $97, $67, -6   # triangle count: a leaf
+        lqx     $73, BDATA48, $66   # (link', meta) of both children
         nop
         lqx     $75, BTAGS, $72
         nop
-        shufb   $83, $74, $74, FT_PAT         # (0, t, 0, t)
+        lqx     $76, NEGTAB, $69   # all ones: child 1 is the near one
         nop
-        shufb   $80, $68, $68, PERMX          # planes in (near, far) order for the first ray
-        andi    $69, $67, 0x30                # split axis * 16
+        lqd     $77, -16(STK)   # the entry a pop takes
+        nop
+        lqa     $78, k_pc0
+        nop
+        lqa     $79, k_pc1
+        nop
+        shufb   $95, CUR, CUR, PAT2   # this node's first active ray: changed?
+        ceq     $115, $75, CUR   # the line holds this pair
+        shufb   $80, $68, $68, PERMX   # planes in (near, far) order for the first ray
+        nop
         shufb   $81, $70, $70, PERMY
         nop
         shufb   $82, $71, $71, PERMZ
-        xor     $83, $83, NEGODD              # (0, -t, 0, -t)
-        lqx     $76, NEGTAB, $69              # all ones: child 1 is the near one
-        fms     $84, $80, RX1, OR1X           # first ray: (entry, -exit) per child and axis
-        lqx     $73, BDATA48, $66             # (link', meta) of both children
+        ceq     $95, $95, FIRST
+        shufb   $83, $74, $74, FT_PAT   # (0, t, 0, t)
+        fms     $84, $80, RX1, OR1X   # first ray: (entry, -exit) per child and axis
+        lnop
         fms     $85, $81, RY1, OR1Y
-        lqd     $77, -16(STK)                 # the entry a pop takes
+        brz     $95, first_changed
         fms     $86, $82, RZ1, OR1Z
-        lqa     $78, k_pc0
-        fma     $87, $80, PAX, OAX            # packet: both bounds, the smaller taken
-        lqa     $79, k_pc1
+        brnz    $97, leaf
+        xor     $83, $83, NEGODD   # (0, -t, 0, -t)
+        lnop
+        fma     $87, $80, PAX, OAX   # packet: both bounds, the smaller taken
+        lnop
         fma     $88, $80, PBX, OBX
         lnop
         fma     $89, $81, PAY, OAY
@@ -958,9 +970,9 @@ trav:
         lnop
         fcgt    $95, $86, $83
         lnop
-        selb    $94, $85, $84, $93            # max(x, y)
+        selb    $94, $85, $84, $93   # max(x, y)
         lnop
-        selb    $96, $83, $86, $95            # max(z, t)
+        selb    $96, $83, $86, $95   # max(z, t)
         lnop
         fcgt    $99, $87, $88
         lnop
@@ -970,7 +982,7 @@ trav:
         lnop
         fcgt    $103, $91, $92
         lnop
-        selb    $98, $96, $94, $97            # first ray: (entry, -exit) over the axes
+        selb    $98, $96, $94, $97   # first ray: (entry, -exit) over the axes
         lnop
         selb    $100, $87, $88, $99
         lnop
@@ -986,86 +998,69 @@ trav:
         lnop
         selb    $108, F2, $104, $107
         lnop
-        xor     $111, $111, SIGNS             # (exit, -entry)
+        xor     $111, $111, SIGNS   # (exit, -entry)
         lnop
         fcgt    $109, $106, $108
         lnop
-        fcgt    $112, $98, $111               # the first ray misses (lanes child 0, 0, 1, 1)
+        fcgt    $112, $98, $111   # the first ray misses (lanes child 0, 0, 1, 1)
         lnop
-        selb    $110, $108, $106, $109        # packet: (entry, -exit) over the axes
+        selb    $110, $108, $106, $109   # packet: (entry, -exit) over the axes
         lnop
-        ceq     $115, $75, CUR                # the line holds this pair
-        shufb   $116, $112, $112, PAT0        # child 0 missed, every lane
+        ai      S_STEPS, S_STEPS, 1
+        shufb   $116, $112, $112, PAT0   # child 0 missed, every lane
         ceq     $93, STK, STKBASE
         shufb   $113, $110, $110, SWAP
         nop
-        shufb   $117, $112, $112, PAT2        # child 1 missed
+        shufb   $117, $112, $112, PAT2   # child 1 missed
         or      $118, $116, $76
         lnop
         xor     $113, $113, SIGNS
         lnop
-        andc    $118, $118, $117              # go to child 1
+        andc    $118, $118, $117   # go to child 1
         lnop
-        fcgt    $114, $110, $113              # the frustum misses
+        fcgt    $114, $110, $113   # the frustum misses
         lnop
-        selb    $119, $78, $79, $118          # next state's pattern
+        selb    $119, $78, $79, $118   # next state's pattern
         brz     $115, bvh_miss
-        selb    $120, $79, $78, $118          # pushed state's pattern
+        selb    $120, $79, $78, $118   # pushed state's pattern
         lnop
         a       $124, $116, $117
         shufb   $122, $73, FIRST, $119
-        andc    $125, $112, $114              # undecided: the first ray misses, the frustum not
+        andc    $125, $112, $114   # undecided: the first ray misses, the frustum not
         shufb   $123, $73, FIRST, $120
-        shli    $124, $124, 4                 # -32, -16, 0: stack delta - 16
+        shli    $124, $124, 4   # -32, -16, 0: stack delta - 16
         lnop
-        and     $127, $112, $114              # early exits
+        and     $127, $112, $114   # early exits
         gb      $126, $125
-        and     $121, $116, $117              # neither: pop
+        and     $121, $116, $117   # neither: pop
         lnop
         a       M1V, M1V, $112
         lnop
         a       EEV, EEV, $127
         lnop
-        and     $93, $93, $121                # popping an empty stack: the packet is done
-        brnz    $126, slow                    # the third case: the only one that branches
+        and     $93, $93, $121   # popping an empty stack: the packet is done
+        brnz    $126, slow   # the third case: the only one that branches
         selb    CUR, $122, $77, $121
         lnop
         nop
-        stqd    $123, 0(STK)                  # stored either way; kept when both children go
+        stqd    $123, 0(STK)   # stored either way; kept when both children go
         nop
         brnz    $93, packet_done
         a       STK, STK, $124
-        rotqbyi $97, CUR, 4
-        nop
-        shufb   $95, CUR, CUR, PAT2           # its first active ray
+        lnop
         ai      STK, STK, 16
         lnop
-        rotmi   $97, $97, -6                  # triangle count: a leaf
-        lnop
-        ceq     $95, $95, FIRST
-        lnop
-        nop
-        brz     $95, first_changed
-        nop
-        brnz    $97, leaf
         nop
 .Lloop_br:
         br      trav
 
-# ---- a new state from a pop or a changed first ray: a leaf, or the next step
-.Lnewcur:
-        shufb   $95, CUR, CUR, PAT2           # its first active ray
-        rotqbyi $97, CUR, 4
-        ceq     $95, $95, FIRST
-        rotmi   $97, $97, -6                  # triangle count: a leaf
-        brz     $95, first_changed
-        brnz    $97, leaf
-        br      trav
+# a new state from a pop or a changed first ray: the step's own checks sort it out
+        .set    .Lnewcur, trav
 
 first_changed:
         shufb   FIRST, CUR, CUR, PAT2
         brsl    $0, set_first
-        br      .Lnewcur
+        br      trav
 
 # ---- the third case: the first ray misses a child the frustum does not rule out. Find the
 # first ray from FIRST on that enters it; none means the child is skipped.
