@@ -110,7 +110,8 @@ pub const STATS_BYTES: usize = 128;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct KernelStats {
     pub packets: u64,
-    /// BVH traversal steps (nodes visited, each a BVH-cache lookup).
+    /// BVH node visits: box tests of the packet against a node (the kernel tests both
+    /// children of a node in one step, so two per step).
     pub traversal_steps: u64,
     /// Steps decided by the first active ray hitting the box.
     pub early_hits: u64,

@@ -122,14 +122,21 @@ impl FrameRun {
         } else {
             0.0
         };
+        let lookups = if k.bvh_lookups > 0 {
+            k.bvh_lookups
+        } else {
+            k.traversal_steps
+        };
         let table2 = format!(
-            "{{\"traversal_steps_per_packet\": {:.2}, \"triangle_tests_per_packet\": {:.2}, \"triangles_culled_per_packet\": {:.2}, \"early_exits_pct\": {:.1}, \"early_hits_pct\": {:.1}, \"bvh_cache_hit_pct\": {:.1}, \"triangle_cache_hit_pct\": {:.1}, \"mrays_per_sec_per_spu\": {:.2}}}",
+            "{{\"traversal_steps_per_packet\": {:.2}, \"pair_steps_per_packet\": {:.2}, \"triangle_tests_per_packet\": {:.2}, \"triangles_culled_per_packet\": {:.2}, \"early_exits_pct\": {:.1}, \"early_hits_pct\": {:.1}, \"bvh_cache_hit_pct\": {:.1}, \"bvh_cache_hit_per_node_pct\": {:.1}, \"triangle_cache_hit_pct\": {:.1}, \"mrays_per_sec_per_spu\": {:.2}}}",
             per(k.traversal_steps),
+            per(lookups),
             per(k.triangle_tests),
             per(k.triangles_culled),
             pct(k.early_exits, k.traversal_steps),
             pct(k.early_hits, k.traversal_steps),
-            100.0 - pct(k.bvh_cache_misses, if k.bvh_lookups > 0 { k.bvh_lookups } else { k.traversal_steps }),
+            100.0 - pct(k.bvh_cache_misses, lookups),
+            100.0 - pct(k.bvh_cache_misses, k.traversal_steps),
             100.0 - pct(k.triangle_cache_misses, k.triangle_lookups),
             per_spu_mrays
         );

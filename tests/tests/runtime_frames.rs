@@ -126,8 +126,68 @@ fn raytrace_kernel_matches_the_reference_on_the_room() {
     let s = run.spus[0].stats;
     assert_eq!(s.packets, 4 * 64);
     assert!(s.traversal_steps > s.packets);
+    check_stats(&s);
     let _ = (
         pixel_location(0, 0, 2),
         Camera::parse("0,0,5,0,0,0,0,1,0,45").unwrap(),
+    );
+}
+
+/// The counters the kernel keeps hold together: two box tests per pair step (one BVH-cache
+/// lookup each), every early hit or exit is a box test, misses are lookups.
+fn check_stats(s: &spu_loader::kernel_abi::KernelStats) {
+    assert_eq!(s.traversal_steps, 2 * s.bvh_lookups, "{s:?}");
+    assert!(s.early_hits + s.early_exits <= s.traversal_steps, "{s:?}");
+    assert!(s.bvh_cache_misses <= s.bvh_lookups, "{s:?}");
+    assert!(s.triangle_cache_misses <= s.triangle_lookups, "{s:?}");
+    assert!(
+        s.triangle_tests + s.triangles_culled <= s.triangle_lookups,
+        "{s:?}"
+    );
+    assert!(s.leaves <= s.traversal_steps, "{s:?}");
+}
+
+/// A large scene with a small BVH cache and triangle cache: the miss paths, the third
+/// traversal case (first ray misses, frustum does not) and the leaf prefetch all run, and
+/// every pixel still agrees with the reference up to ties.
+#[test]
+fn raytrace_kernel_matches_the_reference_on_the_conference_with_small_caches() {
+    let scene = procedural::conference();
+    let (w, h) = (64, 64);
+    let bvh = Bvh::build(&scene, &BvhConfig::default());
+    let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
+    let basis = scene.camera.basis(w, h);
+    let layout = FrameLayout::new(&staged, &basis, w, h, 1, 128, 128).unwrap();
+    let run = render_frame(
+        &staged,
+        &layout,
+        1,
+        1,
+        2.4,
+        false,
+        20_000_000_000,
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let pixels = decode_frame_buffer(&run.frame_buffer, w, h);
+    let reference = Reference::from_staged(&staged).render(&scene.camera, w, h, 1);
+    let mut bad = 0;
+    for (p, r) in pixels.iter().zip(&reference) {
+        let hit_agrees = (p.triangle == MISS) == !r.is_hit();
+        let t_agrees = !r.is_hit() || (p.t - r.t).abs() <= 1e-4 * r.t.abs();
+        if !hit_agrees || !t_agrees {
+            bad += 1;
+        }
+    }
+    assert!(bad <= 1, "{bad} of {} pixels differ", pixels.len());
+    let s = run.spus[0].stats;
+    check_stats(&s);
+    assert!(
+        s.bvh_cache_misses > 0 && s.triangle_cache_misses > 0,
+        "{s:?}"
+    );
+    assert!(
+        s.early_hits + s.early_exits < s.traversal_steps,
+        "the third case never ran: {s:?}"
     );
 }
