@@ -25,6 +25,8 @@ pub struct FrameRun {
     pub profile: Option<spu_isa::profile::Profile>,
     /// The kernel's symbols (to split the profile by code section).
     pub symbols: Vec<(String, u32)>,
+    /// The kernel's local-store image (to tell its no-ops apart in the profile).
+    pub kernel_image: Vec<u8>,
 }
 
 impl FrameRun {
@@ -51,6 +53,22 @@ impl FrameRun {
             return "null".into();
         };
         let r = profile.range_totals(a, b);
+        // IBM's simulator counts nop, lnop and hints apart: the CPI without them is the
+        // figure to compare, the pairing nops of scheduled code would flatter it
+        let nops: u64 = profile
+            .addresses()
+            .filter(|(pc, _)| (a..b).contains(pc))
+            .filter(|(pc, _)| {
+                let word = self
+                    .kernel_image
+                    .get(*pc as usize..*pc as usize + 4)
+                    .map_or(0, |w| u32::from_be_bytes([w[0], w[1], w[2], w[3]]));
+                let op = spu_isa::codec::decode(word).op;
+                use spu_isa::table::Op;
+                spu_isa::analysis::is_nop(op) || matches!(op, Op::Hbr | Op::Hbra | Op::Hbrr)
+            })
+            .map(|(_, s)| s.executions)
+            .sum();
         let names = ["dep", "branch", "hint", "dp", "chan", "fetch"];
         let stalls: Vec<String> = r
             .stall
@@ -58,12 +76,15 @@ impl FrameRun {
             .zip(names)
             .map(|(v, n)| format!("\"{n}\": {v}"))
             .collect();
+        let real = r.executions - nops.min(r.executions);
         format!(
-            "{{\"from\": {from:?}, \"to\": {to:?}, \"instructions\": {}, \"cycles\": {}, \"cpi\": {:.3}, \"dual_issue_pct\": {:.1}, \"stalls\": {{{}}}}}",
+            "{{\"from\": {from:?}, \"to\": {to:?}, \"instructions\": {}, \"instructions_without_nops\": {real}, \"cycles\": {}, \"cpi\": {:.3}, \"cpi_without_nops\": {:.3}, \"dual_issue_pct\": {:.1}, \"stalls\": {{{}}}}}",
             r.executions,
             r.cycles,
             r.cpi(),
-            if r.cycles > 0 { 100.0 * r.dual as f64 / r.cycles as f64 } else { 0.0 },
+            if real > 0 { r.cycles as f64 / real as f64 } else { 0.0 },
+            // both halves of a pair count a dual issue: the share of cycles that issue two
+            if r.cycles > 0 { 50.0 * r.dual as f64 / r.cycles as f64 } else { 0.0 },
             stalls.join(", ")
         )
     }
@@ -336,5 +357,6 @@ pub fn render_frame(
         spus: spus_report,
         profile,
         symbols: program.symbols.clone(),
+        kernel_image: program.image.clone(),
     })
 }
