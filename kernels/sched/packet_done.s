@@ -1,0 +1,77 @@
+packet_done:
+lqa     %np, vars+V_PACKETS
+ai      %np1, %np, 1
+! stqa    %np1, vars+V_PACKETS
+lqa     $66, vars+V_OUTSEL
+ila     %ob, outbuf
+a       $80, %ob, $66
+rotmi   %tg, $66, -10
+ai      $81, %tg, 2
+il      %one, 1
+shl     %mask, %one, $81
+! wrch    $MFC_WrTagMask, %mask
+il      %two, 2
+! wrch    $MFC_WrTagUpdate, %two
+! rdch    %st, $MFC_RdTagStat
+ila     %base, ray_dx
+lqa     %bg, k_bg
+lqa     %pat, k_shade
+lqa     %abs, k_abs
+lqa     %c255, k_c255
+.irp    J, 0, 16, 32, 48, 64, 80, 96, 112
+lqd     %id\J, \J+1792(%base)
+lqd     %nd\J, \J+2048(%base)
+lqd     %iv\J, \J+2304(%base)
+lqd     %t\J, \J+1536(%base)
+fm      %c\J, %nd\J, %iv\J
+ceqi    %miss\J, %id\J, -1
+and     %ca\J, %c\J, %abs
+cfltu   %s\J, %ca\J, 8
+clgt    %big\J, %s\J, %c255
+selb    %sc\J, %s\J, %c255, %big\J
+shufb   %g\J, %sc\J, %sc\J, %pat
+selb    %rgba\J, %g\J, %bg, %miss\J
+~ stqd    %id\J, \J($80)
+~ stqd    %t\J, \J+256($80)
+~ stqd    %rgba\J, \J+512($80)
+.endr
+! lnop
+.irp    J, 128, 144, 160, 176, 192, 208, 224, 240
+lqd     %id\J, \J+1792(%base)
+lqd     %nd\J, \J+2048(%base)
+lqd     %iv\J, \J+2304(%base)
+lqd     %t\J, \J+1536(%base)
+fm      %c\J, %nd\J, %iv\J
+ceqi    %miss\J, %id\J, -1
+and     %ca\J, %c\J, %abs
+cfltu   %s\J, %ca\J, 8
+clgt    %big\J, %s\J, %c255
+selb    %sc\J, %s\J, %c255, %big\J
+shufb   %g\J, %sc\J, %sc\J, %pat
+selb    %rgba\J, %g\J, %bg, %miss\J
+~ stqd    %id\J, \J($80)
+~ stqd    %t\J, \J+256($80)
+~ stqd    %rgba\J, \J+512($80)
+.endr
+lqa     %tile, vars+V_TILE
+lqa     $93, vars+V_PKT
+lqa     %eafb, vars+V_EAFB
+shli    %q, %tile, 6
+a       %q2, %q, $93
+shli    %q3, %q2, 10
+a       %ea, %q3, %eafb
+il      %size, 1024
+il      %cmd, 0x20
+! wrch    $MFC_LSA, $80
+! wrch    $MFC_EAH, ZERO
+! wrch    $MFC_EAL, %ea
+! wrch    $MFC_Size, %size
+! wrch    $MFC_TagID, $81
+! wrch    $MFC_Cmd, %cmd
+xor     %os, $66, %size
+! stqa    %os, vars+V_OUTSEL
+ai      %pk, $93, 1
+! stqa    %pk, vars+V_PKT
+ceqi    %last, %pk, 64
+! brz     %last, packet_loop
+! br      next_tile
