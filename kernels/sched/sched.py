@@ -119,24 +119,59 @@ for i in reversed(range(n)):
 labels = [i for i in range(n) if 'label' in insts[i]]
 assert not labels or labels == [0], "labels only at the start"
 done = {}; ready_at = {}
+POOL_N = len(sys.argv[3].split(',')) if len(sys.argv) > 3 else None
+vdefs = [set(r for r in a.get('dst', []) if r >= 1000) for a in insts]
+vuses = [set(r for r in a.get('src', []) if r >= 1000) | set(r for r in a.get('after', []) if r is not None and r >= 1000) for a in insts]
+remaining_uses = {}
+for i, a in enumerate(insts):
+    if 'label' in a: continue
+    for r in set(a['src']) | set(a['dst']):
+        if r >= 1000: remaining_uses[r] = remaining_uses.get(r, 0) + 1
+live = set()
+def pressure_ok(i):
+    if POOL_N is None: return True
+    new = vdefs[i] - live
+    freed = set(r for r in (vuses[i] | vdefs[i]) if remaining_uses.get(r, 0) == 1 and r in live)
+    return len(live) + len(new) <= POOL_N - 2
+def retire(i):
+    for r in set(insts[i]['src']) | set(insts[i]['dst']):
+        if r >= 1000:
+            remaining_uses[r] -= 1
+            if remaining_uses[r] == 0: live.discard(r)
+            else: live.add(r)
 out = []
 if labels: out.append(insts[0]['text'])
 remaining = [i for i in range(n) if 'label' not in insts[i]]
 t = 0
+stuck = 0
 def ready(i, t):
     return all(j in done and (done[j][0] + (insts[j]['lat'] if set(insts[i]['src']) & set(insts[j]['dst']) else 1)) <= t for j in deps[i])
 while remaining:
-    ev = [i for i in remaining if insts[i]['pipe'] == 'even' and ready(i, t)]
+    ev = [i for i in remaining if insts[i]['pipe'] == 'even' and ready(i, t) and pressure_ok(i)]
     ev.sort(key=lambda i: (-prio[i], i))
     e = ev[0] if ev else None
     if e is not None: done[e] = (t, 0)
+    if e is not None: retire(e)
     od = [i for i in remaining if insts[i]['pipe'] == 'odd' and i != e and ready(i, t)
-          and (e is None or e not in deps[i])]
+          and (e is None or e not in deps[i]) and pressure_ok(i)]
     od.sort(key=lambda i: (-prio[i], i))
     o = od[0] if od else None
     if e is not None: del done[e]
+    if o is not None: retire(o)
     if e is None and o is None:
+        # nothing fits the register pool: take the oldest ready instruction anyway
+        blocked = [i for i in remaining if ready(i, t)]
+        if blocked and all(not ready(i, t - 1) or True for i in blocked) and stuck > 12:
+            i = min(blocked)
+            if insts[i]['pipe'] == 'even':
+                out.append(insts[i]['text']); out.append('lnop')
+            else:
+                out.append('nop'); out.append(insts[i]['text'])
+            done[i] = (t, 0); remaining.remove(i); retire(i); t += 1; stuck = 0
+            continue
+        stuck += 1
         t += 1; continue
+    stuck = 0
     if e is not None:
         out.append(insts[e]['text']); done[e] = (t, 0); remaining.remove(e)
     else:
