@@ -17,12 +17,24 @@
 # cache keeps each pair axis-major (transposed when the line is filled on a miss):
 #   +0  (min0.x, max0.x, min1.x, max1.x)   +16 the same for y   +32 for z
 #   +48 (link0', meta0, link1', meta1)     link' = child-pair byte offset (inner) or
-#                                          first triangle (leaf); meta = count<<2 | axis
+#                                          first triangle (leaf); meta = (count<<2|axis)<<4
 # so a step needs no horizontal reductions: per axis, the planes are put in (near, far)
 # order for the first ray (PERMk), and every slab test becomes "max over the axes of
 # (entry, -exit)" with the exit negated in the odd lanes by the multipliers themselves.
-# The multipliers carry a factor (1 -/+ 2^-16) that widens every box a little, so rounding
-# can only make a box test say "hit", never drop a ray that reaches a triangle.
+# The multipliers carry a factor (1 -/+ 2^-16), and the offsets an absolute margin, that
+# widen every box a little, so rounding can only make a box test say "hit", never drop a
+# ray that reaches a triangle. The decision (descend to the near child and push the far
+# one, take the one that is entered, or pop) is made with masks, without branches; only
+# the third case (first ray misses a child the frustum does not rule out) branches, to
+# find_first. A stack entry is a state: (link', meta, first active ray).
+#
+# A leaf fetches its missing triangles with back-to-back DMAs and one wait, culls each
+# triangle against the packet's corner rays, and tests the active rays (from the first
+# active ray's group of 16 on) four vectors per pass with Wald's projection test.
+#
+# The hot blocks (the step, the ray loop, ray generation, the triangle setup, find_first's
+# loop, the packet setup and output) are laid out in even/odd dual-issue pairs with the
+# aid in kernels/sched/, which holds their logical-order sources.
 #
 # Main-memory layouts come from loader::layout (node: min.xyz, link | max.xyz,
 # count<<2|axis; sibling pairs share a 64-byte line; triangle: Wald's projection record).
@@ -91,14 +103,14 @@
         .set PERMX, 56          # identity or pair swap: planes in (near, far) order
         .set PERMY, 57
         .set PERMZ, 58
-        .set S_SPARE, 59
+        .set FREE59, 59         # free (the ray loop uses it as a temporary)
         .set FT_ADDR, 60        # address of the first ray's t vector, and its splat pattern
         .set FT_PAT, 61
         .set FIRST, 62          # index of the first active ray (splat)
 # traversal state
         .set CUR, 63            # (link', meta, first, 0) of the node being expanded
         .set STK, 64            # stack pointer: entries are states, 16 bytes
-        .set S_SPARE2, 65
+        .set FREE65, 65         # free (the ray loop uses it as a temporary)
 # temporaries: $66..$127
 
 # ---- cold per-frame values kept in local store (lqa/stqa vars+V_*)
@@ -161,7 +173,6 @@ k_plo:          .long 0x00010203, 0x10111213, 0x04050607, 0x14151617
 k_phi:          .long 0x08090a0b, 0x18191a1b, 0x0c0d0e0f, 0x1c1d1e1f
 k_pa:           .long 0x00010203, 0x04050607, 0x10111213, 0x14151617
 k_pb:           .long 0x08090a0b, 0x0c0d0e0f, 0x18191a1b, 0x1c1d1e1f
-k_pxyz:         .long 0x00010203, 0x10111213, 0x80808080, 0x80808080   # (a0, b0, 0, 0)
 k_entry:        .long 0x00010203, 0x10111213, 0x80808080, 0x80808080
 k_root:         .long 0x0c0d0e0f, 0x1c1d1e1f, 0x80808080, 0x80808080   # (link, meta, 0, 0)
 k_bg:           .long 0x000000ff, 0x000000ff, 0x000000ff, 0x000000ff
@@ -170,9 +181,6 @@ k_swap:         .long 0x04050607, 0x00010203, 0x0c0d0e0f, 0x08090a0b
 k_negodd:       .long 0, 0x80000000, 0, 0x80000000
 k_oddmask:      .long 0, -1, 0, -1
 k_evenmask:     .long -1, 0, -1, 0
-k_lane1:        .long 0, -1, 0, 0
-k_lane2:        .long 0, 0, -1, 0
-k_n128:         .long 128, 128, 128, 0
 k_child0:       .long -1, -1, 0, 0
 k_child1:       .long 0, 0, -1, -1
 k_word0:        .long -1, 0, 0, 0
