@@ -1044,6 +1044,13 @@ mod memo {
 
 use memo::{Entry, EntryRef, Memo, Recording, Replay, Step};
 
+/// Whether `inst` ends a memoized block (it needs the core around the pipeline: channels,
+/// stops, halts, `sync`, register-target hints, undecodable words).
+#[inline]
+pub fn ends_block(inst: Inst) -> bool {
+    memo::is_terminator(inst)
+}
+
 impl Timing {
     #[inline]
     fn slot_index(pc: u32) -> usize {
@@ -1052,55 +1059,89 @@ impl Timing {
 
     /// The signature of the current state for a block with live-in registers `live` and
     /// final branch `branch_pc`, into `out`.
-    fn signature<F: FnMut(i64)>(
+    #[inline(always)]
+    fn signature<F: FnMut(i64) -> bool>(
         &self,
         e: &EntryRef,
         live: &[u8],
         start: u32,
         branch_at: Option<(u32, u64)>,
         emit: &mut F,
-    ) {
+    ) -> bool {
         let now = e.now as i64;
         for &r in live {
             let rel = (e.ready[r as usize] as i64 - now).max(-1);
-            emit(rel);
+            if !emit(rel) {
+                return false;
+            }
             if rel > 0 {
-                emit(e.producer[r as usize] as i64);
-                emit(e.unit[r as usize] as i64);
+                if !emit(e.producer[r as usize] as i64) {
+                    return false;
+                }
+                if !emit(e.unit[r as usize] as i64) {
+                    return false;
+                }
             }
         }
         let seq = e.last.pc.wrapping_add(4) == start;
-        emit(seq as i64);
+        if !emit(seq as i64) {
+            return false;
+        }
         if seq && e.last.pairable {
-            emit(1 + e.last.writes as i64);
-            emit(e.last.issue as i64 - now);
+            if !emit(1 + e.last.writes as i64) {
+                return false;
+            }
+            if !emit(e.last.issue as i64 - now) {
+                return false;
+            }
         }
         let redirect = (e.redirect as i64 - now).max(0);
-        emit(redirect);
-        if redirect > 0 {
-            emit(e.miss_pc as i64);
+        if !emit(redirect) {
+            return false;
         }
-        emit((e.dp_until as i64 - now).max(0));
+        if redirect > 0 {
+            if !emit(e.miss_pc as i64) {
+                return false;
+            }
+        }
+        if !emit((e.dp_until as i64 - now).max(0)) {
+            return false;
+        }
         if let Some((bpc, k)) = branch_at {
             let h = &e.hint;
             let m = h.valid && h.branch == bpc;
             let close = e.index + k - h.index >= self.config.hint_min_distance as u64;
-            emit(m as i64 | (close as i64) << 1);
+            if !emit(m as i64 | (close as i64) << 1) {
+                return false;
+            }
             if m && close {
-                emit((h.issued as i64 + self.config.hint_window as i64 - now).max(-1));
-                emit(h.target as i64);
+                if !emit((h.issued as i64 + self.config.hint_window as i64 - now).max(-1)) {
+                    return false;
+                }
+                if !emit(h.target as i64) {
+                    return false;
+                }
             }
         }
         if self.config.model_fetch {
             let lat = self.config.fetch_latency as i64;
-            emit(e.fetch.0 as i64);
-            emit(e.fetch.1 as i64);
+            if !emit(e.fetch.0 as i64) {
+                return false;
+            }
+            if !emit(e.fetch.1 as i64) {
+                return false;
+            }
             if e.fetch.1 {
-                emit((e.fetch.2 as i64 - now).max(-lat - 1));
+                if !emit((e.fetch.2 as i64 - now).max(-lat - 1)) {
+                    return false;
+                }
             } else {
-                emit((e.fetch.3 as i64 - now).max(-1));
+                if !emit((e.fetch.3 as i64 - now).max(-1)) {
+                    return false;
+                }
             }
         }
+        true
     }
 
     fn entry(&self) -> Entry {
@@ -1162,12 +1203,12 @@ impl Timing {
                     (m.branch_pc != NO_PC).then(|| (m.branch_pc, m.words.len() as u64 - 1));
                 let e = self.entry_ref();
                 let mut pos = 0usize;
-                let mut hit = true;
-                self.signature(&e, &m.live, pc, branch_at, &mut |v| {
-                    hit &= m.sig.get(pos) == Some(&v);
+                let sig = &m.sig[..];
+                let hit = self.signature(&e, &m.live, pc, branch_at, &mut |v| {
+                    let same = sig.get(pos) == Some(&v);
                     pos += 1;
-                });
-                let hit = hit && pos == m.sig.len();
+                    same
+                }) && pos == sig.len();
                 if hit {
                     self.memo.replay = Some(Replay {
                         memo: id,
@@ -1331,7 +1372,10 @@ impl Timing {
             &live,
             rec.start,
             branch_at,
-            &mut |v| sig.push(v),
+            &mut |v| {
+                sig.push(v);
+                true
+            },
         );
         let memo = Memo {
             start: rec.start,
@@ -1436,6 +1480,50 @@ impl Timing {
             self.profile.apply_log(&log, 1);
             self.profile.totals.add_scaled(&totals, 1);
         }
+    }
+
+    /// Right after `issue` started replaying a memoized block with the block's first
+    /// instruction: the block's length. The core may then execute the block's remaining
+    /// instructions without calling `issue` and finish with [`Timing::replay_complete`]
+    /// (or stop early with [`Timing::replay_stop_after`]): the result is the same.
+    #[inline]
+    pub fn replay_started(&self) -> Option<usize> {
+        let rp = self.memo.replay.as_ref()?;
+        (rp.k == 1).then(|| self.memo.memos[rp.memo].words.len())
+    }
+
+    /// The words of the block being replayed (to check local store still holds them).
+    #[inline]
+    pub fn replay_words(&self) -> &[u32] {
+        match &self.memo.replay {
+            Some(rp) => &self.memo.memos[rp.memo].words,
+            None => &[],
+        }
+    }
+
+    /// Completes the replay `issue` started: the state and counters are as if `issue` had
+    /// been called for every remaining instruction of the block. Returns the last one's
+    /// issue cycle.
+    pub fn replay_complete(&mut self) -> u64 {
+        let Some(mut rp) = self.memo.replay.take() else {
+            return self.now.saturating_sub(1);
+        };
+        let m = &mut self.memo.memos[rp.memo];
+        let len = m.words.len();
+        let issue = (rp.entry_now as i64 + m.steps[len - 1].issue_rel) as u64;
+        m.hits += 1;
+        rp.k = len;
+        self.materialize(rp, false);
+        issue
+    }
+
+    /// Ends the replay `issue` started after the block's first `k` instructions (the rest
+    /// go through `issue` again).
+    pub fn replay_stop_after(&mut self, k: usize) {
+        if let Some(rp) = self.memo.replay.as_mut() {
+            rp.k = k;
+        }
+        self.sync();
     }
 
     /// Brings a replay in progress up to date (before a hook or an unexpected address).

@@ -578,6 +578,13 @@ impl Spu {
                 Some(t) => t.issue(pc, inst),
                 None => self.cycle,
             };
+            if !self.core.interrupts_enabled {
+                if let Some(n) = self.timing.as_ref().and_then(|t| t.replay_started()) {
+                    if self.replay_block(pc, n) {
+                        continue;
+                    }
+                }
+            }
             let effect = execute(&mut self.core, inst, pc);
             self.core.event_pending_known = false;
             match effect {
@@ -670,6 +677,74 @@ impl Spu {
             };
         }
         None
+    }
+
+    /// Executes a memoized block whose replay `issue` has just started at `pc` (its first
+    /// instruction issued, none executed): all `n` instructions in one go, leaving the
+    /// timing model as the per-instruction path would. Declines (returns false, nothing
+    /// done) unless local store still holds the recorded words, decoded, and none of them
+    /// needs the core's event state (`bisled`).
+    fn replay_block(&mut self, pc: u32, n: usize) -> bool {
+        let Some(t) = self.timing.as_ref() else {
+            return false;
+        };
+        let words = t.replay_words();
+        if words.len() != n {
+            return false;
+        }
+        let first = (pc >> 2) as usize;
+        for (k, &word) in words.iter().enumerate() {
+            let d = self.decoded[(first + k) & (LS_SIZE / 4 - 1)];
+            if d.op == Op::Unknown
+                || d.op == Op::Bisled
+                || d.word != word
+                || crate::timing::ends_block(d)
+            {
+                return false;
+            }
+        }
+        let block_end = pc.wrapping_add(4 * n as u32);
+        let mut p = pc;
+        for k in 0..n {
+            let inst = self.decoded[((p >> 2) as usize) & (LS_SIZE / 4 - 1)];
+            let effect = execute(&mut self.core, inst, p);
+            self.core.event_pending_known = false;
+            match effect {
+                Effect::Branch { taken, target } => {
+                    // Blocks end at their first branch.
+                    let t = self.timing.as_mut().expect("timing");
+                    t.replay_complete();
+                    t.branch_resolved(p, inst, taken, target);
+                    self.pc = if taken { target } else { (p + 4) & LS_MASK };
+                    self.instructions += k as u64 + 1;
+                    self.cycle = t.now();
+                    return true;
+                }
+                Effect::Store { addr } => {
+                    self.redecode(addr, 16);
+                    p = (p + 4) & LS_MASK;
+                    // A store into the rest of the block: the rest goes the long way.
+                    let line = addr & LS_MASK & !15;
+                    if k + 1 < n && line < block_end && line + 16 > p {
+                        let t = self.timing.as_mut().expect("timing");
+                        t.replay_stop_after(k + 1);
+                        self.pc = p;
+                        self.instructions += k as u64 + 1;
+                        self.cycle = t.now();
+                        return true;
+                    }
+                }
+                // Hints name a static target here (register hints end blocks); the
+                // replayed steps already hold what the hook would record.
+                _ => p = (p + 4) & LS_MASK,
+            }
+        }
+        let t = self.timing.as_mut().expect("timing");
+        t.replay_complete();
+        self.pc = p;
+        self.instructions += n as u64;
+        self.cycle = t.now();
+        true
     }
 
     /// The timing-off inner loop: one cycle per instruction, pre-decoded words, no
