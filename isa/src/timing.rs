@@ -901,6 +901,8 @@ mod memo {
         pub steps: Vec<Step>,
         pub log: Vec<LogEntry>,
         pub hits: u64,
+        /// The core's code epoch at which it last found local store holding `words`.
+        pub verified: u64,
         /// The last write of each register the block writes (for the end of a replay).
         pub final_writes: Vec<(u8, i64, u32, Unit)>,
     }
@@ -1386,6 +1388,7 @@ impl Timing {
             steps: rec.steps,
             log,
             hits: 0,
+            verified: u64::MAX,
             final_writes: Vec::new(),
         };
         let mut memo = memo;
@@ -1498,6 +1501,23 @@ impl Timing {
         match &self.memo.replay {
             Some(rp) => &self.memo.memos[rp.memo].words,
             None => &[],
+        }
+    }
+
+    /// The core's code epoch at which the replayed block's words were last checked.
+    #[inline]
+    pub fn replay_verified(&self) -> u64 {
+        match &self.memo.replay {
+            Some(rp) => self.memo.memos[rp.memo].verified,
+            None => u64::MAX,
+        }
+    }
+
+    /// Notes that local store held the replayed block's words at code epoch `epoch`.
+    #[inline]
+    pub fn set_replay_verified(&mut self, epoch: u64) {
+        if let Some(rp) = &self.memo.replay {
+            self.memo.memos[rp.memo].verified = epoch;
         }
     }
 

@@ -266,6 +266,8 @@ pub struct Spu {
     pub index: u32,
     core: Core,
     decoded: Box<[Inst; LS_SIZE / 4]>,
+    /// Bumped whenever a store or DMA makes a decoded instruction stale.
+    code_epoch: u64,
     pc: u32,
     instructions: u64,
     cycle: u64,
@@ -339,6 +341,7 @@ impl Spu {
         Spu {
             index,
             core: Core::new(),
+            code_epoch: 0,
             decoded: vec![decode(0); LS_SIZE / 4]
                 .into_boxed_slice()
                 .try_into()
@@ -402,9 +405,14 @@ impl Spu {
     fn redecode(&mut self, addr: u32, len: u32) {
         let start = (addr & LS_MASK) as usize / 4;
         let words = (len as usize).div_ceil(4) + 1;
+        let mut touched = false;
         for k in 0..words.min(LS_SIZE / 4) {
-            self.decoded[(start + k) % (LS_SIZE / 4)] = STALE;
+            let d = &mut self.decoded[(start + k) % (LS_SIZE / 4)];
+            touched |= d.op != Op::Unknown || d.word != STALE.word;
+            *d = STALE;
         }
+        // Decoded code changed: memoized blocks must check their words again.
+        self.code_epoch += touched as u64;
     }
 
     /// The decoded instruction at `pc`, decoding it first if a write made it stale.
@@ -688,19 +696,25 @@ impl Spu {
         let Some(t) = self.timing.as_ref() else {
             return false;
         };
-        let words = t.replay_words();
-        if words.len() != n {
-            return false;
-        }
-        let first = (pc >> 2) as usize;
-        for (k, &word) in words.iter().enumerate() {
-            let d = self.decoded[(first + k) & (LS_SIZE / 4 - 1)];
-            if d.op == Op::Unknown
-                || d.op == Op::Bisled
-                || d.word != word
-                || crate::timing::ends_block(d)
-            {
+        if t.replay_verified() != self.code_epoch {
+            let words = t.replay_words();
+            if words.len() != n {
                 return false;
+            }
+            let first = (pc >> 2) as usize;
+            for (k, &word) in words.iter().enumerate() {
+                let d = self.decoded[(first + k) & (LS_SIZE / 4 - 1)];
+                if d.op == Op::Unknown
+                    || d.op == Op::Bisled
+                    || d.word != word
+                    || crate::timing::ends_block(d)
+                {
+                    return false;
+                }
+            }
+            let epoch = self.code_epoch;
+            if let Some(t) = self.timing.as_mut() {
+                t.set_replay_verified(epoch);
             }
         }
         let block_end = pc.wrapping_add(4 * n as u32);
@@ -795,7 +809,11 @@ impl Spu {
                 }
                 Effect::Store { addr } => {
                     let s = (addr & LS_MASK) as usize / 4;
+                    let touched = decoded[s..s + 4]
+                        .iter()
+                        .any(|d| d.op != Op::Unknown || d.word != STALE.word);
                     decoded[s..s + 4].fill(STALE);
+                    self.code_epoch += touched as u64;
                     pc = (pc + 4) & LS_MASK;
                 }
                 _ => break,
