@@ -717,6 +717,33 @@ mod listing {
         Inst { addr: u32, text: String },
     }
 
+    /// The listing lines of every executed address of `image` (a local-store image), in
+    /// address order: its labels from `symbols`, then its disassembly.
+    pub fn executed_lines(
+        profile: &Profile,
+        image: &[u8],
+        symbols: &[(String, u32)],
+    ) -> Vec<ListingLine> {
+        use crate::disasm::{instruction_text, SymbolTable};
+        let table = SymbolTable::new(symbols.iter().map(|(n, a)| (*a, n.clone())).collect());
+        let mut addresses: Vec<u32> = profile.addresses().map(|(a, _)| a).collect();
+        addresses.sort_unstable();
+        let mut lines = Vec::new();
+        for addr in addresses {
+            let mut names: Vec<&str> = table.at(addr).collect();
+            names.sort_unstable();
+            lines.extend(names.into_iter().map(|n| ListingLine::Label(n.to_string())));
+            let word = image
+                .get(addr as usize..addr as usize + 4)
+                .map_or(0, |b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
+            lines.push(ListingLine::Inst {
+                addr,
+                text: instruction_text(word, addr, &table).replace('\t', " "),
+            });
+        }
+        lines
+    }
+
     /// Options of the annotated listing.
     #[derive(Clone, Debug, Default)]
     pub struct ListingOptions {

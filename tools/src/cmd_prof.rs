@@ -2,9 +2,8 @@
 //! instruction its executions, cycles and stall cycles by cause, a dual-issue mark, then a
 //! summary per label and the totals IBM's simulator reported.
 
-use spu_isa::disasm::{instruction_text, SymbolTable};
 use spu_isa::machine::MainMemory;
-use spu_isa::profile::{annotated_listing, listing_json, ListingLine, ListingOptions};
+use spu_isa::profile::{annotated_listing, executed_lines, listing_json, ListingOptions};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -48,23 +47,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         None => None,
     };
     // Every executed address, with its labels and disassembly, in address order.
-    let table = SymbolTable::new(symbols.iter().map(|(n, a)| (*a, n.clone())).collect());
-    let mut addresses: Vec<u32> = profile.addresses().map(|(a, _)| a).collect();
-    addresses.sort_unstable();
-    let mut lines = Vec::new();
-    for addr in addresses {
-        let mut names: Vec<&str> = table.at(addr).collect();
-        names.sort_unstable();
-        for n in names {
-            lines.push(ListingLine::Label(n.to_string()));
-        }
-        let b = &spu.ls()[addr as usize..addr as usize + 4];
-        let word = u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
-        lines.push(ListingLine::Inst {
-            addr,
-            text: instruction_text(word, addr, &table).replace('\t', " "),
-        });
-    }
+    let lines = executed_lines(&profile, spu.ls(), &symbols);
     let opts = ListingOptions {
         range,
         executed_only: true,

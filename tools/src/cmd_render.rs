@@ -225,8 +225,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
 
 /// The annotated listing of the kernel that ran, from its image and symbols.
 fn kernel_profile(run: &spu_loader::runtime::FrameRun, fill: bool) -> Result<String, String> {
-    use spu_isa::disasm::{instruction_text, SymbolTable};
-    use spu_isa::profile::{annotated_listing, ListingLine, ListingOptions};
+    use spu_isa::profile::{annotated_listing, executed_lines, ListingOptions};
     let profile = run
         .profile
         .as_ref()
@@ -237,29 +236,7 @@ fn kernel_profile(run: &spu_loader::runtime::FrameRun, fill: bool) -> Result<Str
         (spu_loader::runtime::RAYTRACE_SOURCE, "kernels/raytrace.s")
     };
     let program = spu_loader::runtime::assemble_kernel(source, name)?;
-    let table = SymbolTable::new(
-        program
-            .symbols
-            .iter()
-            .map(|(n, a)| (*a, n.clone()))
-            .collect(),
-    );
-    let mut addresses: Vec<u32> = profile.addresses().map(|(a, _)| a).collect();
-    addresses.sort_unstable();
-    let mut lines = Vec::new();
-    for addr in addresses {
-        let mut names: Vec<&str> = table.at(addr).collect();
-        names.sort_unstable();
-        lines.extend(names.into_iter().map(|n| ListingLine::Label(n.to_string())));
-        let word = program
-            .image
-            .get(addr as usize..addr as usize + 4)
-            .map_or(0, |b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
-        lines.push(ListingLine::Inst {
-            addr,
-            text: instruction_text(word, addr, &table).replace('\t', " "),
-        });
-    }
+    let lines = executed_lines(profile, &program.image, &program.symbols);
     let opts = ListingOptions {
         range: None,
         executed_only: true,

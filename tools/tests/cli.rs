@@ -94,3 +94,54 @@ fn assembler_errors_name_the_line_and_column() {
         "nothing is written when there are errors"
     );
 }
+
+/// `spu render --profile` writes the kernel's annotated profile, whose per-label cycles add
+/// up to the frame's cycles, and `--stats` the Table 2 figures with per-section CPI.
+#[test]
+fn render_writes_profile_and_stats() {
+    let dir = std::env::temp_dir().join(format!("spu-cli-render-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (png, prof, stats) = (dir.join("r.png"), dir.join("r.prof"), dir.join("r.json"));
+    let out = spu(&[
+        "render",
+        "--scene",
+        "room",
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "-o",
+        png.to_str().unwrap(),
+        "--profile",
+        prof.to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    let cycles: u64 = out
+        .split(" cycles per frame")
+        .next()
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .expect("cycles in the summary line");
+    let prof = std::fs::read_to_string(&prof).unwrap();
+    assert!(
+        prof.contains("\ntrav:\n") && prof.contains("\nray_loop:\n"),
+        "{prof}"
+    );
+    let total = prof
+        .lines()
+        .find(|l| l.trim_start().starts_with("Total Cycle count"))
+        .and_then(|l| l.split_whitespace().last())
+        .and_then(|n| n.parse::<u64>().ok())
+        .expect("total cycles");
+    assert_eq!(total, cycles);
+    let stats = std::fs::read_to_string(&stats).unwrap();
+    for key in [
+        "\"traversal_steps_per_packet\"",
+        "\"pair_steps_per_packet\"",
+        "\"cpi_without_nops\"",
+        "\"bvh_cache_hit_per_node_pct\"",
+    ] {
+        assert!(stats.contains(key), "{key} in {stats}");
+    }
+}
