@@ -145,6 +145,11 @@ impl Reference {
         let d = dir.to_array();
         let inverse = safe_inverse(d);
         let mut best = Hit::NONE;
+        if self.triangles.is_empty() {
+            // The empty scene's root is an inverted box whose slabs, swapped by the ray's
+            // direction, would read as a valid one: there is nothing to find.
+            return best;
+        }
         let mut stack: Vec<(u32, f32)> = Vec::with_capacity(128);
         if let Some(entry) = hit_box(&self.nodes[0], o, inverse, T_MIN, best.t) {
             stack.push((0, entry));
@@ -287,6 +292,21 @@ pub fn brute_force_trace(
 mod tests {
     use super::*;
     use crate::bvh::BvhConfig;
+
+    /// A scene without triangles: every ray misses (and the trace ends).
+    #[test]
+    fn the_empty_scene_is_missed() {
+        let scene = Scene::from_parts(Vec::new(), None, Vec::new(), Vec::new(), Vec::new());
+        let bvh = Bvh::build(&scene, &BvhConfig::default());
+        let reference = Reference::new(&scene, &bvh);
+        let hit = reference.trace(Vec3::new(0.5, 0.5, 5.0), Vec3::new(0.0, 0.0, -1.0));
+        assert!(!hit.is_hit());
+        let camera = Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 45.0);
+        assert!(reference
+            .render(&camera, 8, 8, 1)
+            .iter()
+            .all(|h| !h.is_hit()));
+    }
 
     /// Compares the reference with brute force for every pixel. Disagreements are allowed
     /// only where f32 vs f64 precision legitimately decides: the reference's triangle is hit

@@ -191,3 +191,44 @@ fn raytrace_kernel_matches_the_reference_on_the_conference_with_small_caches() {
         "the third case never ran: {s:?}"
     );
 }
+
+/// The degenerate BVHs: a scene of one triangle (the root is a leaf) and a scene of none
+/// (the root is an inverted box, the kernel skips traversal): the kernel agrees with the
+/// reference and stops.
+#[test]
+fn raytrace_kernel_handles_a_leaf_root_and_an_empty_scene() {
+    use glam::{Vec2, Vec3};
+    use spu_loader::scene::Triangle;
+    let one = spu_loader::Scene::from_parts(
+        vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ],
+        None,
+        Vec::<Vec2>::new(),
+        vec![Triangle {
+            v: [0, 1, 2],
+            material: 0,
+        }],
+        Vec::new(),
+    );
+    let empty = spu_loader::Scene::from_parts(Vec::new(), None, Vec::new(), Vec::new(), Vec::new());
+    for (mut scene, expect_hits) in [(one, true), (empty, false)] {
+        scene.camera = Camera::parse("0,0,3,0,0,0,0,1,0,60").unwrap();
+        let (w, h) = (32, 32);
+        let (staged, run) = frame(&scene, w, h, 1, 1, false);
+        let pixels = decode_frame_buffer(&run.frame_buffer, w, h);
+        let reference = Reference::from_staged(&staged).render(&scene.camera, w, h, 1);
+        let mut hits = 0;
+        for (p, r) in pixels.iter().zip(&reference) {
+            assert_eq!(p.triangle == MISS, !r.is_hit());
+            if r.is_hit() {
+                hits += 1;
+                assert!((p.t - r.t).abs() <= 1e-4 * r.t.abs());
+            }
+        }
+        assert_eq!(hits > 0, expect_hits);
+        assert_eq!(run.spus[0].stats.packets, 64); // one 64x64 tile
+    }
+}
