@@ -778,6 +778,13 @@ impl<'o> Assembler<'o> {
             } else if args.starts_with('=') {
                 let v = args[1..].trim().to_string();
                 self.set_symbol(&word, &v, line);
+            } else if let Some((name, value)) = word
+                .split_once('=')
+                .filter(|(n, _)| !n.is_empty() && !n.contains(|c: char| c.is_whitespace()))
+            {
+                // `name=value` written without spaces, as gas accepts it.
+                let v = format!("{value}{}{args}", if args.is_empty() { "" } else { " " });
+                self.set_symbol(name, v.trim(), line);
             } else {
                 self.instruction(&lw, &args, line, col);
             }

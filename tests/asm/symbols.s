@@ -33,3 +33,7 @@ later:	nop			# => 40200000
 	il $10,size		# => 40802e0a
 	# KNOWN GAP: using `size` before its .equ (GNU as resolves it) is "undefined symbol"
 end:
+	packed=ten+1		# `=` without spaces, as gas takes it
+	il $8,packed		# => 40800608
+	alias = later		# a label's other name
+	br alias		# => 327ffd80
