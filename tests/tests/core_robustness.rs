@@ -112,3 +112,52 @@ fn random_program_pairs_share_memory_in_quanta() {
         }
     }
 }
+
+/// A channel the SPU does not have, or one used in the wrong direction, stops the SPU with
+/// the hardware's invalid-channel status at that instruction; `rchcnt` works on every
+/// channel that exists in either direction.
+#[test]
+fn invalid_channels_stop_the_spu() {
+    let run = |src: &str| {
+        let program = spu_asm::assemble(
+            &format!("\t.text\n\t.global _start\n_start:\n{src}\n\tstop 0x2000\n"),
+            "ch.s",
+            &Default::default(),
+        )
+        .expect("assembles");
+        let mut spu = Spu::new(0);
+        spu.load_image(&program.image);
+        spu.set_pc(program.entry);
+        let stop = spu.run(&mut MainMemory::zeroed(4096), 1_000_000);
+        (stop, spu.reg(3)[0])
+    };
+    // rdch of an unimplemented channel (5), of a write channel (SPU_WrOutMbox, 28).
+    assert_eq!(
+        run("\tnop\n\trdch $3, $ch5").0,
+        StopReason::InvalidChannel { pc: 4, channel: 5 }
+    );
+    assert_eq!(
+        run("\trdch $3, $ch28").0,
+        StopReason::InvalidChannel { pc: 0, channel: 28 }
+    );
+    // wrch of a read channel (SPU_RdEventStat, 0) and of channel 64.
+    assert_eq!(
+        run("\twrch $ch0, $3").0,
+        StopReason::InvalidChannel { pc: 0, channel: 0 }
+    );
+    assert_eq!(
+        run("\twrch $ch64, $3").0,
+        StopReason::InvalidChannel { pc: 0, channel: 64 }
+    );
+    // rchcnt: a write channel with room (the outbound mailbox: 1), a missing channel.
+    assert_eq!(run("\trchcnt $3, $ch28"), (StopReason::Stop(0x2000), 1));
+    assert_eq!(
+        run("\trchcnt $3, $ch31").0,
+        StopReason::InvalidChannel { pc: 0, channel: 31 }
+    );
+    // The report names channel and address.
+    assert_eq!(
+        StopReason::InvalidChannel { pc: 8, channel: 5 }.to_string(),
+        "invalid channel 5 at 0x8"
+    );
+}

@@ -137,6 +137,13 @@ pub enum StopReason {
         tag: u32,
         reason: String,
     },
+    /// A channel instruction named a channel the SPU does not have, or read a write
+    /// channel or wrote a read channel (the hardware's "invalid channel" stop, SPU_Status
+    /// bit IC).
+    InvalidChannel {
+        pc: u32,
+        channel: u8,
+    },
     /// Blocked on a channel nothing will ever make ready.
     Deadlock {
         pc: u32,
@@ -169,6 +176,9 @@ impl std::fmt::Display for StopReason {
                 f,
                 "DMA error at {pc:#x}: {reason} (command {cmd:#x}, LS {lsa:#x}, EA {ea:#x}, size {size}, tag {tag})"
             ),
+            StopReason::InvalidChannel { pc, channel } => {
+                write!(f, "invalid channel {channel} at {pc:#x}")
+            }
             StopReason::Deadlock { pc, channel } => {
                 write!(f, "deadlock at {pc:#x} on channel {channel}")
             }
@@ -333,6 +343,8 @@ enum ChannelOutcome {
     /// Only the host can make it ready.
     Host,
     Never,
+    /// No such channel in that direction.
+    Invalid,
     Error(String),
 }
 
@@ -659,6 +671,13 @@ impl Spu {
                     ChannelOutcome::Never => {
                         self.finish(issue);
                         return Some(StopReason::Deadlock {
+                            pc,
+                            channel: inst.ra,
+                        });
+                    }
+                    ChannelOutcome::Invalid => {
+                        self.finish(issue);
+                        return Some(StopReason::InvalidChannel {
                             pc,
                             channel: inst.ra,
                         });
@@ -1017,6 +1036,29 @@ impl Spu {
 
     fn channel(&mut self, inst: Inst, now: u64, memory: &MainMemory) -> ChannelOutcome {
         let channel = inst.ra;
+        // The SPU's channels and their directions (../shared/isa/README.md, "Channels").
+        const READ: u128 = 1 << 0
+            | 1 << 3
+            | 1 << 4
+            | 1 << 8
+            | 1 << 11
+            | 1 << 12
+            | 1 << 13
+            | 1 << 15
+            | 1 << 24
+            | 1 << 25
+            | 1 << 27
+            | 1 << 29;
+        const WRITE: u128 =
+            1 << 1 | 1 << 2 | 1 << 7 | 1 << 9 | 1 << 14 | 0xff << 16 | 1 << 26 | 1 << 28 | 1 << 30;
+        let valid = match inst.op {
+            Op::Rdch => READ,
+            Op::Wrch => WRITE,
+            _ => READ | WRITE,
+        };
+        if valid >> (channel & 127) & 1 == 0 {
+            return ChannelOutcome::Invalid;
+        }
         match inst.op {
             Op::Rdch => match self.read_channel(channel, now) {
                 Ok(v) => {
