@@ -132,7 +132,11 @@ def pressure_ok(i):
     if POOL_N is None: return True
     new = vdefs[i] - live
     freed = set(r for r in (vuses[i] | vdefs[i]) if remaining_uses.get(r, 0) == 1 and r in live)
-    return len(live) + len(new) <= POOL_N - 2
+    # the allocator takes the new registers before it frees the last uses, so the pool
+    # must hold both; growth keeps a margin so that register-freeing work can always issue
+    if len(live) + len(new) > POOL_N:
+        return False
+    return len(new) <= len(freed) or len(live) + len(new) <= POOL_N - 4
 def retire(i):
     for r in set(insts[i]['src']) | set(insts[i]['dst']):
         if r >= 1000:
