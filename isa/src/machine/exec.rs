@@ -1237,6 +1237,51 @@ mod tests {
         x.to_bits()
     }
 
+    /// Random single-precision operands for the fast-path tests: a wide exponent spread
+    /// (from `low`, `span` values), short and full mantissas, and some zeros, denormals and
+    /// exponent-255 and exponent-254 values.
+    struct Singles {
+        state: u64,
+        low: u32,
+        span: u64,
+    }
+
+    impl Singles {
+        fn new(seed: u64, low: u32, span: u64) -> Self {
+            Singles {
+                state: seed,
+                low,
+                span,
+            }
+        }
+
+        fn next(&mut self) -> u64 {
+            let x = &mut self.state;
+            *x ^= *x << 13;
+            *x ^= *x >> 7;
+            *x ^= *x << 17;
+            *x
+        }
+
+        fn single(&mut self) -> u32 {
+            let r = self.next();
+            let sign = (r as u32) & 0x8000_0000;
+            let exp = match (r >> 40) % 16 {
+                0 => 0,
+                1 => 255,
+                2 => 1,
+                3 => 254,
+                _ => self.low + ((r >> 8) % self.span) as u32,
+            };
+            let mant = ((r >> 16) as u32 & 0x7f_ffff) & (0x7f_ffff << ((r >> 48) % 24));
+            sign | exp << 23 | mant
+        }
+
+        fn reg(&mut self) -> Reg {
+            [0; 4].map(|_| self.single())
+        }
+    }
+
     /// The fast path must take these cases (all operands normal, result normal) and agree
     /// with the float unit's exact functions bit for bit.
     #[test]
@@ -1318,29 +1363,12 @@ mod tests {
     /// the float unit's exact functions.
     #[test]
     fn four_lane_fast_path_agrees_on_random_operands() {
-        let mut x = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x
-        };
-        let mut val = |r: u64| -> u32 {
-            let sign = (r as u32) & 0x8000_0000;
-            let exp = match (r >> 40) % 16 {
-                0 => 0,
-                1 => 255,
-                2 => 1,
-                _ => 90 + ((r >> 8) % 76) as u32,
-            };
-            let mant = ((r >> 16) as u32 & 0x7f_ffff) & (0x7f_ffff << ((r >> 48) % 24));
-            sign | exp << 23 | mant
-        };
+        let mut singles = Singles::new(0x2545_f491_4f6c_dd1d, 90, 76);
         let mut fast = 0;
         for _ in 0..50_000 {
-            let a: Reg = [0; 4].map(|_| val(next()));
-            let b: Reg = [0; 4].map(|_| val(next()));
-            let c: Reg = [0; 4].map(|_| val(next()));
+            let a: Reg = singles.reg();
+            let b: Reg = singles.reg();
+            let c: Reg = singles.reg();
             type Exact = fn(u32, u32, u32) -> u32;
             let ops: [(Option<Reg>, Exact); 6] = [
                 (sp4(a, b, c, normal2, |x, y, _| two_sum(x, y)), |a, b, _| {
@@ -1389,25 +1417,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn truncating_host_path_agrees_with_the_exact_functions() {
-        let mut x = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x
-        };
-        let mut val = |r: u64| -> u32 {
-            let sign = (r as u32) & 0x8000_0000;
-            let exp = match (r >> 40) % 16 {
-                0 => 0,
-                1 => 255,
-                2 => 1,
-                3 => 254,
-                _ => 90 + ((r >> 8) % 76) as u32,
-            };
-            let mant = ((r >> 16) as u32 & 0x7f_ffff) & (0x7f_ffff << ((r >> 48) % 24));
-            sign | exp << 23 | mant
-        };
+        let mut singles = Singles::new(0x2545_f491_4f6c_dd1d, 90, 76);
         let p60 = f(2f32.powi(-30));
         let mut triples: Vec<(Reg, Reg, Reg)> = [
             (p60, p60 | 0x8000_0000, f(1.0)),
@@ -1421,9 +1431,9 @@ mod tests {
         .map(|&(a, b, c)| ([a; 4], [b; 4], [c; 4]))
         .collect();
         for _ in 0..50_000 {
-            let a: Reg = [0; 4].map(|_| val(next()));
-            let b: Reg = [0; 4].map(|_| val(next()));
-            let c: Reg = [0; 4].map(|_| val(next()));
+            let a: Reg = singles.reg();
+            let b: Reg = singles.reg();
+            let c: Reg = singles.reg();
             triples.push((a, b, c));
         }
         type Exact = fn(u32, u32, u32) -> u32;
@@ -1516,25 +1526,7 @@ mod tests {
     /// The SSE2 path declines and computes exactly what the scalar path does.
     #[test]
     fn vector_and_scalar_fast_paths_agree() {
-        let mut x = 0x0123_4567_89ab_cdefu64;
-        let mut next = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x
-        };
-        let mut val = |r: u64| -> u32 {
-            let sign = (r as u32) & 0x8000_0000;
-            let exp = match (r >> 40) % 16 {
-                0 => 0,
-                1 => 255,
-                2 => 1,
-                3 => 254,
-                _ => 60 + ((r >> 8) % 136) as u32,
-            };
-            let mant = ((r >> 16) as u32 & 0x7f_ffff) & (0x7f_ffff << ((r >> 48) % 24));
-            sign | exp << 23 | mant
-        };
+        let mut singles = Singles::new(0x0123_4567_89ab_cdef, 60, 136);
         let (mut agree, mut declined_more) = (0, 0);
         for i in 0..100_000 {
             // Mostly all-normal registers, so that the result checks are exercised.
@@ -1545,9 +1537,9 @@ mod tests {
                     (v & 0x807f_ffff) | (((v >> 23) & 0xff).clamp(40, 200) << 23)
                 }
             };
-            let a: Reg = [0; 4].map(|_| pick(val(next())));
-            let b: Reg = [0; 4].map(|_| pick(val(next())));
-            let c: Reg = [0; 4].map(|_| pick(val(next())));
+            let a: Reg = singles.reg().map(pick);
+            let b: Reg = singles.reg().map(pick);
+            let c: Reg = singles.reg().map(pick);
             let pairs = [
                 (
                     sp4v::<SP_FA>(a, b, c),
