@@ -1046,6 +1046,16 @@ mod memo {
 
 use memo::{Entry, EntryRef, Memo, Recording, Replay, Step};
 
+/// What the memo table says of a block start.
+enum Lookup {
+    /// Never memoized here (its state kept changing).
+    Never,
+    Absent,
+    /// A memo whose recorded state (or words) differs from now.
+    Differs(usize),
+    Hit(usize),
+}
+
 /// Whether `inst` ends a memoized block (it needs the core around the pipeline: channels,
 /// stops, halts, `sync`, register-target hints, undecodable words).
 #[inline]
@@ -1193,45 +1203,21 @@ impl Timing {
             self.memo.slots.resize(0x1_0000, 0);
             self.memo.fails.resize(0x1_0000, 0);
         }
-        let slot = self.memo.slots[idx];
-        if slot == memo::NEVER {
-            return self.issue_slow(pc, inst);
-        }
-        if slot != 0 {
-            let id = (slot - 1) as usize;
-            let m = &self.memo.memos[id];
-            if m.start == pc && m.words[0] == inst.word {
-                let branch_at =
-                    (m.branch_pc != NO_PC).then(|| (m.branch_pc, m.words.len() as u64 - 1));
-                let e = self.entry_ref();
-                let mut pos = 0usize;
-                let sig = &m.sig[..];
-                let hit = self.signature(&e, &m.live, pc, branch_at, &mut |v| {
-                    let same = sig.get(pos) == Some(&v);
-                    pos += 1;
-                    same
-                }) && pos == sig.len();
-                if hit {
-                    self.memo.replay = Some(Replay {
-                        memo: id,
-                        k: 0,
-                        entry_now: self.now,
-                        entry_index: self.index,
-                    });
-                    return self
-                        .replay_next(pc, inst)
-                        .expect("first replayed instruction");
+        match self.memo_lookup(idx, pc, inst) {
+            Lookup::Never => return self.issue_slow(pc, inst),
+            Lookup::Hit(id) => return self.begin_replay(id, pc, inst),
+            Lookup::Differs(id) => {
+                // A different state: record again (keeping what the old record counted).
+                if self.memo.memos[id].hits < 2 {
+                    self.memo.fails[idx] = self.memo.fails[idx].saturating_add(1);
+                    if self.memo.fails[idx] >= 8 {
+                        self.memo.flush(id, &mut self.profile);
+                        self.memo.slots[idx] = memo::NEVER;
+                        return self.issue_slow(pc, inst);
+                    }
                 }
             }
-            // A different state: record again (keeping what the old record counted).
-            if self.memo.memos[id].hits < 2 {
-                self.memo.fails[idx] = self.memo.fails[idx].saturating_add(1);
-                if self.memo.fails[idx] >= 8 {
-                    self.memo.flush(id, &mut self.profile);
-                    self.memo.slots[idx] = memo::NEVER;
-                    return self.issue_slow(pc, inst);
-                }
-            }
+            Lookup::Absent => {}
         }
         // Record this block.
         self.memo.rec = Some(Box::new(Recording {
@@ -1249,6 +1235,96 @@ impl Timing {
             self.finish_recording();
         }
         t
+    }
+
+    /// The memo for a block starting at `pc` with first instruction `inst` (slot `idx`),
+    /// and whether the current state matches the one it was recorded in.
+    #[inline]
+    fn memo_lookup(&self, idx: usize, pc: u32, inst: Inst) -> Lookup {
+        let slot = self.memo.slots[idx];
+        if slot == memo::NEVER {
+            return Lookup::Never;
+        }
+        if slot == 0 {
+            return Lookup::Absent;
+        }
+        let id = (slot - 1) as usize;
+        let m = &self.memo.memos[id];
+        if m.start != pc || m.words[0] != inst.word {
+            return Lookup::Differs(id);
+        }
+        let branch_at = (m.branch_pc != NO_PC).then(|| (m.branch_pc, m.words.len() as u64 - 1));
+        let e = self.entry_ref();
+        let mut pos = 0usize;
+        let sig = &m.sig[..];
+        let hit = self.signature(&e, &m.live, pc, branch_at, &mut |v| {
+            let same = sig.get(pos) == Some(&v);
+            pos += 1;
+            same
+        }) && pos == sig.len();
+        if hit {
+            Lookup::Hit(id)
+        } else {
+            Lookup::Differs(id)
+        }
+    }
+
+    /// Starts replaying memo `id` with its first instruction (`pc`, `inst`); returns that
+    /// instruction's issue cycle.
+    fn begin_replay(&mut self, id: usize, pc: u32, inst: Inst) -> u64 {
+        self.memo.replay = Some(Replay {
+            memo: id,
+            k: 0,
+            entry_now: self.now,
+            entry_index: self.index,
+        });
+        self.replay_next(pc, inst)
+            .expect("first replayed instruction")
+    }
+
+    /// For a core that runs whole memoized blocks: the memo (id and length) of the block
+    /// starting at `pc` with `inst` when the state matches its record and nothing else is
+    /// in progress; nothing changes. Follow with [`Timing::start_block_replay`].
+    #[inline]
+    pub fn block_replay_candidate(&self, pc: u32, inst: Inst) -> Option<(usize, usize)> {
+        if !self.config.memoize
+            || self.memo.rec.is_some()
+            || self.memo.replay.is_some()
+            || self.fetch.dma_min != u64::MAX
+            || memo::is_terminator(inst)
+        {
+            return None;
+        }
+        let idx = Self::slot_index(pc);
+        if idx >= self.memo.slots.len() {
+            return None;
+        }
+        match self.memo_lookup(idx, pc, inst) {
+            Lookup::Hit(id) => Some((id, self.memo.memos[id].words.len())),
+            _ => None,
+        }
+    }
+
+    /// The words memo `id` recorded, and the core's code epoch at which local store last
+    /// held them.
+    #[inline]
+    pub fn memo_words(&self, id: usize) -> (&[u32], u64) {
+        let m = &self.memo.memos[id];
+        (&m.words, m.verified)
+    }
+
+    /// Notes that local store held memo `id`'s words at code epoch `epoch`.
+    #[inline]
+    pub fn set_memo_verified(&mut self, id: usize, epoch: u64) {
+        self.memo.memos[id].verified = epoch;
+    }
+
+    /// Issues the first instruction of a [`Timing::block_replay_candidate`] and starts its
+    /// replay, as `issue` would; the core then runs the block and ends the replay with
+    /// [`Timing::replay_complete`] or [`Timing::replay_stop_after`].
+    #[inline]
+    pub fn start_block_replay(&mut self, id: usize, pc: u32, inst: Inst) -> u64 {
+        self.begin_replay(id, pc, inst)
     }
 
     /// A view of the current state for the signature.

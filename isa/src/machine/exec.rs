@@ -1132,7 +1132,6 @@ unsafe fn sp4_truncating<const K: u8>(a: Reg, b: Reg, c: Reg, fma3: bool) -> Opt
     macro_rules! via_double {
         ($sum:literal) => {{
             let mut lo = fa;
-            let hi: __m128;
             asm!(
                 "ldmxcsr [{t}]",
                 "pshufd {hi}, {lo}, 0xee",
@@ -1152,7 +1151,7 @@ unsafe fn sp4_truncating<const K: u8>(a: Reg, b: Reg, c: Reg, fma3: bool) -> Opt
                 "movlhps {lo}, {hi}",
                 "ldmxcsr [{d}]",
                 lo = inout(xmm_reg) lo,
-                hi = out(xmm_reg) hi,
+                hi = out(xmm_reg) _,
                 p = out(xmm_reg) _,
                 q = out(xmm_reg) _,
                 y = in(xmm_reg) fb,

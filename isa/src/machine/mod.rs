@@ -570,9 +570,11 @@ impl Spu {
         while self.cycle < until {
             if self.timing.is_none() {
                 self.run_fast(until);
-                if self.cycle >= until {
-                    break;
-                }
+            } else {
+                self.run_block_replays(until);
+            }
+            if self.cycle >= until {
+                break;
             }
             // One instruction the fast loop leaves to this general path (channels, stops,
             // halts, illegal words, `bisled`, anything while interrupts are enabled), or
@@ -706,6 +708,51 @@ impl Spu {
         None
     }
 
+    /// Whether local store still holds `words` at `pc`, decoded, with none that needs the
+    /// core's event state (`bisled`) or ends a block; `verified`: the code epoch at which
+    /// that was last found true.
+    fn block_in_store(&self, pc: u32, words: &[u32], verified: u64) -> bool {
+        if verified == self.code_epoch {
+            return true;
+        }
+        let first = (pc >> 2) as usize;
+        words.iter().enumerate().all(|(k, &word)| {
+            let d = self.decoded[(first + k) & (LS_SIZE / 4 - 1)];
+            d.op != Op::Unknown
+                && d.op != Op::Bisled
+                && d.word == word
+                && !crate::timing::ends_block(d)
+        })
+    }
+
+    /// Timing on: runs memoized blocks back to back, each in one go, while the block at
+    /// the program counter is memoized, its entry state matches its record and local
+    /// store holds it. Returns at the first that is not (the general path takes it).
+    fn run_block_replays(&mut self, until: u64) {
+        while self.cycle < until && !self.core.interrupts_enabled {
+            let pc = self.pc;
+            let inst = self.decoded[((pc >> 2) as usize) & (LS_SIZE / 4 - 1)];
+            if inst.op == Op::Unknown || inst.op == Op::Bisled {
+                return;
+            }
+            let Some(t) = self.timing.as_ref() else {
+                return;
+            };
+            let Some((id, n)) = t.block_replay_candidate(pc, inst) else {
+                return;
+            };
+            let (words, verified) = t.memo_words(id);
+            if words.len() != n || !self.block_in_store(pc, words, verified) {
+                return;
+            }
+            let epoch = self.code_epoch;
+            let t = self.timing.as_mut().expect("timing");
+            t.set_memo_verified(id, epoch);
+            t.start_block_replay(id, pc, inst);
+            self.run_replayed_block(pc, n);
+        }
+    }
+
     /// Executes a memoized block whose replay `issue` has just started at `pc` (its first
     /// instruction issued, none executed): all `n` instructions in one go, leaving the
     /// timing model as the per-instruction path would. Declines (returns false, nothing
@@ -715,27 +762,21 @@ impl Spu {
         let Some(t) = self.timing.as_ref() else {
             return false;
         };
-        if t.replay_verified() != self.code_epoch {
-            let words = t.replay_words();
-            if words.len() != n {
-                return false;
-            }
-            let first = (pc >> 2) as usize;
-            for (k, &word) in words.iter().enumerate() {
-                let d = self.decoded[(first + k) & (LS_SIZE / 4 - 1)];
-                if d.op == Op::Unknown
-                    || d.op == Op::Bisled
-                    || d.word != word
-                    || crate::timing::ends_block(d)
-                {
-                    return false;
-                }
-            }
-            let epoch = self.code_epoch;
-            if let Some(t) = self.timing.as_mut() {
-                t.set_replay_verified(epoch);
-            }
+        let words = t.replay_words();
+        if words.len() != n || !self.block_in_store(pc, words, t.replay_verified()) {
+            return false;
         }
+        let epoch = self.code_epoch;
+        if let Some(t) = self.timing.as_mut() {
+            t.set_replay_verified(epoch);
+        }
+        self.run_replayed_block(pc, n);
+        true
+    }
+
+    /// The execution part of [`Spu::replay_block`].
+    #[inline(always)]
+    fn run_replayed_block(&mut self, pc: u32, n: usize) {
         let block_end = pc.wrapping_add(4 * n as u32);
         let mut p = pc;
         for k in 0..n {
@@ -751,7 +792,7 @@ impl Spu {
                     self.pc = if taken { target } else { (p + 4) & LS_MASK };
                     self.instructions += k as u64 + 1;
                     self.cycle = t.now();
-                    return true;
+                    return;
                 }
                 Effect::Store { addr } => {
                     self.redecode(addr, 16);
@@ -764,7 +805,7 @@ impl Spu {
                         self.pc = p;
                         self.instructions += k as u64 + 1;
                         self.cycle = t.now();
-                        return true;
+                        return;
                     }
                 }
                 // Hints name a static target here (register hints end blocks); the
@@ -777,7 +818,6 @@ impl Spu {
         self.pc = p;
         self.instructions += n as u64;
         self.cycle = t.now();
-        true
     }
 
     /// The timing-off inner loop: one cycle per instruction, pre-decoded words, no
