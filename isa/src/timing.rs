@@ -343,6 +343,8 @@ pub struct Timing {
     /// Cycle at which each register's newest value can be used, and which instruction
     /// address produces it.
     ready: [u64; 128],
+    /// At least the latest of `ready` (the latest ever written).
+    max_ready: u64,
     producer: [u32; 128],
     producer_unit: [Unit; 128],
     /// Nothing issues before this cycle after a branch miss (R4), charged to `miss_pc`.
@@ -407,6 +409,7 @@ impl Timing {
                 branch_hint: None,
             },
             ready: [0; 128],
+            max_ready: 0,
             producer: [NO_PC; 128],
             producer_unit: [Unit::NOP; 128],
             redirect: 0,
@@ -614,6 +617,7 @@ impl Timing {
         let writes = if regs & W_RT != 0 { inst.rt & 127 } else { 128 };
         if writes < 128 {
             self.ready[writes as usize] = issue + class.latency as u64;
+            self.max_ready = self.max_ready.max(issue + class.latency as u64);
             self.producer[writes as usize] = pc;
             self.producer_unit[writes as usize] = class.unit;
         }
@@ -694,7 +698,11 @@ impl Timing {
     pub fn branch_resolved(&mut self, pc: u32, _inst: Inst, taken: bool, target: u32) {
         self.sync();
         if self.last.pc != pc {
+            self.memo.chain_from = None;
             return;
+        }
+        if let Some(from) = &mut self.memo.chain_from {
+            from.taken = taken;
         }
         let hinted = match self.last.branch_hint {
             Some(NO_PC) | None => None,
@@ -733,6 +741,7 @@ impl Timing {
     /// After a hint executed: the branch address it names and the target it predicts
     /// (for `hbr` the target comes from a register, so the core supplies it).
     pub fn hint(&mut self, pc: u32, branch: u32, target: u32) {
+        self.memo.chain_from = None;
         if self.replay_hint_matches(pc, branch, target) {
             return;
         }
@@ -757,6 +766,7 @@ impl Timing {
     /// The instruction just issued at `pc` could not complete before cycle `until` because
     /// channel `channel` was empty (read) or full (write): it re-issues at `until`.
     pub fn channel_stall(&mut self, pc: u32, channel: u8, until: u64) {
+        self.memo.chain_from = None;
         self.sync();
         if self.last.pc != pc || until <= self.last.issue {
             return;
@@ -775,6 +785,7 @@ impl Timing {
         }
         if self.last.writes < 128 {
             self.ready[self.last.writes as usize] = until + self.last.latency as u64;
+            self.max_ready = self.max_ready.max(until + self.last.latency as u64);
         }
         self.last.issue = until;
         self.last.dual = false;
@@ -789,6 +800,7 @@ impl Timing {
     /// priority over loads, stores and instruction fetch): one 128-byte line access every
     /// 16 cycles (8 B/cycle), R9.
     pub fn dma_local_store(&mut self, cycle: u64, bytes: u32) {
+        self.memo.chain_from = None;
         self.sync();
         self.memo.abort_recording(&mut self.profile);
         let lines = bytes.div_ceil(128).max(1) as u64;
@@ -814,6 +826,7 @@ impl Timing {
 
     /// Lets time pass without issuing (e.g. while the SPU is stopped and restarted).
     pub fn advance_to(&mut self, cycle: u64) {
+        self.memo.chain_from = None;
         self.sync();
         self.memo.abort_recording(&mut self.profile);
         if cycle > self.now {
@@ -838,6 +851,7 @@ impl Timing {
 
     /// Clears the counters (the pipeline state is kept).
     pub fn reset_profile(&mut self) {
+        self.memo.chain_from = None;
         self.sync();
         self.memo.abort_recording(&mut self.profile);
         self.memo.clear_hits();
@@ -905,6 +919,43 @@ mod memo {
         pub verified: u64,
         /// The last write of each register the block writes (for the end of a replay).
         pub final_writes: Vec<(u8, i64, u32, Unit)>,
+        /// The latest of those ready cycles, relative to the entry.
+        pub max_ready_rel: i64,
+        /// Distinguishes this record from an earlier one in the same place.
+        pub generation: u64,
+        /// Whether the hint entry after a replay follows from the record (the block sets
+        /// it, or its signature pins it down).
+        pub hint_known_after: bool,
+        /// The blocks that followed a full replay, not taken and taken (see [`Chain`]).
+        pub chain: [Chain; 2],
+    }
+
+    /// A block B that followed a full replay of block A once and matched its signature,
+    /// in a state that A's record and the branch outcome decided entirely: the next time
+    /// A replays fully with the same outcome to `pc`, B matches again without the check.
+    #[derive(Clone, Copy, Debug)]
+    pub(super) struct Chain {
+        pub pc: u32,
+        pub memo: u32,
+        pub generation: u64,
+    }
+
+    pub(super) const NO_CHAIN: Chain = Chain {
+        pc: NEVER,
+        memo: 0,
+        generation: 0,
+    };
+
+    /// A full replay just ended, and what the next block's chain check needs of it.
+    #[derive(Clone, Copy, Debug)]
+    pub(super) struct ChainFrom {
+        pub memo: usize,
+        pub generation: u64,
+        pub taken: bool,
+        /// The instruction count after the block (nothing else may issue in between).
+        pub index: u64,
+        /// The latest ready cycle of any register at the block's entry.
+        pub max_ready_at_entry: u64,
     }
 
     #[derive(Clone, Debug)]
@@ -973,6 +1024,7 @@ mod memo {
         pub k: usize,
         pub entry_now: u64,
         pub entry_index: u64,
+        pub entry_max_ready: u64,
     }
 
     #[derive(Clone, Debug, Default)]
@@ -983,6 +1035,8 @@ mod memo {
         pub memos: Vec<Memo>,
         pub rec: Option<Box<Recording>>,
         pub replay: Option<Replay>,
+        pub chain_from: Option<ChainFrom>,
+        pub generations: u64,
     }
 
     impl Memos {
@@ -1044,7 +1098,7 @@ mod memo {
     }
 }
 
-use memo::{Entry, EntryRef, Memo, Recording, Replay, Step};
+use memo::{ChainFrom, Entry, EntryRef, Memo, Recording, Replay, Step};
 
 /// What the memo table says of a block start.
 enum Lookup {
@@ -1203,7 +1257,7 @@ impl Timing {
             self.memo.slots.resize(0x1_0000, 0);
             self.memo.fails.resize(0x1_0000, 0);
         }
-        match self.memo_lookup(idx, pc, inst) {
+        match self.chained_lookup(idx, pc, inst) {
             Lookup::Never => return self.issue_slow(pc, inst),
             Lookup::Hit(id) => return self.begin_replay(id, pc, inst),
             Lookup::Differs(id) => {
@@ -1269,6 +1323,50 @@ impl Timing {
         }
     }
 
+    /// [`Timing::memo_lookup`], first through the chain of the block whose full replay
+    /// just ended, and adding to that chain. A chain is followed only where the state at
+    /// this block's entry follows from the previous block's record: every register the
+    /// previous block did not write was ready before now (`max_ready_at_entry < now`),
+    /// nothing issued in between, and this block has no branch or the previous record
+    /// fixed the hint entry; the rest of the signature (readiness of what the previous
+    /// block wrote, the last issue, branch redirect, double-precision block, fetch) is
+    /// set from that record and the branch outcome.
+    #[inline]
+    fn chained_lookup(&mut self, idx: usize, pc: u32, inst: Inst) -> Lookup {
+        let from = self.memo.chain_from.take().filter(|f| {
+            f.index == self.index
+                && f.max_ready_at_entry < self.now
+                && self.memo.memos[f.memo].generation == f.generation
+        });
+        if let Some(f) = from {
+            let a = &self.memo.memos[f.memo];
+            let c = a.chain[f.taken as usize];
+            if c.pc == pc {
+                let b = &self.memo.memos[c.memo as usize];
+                if b.generation == c.generation
+                    && b.words[0] == inst.word
+                    && (b.branch_pc == NO_PC || a.hint_known_after)
+                {
+                    return Lookup::Hit(c.memo as usize);
+                }
+            }
+        }
+        let found = self.memo_lookup(idx, pc, inst);
+        if let (Lookup::Hit(id), Some(f)) = (&found, from) {
+            let b = &self.memo.memos[*id];
+            let (branch_pc, generation) = (b.branch_pc, b.generation);
+            let a = &mut self.memo.memos[f.memo];
+            if branch_pc == NO_PC || a.hint_known_after {
+                a.chain[f.taken as usize] = memo::Chain {
+                    pc,
+                    memo: *id as u32,
+                    generation,
+                };
+            }
+        }
+        found
+    }
+
     /// Starts replaying memo `id` with its first instruction (`pc`, `inst`); returns that
     /// instruction's issue cycle.
     fn begin_replay(&mut self, id: usize, pc: u32, inst: Inst) -> u64 {
@@ -1277,6 +1375,7 @@ impl Timing {
             k: 0,
             entry_now: self.now,
             entry_index: self.index,
+            entry_max_ready: self.max_ready,
         });
         self.replay_next(pc, inst)
             .expect("first replayed instruction")
@@ -1286,7 +1385,7 @@ impl Timing {
     /// starting at `pc` with `inst` when the state matches its record and nothing else is
     /// in progress; nothing changes. Follow with [`Timing::start_block_replay`].
     #[inline]
-    pub fn block_replay_candidate(&self, pc: u32, inst: Inst) -> Option<(usize, usize)> {
+    pub fn block_replay_candidate(&mut self, pc: u32, inst: Inst) -> Option<(usize, usize)> {
         if !self.config.memoize
             || self.memo.rec.is_some()
             || self.memo.replay.is_some()
@@ -1299,7 +1398,7 @@ impl Timing {
         if idx >= self.memo.slots.len() {
             return None;
         }
-        match self.memo_lookup(idx, pc, inst) {
+        match self.chained_lookup(idx, pc, inst) {
             Lookup::Hit(id) => Some((id, self.memo.memos[id].words.len())),
             _ => None,
         }
@@ -1444,6 +1543,14 @@ impl Timing {
             }
         }
         let branch_at = (branch_pc != NO_PC).then(|| (branch_pc, rec.words.len() as u64 - 1));
+        // The signature names the hint entry when it holds this block's branch, close
+        // enough to count.
+        let hint_pinned = branch_at.is_some_and(|(bpc, k)| {
+            let h = &rec.entry.hint;
+            h.valid
+                && h.branch == bpc
+                && rec.entry.index + k - h.index >= self.config.hint_min_distance as u64
+        });
         let mut sig = Vec::new();
         self.signature(
             &memo::Entry::as_ref(&rec.entry),
@@ -1466,12 +1573,18 @@ impl Timing {
             hits: 0,
             verified: u64::MAX,
             final_writes: Vec::new(),
+            max_ready_rel: i64::MIN,
+            generation: self.memo.generations,
+            hint_known_after: rec.hint_changed || hint_pinned,
+            chain: [memo::NO_CHAIN; 2],
         };
+        self.memo.generations += 1;
         let mut memo = memo;
         for st in memo.steps.iter().rev() {
             if st.write < 128 && !memo.final_writes.iter().any(|w| w.0 == st.write) {
                 memo.final_writes
                     .push((st.write, st.ready_rel, st.producer, st.unit));
+                memo.max_ready_rel = memo.max_ready_rel.max(st.ready_rel);
             }
         }
         let idx = Self::slot_index(memo.start);
@@ -1503,6 +1616,7 @@ impl Timing {
                 let rp = *rp;
                 self.memo.replay = None;
                 self.materialize(rp, false);
+                self.chain_after(rp);
             }
             Some(issue)
         } else {
@@ -1524,10 +1638,12 @@ impl Timing {
                 self.producer[r as usize] = producer;
                 self.producer_unit[r as usize] = unit;
             }
+            self.max_ready = self.max_ready.max(at(m.max_ready_rel));
         } else {
             for st in &m.steps[..k] {
                 if st.write < 128 {
                     self.ready[st.write as usize] = at(st.ready_rel);
+                    self.max_ready = self.max_ready.max(at(st.ready_rel));
                     self.producer[st.write as usize] = st.producer;
                     self.producer_unit[st.write as usize] = st.unit;
                 }
@@ -1610,7 +1726,19 @@ impl Timing {
         m.hits += 1;
         rp.k = len;
         self.materialize(rp, false);
+        self.chain_after(rp);
         issue
+    }
+
+    /// After a full replay: what lets the next block skip its signature.
+    fn chain_after(&mut self, rp: Replay) {
+        self.memo.chain_from = Some(ChainFrom {
+            memo: rp.memo,
+            generation: self.memo.memos[rp.memo].generation,
+            taken: false,
+            index: self.index,
+            max_ready_at_entry: rp.entry_max_ready,
+        });
     }
 
     /// Ends the replay `issue` started after the block's first `k` instructions (the rest

@@ -233,7 +233,7 @@ pub fn render_frame(
     layout: &FrameLayout,
     spes: usize,
     threads: usize,
-    clock_ghz: f64,
+    timing: &spu_isa::timing::TimingConfig,
     fill: bool,
     max_cycles: u64,
     progress: &mut dyn FnMut(u32, u32),
@@ -246,10 +246,6 @@ pub fn render_frame(
     };
     let program = assemble_kernel(source, name)?;
     let mut memory = MainMemory::new(layout.memory_image(staged));
-    let timing = spu_isa::timing::TimingConfig {
-        clock_ghz,
-        ..Default::default()
-    };
     let mut spus: Vec<Spu> = (0..spes)
         .map(|i| {
             let mut spu = Spu::new(i as u32);

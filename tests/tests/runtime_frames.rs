@@ -10,6 +10,7 @@ use spu_loader::kernel_abi::{
 use spu_loader::reference::Reference;
 use spu_loader::runtime::{render_frame, FrameRun};
 use spu_loader::{procedural, Bvh, BvhConfig, StagedScene};
+use spu_isa::timing::TimingConfig;
 
 fn frame(
     scene: &spu_loader::Scene,
@@ -34,7 +35,7 @@ fn frame(
         &layout,
         spes,
         threads,
-        2.4,
+        &TimingConfig::default(),
         fill,
         50_000_000_000,
         &mut |_, _| {},
@@ -163,7 +164,7 @@ fn raytrace_kernel_matches_the_reference_on_the_conference_with_small_caches() {
         &layout,
         1,
         1,
-        2.4,
+        &TimingConfig::default(),
         false,
         20_000_000_000,
         &mut |_, _| {},
@@ -231,4 +232,44 @@ fn raytrace_kernel_handles_a_leaf_root_and_an_empty_scene() {
         assert_eq!(hits > 0, expect_hits);
         assert_eq!(run.spus[0].stats.packets, 64); // one 64x64 tile
     }
+}
+
+/// The ray-tracing kernel with the timing model's block memoization (replays, chained
+/// blocks, replays run in one go by the core) and without it: the same frame, cycles and
+/// counters, total and per address. A small frame of the conference with small caches, so
+/// that DMA, cache misses and every traversal case interleave with replayed blocks.
+#[test]
+fn raytrace_kernel_times_the_same_with_and_without_block_memoization() {
+    let scene = procedural::conference();
+    let (w, h) = (24, 16);
+    let bvh = Bvh::build(&scene, &BvhConfig::default());
+    let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
+    let basis = scene.camera.basis(w, h);
+    let layout = FrameLayout::new(&staged, &basis, w, h, 2, 128, 128).unwrap();
+    let run = |memoize: bool| {
+        render_frame(
+            &staged,
+            &layout,
+            2,
+            1,
+            &TimingConfig {
+                memoize,
+                ..Default::default()
+            },
+            false,
+            20_000_000_000,
+            &mut |_, _| {},
+        )
+        .unwrap()
+    };
+    let (plain, memo) = (run(false), run(true));
+    assert_eq!(plain.frame_buffer, memo.frame_buffer);
+    assert_eq!(plain.frame_cycles, memo.frame_cycles);
+    let (pp, pm) = (plain.profile.unwrap(), memo.profile.unwrap());
+    assert_eq!(pp.totals, pm.totals);
+    let per_address = |p: &spu_isa::profile::Profile| -> Vec<_> {
+        p.addresses().map(|(pc, s)| (pc, *s)).collect()
+    };
+    assert_eq!(per_address(&pp), per_address(&pm));
+    assert!(pp.totals.branch_misses > 0 && pp.totals.instructions > 100_000);
 }

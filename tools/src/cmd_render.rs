@@ -159,7 +159,10 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         &layout,
         args.spes,
         threads,
-        args.clock,
+        &spu_isa::timing::TimingConfig {
+            clock_ghz: args.clock,
+            ..Default::default()
+        },
         args.fill,
         args.max_cycles,
         &mut |taken, _| bar.set_position(taken as u64),

@@ -735,12 +735,13 @@ impl Spu {
             if inst.op == Op::Unknown || inst.op == Op::Bisled {
                 return;
             }
-            let Some(t) = self.timing.as_ref() else {
+            let Some(t) = self.timing.as_mut() else {
                 return;
             };
             let Some((id, n)) = t.block_replay_candidate(pc, inst) else {
                 return;
             };
+            let t = self.timing.as_ref().expect("timing");
             let (words, verified) = t.memo_words(id);
             if words.len() != n || !self.block_in_store(pc, words, verified) {
                 return;
