@@ -921,11 +921,10 @@ mod memo {
         pub final_writes: Vec<(u8, i64, u32, Unit)>,
         /// The latest of those ready cycles, relative to the entry.
         pub max_ready_rel: i64,
+        /// The block sets the hint entry (so after a replay it follows from the record).
+        pub sets_hint: bool,
         /// Distinguishes this record from an earlier one in the same place.
         pub generation: u64,
-        /// Whether the hint entry after a replay follows from the record (the block sets
-        /// it, or its signature pins it down).
-        pub hint_known_after: bool,
         /// The blocks that followed a full replay, not taken and taken (see [`Chain`]).
         pub chain: [Chain; 2],
     }
@@ -938,12 +937,24 @@ mod memo {
         pub pc: u32,
         pub memo: u32,
         pub generation: u64,
+        /// What B's signature saw of the hint entry (`Timing::hint_view`); the hint entry
+        /// is the one part of B's entry state A's record may leave open, so it is compared.
+        pub hint: [i64; 3],
+        /// B's live registers that A does not write: they must have been ready before B's
+        /// entry (as they were when the chain formed). Ended by 128; `UNLISTED` when
+        /// there were too many to list (then every register must have been ready).
+        pub open: [u8; OPEN_MAX],
     }
+
+    pub(super) const OPEN_MAX: usize = 8;
+    pub(super) const UNLISTED: u8 = 255;
 
     pub(super) const NO_CHAIN: Chain = Chain {
         pc: NEVER,
         memo: 0,
         generation: 0,
+        hint: [0; 3],
+        open: [UNLISTED; OPEN_MAX],
     };
 
     /// A full replay just ended, and what the next block's chain check needs of it.
@@ -1174,17 +1185,15 @@ impl Timing {
             return false;
         }
         if let Some((bpc, k)) = branch_at {
-            let h = &e.hint;
-            let m = h.valid && h.branch == bpc;
-            let close = e.index + k - h.index >= self.config.hint_min_distance as u64;
-            if !emit(m as i64 | (close as i64) << 1) {
+            let [bits, window, target] = self.hint_view(&e.hint, e.index, e.now, bpc, k);
+            if !emit(bits) {
                 return false;
             }
-            if m && close {
-                if !emit((h.issued as i64 + self.config.hint_window as i64 - now).max(-1)) {
+            if bits == 3 {
+                if !emit(window) {
                     return false;
                 }
-                if !emit(h.target as i64) {
+                if !emit(target) {
                     return false;
                 }
             }
@@ -1208,6 +1217,41 @@ impl Timing {
             }
         }
         true
+    }
+
+    /// What a block whose branch is at `bpc`, `k` instructions after its start, sees of the
+    /// hint entry `h` at its entry (instruction count `index`, cycle `now`): whether the
+    /// entry names the branch and is far enough ahead (bits 0 and 1), and if both, how
+    /// long its window still runs and its target (else 0).
+    #[inline(always)]
+    fn hint_view(&self, h: &HintEntry, index: u64, now: u64, bpc: u32, k: u64) -> [i64; 3] {
+        let m = h.valid && h.branch == bpc;
+        let close = index + k - h.index >= self.config.hint_min_distance as u64;
+        if m && close {
+            [
+                3,
+                (h.issued as i64 + self.config.hint_window as i64 - now as i64).max(-1),
+                h.target as i64,
+            ]
+        } else {
+            [m as i64 | (close as i64) << 1, 0, 0]
+        }
+    }
+
+    /// [`Timing::hint_view`] of the current state for memo `id`'s branch.
+    #[inline]
+    fn hint_view_now(&self, id: usize) -> [i64; 3] {
+        let m = &self.memo.memos[id];
+        if m.branch_pc == NO_PC {
+            return [0; 3];
+        }
+        self.hint_view(
+            &self.hint,
+            self.index,
+            self.now,
+            m.branch_pc,
+            m.words.len() as u64 - 1,
+        )
     }
 
     fn entry(&self) -> Entry {
@@ -1325,27 +1369,26 @@ impl Timing {
 
     /// [`Timing::memo_lookup`], first through the chain of the block whose full replay
     /// just ended, and adding to that chain. A chain is followed only where the state at
-    /// this block's entry follows from the previous block's record: every register the
-    /// previous block did not write was ready before now (`max_ready_at_entry < now`),
-    /// nothing issued in between, and this block has no branch or the previous record
-    /// fixed the hint entry; the rest of the signature (readiness of what the previous
-    /// block wrote, the last issue, branch redirect, double-precision block, fetch) is
-    /// set from that record and the branch outcome.
+    /// this block's entry follows from the previous block's record: every live register
+    /// the previous block did not write was ready before now (as when the chain formed)
+    /// and nothing issued in between; the rest of the signature (readiness of what the
+    /// previous block wrote, the last issue, branch redirect, double-precision block,
+    /// fetch) is set from that record and the branch outcome, and so is the hint entry
+    /// where the previous block sets it; otherwise its view is compared.
     #[inline]
     fn chained_lookup(&mut self, idx: usize, pc: u32, inst: Inst) -> Lookup {
         let from = self.memo.chain_from.take().filter(|f| {
-            f.index == self.index
-                && f.max_ready_at_entry < self.now
-                && self.memo.memos[f.memo].generation == f.generation
+            f.index == self.index && self.memo.memos[f.memo].generation == f.generation
         });
         if let Some(f) = from {
             let a = &self.memo.memos[f.memo];
-            let c = a.chain[f.taken as usize];
+            let c = &a.chain[f.taken as usize];
             if c.pc == pc {
                 let b = &self.memo.memos[c.memo as usize];
                 if b.generation == c.generation
                     && b.words[0] == inst.word
-                    && (b.branch_pc == NO_PC || a.hint_known_after)
+                    && self.open_registers_ready(f.max_ready_at_entry, &c.open)
+                    && (a.sets_hint || self.hint_view_now(c.memo as usize) == c.hint)
                 {
                     return Lookup::Hit(c.memo as usize);
                 }
@@ -1353,18 +1396,47 @@ impl Timing {
         }
         let found = self.memo_lookup(idx, pc, inst);
         if let (Lookup::Hit(id), Some(f)) = (&found, from) {
-            let b = &self.memo.memos[*id];
-            let (branch_pc, generation) = (b.branch_pc, b.generation);
-            let a = &mut self.memo.memos[f.memo];
-            if branch_pc == NO_PC || a.hint_known_after {
-                a.chain[f.taken as usize] = memo::Chain {
+            // B's live registers that A does not write (when few enough to list).
+            let (a, b) = (&self.memo.memos[f.memo], &self.memo.memos[*id]);
+            let open: Vec<u8> = b
+                .live
+                .iter()
+                .copied()
+                .filter(|r| !a.final_writes.iter().any(|w| w.0 == *r))
+                .collect();
+            let mut listed = [memo::UNLISTED; memo::OPEN_MAX];
+            if open.len() <= memo::OPEN_MAX {
+                listed[..open.len()].copy_from_slice(&open);
+                listed[open.len()..].fill(128);
+            }
+            if self.open_registers_ready(f.max_ready_at_entry, &listed) {
+                let chain = memo::Chain {
                     pc,
                     memo: *id as u32,
-                    generation,
+                    generation: b.generation,
+                    hint: self.hint_view_now(*id),
+                    open: listed,
                 };
+                self.memo.memos[f.memo].chain[f.taken as usize] = chain;
             }
         }
         found
+    }
+
+    /// Whether the registers a chain leaves open (`open`: a list ended by 128, or
+    /// [`memo::UNLISTED`] for any register) were all ready before now: at once when every
+    /// register was ready by the previous block's entry.
+    #[inline(always)]
+    fn open_registers_ready(&self, max_ready_at_entry: u64, open: &[u8; memo::OPEN_MAX]) -> bool {
+        if max_ready_at_entry < self.now {
+            return true;
+        }
+        if open[0] == memo::UNLISTED {
+            return false;
+        }
+        open.iter()
+            .take_while(|&&r| r < 128)
+            .all(|&r| self.ready[r as usize] < self.now)
     }
 
     /// Starts replaying memo `id` with its first instruction (`pc`, `inst`); returns that
@@ -1543,14 +1615,6 @@ impl Timing {
             }
         }
         let branch_at = (branch_pc != NO_PC).then(|| (branch_pc, rec.words.len() as u64 - 1));
-        // The signature names the hint entry when it holds this block's branch, close
-        // enough to count.
-        let hint_pinned = branch_at.is_some_and(|(bpc, k)| {
-            let h = &rec.entry.hint;
-            h.valid
-                && h.branch == bpc
-                && rec.entry.index + k - h.index >= self.config.hint_min_distance as u64
-        });
         let mut sig = Vec::new();
         self.signature(
             &memo::Entry::as_ref(&rec.entry),
@@ -1575,7 +1639,7 @@ impl Timing {
             final_writes: Vec::new(),
             max_ready_rel: i64::MIN,
             generation: self.memo.generations,
-            hint_known_after: rec.hint_changed || hint_pinned,
+            sets_hint: rec.hint_changed,
             chain: [memo::NO_CHAIN; 2],
         };
         self.memo.generations += 1;

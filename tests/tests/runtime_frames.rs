@@ -2,6 +2,7 @@
 //! queue and the deterministic memory model; the ray-tracing kernel is checked pixel by
 //! pixel against the host reference.
 
+use spu_isa::timing::TimingConfig;
 use spu_loader::camera::Camera;
 use spu_loader::frame::{FrameLayout, SCENE_BASE};
 use spu_loader::kernel_abi::{
@@ -10,7 +11,6 @@ use spu_loader::kernel_abi::{
 use spu_loader::reference::Reference;
 use spu_loader::runtime::{render_frame, FrameRun};
 use spu_loader::{procedural, Bvh, BvhConfig, StagedScene};
-use spu_isa::timing::TimingConfig;
 
 fn frame(
     scene: &spu_loader::Scene,

@@ -610,3 +610,89 @@ fn memoized_replay_is_exact() {
         }
     }
 }
+
+/// A chained block skips its signature only where the block before it decided its entry
+/// state. Here block A (0x108) replays from the same state every time, but what comes
+/// before it varies: the tail at 0xf0 has a 6-cycle `fm` or a 2-cycle `ai`, and a hint for
+/// block B's branch, for another branch or none. With the `ai`, P's load into $20 is still
+/// in flight when B (0x114) reads it (B stalls); with the `fm` it is not; after
+/// the first hint B's branch is predicted, after the second not. A chain A -> B formed
+/// after one tail must not be followed after another: every issue cycle and counter
+/// agrees with the unmemoized model.
+#[test]
+fn chained_blocks_check_what_the_previous_block_did_not_decide() {
+    let at = |pc: u32, m: &str, ops: &[i64]| (pc, inst(m, ops, pc));
+    let tails = [
+        [at(0xf0, "nop", &[]), at(0xf4, "fm", &[24, 26, 26])],
+        [at(0xf0, "nop", &[]), at(0xf4, "ai", &[24, 24, 1])],
+        [
+            at(0xf0, "hbrr", &[0x118, 0xf0]),
+            at(0xf4, "fm", &[24, 26, 26]),
+        ],
+        [
+            at(0xf0, "hbrr", &[0x300, 0xf0]),
+            at(0xf4, "fm", &[24, 26, 26]),
+        ],
+    ];
+    let hinted_branch = [0, 0, 0x118, 0x300];
+    let rest = [
+        at(0xf8, "brz", &[9, 0x200]), // not taken
+        at(0xfc, "lqd", &[20, 0, 3]), // P
+        at(0x100, "ai", &[25, 24, 1]),
+        at(0x104, "brz", &[9, 0x200]), // not taken
+        at(0x108, "ai", &[21, 21, 1]), // A
+        at(0x10c, "ai", &[27, 27, 1]),
+        at(0x110, "brz", &[9, 0x200]), // not taken
+        at(0x114, "a", &[22, 20, 20]), // B
+        at(0x118, "brnz", &[9, 0xf0]), // taken, back to the tail
+    ];
+    // Each tail four times (so that A replays and the chain A -> B forms), then another.
+    let pairs = [
+        (0, 1),
+        (1, 0),
+        (0, 2),
+        (2, 0),
+        (1, 2),
+        (2, 1),
+        (2, 3),
+        (3, 2),
+    ];
+    let order: Vec<usize> = pairs.iter().flat_map(|&(x, y)| [x, x, x, x, y]).collect();
+    let run = |memoize: bool| {
+        let mut t = Timing::new(TimingConfig {
+            memoize,
+            model_fetch: false,
+            ..Default::default()
+        });
+        let mut cycles = Vec::new();
+        for _ in 0..4 {
+            for &v in &order {
+                for &(pc, ins) in tails[v].iter().chain(&rest) {
+                    cycles.push(t.issue(pc, ins));
+                    if ins.op == spu_isa::table::Op::Hbrr {
+                        t.hint(pc, hinted_branch[v], 0xf0);
+                    }
+                    if spu_isa::analysis::is_branch(ins.op) {
+                        let taken = pc == 0x118;
+                        t.branch_resolved(pc, ins, taken, if taken { 0xf0 } else { pc + 4 });
+                    }
+                }
+            }
+        }
+        (cycles, t.finish_profile())
+    };
+    let (c0, p0) = run(false);
+    let (c1, p1) = run(true);
+    assert_eq!(c0, c1);
+    assert_eq!(p0.totals, p1.totals);
+    let a0: Vec<_> = p0.addresses().map(|(a, s)| (a, *s)).collect();
+    let a1: Vec<_> = p1.addresses().map(|(a, s)| (a, *s)).collect();
+    assert_eq!(a0, a1);
+    // B's load-use stall happens after some tails and not after others.
+    let b = p0.get(0x114).unwrap();
+    assert!(
+        b.stall_total() > 0 && b.stall_total() < b.executions,
+        "{b:?}"
+    );
+    assert!(p0.totals.hint_hits > 0);
+}
