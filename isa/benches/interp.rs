@@ -1,5 +1,6 @@
 //! Simulated SPU instructions per host second on mixed loops (loads, float multiply-adds,
-//! shuffles, adds, a store, a hinted branch), timing model off: `cargo bench -p spu-isa`.
+//! shuffles, adds, a store, a hinted branch), timing model off and on:
+//! `cargo bench -p spu-isa`.
 //!
 //! `accumulating` is the loop of `spu bench` (its fma chain grows without bound, so after
 //! the first iterations every fma takes the float unit's exact path); `bounded` does the
@@ -63,13 +64,16 @@ fn program(iterations: u32, kind: &str) -> Vec<u8> {
     image
 }
 
-fn measure(name: &str, iterations: u32) {
+fn measure(name: &str, iterations: u32, timing: bool) {
     let image = program(iterations, name);
     let mut best = f64::MAX;
     let mut n = 0;
     for _ in 0..3 {
         let mut spu = Spu::new(0);
         spu.load_image(&image);
+        if timing {
+            spu.enable_timing(Default::default());
+        }
         let mut memory = MainMemory::zeroed(4096);
         let t = Instant::now();
         let stop = spu.run(&mut memory, u64::MAX);
@@ -79,12 +83,14 @@ fn measure(name: &str, iterations: u32) {
         best = best.min(s);
     }
     println!(
-        "{name:>12}: {n} instructions in {best:.3} s = {:7.1} M simulated instructions per host second (timing off, best of 3)",
-        n as f64 / best / 1e6
+        "{name:>12}: {n} instructions in {best:.3} s = {:7.1} M simulated instructions per host second (timing {}, best of 3)",
+        n as f64 / best / 1e6,
+        if timing { "on" } else { "off" }
     );
 }
 
-/// Arguments: an iteration count and/or the names of the loops to run.
+/// Arguments: an iteration count, the names of the loops to run, `on` or `off` for the
+/// timing model (both when neither is given).
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let iterations = args
@@ -93,9 +99,18 @@ fn main() {
         .unwrap_or(10_000_000);
     const LOOPS: [&str; 3] = ["bounded", "accumulating", "integer"];
     let named = args.iter().any(|a| LOOPS.contains(&a.as_str()));
+    let modes: Vec<bool> = [false, true]
+        .into_iter()
+        .filter(|&on| {
+            let word = if on { "on" } else { "off" };
+            !args.iter().any(|a| a == "on" || a == "off") || args.iter().any(|a| a == word)
+        })
+        .collect();
     for name in LOOPS {
         if !named || args.iter().any(|a| a == name) {
-            measure(name, iterations);
+            for &timing in &modes {
+                measure(name, iterations, timing);
+            }
         }
     }
 }

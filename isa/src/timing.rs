@@ -918,15 +918,25 @@ mod memo {
         /// The core's code epoch at which it last found local store holding `words`.
         pub verified: u64,
         /// The last write of each register the block writes (for the end of a replay).
-        pub final_writes: Vec<(u8, i64, u32, Unit)>,
-        /// The latest of those ready cycles, relative to the entry.
-        pub max_ready_rel: i64,
+        pub final_writes: Vec<FinalWrite>,
+        /// The latest of those ready cycles, relative to the entry (0 without writes).
+        pub max_ready_rel: u64,
         /// The block sets the hint entry (so after a replay it follows from the record).
         pub sets_hint: bool,
         /// Distinguishes this record from an earlier one in the same place.
         pub generation: u64,
         /// The blocks that followed a full replay, not taken and taken (see [`Chain`]).
         pub chain: [Chain; 2],
+    }
+
+    /// A register's state after a block, relative to the block's entry (a result is never
+    /// ready before its block starts).
+    #[derive(Clone, Copy, Debug)]
+    pub(super) struct FinalWrite {
+        pub ready_rel: u64,
+        pub producer: u32,
+        pub reg: u8,
+        pub unit: Unit,
     }
 
     /// A block B that followed a full replay of block A once and matched its signature,
@@ -1402,7 +1412,7 @@ impl Timing {
                 .live
                 .iter()
                 .copied()
-                .filter(|r| !a.final_writes.iter().any(|w| w.0 == *r))
+                .filter(|r| !a.final_writes.iter().any(|w| w.reg == *r))
                 .collect();
             let mut listed = [memo::UNLISTED; memo::OPEN_MAX];
             if open.len() <= memo::OPEN_MAX {
@@ -1637,7 +1647,7 @@ impl Timing {
             hits: 0,
             verified: u64::MAX,
             final_writes: Vec::new(),
-            max_ready_rel: i64::MIN,
+            max_ready_rel: 0,
             generation: self.memo.generations,
             sets_hint: rec.hint_changed,
             chain: [memo::NO_CHAIN; 2],
@@ -1645,10 +1655,15 @@ impl Timing {
         self.memo.generations += 1;
         let mut memo = memo;
         for st in memo.steps.iter().rev() {
-            if st.write < 128 && !memo.final_writes.iter().any(|w| w.0 == st.write) {
-                memo.final_writes
-                    .push((st.write, st.ready_rel, st.producer, st.unit));
-                memo.max_ready_rel = memo.max_ready_rel.max(st.ready_rel);
+            if st.write < 128 && !memo.final_writes.iter().any(|w| w.reg == st.write) {
+                let ready_rel = st.ready_rel.max(0) as u64;
+                memo.final_writes.push(memo::FinalWrite {
+                    ready_rel,
+                    producer: st.producer,
+                    reg: st.write,
+                    unit: st.unit,
+                });
+                memo.max_ready_rel = memo.max_ready_rel.max(ready_rel);
             }
         }
         let idx = Self::slot_index(memo.start);
@@ -1697,12 +1712,14 @@ impl Timing {
         let base = rp.entry_now as i64;
         let at = |rel: i64| (base + rel).max(0) as u64;
         if k == m.steps.len() {
-            for &(r, rel, producer, unit) in &m.final_writes {
-                self.ready[r as usize] = at(rel);
-                self.producer[r as usize] = producer;
-                self.producer_unit[r as usize] = unit;
+            let entry = rp.entry_now;
+            for w in &m.final_writes {
+                let r = (w.reg & 127) as usize;
+                self.ready[r] = entry + w.ready_rel;
+                self.producer[r] = w.producer;
+                self.producer_unit[r] = w.unit;
             }
-            self.max_ready = self.max_ready.max(at(m.max_ready_rel));
+            self.max_ready = self.max_ready.max(entry + m.max_ready_rel);
         } else {
             for st in &m.steps[..k] {
                 if st.write < 128 {

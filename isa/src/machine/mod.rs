@@ -348,6 +348,19 @@ enum ChannelOutcome {
     Error(String),
 }
 
+/// Marks the four decoded words of the quadword a store wrote at `addr` stale (they are
+/// decoded again when fetched); whether any held decoded code.
+#[inline(always)]
+fn invalidate_quad(decoded: &mut [Inst; LS_SIZE / 4], addr: u32) -> bool {
+    let s = (addr & LS_MASK & !15) as usize / 4;
+    let quad = &mut decoded[s..s + 4];
+    let touched = quad
+        .iter()
+        .any(|d| d.op != Op::Unknown || d.word != STALE.word);
+    quad.fill(STALE);
+    touched
+}
+
 impl Spu {
     pub fn new(index: u32) -> Spu {
         Spu {
@@ -779,46 +792,46 @@ impl Spu {
     #[inline(always)]
     fn run_replayed_block(&mut self, pc: u32, n: usize) {
         let block_end = pc.wrapping_add(4 * n as u32);
+        let core = &mut self.core;
+        let decoded = &mut *self.decoded;
+        let timing = self.timing.as_mut().expect("timing");
+        // Blocks hold no `bisled`, the one reader of the pending-event flag.
+        core.event_pending_known = false;
         let mut p = pc;
+        let mut done = n;
         for k in 0..n {
-            let inst = self.decoded[((p >> 2) as usize) & (LS_SIZE / 4 - 1)];
-            let effect = execute(&mut self.core, inst, p);
-            self.core.event_pending_known = false;
-            match effect {
+            let inst = decoded[((p >> 2) as usize) & (LS_SIZE / 4 - 1)];
+            match execute(core, inst, p) {
                 Effect::Branch { taken, target } => {
                     // Blocks end at their first branch.
-                    let t = self.timing.as_mut().expect("timing");
-                    t.replay_complete();
-                    t.branch_resolved(p, inst, taken, target);
-                    self.pc = if taken { target } else { (p + 4) & LS_MASK };
-                    self.instructions += k as u64 + 1;
-                    self.cycle = t.now();
-                    return;
+                    timing.replay_complete();
+                    timing.branch_resolved(p, inst, taken, target);
+                    p = if taken { target } else { (p + 4) & LS_MASK };
+                    done = k + 1;
+                    break;
                 }
                 Effect::Store { addr } => {
-                    self.redecode(addr, 16);
+                    self.code_epoch += invalidate_quad(decoded, addr) as u64;
                     p = (p + 4) & LS_MASK;
                     // A store into the rest of the block: the rest goes the long way.
                     let line = addr & LS_MASK & !15;
                     if k + 1 < n && line < block_end && line + 16 > p {
-                        let t = self.timing.as_mut().expect("timing");
-                        t.replay_stop_after(k + 1);
-                        self.pc = p;
-                        self.instructions += k as u64 + 1;
-                        self.cycle = t.now();
-                        return;
+                        timing.replay_stop_after(k + 1);
+                        done = k + 1;
+                        break;
                     }
                 }
                 // Hints name a static target here (register hints end blocks); the
                 // replayed steps already hold what the hook would record.
                 _ => p = (p + 4) & LS_MASK,
             }
+            if k + 1 == n {
+                timing.replay_complete();
+            }
         }
-        let t = self.timing.as_mut().expect("timing");
-        t.replay_complete();
         self.pc = p;
-        self.instructions += n as u64;
-        self.cycle = t.now();
+        self.instructions += done as u64;
+        self.cycle = timing.now();
     }
 
     /// The timing-off inner loop: one cycle per instruction, pre-decoded words, no
@@ -868,12 +881,7 @@ impl Spu {
                     }
                 }
                 Effect::Store { addr } => {
-                    let s = (addr & LS_MASK) as usize / 4;
-                    let touched = decoded[s..s + 4]
-                        .iter()
-                        .any(|d| d.op != Op::Unknown || d.word != STALE.word);
-                    decoded[s..s + 4].fill(STALE);
-                    self.code_epoch += touched as u64;
+                    self.code_epoch += invalidate_quad(decoded, addr) as u64;
                     pc = (pc + 4) & LS_MASK;
                 }
                 _ => break,
