@@ -345,6 +345,11 @@ pub struct Timing {
     ready: [u64; 128],
     /// At least the latest of `ready` (the latest ever written).
     max_ready: u64,
+    /// A fully replayed block (memo, entry cycle) whose final register writes are not in
+    /// `ready`, `producer` and `producer_unit` yet: they are applied when something reads
+    /// or writes those ([`Timing::apply_deferred_writes`]), or dropped when the next
+    /// replayed block writes all the same registers. Every other register is up to date.
+    deferred_writes: Option<(usize, u64)>,
     producer: [u32; 128],
     producer_unit: [Unit; 128],
     /// Nothing issues before this cycle after a branch miss (R4), charged to `miss_pc`.
@@ -410,6 +415,7 @@ impl Timing {
             },
             ready: [0; 128],
             max_ready: 0,
+            deferred_writes: None,
             producer: [NO_PC; 128],
             producer_unit: [Unit::NOP; 128],
             redirect: 0,
@@ -455,6 +461,7 @@ impl Timing {
     ///
     #[inline]
     fn issue_slow(&mut self, pc: u32, inst: Inst) -> u64 {
+        self.apply_deferred_writes();
         let class = self.classes[inst.op as usize];
         let flags = class.flags;
         let regs = class.regs;
@@ -766,6 +773,7 @@ impl Timing {
     /// The instruction just issued at `pc` could not complete before cycle `until` because
     /// channel `channel` was empty (read) or full (write): it re-issues at `until`.
     pub fn channel_stall(&mut self, pc: u32, channel: u8, until: u64) {
+        self.apply_deferred_writes();
         self.memo.chain_from = None;
         self.sync();
         if self.last.pc != pc || until <= self.last.issue {
@@ -921,6 +929,8 @@ mod memo {
         pub final_writes: Vec<FinalWrite>,
         /// The latest of those ready cycles, relative to the entry (0 without writes).
         pub max_ready_rel: u64,
+        /// The registers in `final_writes`, one bit each.
+        pub writes_mask: u128,
         /// The block sets the hint entry (so after a replay it follows from the record).
         pub sets_hint: bool,
         /// Distinguishes this record from an earlier one in the same place.
@@ -1287,6 +1297,7 @@ impl Timing {
     }
 
     fn issue_memo(&mut self, pc: u32, inst: Inst) -> u64 {
+        self.apply_deferred_writes();
         if let Some(rec) = &self.memo.rec {
             let k = rec.words.len();
             if pc != rec.start.wrapping_add(4 * k as u32)
@@ -1404,6 +1415,7 @@ impl Timing {
                 }
             }
         }
+        self.apply_deferred_writes();
         let found = self.memo_lookup(idx, pc, inst);
         if let (Lookup::Hit(id), Some(f)) = (&found, from) {
             // B's live registers that A does not write (when few enough to list).
@@ -1531,6 +1543,7 @@ impl Timing {
     }
 
     fn record_step(&mut self, inst: Inst) {
+        self.apply_deferred_writes();
         let Some(rec) = self.memo.rec.as_mut() else {
             return;
         };
@@ -1585,6 +1598,8 @@ impl Timing {
     }
 
     fn finish_recording(&mut self) {
+        // The record may replace the deferred block's memo.
+        self.apply_deferred_writes();
         let Some(rec) = self.memo.rec.take() else {
             return;
         };
@@ -1648,6 +1663,7 @@ impl Timing {
             verified: u64::MAX,
             final_writes: Vec::new(),
             max_ready_rel: 0,
+            writes_mask: 0,
             generation: self.memo.generations,
             sets_hint: rec.hint_changed,
             chain: [memo::NO_CHAIN; 2],
@@ -1664,6 +1680,7 @@ impl Timing {
                     unit: st.unit,
                 });
                 memo.max_ready_rel = memo.max_ready_rel.max(ready_rel);
+                memo.writes_mask |= 1u128 << st.write;
             }
         }
         let idx = Self::slot_index(memo.start);
@@ -1704,23 +1721,43 @@ impl Timing {
         }
     }
 
-    /// Sets the state after `rp.k` replayed instructions; `eager`: also apply their
-    /// counter changes now (a partial block).
-    fn materialize(&mut self, rp: Replay, eager: bool) {
-        let m = &self.memo.memos[rp.memo];
-        let k = rp.k;
-        let base = rp.entry_now as i64;
-        let at = |rel: i64| (base + rel).max(0) as u64;
-        if k == m.steps.len() {
-            let entry = rp.entry_now;
-            for w in &m.final_writes {
+    /// Applies the register writes of the block in `deferred_writes`.
+    #[inline]
+    fn apply_deferred_writes(&mut self) {
+        if let Some((id, entry)) = self.deferred_writes.take() {
+            for w in &self.memo.memos[id].final_writes {
                 let r = (w.reg & 127) as usize;
                 self.ready[r] = entry + w.ready_rel;
                 self.producer[r] = w.producer;
                 self.producer_unit[r] = w.unit;
             }
-            self.max_ready = self.max_ready.max(entry + m.max_ready_rel);
+        }
+    }
+
+    /// Sets the state after `rp.k` replayed instructions; `eager`: also apply their
+    /// counter changes now (a partial block).
+    fn materialize(&mut self, rp: Replay, eager: bool) {
+        let k = rp.k;
+        if k == self.memo.memos[rp.memo].steps.len() {
+            // The registers wait in `deferred_writes`; the previous deferred block's are
+            // applied first unless this block overwrites them all.
+            if let Some((d, _)) = self.deferred_writes {
+                let covered =
+                    self.memo.memos[d].writes_mask & !self.memo.memos[rp.memo].writes_mask;
+                if covered != 0 {
+                    self.apply_deferred_writes();
+                }
+            }
+            self.deferred_writes = Some((rp.memo, rp.entry_now));
+            let m = &self.memo.memos[rp.memo];
+            self.max_ready = self.max_ready.max(rp.entry_now + m.max_ready_rel);
         } else {
+            self.apply_deferred_writes();
+        }
+        let m = &self.memo.memos[rp.memo];
+        let base = rp.entry_now as i64;
+        let at = |rel: i64| (base + rel).max(0) as u64;
+        if k < m.steps.len() {
             for st in &m.steps[..k] {
                 if st.write < 128 {
                     self.ready[st.write as usize] = at(st.ready_rel);

@@ -348,6 +348,24 @@ enum ChannelOutcome {
     Error(String),
 }
 
+/// Whether this CPU runs code built for x86-64-v3 (the fast loops have such a build).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+fn host_has_x86_64_v3() -> bool {
+    use std::sync::OnceLock;
+    static HAS: OnceLock<bool> = OnceLock::new();
+    *HAS.get_or_init(|| {
+        std::is_x86_feature_detected!("avx2")
+            && std::is_x86_feature_detected!("fma")
+            && std::is_x86_feature_detected!("bmi1")
+            && std::is_x86_feature_detected!("bmi2")
+            && std::is_x86_feature_detected!("lzcnt")
+            && std::is_x86_feature_detected!("popcnt")
+            && std::is_x86_feature_detected!("sse4.2")
+            && std::is_x86_feature_detected!("ssse3")
+    })
+}
+
 /// Marks the four decoded words of the quadword a store wrote at `addr` stale (they are
 /// decoded again when fetched); whether any held decoded code.
 #[inline(always)]
@@ -741,7 +759,26 @@ impl Spu {
     /// Timing on: runs memoized blocks back to back, each in one go, while the block at
     /// the program counter is memoized, its entry state matches its record and local
     /// store holds it. Returns at the first that is not (the general path takes it).
+    #[inline(never)]
     fn run_block_replays(&mut self, until: u64) {
+        #[cfg(target_arch = "x86_64")]
+        if host_has_x86_64_v3() {
+            // SAFETY: the CPU has every feature the function is compiled for.
+            return unsafe { self.run_block_replays_v3(until) };
+        }
+        self.run_block_replays_body(until)
+    }
+
+    /// [`Spu::run_block_replays`] compiled for x86-64-v3 (AVX2, FMA, BMI, LZCNT), so
+    /// that byte swaps, shuffles and bit counts inline as single instructions.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,sse4.2,ssse3")]
+    unsafe fn run_block_replays_v3(&mut self, until: u64) {
+        self.run_block_replays_body(until)
+    }
+
+    #[inline(always)]
+    fn run_block_replays_body(&mut self, until: u64) {
         while self.cycle < until && !self.core.interrupts_enabled {
             let pc = self.pc;
             let inst = self.decoded[((pc >> 2) as usize) & (LS_SIZE / 4 - 1)];
@@ -841,6 +878,18 @@ impl Spu {
     /// effect on the core before that point.
     #[inline(never)]
     fn run_fast(&mut self, until: u64) {
+        #[cfg(target_arch = "x86_64")]
+        if host_has_x86_64_v3() {
+            // SAFETY: the CPU has every feature the function is compiled for.
+            return unsafe { self.run_fast_v3(until) };
+        }
+        self.run_fast_body(until)
+    }
+
+    /// [`Spu::run_fast`] compiled for x86-64-v3 (see [`Spu::run_block_replays_v3`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,sse4.2,ssse3")]
+    unsafe fn run_fast_v3(&mut self, until: u64) {
         self.run_fast_body(until)
     }
 
