@@ -1512,12 +1512,52 @@ impl Timing {
         self.memo.memos[id].verified = epoch;
     }
 
-    /// Issues the first instruction of a [`Timing::block_replay_candidate`] and starts its
-    /// replay, as `issue` would; the core then runs the block and ends the replay with
-    /// [`Timing::replay_complete`] or [`Timing::replay_stop_after`].
+    /// The entry of a block replayed whole by the core: the replay `issue` started, or
+    /// (for a [`Timing::block_replay_candidate`]) the current state.
     #[inline]
-    pub fn start_block_replay(&mut self, id: usize, pc: u32, inst: Inst) -> u64 {
-        self.begin_replay(id, pc, inst)
+    fn block_entry(&mut self, id: usize) -> Replay {
+        match self.memo.replay.take() {
+            Some(rp) if rp.memo == id => rp,
+            _ => Replay {
+                memo: id,
+                k: 0,
+                entry_now: self.now,
+                entry_index: self.index,
+                entry_max_ready: self.max_ready,
+            },
+        }
+    }
+
+    /// The core ran memo `id`'s block whole (a [`Timing::block_replay_candidate`], or the
+    /// replay `issue` started): the state and counters become what issuing each of its
+    /// instructions would have made them, and `branch` (its last instruction's address,
+    /// the instruction, whether it was taken and where to) resolves.
+    #[inline]
+    pub fn block_replayed(&mut self, id: usize, branch: Option<(u32, Inst, bool, u32)>) {
+        let mut rp = self.block_entry(id);
+        let m = &mut self.memo.memos[id];
+        m.hits += 1;
+        rp.k = m.words.len();
+        self.materialize(rp, false);
+        self.chain_after(rp);
+        if let Some((pc, inst, taken, target)) = branch {
+            self.branch_resolved(pc, inst, taken, target);
+        }
+    }
+
+    /// The core ran the first `k` instructions of memo `id`'s block and stopped (the rest
+    /// go through `issue`).
+    pub fn block_replayed_partly(&mut self, id: usize, k: usize) {
+        let mut rp = self.block_entry(id);
+        rp.k = k;
+        self.memo.replay = Some(rp);
+        self.sync();
+    }
+
+    /// The memo whose replay `issue` started.
+    #[inline]
+    pub fn replay_memo(&self) -> Option<usize> {
+        self.memo.replay.map(|rp| rp.memo)
     }
 
     /// A view of the current state for the signature.
@@ -1797,8 +1837,8 @@ impl Timing {
 
     /// Right after `issue` started replaying a memoized block with the block's first
     /// instruction: the block's length. The core may then execute the block's remaining
-    /// instructions without calling `issue` and finish with [`Timing::replay_complete`]
-    /// (or stop early with [`Timing::replay_stop_after`]): the result is the same.
+    /// instructions without calling `issue` and finish with [`Timing::block_replayed`]
+    /// (or stop early with [`Timing::block_replayed_partly`]): the result is the same.
     #[inline]
     pub fn replay_started(&self) -> Option<usize> {
         let rp = self.memo.replay.as_ref()?;
@@ -1831,23 +1871,6 @@ impl Timing {
         }
     }
 
-    /// Completes the replay `issue` started: the state and counters are as if `issue` had
-    /// been called for every remaining instruction of the block. Returns the last one's
-    /// issue cycle.
-    pub fn replay_complete(&mut self) -> u64 {
-        let Some(mut rp) = self.memo.replay.take() else {
-            return self.now.saturating_sub(1);
-        };
-        let m = &mut self.memo.memos[rp.memo];
-        let len = m.words.len();
-        let issue = (rp.entry_now as i64 + m.steps[len - 1].issue_rel) as u64;
-        m.hits += 1;
-        rp.k = len;
-        self.materialize(rp, false);
-        self.chain_after(rp);
-        issue
-    }
-
     /// After a full replay: what lets the next block skip its signature.
     fn chain_after(&mut self, rp: Replay) {
         self.memo.chain_from = Some(ChainFrom {
@@ -1857,15 +1880,6 @@ impl Timing {
             index: self.index,
             max_ready_at_entry: rp.entry_max_ready,
         });
-    }
-
-    /// Ends the replay `issue` started after the block's first `k` instructions (the rest
-    /// go through `issue` again).
-    pub fn replay_stop_after(&mut self, k: usize) {
-        if let Some(rp) = self.memo.replay.as_mut() {
-            rp.k = k;
-        }
-        self.sync();
     }
 
     /// Brings a replay in progress up to date (before a hook or an unexpected address).

@@ -799,8 +799,7 @@ impl Spu {
             let epoch = self.code_epoch;
             let t = self.timing.as_mut().expect("timing");
             t.set_memo_verified(id, epoch);
-            t.start_block_replay(id, pc, inst);
-            self.run_replayed_block(pc, n);
+            self.run_replayed_block(pc, n, id);
         }
     }
 
@@ -817,17 +816,20 @@ impl Spu {
         if words.len() != n || !self.block_in_store(pc, words, t.replay_verified()) {
             return false;
         }
+        let Some(id) = t.replay_memo() else {
+            return false;
+        };
         let epoch = self.code_epoch;
         if let Some(t) = self.timing.as_mut() {
             t.set_replay_verified(epoch);
         }
-        self.run_replayed_block(pc, n);
+        self.run_replayed_block(pc, n, id);
         true
     }
 
     /// The execution part of [`Spu::replay_block`].
     #[inline(always)]
-    fn run_replayed_block(&mut self, pc: u32, n: usize) {
+    fn run_replayed_block(&mut self, pc: u32, n: usize, id: usize) {
         let block_end = pc.wrapping_add(4 * n as u32);
         let core = &mut self.core;
         let decoded = &mut *self.decoded;
@@ -841,8 +843,7 @@ impl Spu {
             match execute(core, inst, p) {
                 Effect::Branch { taken, target } => {
                     // Blocks end at their first branch.
-                    timing.replay_complete();
-                    timing.branch_resolved(p, inst, taken, target);
+                    timing.block_replayed(id, Some((p, inst, taken, target)));
                     p = if taken { target } else { (p + 4) & LS_MASK };
                     done = k + 1;
                     break;
@@ -853,7 +854,7 @@ impl Spu {
                     // A store into the rest of the block: the rest goes the long way.
                     let line = addr & LS_MASK & !15;
                     if k + 1 < n && line < block_end && line + 16 > p {
-                        timing.replay_stop_after(k + 1);
+                        timing.block_replayed_partly(id, k + 1);
                         done = k + 1;
                         break;
                     }
@@ -863,7 +864,7 @@ impl Spu {
                 _ => p = (p + 4) & LS_MASK,
             }
             if k + 1 == n {
-                timing.replay_complete();
+                timing.block_replayed(id, None);
             }
         }
         self.pc = p;
