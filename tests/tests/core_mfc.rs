@@ -731,3 +731,80 @@ fn decrementer_counts_down_and_wraps_below_zero() {
         "{fast} {slow}"
     );
 }
+
+/// `sndsig` with a 32-bit effective address (the raw-SPU map is above 0xE000_0000).
+fn sndsig(lsa: u32, ea: u32, size: u32, tag: u32, cmd: u32) -> String {
+    format!(
+        "ila $70, {lsa}\n wrch $MFC_LSA, $70\n il $70, 0\n wrch $MFC_EAH, $70\n\
+         ilhu $70, {}\n iohl $70, {}\n wrch $MFC_EAL, $70\n ila $70, {size}\n wrch $MFC_Size, $70\n\
+         ila $70, {tag}\n wrch $MFC_TagID, $70\n ila $70, {cmd}\n wrch $MFC_Cmd, $70\n",
+        ea >> 16,
+        ea & 0xffff
+    )
+}
+
+/// SPU 0 signals SPU 1 with `sndsig`, `sndsigf` and `sndsigb` through SPU 1's
+/// problem-state registers: register 1 in overwrite mode keeps the last value, register 2
+/// in OR mode (the host set it) collects both. SPU 1 blocks on its signal channels until
+/// the boundary that delivers them.
+#[test]
+fn sndsig_writes_another_spus_signal_registers() {
+    use spu_isa::machine::signal_notify_ea;
+    let (sig1, sig2) = (signal_notify_ea(1, 0), signal_notify_ea(1, 1));
+    assert_eq!((sig1, sig2), (0xE015_400C, 0xE015_C00C));
+    let mut sender = String::from(
+        "il $5, 0x11\n stqa $5, 0x1000\n il $5, 0x2a\n stqa $5, 0x1010\n\
+         il $5, 0x5\n stqa $5, 0x1020\n il $5, 0x30\n stqa $5, 0x1030\n",
+    );
+    sender += &sndsig(0x100c, sig1, 4, 2, 0xa0); // sndsig 0x11
+    sender += &sndsig(0x101c, sig1, 4, 2, 0xa2); // sndsigf 0x2a (overwrites)
+    sender += &sndsig(0x102c, sig2, 4, 3, 0xa1); // sndsigb 0x05
+    sender += &sndsig(0x103c, sig2, 4, 3, 0xa0); // sndsig 0x30 (ORed)
+    sender += &wait(0b1100, 2, 10);
+    let receiver = "rdch $3, $SPU_RdSigNotify1\n rdch $4, $SPU_RdSigNotify2\n";
+    let mut spus = vec![load(&sender), load(receiver)];
+    spus[1].index = 1;
+    spus[1].signal_or_mode[1] = true;
+    // Its signals come from outside it (here SPU 0), so an empty channel waits.
+    spus[1].host_feeds = true;
+    let mut mem = memory();
+    let mut finished = [false; 2];
+    let mut until = 0;
+    while !finished.iter().all(|d| *d) {
+        until += 1000;
+        assert!(until < 10_000_000, "no progress");
+        for (i, s) in spus.iter_mut().enumerate() {
+            if !finished[i] {
+                match s.run_quantum(&mem, until) {
+                    Some(StopReason::Stop(0x100)) => finished[i] = true,
+                    Some(StopReason::Blocked { .. }) | None => {}
+                    Some(other) => panic!("SPU {i}: {other}"),
+                }
+            }
+        }
+        apply_quantum(&mut spus, &mut mem);
+    }
+    assert_eq!(spus[1].reg(3)[0], 0x2a);
+    assert_eq!(spus[1].reg(4)[0], 0x35);
+    assert_eq!(spus[0].reg(10)[0], 0b1100);
+}
+
+/// A `sndsig` to an address that is no signal register, or of another size, is a DMA
+/// error that stops the SPU.
+#[test]
+fn bad_sndsig_stops_with_a_dma_error() {
+    use spu_isa::machine::signal_notify_ea;
+    for (ea, size, lsa) in [
+        (signal_notify_ea(2, 0) + 4, 4, 0x1000), // next to the register
+        (0x2000, 4, 0x1000),                     // plain memory
+        (signal_notify_ea(2, 1), 8, 0x1008),     // eight bytes
+        (signal_notify_ea(2, 1), 4, 0x1000),     // low four bits differ
+    ] {
+        let mut spu = load(&sndsig(lsa, ea, size, 0, 0xa0));
+        let stop = spu.run(&mut memory(), 100_000);
+        assert!(
+            matches!(stop, StopReason::DmaError { .. }),
+            "EA {ea:#x} size {size}: {stop}"
+        );
+    }
+}

@@ -22,8 +22,10 @@
 //! to -1. With interrupts enabled (the E forms of the indirect branches) an enabled
 //! pending event interrupts before the next instruction: SRR0 gets its address,
 //! interrupts are disabled and execution continues at 0; `iret` returns to SRR0.
-//! `sndsig`/`sndsigb`/`sndsigf` and `barrier`/`eieio`/`sync` are accepted and do nothing
-//! (commands complete in order here, so fences and barriers are already honoured).
+//! `sndsig`/`sndsigb`/`sndsigf` write another SPU's signal-notification register (found at
+//! [`signal_notify_ea`], the PlayStation 3's raw-SPU map), delivered at the boundary like a
+//! put; `barrier`/`eieio`/`sync` are accepted and do nothing (commands complete in order
+//! here, so fences and barriers are already honoured).
 //!
 //! # DMA timing
 //! One DMA engine per SPU moves one command at a time: a command completes at
@@ -260,6 +262,37 @@ enum WriteKind {
     Put,
     Conditional,
     Unconditional,
+    /// A `sndsig` to signal-notification register `which` (0 or 1) of the SPU whose
+    /// index is `spu`.
+    Signal {
+        spu: u32,
+        which: u8,
+    },
+}
+
+/// Where `sndsig` finds the other SPUs' signal-notification registers: the PlayStation 3's
+/// raw-SPU map (each SPU's problem-state area at `RAW_SPU_BASE + index * RAW_SPU_STRIDE +
+/// PROBLEM_STATE_OFFSET`), with SPU_Sig_Notify_1 and _2 at their problem-state offsets
+/// 0x1400C and 0x1C00C (Cell BE Handbook, problem-state register map).
+pub const RAW_SPU_BASE: u32 = 0xE000_0000;
+pub const RAW_SPU_STRIDE: u32 = 0x10_0000;
+pub const PROBLEM_STATE_OFFSET: u32 = 0x4_0000;
+pub const SIG_NOTIFY_OFFSETS: [u32; 2] = [0x1_400C, 0x1_C00C];
+
+/// The effective address of signal-notification register `which` (0 or 1) of the SPU with
+/// index `spu`, for `sndsig`.
+pub fn signal_notify_ea(spu: u32, which: usize) -> u32 {
+    RAW_SPU_BASE + spu * RAW_SPU_STRIDE + PROBLEM_STATE_OFFSET + SIG_NOTIFY_OFFSETS[which & 1]
+}
+
+/// The SPU index and register a `sndsig` effective address names, if it names one.
+fn signal_target(ea: u64) -> Option<(u32, u8)> {
+    let off = ea.checked_sub(RAW_SPU_BASE as u64)?;
+    let (spu, within) = (off / RAW_SPU_STRIDE as u64, off % RAW_SPU_STRIDE as u64);
+    let which = SIG_NOTIFY_OFFSETS
+        .iter()
+        .position(|&o| within == (PROBLEM_STATE_OFFSET + o) as u64)?;
+    (spu < 256).then_some((spu as u32, which as u8))
 }
 
 #[derive(Clone, Debug)]
@@ -1407,7 +1440,39 @@ impl Spu {
                 }
                 ChannelOutcome::Done
             }
-            0xa0 | 0xa1 | 0xa2 | 0xc0 | 0xc8 | 0xcc => ChannelOutcome::Done,
+            0xa0..=0xa2 => {
+                // sndsig, sndsigb, sndsigf: four bytes from local store into another SPU's
+                // signal-notification register, delivered when the command completes
+                // (at the quantum boundary that publishes it, like a put).
+                let Some((spu, which)) = signal_target(ea) else {
+                    return ChannelOutcome::Error(format!(
+                        "sndsig to EA {ea:#x}, which is no SPU's signal-notification register"
+                    ));
+                };
+                if self.size != 4 {
+                    return ChannelOutcome::Error(format!(
+                        "sndsig of {} bytes (a signal is 4 bytes)",
+                        self.size
+                    ));
+                }
+                if lsa & 15 != (ea as u32) & 15 {
+                    return ChannelOutcome::Error(format!(
+                        "LS {lsa:#x} and EA {ea:#x} differ in their low 4 bits"
+                    ));
+                }
+                let complete = self.schedule(now, 4);
+                let data: Vec<u8> = (0..4)
+                    .map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize])
+                    .collect();
+                self.log_write(complete, ea as u32, data, WriteKind::Signal { spu, which });
+                self.queue.push(DmaCommand {
+                    tag,
+                    complete,
+                    incoming: Vec::new(),
+                });
+                ChannelOutcome::Done
+            }
+            0xc0 | 0xc8 | 0xcc => ChannelOutcome::Done,
             other => ChannelOutcome::Error(format!("unknown MFC command {other:#x}")),
         }
     }
@@ -1512,6 +1577,14 @@ pub fn apply_quantum(spus: &mut [Spu], memory: &mut MainMemory) {
     }
     all.sort_by_key(|(c, i, s, _)| (*c, *i, *s));
     for (_, i, _, w) in all {
+        if let WriteKind::Signal { spu, which } = w.kind {
+            // A signal for an SPU that is not running here goes nowhere.
+            let value = u32::from_be_bytes([w.data[0], w.data[1], w.data[2], w.data[3]]);
+            if let Some(target) = spus.iter_mut().find(|s| s.index == spu) {
+                target.write_signal(which as usize, value);
+            }
+            continue;
+        }
         let line = w.ea & !127;
         let apply = match w.kind {
             WriteKind::Conditional => {
