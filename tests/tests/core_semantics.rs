@@ -1592,3 +1592,17 @@ fn double_precision_nan_and_invalid() {
     assert_eq!(spu.reg(3), both(0x7ff8_0000_0000_0000));
     assert_ne!(spu.reg(7)[2] & 0x0400, 0);
 }
+
+/// The core truncates with the host's own float unit while it runs (the fast loops hold
+/// MXCSR at round-toward-zero); afterwards the host rounds to nearest again: 1 + 2^-24 *
+/// (2 - 2^-23) is just over half an ulp of 1.0, so it rounds up on the host but truncates
+/// to 1.0 on the SPU.
+#[test]
+fn the_host_rounds_to_nearest_again_after_the_spu_truncates() {
+    use std::hint::black_box;
+    let (one_f, tiny) = (1.0f32, f32::from_bits(0x33ff_ffff));
+    let on_spu = rr("fa", [one_f.to_bits(); 4], [tiny.to_bits(); 4]);
+    assert_eq!(on_spu, [0x3f80_0000; 4]);
+    let on_host = black_box(one_f) + black_box(tiny);
+    assert_eq!(on_host.to_bits(), 0x3f80_0001);
+}

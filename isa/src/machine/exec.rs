@@ -299,6 +299,13 @@ pub fn put(regs: &mut [Reg; 128], rt: u8, v: Reg) {
 /// Executes `inst` at `pc` on `core`. Channel instructions return [`Effect::Channel`].
 #[inline(always)]
 pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
+    execute_in::<false>(core, inst, pc)
+}
+
+/// [`execute`]; `TRUNCATING`: the caller holds a [`TruncatingFloats`], so the host's
+/// floating-point unit already rounds toward zero.
+#[inline(always)]
+pub(crate) fn execute_in<const TRUNCATING: bool>(core: &mut Core, inst: Inst, pc: u32) -> Effect {
     use Op::*;
     // Operands are read where an operation uses them and each operation writes its own
     // result, so a result computed in vector registers is stored straight from them.
@@ -728,27 +735,60 @@ pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
         // ---- single precision
         Fa => {
             let (a, b) = (ra!(), rb!());
-            w!(sp4v::<SP_FA>(a, b, b).unwrap_or_else(|| fl2(core, a, b, float::fa_flags)))
+            w!(sp4v::<SP_FA, TRUNCATING>(a, b, b).unwrap_or_else(|| fl2(
+                core,
+                a,
+                b,
+                float::fa_flags
+            )))
         }
         Fs => {
             let (a, b) = (ra!(), rb!());
-            w!(sp4v::<SP_FS>(a, b, b).unwrap_or_else(|| fl2(core, a, b, float::fs_flags)))
+            w!(sp4v::<SP_FS, TRUNCATING>(a, b, b).unwrap_or_else(|| fl2(
+                core,
+                a,
+                b,
+                float::fs_flags
+            )))
         }
         Fm => {
             let (a, b) = (ra!(), rb!());
-            w!(sp4v::<SP_FM>(a, b, b).unwrap_or_else(|| fl2(core, a, b, float::fm_flags)))
+            w!(sp4v::<SP_FM, TRUNCATING>(a, b, b).unwrap_or_else(|| fl2(
+                core,
+                a,
+                b,
+                float::fm_flags
+            )))
         }
         Fma => {
             let (a, b, c) = (ra!(), rb!(), rc!());
-            w!(sp4v::<SP_FMA>(a, b, c).unwrap_or_else(|| fl3(core, a, b, c, float::fma_flags)))
+            w!(sp4v::<SP_FMA, TRUNCATING>(a, b, c).unwrap_or_else(|| fl3(
+                core,
+                a,
+                b,
+                c,
+                float::fma_flags
+            )))
         }
         Fms => {
             let (a, b, c) = (ra!(), rb!(), rc!());
-            w!(sp4v::<SP_FMS>(a, b, c).unwrap_or_else(|| fl3(core, a, b, c, float::fms_flags)))
+            w!(sp4v::<SP_FMS, TRUNCATING>(a, b, c).unwrap_or_else(|| fl3(
+                core,
+                a,
+                b,
+                c,
+                float::fms_flags
+            )))
         }
         Fnms => {
             let (a, b, c) = (ra!(), rb!(), rc!());
-            w!(sp4v::<SP_FNMS>(a, b, c).unwrap_or_else(|| fl3(core, a, b, c, float::fnms_flags)))
+            w!(sp4v::<SP_FNMS, TRUNCATING>(a, b, c).unwrap_or_else(|| fl3(
+                core,
+                a,
+                b,
+                c,
+                float::fnms_flags
+            )))
         }
         Fceq => w!(zip(ra!(), rb!(), |a, b| mask(float::fceq(a, b)))),
         Fcgt => w!(zip(ra!(), rb!(), |a, b| mask(float::fcgt(a, b)))),
@@ -1025,29 +1065,79 @@ const SP_FMA: u8 = 3;
 const SP_FMS: u8 = 4;
 const SP_FNMS: u8 = 5;
 
-/// MXCSR with every exception masked and rounding toward zero, the SPU's truncation; and
-/// the default it is set back to (Rust code runs with the default, and no other code runs
-/// between the two writes).
+/// MXCSR with every exception masked and rounding toward zero, the SPU's truncation (and
+/// no flush-to-zero or denormals-are-zero: the fast path's range checks see denormals).
 #[cfg(target_arch = "x86_64")]
 static MXCSR_TRUNCATE: u32 = 0x7f80;
-#[cfg(target_arch = "x86_64")]
-static MXCSR_DEFAULT: u32 = 0x1f80;
+
+/// While held, the host's floating-point unit truncates (MXCSR as [`MXCSR_TRUNCATE`]), so
+/// the single-precision fast path ([`execute_in`] with `TRUNCATING`) needs no MXCSR writes
+/// of its own; the previous MXCSR comes back with [`TruncatingFloats::release`]. Only code whose host
+/// floating point is exact or inline assembly runs while it is held: the core's fast
+/// loops, between channel instructions (the float unit's other paths compute in f64 only
+/// where the result is exact, and in integers otherwise).
+pub(crate) struct TruncatingFloats {
+    #[cfg(target_arch = "x86_64")]
+    saved: u32,
+}
+
+impl TruncatingFloats {
+    #[inline(always)]
+    pub(crate) fn hold() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let mut saved = 0u32;
+            // SAFETY: stores MXCSR to a local and loads a constant into it; the only
+            // effect is the rounding mode and exception masks this guard exists to set.
+            unsafe {
+                core::arch::asm!(
+                    "stmxcsr [{s}]",
+                    "ldmxcsr [{t}]",
+                    s = in(reg) &mut saved as *mut u32,
+                    t = in(reg) &MXCSR_TRUNCATE as *const u32,
+                    options(nostack, preserves_flags),
+                );
+            }
+            TruncatingFloats { saved }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        TruncatingFloats {}
+    }
+}
+
+impl TruncatingFloats {
+    /// Sets MXCSR back (explicitly, not in `Drop`: a cleanup path for unwinding would cost
+    /// the fast loops registers; a panic in them ends the simulation anyway).
+    #[inline(always)]
+    pub(crate) fn release(self) {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: restores the MXCSR value saved by `hold`.
+        unsafe {
+            core::arch::asm!(
+                "ldmxcsr [{s}]",
+                s = in(reg) &self.saved as *const u32,
+                options(nostack, preserves_flags, readonly),
+            );
+        }
+    }
+}
 
 /// [`sp4`] for operation `K` on x86_64: the host's own single-precision arithmetic with
 /// rounding toward zero is the SPU's truncation whenever operands and result are normal,
 /// so the operation runs in one instruction (an FMA3 fused multiply-add where the CPU has
 /// one; otherwise the exact product in double precision, then the sum truncated twice,
-/// which truncates once) between two writes of MXCSR. The arithmetic is inline assembly so
-/// the compiler never moves or folds it under an assumed rounding mode. Lanes are declined
+/// which truncates once) with MXCSR set to truncate: by the fast loops for as long as
+/// they run (`TRUNCATING`), else around the operation. The arithmetic is inline assembly
+/// so the compiler never moves or folds it under an assumed rounding mode. Lanes are declined
 /// as in [`sp4`], and also a result of the largest magnitude (it may be a truncated
 /// overflow) and a zero from the multiplying forms (it may be an underflow).
 #[inline(always)]
-fn sp4v<const K: u8>(a: Reg, b: Reg, c: Reg) -> Option<Reg> {
+fn sp4v<const K: u8, const TRUNCATING: bool>(a: Reg, b: Reg, c: Reg) -> Option<Reg> {
     #[cfg(target_arch = "x86_64")]
     {
         // SAFETY: SSE2 is part of the x86_64 baseline; the FMA3 form runs only where the
         // CPU reports FMA.
-        unsafe { sp4_truncating::<K>(a, b, c, K >= SP_FMA && std::is_x86_feature_detected!("fma")) }
+        unsafe { sp4_truncating::<K, TRUNCATING>(a, b, c, std::is_x86_feature_detected!("fma")) }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
@@ -1064,7 +1154,12 @@ fn sp4v<const K: u8>(a: Reg, b: Reg, c: Reg) -> Option<Reg> {
 
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn sp4_truncating<const K: u8>(a: Reg, b: Reg, c: Reg, fma3: bool) -> Option<Reg> {
+unsafe fn sp4_truncating<const K: u8, const TRUNCATING: bool>(
+    a: Reg,
+    b: Reg,
+    c: Reg,
+    fma3: bool,
+) -> Option<Reg> {
     use core::arch::asm;
     use core::arch::x86_64::*;
     let va = _mm_loadu_si128(a.as_ptr() as *const __m128i);
@@ -1091,22 +1186,28 @@ unsafe fn sp4_truncating<const K: u8>(a: Reg, b: Reg, c: Reg, fma3: bool) -> Opt
         _mm_castsi128_ps(vb),
         _mm_castsi128_ps(vc),
     );
-    let r: __m128;
-    let trunc = &MXCSR_TRUNCATE as *const u32;
-    let default = &MXCSR_DEFAULT as *const u32;
+    // Outside the fast loops, MXCSR is set to truncate around the operation.
+    let held = (!TRUNCATING).then(TruncatingFloats::hold);
+    // With FMA3 (and so AVX) the VEX forms: a legacy SSE instruction inside code that uses
+    // the upper halves of the vector registers costs a state transition.
     macro_rules! one {
-        ($op:literal) => {{
+        ($op:literal, $vex:literal) => {{
             let mut x = fa;
-            asm!(
-                "ldmxcsr [{t}]",
-                concat!($op, " {x}, {y}"),
-                "ldmxcsr [{d}]",
-                x = inout(xmm_reg) x,
-                y = in(xmm_reg) fb,
-                t = in(reg) trunc,
-                d = in(reg) default,
-                options(nostack, preserves_flags, readonly),
-            );
+            if fma3 {
+                asm!(
+                    concat!($vex, " {x}, {x}, {y}"),
+                    x = inout(xmm_reg) x,
+                    y = in(xmm_reg) fb,
+                    options(nostack, preserves_flags, nomem),
+                );
+            } else {
+                asm!(
+                    concat!($op, " {x}, {y}"),
+                    x = inout(xmm_reg) x,
+                    y = in(xmm_reg) fb,
+                    options(nostack, preserves_flags, nomem),
+                );
+            }
             x
         }};
     }
@@ -1114,15 +1215,11 @@ unsafe fn sp4_truncating<const K: u8>(a: Reg, b: Reg, c: Reg, fma3: bool) -> Opt
         ($op:literal) => {{
             let mut x = fa;
             asm!(
-                "ldmxcsr [{t}]",
                 concat!($op, " {x}, {y}, {z}"),
-                "ldmxcsr [{d}]",
                 x = inout(xmm_reg) x,
                 y = in(xmm_reg) fb,
                 z = in(xmm_reg) fc,
-                t = in(reg) trunc,
-                d = in(reg) default,
-                options(nostack, preserves_flags, readonly),
+                options(nostack, preserves_flags, nomem),
             );
             x
         }};
@@ -1133,7 +1230,6 @@ unsafe fn sp4_truncating<const K: u8>(a: Reg, b: Reg, c: Reg, fma3: bool) -> Opt
         ($sum:literal) => {{
             let mut lo = fa;
             asm!(
-                "ldmxcsr [{t}]",
                 "pshufd {hi}, {lo}, 0xee",
                 "cvtps2pd {lo}, {lo}",
                 "cvtps2pd {hi}, {hi}",
@@ -1149,24 +1245,21 @@ unsafe fn sp4_truncating<const K: u8>(a: Reg, b: Reg, c: Reg, fma3: bool) -> Opt
                 "cvtpd2ps {lo}, {lo}",
                 "cvtpd2ps {hi}, {hi}",
                 "movlhps {lo}, {hi}",
-                "ldmxcsr [{d}]",
                 lo = inout(xmm_reg) lo,
                 hi = out(xmm_reg) _,
                 p = out(xmm_reg) _,
                 q = out(xmm_reg) _,
                 y = in(xmm_reg) fb,
                 z = in(xmm_reg) fc,
-                t = in(reg) trunc,
-                d = in(reg) default,
-                options(nostack, preserves_flags, readonly),
+                options(nostack, preserves_flags, nomem),
             );
             lo
         }};
     }
-    r = match K {
-        SP_FA => one!("addps"),
-        SP_FS => one!("subps"),
-        SP_FM => one!("mulps"),
+    let r: __m128 = match K {
+        SP_FA => one!("addps", "vaddps"),
+        SP_FS => one!("subps", "vsubps"),
+        SP_FM => one!("mulps", "vmulps"),
         SP_FMA if fma3 => fused!("vfmadd213ps"),
         SP_FMS if fma3 => fused!("vfmsub213ps"),
         SP_FNMS if fma3 => fused!("vfnmadd213ps"),
@@ -1174,6 +1267,9 @@ unsafe fn sp4_truncating<const K: u8>(a: Reg, b: Reg, c: Reg, fma3: bool) -> Opt
         SP_FMS => via_double!("subpd {lo}, {p}\n subpd {hi}, {q}"),
         _ => via_double!("subpd {p}, {lo}\n subpd {q}, {hi}\n movapd {lo}, {p}\n movapd {hi}, {q}"),
     };
+    if let Some(held) = held {
+        held.release();
+    }
     let v = _mm_castps_si128(r);
     // A normal single other than the largest magnitude; or, from an addition, a zero (only
     // an exact cancellation gives one, and it is +0 when truncating).
@@ -1443,20 +1539,40 @@ mod tests {
                 // SAFETY: the FMA3 form only where the CPU has it.
                 let ops: [(Option<Reg>, Exact); 6] = unsafe {
                     [
-                        (sp4_truncating::<SP_FA>(a, b, c, fma3), |a, b, _| {
+                        (sp4_truncating::<SP_FA, false>(a, b, c, fma3), |a, b, _| {
                             float::fa(a, b)
                         }),
-                        (sp4_truncating::<SP_FS>(a, b, c, fma3), |a, b, _| {
+                        (sp4_truncating::<SP_FS, false>(a, b, c, fma3), |a, b, _| {
                             float::fs(a, b)
                         }),
-                        (sp4_truncating::<SP_FM>(a, b, c, fma3), |a, b, _| {
+                        (sp4_truncating::<SP_FM, false>(a, b, c, fma3), |a, b, _| {
                             float::fm(a, b)
                         }),
-                        (sp4_truncating::<SP_FMA>(a, b, c, fma3), float::fma),
-                        (sp4_truncating::<SP_FMS>(a, b, c, fma3), float::fms),
-                        (sp4_truncating::<SP_FNMS>(a, b, c, fma3), float::fnms),
+                        (sp4_truncating::<SP_FMA, false>(a, b, c, fma3), float::fma),
+                        (sp4_truncating::<SP_FMS, false>(a, b, c, fma3), float::fms),
+                        (sp4_truncating::<SP_FNMS, false>(a, b, c, fma3), float::fnms),
                     ]
                 };
+                // The same under a held truncating MXCSR (the fast loops' form).
+                let held: [Option<Reg>; 6] = {
+                    let truncating = TruncatingFloats::hold();
+                    // SAFETY: as above.
+                    let held = unsafe {
+                        [
+                            sp4_truncating::<SP_FA, true>(a, b, c, fma3),
+                            sp4_truncating::<SP_FS, true>(a, b, c, fma3),
+                            sp4_truncating::<SP_FM, true>(a, b, c, fma3),
+                            sp4_truncating::<SP_FMA, true>(a, b, c, fma3),
+                            sp4_truncating::<SP_FMS, true>(a, b, c, fma3),
+                            sp4_truncating::<SP_FNMS, true>(a, b, c, fma3),
+                        ]
+                    };
+                    truncating.release();
+                    held
+                };
+                for (k, h) in held.iter().enumerate() {
+                    assert_eq!(*h, ops[k].0, "op {k} held, fma3 {fma3}");
+                }
                 for (k, (got, exact)) in ops.iter().enumerate() {
                     if let Some(r) = got {
                         fast[k] += 1;
@@ -1480,14 +1596,15 @@ mod tests {
         // for the multiplying forms): 1 - 2^-60 truncates to just below 1.0.
         // SAFETY: SSE2 only.
         let r = unsafe {
-            sp4_truncating::<SP_FMA>([p60; 4], [p60 | 0x8000_0000; 4], [f(1.0); 4], false)
+            sp4_truncating::<SP_FMA, false>([p60; 4], [p60 | 0x8000_0000; 4], [f(1.0); 4], false)
         };
         assert_eq!(r, Some([0x3f7f_ffff; 4]));
         // A cancellation to zero in an addition is +0 on the fast path; a product that
         // truncates to the largest magnitude is declined (it may be an overflow).
-        let r = unsafe { sp4_truncating::<SP_FS>([f(1.5); 4], [f(1.5); 4], [0; 4], false) };
+        let r = unsafe { sp4_truncating::<SP_FS, false>([f(1.5); 4], [f(1.5); 4], [0; 4], false) };
         assert_eq!(r, Some([0; 4]));
-        let r = unsafe { sp4_truncating::<SP_FM>([0x7f7f_ffff; 4], [f(2.0); 4], [0; 4], false) };
+        let r =
+            unsafe { sp4_truncating::<SP_FM, false>([0x7f7f_ffff; 4], [f(2.0); 4], [0; 4], false) };
         assert_eq!(r, None);
     }
 
@@ -1541,27 +1658,27 @@ mod tests {
             let c: Reg = singles.reg().map(pick);
             let pairs = [
                 (
-                    sp4v::<SP_FA>(a, b, c),
+                    sp4v::<SP_FA, false>(a, b, c),
                     sp4(a, b, c, normal2, |x, y, _| two_sum(x, y)),
                 ),
                 (
-                    sp4v::<SP_FS>(a, b, c),
+                    sp4v::<SP_FS, false>(a, b, c),
                     sp4(a, b, c, normal2, |x, y, _| two_sum(x, -y)),
                 ),
                 (
-                    sp4v::<SP_FM>(a, b, c),
+                    sp4v::<SP_FM, false>(a, b, c),
                     sp4(a, b, c, normal2, |x, y, _| (x * y, 0.0)),
                 ),
                 (
-                    sp4v::<SP_FMA>(a, b, c),
+                    sp4v::<SP_FMA, false>(a, b, c),
                     sp4(a, b, c, normal3, |x, y, z| two_sum(x * y, z)),
                 ),
                 (
-                    sp4v::<SP_FMS>(a, b, c),
+                    sp4v::<SP_FMS, false>(a, b, c),
                     sp4(a, b, c, normal3, |x, y, z| two_sum(x * y, -z)),
                 ),
                 (
-                    sp4v::<SP_FNMS>(a, b, c),
+                    sp4v::<SP_FNMS, false>(a, b, c),
                     sp4(a, b, c, normal3, |x, y, z| two_sum(z, -(x * y))),
                 ),
             ];

@@ -37,7 +37,9 @@ pub mod exec;
 use std::collections::VecDeque;
 
 use crate::codec::{decode, Inst};
-use crate::machine::exec::{execute, Core, Effect, Reg, LS_MASK, LS_SIZE};
+use crate::machine::exec::{
+    execute, execute_in, Core, Effect, Reg, TruncatingFloats, LS_MASK, LS_SIZE,
+};
 use crate::table::Op;
 use crate::timing::{StallCause, Timing, TimingConfig};
 
@@ -812,6 +814,13 @@ impl Spu {
 
     #[inline(always)]
     fn run_block_replays_body(&mut self, until: u64) {
+        let truncating = TruncatingFloats::hold();
+        self.block_replays_loop(until);
+        truncating.release();
+    }
+
+    #[inline(always)]
+    fn block_replays_loop(&mut self, until: u64) {
         while self.cycle < until && !self.core.interrupts_enabled {
             let pc = self.pc;
             let inst = self.decoded[((pc >> 2) as usize) & (LS_SIZE / 4 - 1)];
@@ -856,11 +865,14 @@ impl Spu {
         if let Some(t) = self.timing.as_mut() {
             t.set_replay_verified(epoch);
         }
+        let truncating = TruncatingFloats::hold();
         self.run_replayed_block(pc, n, id);
+        truncating.release();
         true
     }
 
-    /// The execution part of [`Spu::replay_block`].
+    /// The execution part of [`Spu::replay_block`]; the caller holds a
+    /// [`TruncatingFloats`].
     #[inline(always)]
     fn run_replayed_block(&mut self, pc: u32, n: usize, id: usize) {
         let block_end = pc.wrapping_add(4 * n as u32);
@@ -873,7 +885,7 @@ impl Spu {
         let mut done = n;
         for k in 0..n {
             let inst = decoded[((p >> 2) as usize) & (LS_SIZE / 4 - 1)];
-            match execute(core, inst, p) {
+            match execute_in::<true>(core, inst, p) {
                 Effect::Branch { taken, target } => {
                     // Blocks end at their first branch.
                     timing.block_replayed(id, Some((p, inst, taken, target)));
@@ -932,6 +944,7 @@ impl Spu {
         if self.core.interrupts_enabled {
             return;
         }
+        let truncating = TruncatingFloats::hold();
         let budget = until.saturating_sub(self.cycle);
         let mut pc = self.pc;
         let mut done = 0u64;
@@ -954,7 +967,7 @@ impl Spu {
                 }
                 continue;
             }
-            match execute(core, inst, pc) {
+            match execute_in::<true>(core, inst, pc) {
                 Effect::Next | Effect::Hint { .. } => pc = (pc + 4) & LS_MASK,
                 Effect::Branch { taken, target } => {
                     pc = if taken { target } else { (pc + 4) & LS_MASK };
@@ -971,6 +984,7 @@ impl Spu {
             }
             done += 1;
         }
+        truncating.release();
         self.pc = pc;
         self.instructions += done;
         self.cycle += done;
