@@ -931,6 +931,9 @@ mod memo {
         pub max_ready_rel: u64,
         /// The registers in `final_writes`, one bit each.
         pub writes_mask: u128,
+        /// Past every cycle the block's timing looks at in the local store (the fetch
+        /// model's probes, the issue cycles), relative to the entry.
+        pub dma_horizon_rel: u64,
         /// The block sets the hint entry (so after a replay it follows from the record).
         pub sets_hint: bool,
         /// Distinguishes this record from an earlier one in the same place.
@@ -1314,7 +1317,7 @@ impl Timing {
                 return t;
             }
         }
-        if memo::is_terminator(inst) || self.fetch.dma_min != u64::MAX {
+        if memo::is_terminator(inst) {
             return self.issue_slow(pc, inst);
         }
         let idx = Self::slot_index(pc);
@@ -1322,9 +1325,14 @@ impl Timing {
             self.memo.slots.resize(0x1_0000, 0);
             self.memo.fails.resize(0x1_0000, 0);
         }
+        // While DMA holds local-store cycles, blocks replay only clear of them and are not
+        // recorded (a record must not depend on them).
+        let dma = self.fetch.dma_min != u64::MAX;
         match self.chained_lookup(idx, pc, inst) {
             Lookup::Never => return self.issue_slow(pc, inst),
-            Lookup::Hit(id) => return self.begin_replay(id, pc, inst),
+            Lookup::Hit(id) if self.clear_of_dma(id) => return self.begin_replay(id, pc, inst),
+            Lookup::Hit(_) => return self.issue_slow(pc, inst),
+            _ if dma => return self.issue_slow(pc, inst),
             Lookup::Differs(id) => {
                 // A different state: record again (keeping what the old record counted).
                 if self.memo.memos[id].hits < 2 {
@@ -1483,7 +1491,6 @@ impl Timing {
         if !self.config.memoize
             || self.memo.rec.is_some()
             || self.memo.replay.is_some()
-            || self.fetch.dma_min != u64::MAX
             || memo::is_terminator(inst)
         {
             return None;
@@ -1493,9 +1500,18 @@ impl Timing {
             return None;
         }
         match self.chained_lookup(idx, pc, inst) {
-            Lookup::Hit(id) => Some((id, self.memo.memos[id].words.len())),
+            Lookup::Hit(id) if self.clear_of_dma(id) => Some((id, self.memo.memos[id].words.len())),
             _ => None,
         }
+    }
+
+    /// Whether memo `id`'s block, starting now, ends its use of the local store before
+    /// the first cycle a DMA holds: the model then asks of it exactly what it asked when
+    /// the block was recorded (with no DMA), so the record holds.
+    #[inline]
+    fn clear_of_dma(&self, id: usize) -> bool {
+        self.fetch.dma_min == u64::MAX
+            || self.fetch.dma_min > self.now + self.memo.memos[id].dma_horizon_rel
     }
 
     /// The words memo `id` recorded, and the core's code epoch at which local store last
@@ -1704,12 +1720,20 @@ impl Timing {
             final_writes: Vec::new(),
             max_ready_rel: 0,
             writes_mask: 0,
+            dma_horizon_rel: 0,
             generation: self.memo.generations,
             sets_hint: rec.hint_changed,
             chain: [memo::NO_CHAIN; 2],
         };
         self.memo.generations += 1;
         let mut memo = memo;
+        memo.dma_horizon_rel = memo
+            .steps
+            .iter()
+            .map(|st| st.issue_rel.max(st.fetch.2).max(0) as u64)
+            .max()
+            .unwrap_or(0)
+            + 2;
         for st in memo.steps.iter().rev() {
             if st.write < 128 && !memo.final_writes.iter().any(|w| w.reg == st.write) {
                 let ready_rel = st.ready_rel.max(0) as u64;
