@@ -1428,16 +1428,17 @@ impl Timing {
         if let (Lookup::Hit(id), Some(f)) = (&found, from) {
             // B's live registers that A does not write (when few enough to list).
             let (a, b) = (&self.memo.memos[f.memo], &self.memo.memos[*id]);
-            let open: Vec<u8> = b
-                .live
-                .iter()
-                .copied()
-                .filter(|r| !a.final_writes.iter().any(|w| w.reg == *r))
-                .collect();
-            let mut listed = [memo::UNLISTED; memo::OPEN_MAX];
-            if open.len() <= memo::OPEN_MAX {
-                listed[..open.len()].copy_from_slice(&open);
-                listed[open.len()..].fill(128);
+            let mut listed = [128u8; memo::OPEN_MAX];
+            let mut n = 0;
+            for &r in &b.live {
+                if a.writes_mask & (1u128 << (r & 127)) == 0 {
+                    if n == memo::OPEN_MAX {
+                        listed = [memo::UNLISTED; memo::OPEN_MAX];
+                        break;
+                    }
+                    listed[n] = r;
+                    n += 1;
+                }
             }
             if self.open_registers_ready(f.max_ready_at_entry, &listed) {
                 let chain = memo::Chain {
