@@ -702,6 +702,7 @@ impl Timing {
     }
 
     /// After a branch instruction executed: whether it was taken and where it went.
+    #[inline]
     pub fn branch_resolved(&mut self, pc: u32, _inst: Inst, taken: bool, target: u32) {
         self.sync();
         if self.last.pc != pc {
@@ -1404,7 +1405,7 @@ impl Timing {
     /// previous block wrote, the last issue, branch redirect, double-precision block,
     /// fetch) is set from that record and the branch outcome, and so is the hint entry
     /// where the previous block sets it; otherwise its view is compared.
-    #[inline]
+    #[inline(always)]
     fn chained_lookup(&mut self, idx: usize, pc: u32, inst: Inst) -> Lookup {
         let from = self.memo.chain_from.take().filter(|f| {
             f.index == self.index && self.memo.memos[f.memo].generation == f.generation
@@ -1487,7 +1488,7 @@ impl Timing {
     /// For a core that runs whole memoized blocks: the memo (id and length) of the block
     /// starting at `pc` with `inst` when the state matches its record and nothing else is
     /// in progress; nothing changes. Follow with [`Timing::start_block_replay`].
-    #[inline]
+    #[inline(always)]
     pub fn block_replay_candidate(&mut self, pc: u32, inst: Inst) -> Option<(usize, usize)> {
         if !self.config.memoize
             || self.memo.rec.is_some()
@@ -1549,7 +1550,7 @@ impl Timing {
     /// replay `issue` started): the state and counters become what issuing each of its
     /// instructions would have made them, and `branch` (its last instruction's address,
     /// the instruction, whether it was taken and where to) resolves.
-    #[inline]
+    #[inline(always)]
     pub fn block_replayed(&mut self, id: usize, branch: Option<(u32, Inst, bool, u32)>) {
         let mut rp = self.block_entry(id);
         let m = &mut self.memo.memos[id];
@@ -1801,6 +1802,7 @@ impl Timing {
 
     /// Sets the state after `rp.k` replayed instructions; `eager`: also apply their
     /// counter changes now (a partial block).
+    #[inline]
     fn materialize(&mut self, rp: Replay, eager: bool) {
         let k = rp.k;
         if k == self.memo.memos[rp.memo].steps.len() {
