@@ -134,50 +134,6 @@ impl TimingConfig {
     }
 }
 
-/// The chip's memory interface, shared by every SPU of a run: the host keeps one and asks
-/// it when each DMA command completes, so that several SPUs moving data at once share the
-/// 25.6 GB/s (each SPU also never exceeds its own 8 B/cycle).
-///
-/// Transfers are served first come, first served at the chip rate; a command's bytes move
-/// no earlier than `issue + latency`. Cycles are SPU cycles at the configured clock (all
-/// SPUs share the clock).
-#[derive(Clone, Debug)]
-pub struct MemoryBus {
-    config: TimingConfig,
-    /// The cycle (fractional) at which the shared bus finishes its queued bytes.
-    busy_until: f64,
-    /// Total bytes moved.
-    pub bytes: u64,
-}
-
-impl MemoryBus {
-    pub fn new(config: TimingConfig) -> Self {
-        MemoryBus {
-            config,
-            busy_until: 0.0,
-            bytes: 0,
-        }
-    }
-
-    /// Reserves the bus for a command of `bytes` issued at `issue` (by any SPU) and returns
-    /// its completion cycle: the later of the SPU's own rate (issue + latency + bytes/8)
-    /// and the shared bus finishing it (start no earlier than issue + latency, then bytes
-    /// at 25.6 GB/s behind everything already queued).
-    pub fn transfer(&mut self, issue: u64, bytes: u32) -> u64 {
-        let own = self.config.dma_completion(issue, bytes);
-        let start = (issue + self.config.dma_latency_cycles()) as f64;
-        let begin = start.max(self.busy_until);
-        self.busy_until = begin + bytes as f64 / self.config.chip_bytes_per_cycle();
-        self.bytes += bytes as u64;
-        own.max(self.busy_until.ceil() as u64)
-    }
-
-    /// The cycle at which the bus drains everything reserved so far.
-    pub fn busy_until(&self) -> u64 {
-        self.busy_until.ceil() as u64
-    }
-}
-
 // ---- per-operation facts, precomputed once ------------------------------------------------
 
 const R_RA: u8 = 1;
@@ -2019,15 +1975,7 @@ mod tests {
         assert_eq!(c.dma_latency_cycles(), 240);
         assert_eq!(c.dma_completion(1000, 128), 1000 + 240 + 16);
         assert_eq!(TimingConfig::ps3().dma_latency_cycles(), 320);
-        let mut bus = MemoryBus::new(c.clone());
-        // One SPU: limited by its own 8 B/cycle.
-        assert_eq!(bus.transfer(0, 16384), 240 + 2048);
-        // A second SPU at the same time: the shared 10.67 B/cycle is the limit.
-        let second = bus.transfer(0, 16384);
-        assert_eq!(
-            second,
-            (240.0 + 2.0 * 16384.0 / (25.6 / 2.4) as f64).ceil() as u64
-        );
+        assert!((c.chip_bytes_per_cycle() - 25.6 / 2.4).abs() < 1e-12);
     }
 }
 impl Timing {

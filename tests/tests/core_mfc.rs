@@ -808,3 +808,54 @@ fn bad_sndsig_stops_with_a_dma_error() {
         );
     }
 }
+
+/// The chip's 25.6 GB/s (10.67 bytes per cycle at 2.4 GHz) is shared: one SPU fetching
+/// 32 blocks of 16 KiB, each waited for, takes 32 x (240 latency + 2048 at its own
+/// 8 bytes per cycle) cycles; four SPUs doing the same at once need the memory interface
+/// for 4 x 32 x 16384 / 10.67 = 196,608 cycles, so they finish close to that (sharing
+/// takes effect one 10,000-cycle quantum late, so up to a quantum early).
+#[test]
+fn four_spus_share_the_chip_memory_bandwidth() {
+    let fetcher = || {
+        let mut body = String::from("il $20, 32\nagain:\n");
+        body += &dma(0x10000, 0, 16384, 1, 0x40);
+        body += &wait(0b10, 2, 21);
+        body += "ai $20, $20, -1\n brnz $20, again\n";
+        load(&body)
+    };
+    let run = |n: usize| -> Vec<u64> {
+        let mut spus: Vec<Spu> = (0..n).map(|_| fetcher()).collect();
+        for (i, s) in spus.iter_mut().enumerate() {
+            s.index = i as u32;
+        }
+        let mut mem = memory();
+        let mut finished = vec![false; n];
+        let mut until = 0;
+        while finished.iter().any(|f| !f) {
+            until += 10_000;
+            assert!(until < 10_000_000, "no progress");
+            for (i, s) in spus.iter_mut().enumerate() {
+                if !finished[i] {
+                    match s.run_quantum(&mem, until) {
+                        Some(StopReason::Stop(0x100)) => finished[i] = true,
+                        None => {}
+                        Some(other) => panic!("SPU {i}: {other}"),
+                    }
+                }
+            }
+            apply_quantum(&mut spus, &mut mem);
+        }
+        spus.iter().map(|s| s.cycles()).collect()
+    };
+    let alone = run(1)[0];
+    let own = 32 * (240 + 16384 / 8);
+    assert!(alone >= own && alone < own + 2_000, "{alone} vs {own}");
+    let chip = (4.0 * 32.0 * 16384.0 / (25.6 / 2.4)) as u64;
+    let together = run(4);
+    let last = *together.iter().max().unwrap();
+    assert!(
+        last + 10_000 >= chip && last < chip + chip / 10,
+        "{together:?} vs {chip}"
+    );
+    assert!(last > 2 * alone);
+}

@@ -29,7 +29,9 @@
 //!
 //! # DMA timing
 //! One DMA engine per SPU moves one command at a time: a command completes at
-//! `max(issue + latency, previous completion) + bytes / bytes-per-cycle`. With the timing
+//! `max(issue + latency, previous completion) + bytes / bytes-per-cycle`, and no earlier
+//! than the chip's memory interface, shared by all SPUs, can serve it behind the traffic of
+//! earlier quanta (see `settle_memory_bus`). With the timing
 //! model off the clock is the instruction count, so completion times stay deterministic.
 
 pub mod exec;
@@ -43,20 +45,30 @@ use crate::machine::exec::{
 use crate::table::Op;
 use crate::timing::{StallCause, Timing, TimingConfig};
 
-/// Main memory shared by all SPUs, big-endian bytes owned by the host.
+/// Main memory shared by all SPUs, big-endian bytes owned by the host, and the chip's
+/// memory interface in front of it.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MainMemory {
     bytes: Vec<u8>,
+    /// The cycle (fractional) at which the memory interface has moved every byte the SPUs'
+    /// DMA commands asked for up to the last quantum boundary (see [`apply_quantum`]).
+    bus_busy_until: f64,
 }
 
 impl MainMemory {
     pub fn new(bytes: Vec<u8>) -> Self {
-        MainMemory { bytes }
+        MainMemory {
+            bytes,
+            bus_busy_until: 0.0,
+        }
     }
     pub fn zeroed(len: usize) -> Self {
-        MainMemory {
-            bytes: vec![0; len],
-        }
+        MainMemory::new(vec![0; len])
+    }
+
+    /// The cycle at which the memory interface has drained the traffic published so far.
+    pub fn bus_busy_until(&self) -> u64 {
+        self.bus_busy_until.ceil() as u64
     }
     pub fn len(&self) -> usize {
         self.bytes.len()
@@ -345,6 +357,11 @@ pub struct Spu {
     tag_update: Option<u32>,
     queue: Vec<DmaCommand>,
     dma_free_at: u64,
+    /// The memory interface is busy with earlier quanta's traffic until then (set at each
+    /// boundary); this quantum's commands, `(first cycle they may move data, bytes)`, for
+    /// the boundary to add.
+    bus_free_at: u64,
+    bus_log: Vec<(u64, u32)>,
     list_stall: u32,
     stalled_list: Option<(u8, u8, u32, u32, u32, u32)>,
     atomic_stat: Option<(u32, u64)>,
@@ -449,6 +466,8 @@ impl Spu {
             tag_update: None,
             queue: Vec::new(),
             dma_free_at: 0,
+            bus_free_at: 0,
+            bus_log: Vec::new(),
             list_stall: 0,
             stalled_list: None,
             atomic_stat: None,
@@ -1284,9 +1303,14 @@ impl Spu {
     }
 
     fn schedule(&mut self, now: u64, bytes: u32) -> u64 {
-        let start = (now + self.dma_latency()).max(self.dma_free_at);
+        let earliest = now + self.dma_latency();
         let per_cycle = (self.timing_config.spu_bytes_per_cycle.max(1.0)) as u64;
-        let done = start + (bytes as u64).div_ceil(per_cycle);
+        let own = earliest.max(self.dma_free_at) + (bytes as u64).div_ceil(per_cycle);
+        // Behind the traffic the memory interface still has from earlier quanta.
+        let chip = self.timing_config.chip_bytes_per_cycle();
+        let shared = (earliest.max(self.bus_free_at) as f64 + bytes as f64 / chip).ceil() as u64;
+        let done = own.max(shared);
+        self.bus_log.push((earliest, bytes));
         self.dma_free_at = done;
         if let Some(t) = &mut self.timing {
             t.dma_local_store(done, bytes);
@@ -1580,6 +1604,36 @@ impl Spu {
     }
 }
 
+/// The chip's memory interface (25.6 GB/s at 2.4 GHz, 10.67 bytes per cycle) serves the
+/// DMA commands of all SPUs first come, first served: at a boundary the commands of the
+/// quantum just run, ordered by (first cycle they may move data, SPU index, order), are
+/// queued behind the earlier traffic, and every SPU's later commands complete no earlier
+/// than the interface can serve them behind it. Commands of one quantum do not delay each
+/// other across SPUs (each SPU's own engine, 8 bytes per cycle, still does): sharing takes
+/// effect one quantum late, and the outcome depends only on simulated time. One SPU alone
+/// never waits for it (8 < 10.67).
+fn settle_memory_bus(spus: &mut [Spu], memory: &mut MainMemory) {
+    let mut traffic: Vec<(u64, usize, usize, u32)> = Vec::new();
+    for (i, spu) in spus.iter_mut().enumerate() {
+        for (k, (earliest, bytes)) in spu.bus_log.drain(..).enumerate() {
+            traffic.push((earliest, i, k, bytes));
+        }
+    }
+    let Some(first) = spus.first() else {
+        return;
+    };
+    let chip = first.timing_config.chip_bytes_per_cycle();
+    traffic.sort_unstable();
+    let mut busy = memory.bus_busy_until;
+    for (earliest, _, _, bytes) in traffic {
+        busy = busy.max(earliest as f64) + bytes as f64 / chip;
+    }
+    memory.bus_busy_until = busy;
+    for spu in spus.iter_mut() {
+        spu.bus_free_at = busy.ceil() as u64;
+    }
+}
+
 /// Applies every SPU's logged main-memory writes in (cycle, SPU index, sequence) order and
 /// settles `putllc` outcomes and lost reservations (see the module docs).
 pub fn apply_quantum(spus: &mut [Spu], memory: &mut MainMemory) {
@@ -1590,6 +1644,7 @@ pub fn apply_quantum(spus: &mut [Spu], memory: &mut MainMemory) {
         }
     }
     all.sort_by_key(|(c, i, s, _)| (*c, *i, *s));
+    settle_memory_bus(spus, memory);
     for (_, i, _, w) in all {
         if let WriteKind::Signal { spu, which } = w.kind {
             // A signal for an SPU that is not running here goes nowhere.
