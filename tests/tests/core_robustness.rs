@@ -6,15 +6,7 @@
 use spu_isa::machine::{apply_quantum, MainMemory, Spu, StopReason};
 use spu_isa::table::Op;
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-}
+use spu_tests::XorShift as Rng;
 
 /// A random program: mostly random real opcodes with random fields, a good share of
 /// `wrch`/`rdch`/`rchcnt` on the MFC and event channels, `il`/`ila` to make plausible

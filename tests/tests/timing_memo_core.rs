@@ -3,6 +3,7 @@
 //! same registers, cycles, totals and per-address counters.
 
 use spu_isa::machine::{MainMemory, Spu, StopReason};
+use spu_isa::profile::Profile;
 use spu_isa::timing::TimingConfig;
 
 /// Loops with hints, loads, stores, shuffles, double precision, a data-dependent inner
@@ -64,8 +65,10 @@ data:   .float  1.5, 2.0, 0.5, 3.0, 0.25, 1.0, 2.0, 4.0
         .space  16
 ";
 
-fn run(memoize: bool) -> (Spu, spu_isa::profile::Profile) {
-    let program = spu_asm::assemble(PROGRAM, "memo.s", &Default::default()).expect("assembles");
+/// Assembles `src` and runs it with the timing model, memoized or not, to `stop 0x2000`.
+fn timed_run(src: &str, memoize: bool) -> (Spu, Profile) {
+    let program = spu_asm::assemble(src, "memo.s", &Default::default())
+        .unwrap_or_else(|d| panic!("{d:?}\n{src}"));
     let mut spu = Spu::new(0);
     spu.load_image(&program.image);
     spu.set_pc(program.entry);
@@ -74,27 +77,135 @@ fn run(memoize: bool) -> (Spu, spu_isa::profile::Profile) {
         ..Default::default()
     });
     let mut memory = MainMemory::zeroed(4096);
-    assert_eq!(spu.run(&mut memory, 10_000_000), StopReason::Stop(0x2000));
+    assert_eq!(
+        spu.run(&mut memory, 10_000_000),
+        StopReason::Stop(0x2000),
+        "{src}"
+    );
     let profile = spu.timing().expect("timing").finish_profile();
     (spu, profile)
 }
 
-#[test]
-fn replayed_blocks_match_the_per_instruction_model() {
-    let (a, pa) = run(false);
-    let (b, pb) = run(true);
+/// Runs `src` without and with memoization: the same registers, instructions, cycles,
+/// totals and per-address counters. Returns the memoized run.
+fn same_both_ways(src: &str) -> (Spu, Profile) {
+    let (a, pa) = timed_run(src, false);
+    let (b, pb) = timed_run(src, true);
     for r in 0..128 {
-        assert_eq!(a.reg(r), b.reg(r), "${r}");
+        assert_eq!(a.reg(r), b.reg(r), "${r}\n{src}");
     }
-    // The patched instruction ran 40 times with the new word: $15 = 40 * 2.
-    assert_eq!(a.reg(15)[0], 80);
-    assert_eq!(a.reg(26)[0], 120);
     assert_eq!(
         (a.instructions(), a.cycles()),
-        (b.instructions(), b.cycles())
+        (b.instructions(), b.cycles()),
+        "{src}"
     );
-    assert_eq!(pa.totals, pb.totals);
+    assert_eq!(pa.totals, pb.totals, "{src}");
     let sa: Vec<_> = pa.addresses().map(|(pc, s)| (pc, *s)).collect();
     let sb: Vec<_> = pb.addresses().map(|(pc, s)| (pc, *s)).collect();
-    assert_eq!(sa, sb);
+    assert_eq!(sa, sb, "{src}");
+    (b, pb)
+}
+
+#[test]
+fn replayed_blocks_match_the_per_instruction_model() {
+    let (b, _) = same_both_ways(PROGRAM);
+    // The patched instruction ran 40 times with the new word: $15 = 40 * 2.
+    assert_eq!(b.reg(15)[0], 80);
+    assert_eq!(b.reg(26)[0], 120);
+}
+
+/// Random programs with loops: blocks of random arithmetic, float, shuffle, load/store and
+/// double-precision instructions, hints that are right, wrong or too close, and branches
+/// that depend on the data, run with and without block memoization (replays, chains,
+/// deferred register writes): the same registers, cycles, totals and per-address
+/// counters, program after program.
+#[test]
+fn random_looping_programs_time_the_same_with_and_without_memoization() {
+    use spu_tests::XorShift as Rng;
+    let reg = |rng: &mut Rng| 10 + rng.below(12);
+    let body_op = |rng: &mut Rng| -> String {
+        let (t, a, b, c) = (reg(rng), reg(rng), reg(rng), reg(rng));
+        match rng.below(16) {
+            0 => format!("a ${t}, ${a}, ${b}"),
+            1 => format!("ai ${t}, ${a}, {}", rng.below(64) as i64 - 32),
+            2 => format!("fa ${t}, ${a}, ${b}"),
+            3 => format!("fm ${t}, ${a}, ${b}"),
+            4 => format!("fma ${t}, ${a}, ${b}, ${c}"),
+            5 => format!("shufb ${t}, ${a}, ${b}, ${c}"),
+            6 => format!("lqd ${t}, {}($3)", 16 * rng.below(8)),
+            7 => format!("stqd ${t}, {}($3)", 16 * rng.below(8)),
+            8 => format!("rotqby ${t}, ${a}, ${b}"),
+            9 => format!("selb ${t}, ${a}, ${b}, ${c}"),
+            10 => format!("dfa ${t}, ${a}, ${b}"),
+            11 => "nop".into(),
+            12 => "lnop".into(),
+            13 => format!("ceq ${t}, ${a}, ${b}"),
+            14 => format!("xor ${t}, ${a}, ${b}"),
+            _ => format!("mpy ${t}, ${a}, ${b}"),
+        }
+    };
+    let mut replays = 0;
+    for seed in 1..=24u64 {
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15 ^ seed.wrapping_mul(0x1234_5678_9abc));
+        let blocks = 3 + rng.below(5) as usize;
+        let mut src = String::from(
+            "        .text\n        .global _start\n_start: ila $3, data\n il $4, 3000\n",
+        );
+        for r in 10..22 {
+            src += &format!(" lqd ${r}, {}($3)\n", 16 * (r % 8));
+        }
+        for i in 0..blocks {
+            let target = rng.below(blocks as u64);
+            src += &format!("b{i}:\n");
+            match rng.below(3) {
+                0 => src += &format!(" hbrr .Lbr{i}, b{target}\n"),
+                1 => src += &format!(" hbrr .Lbr{i}, b{}\n", (target + 1) % blocks as u64),
+                _ => {}
+            }
+            for _ in 0..rng.below(14) {
+                src += &format!(" {}\n", body_op(&mut rng));
+            }
+            src += " ai $4, $4, -1\n brz $4, end\n";
+            for _ in 0..rng.below(6) {
+                src += &format!(" {}\n", body_op(&mut rng));
+            }
+            let cond = ["brnz", "brz", "brhnz"][rng.below(3) as usize];
+            src += &format!(".Lbr{i}: {cond} ${}, b{target}\n", reg(&mut rng));
+        }
+        src += " br b0\nend: stop 0x2000\n        .data\n        .align 4\ndata:\n";
+        for _ in 0..32 {
+            src += &format!(" .long {}\n", rng.next() as u32 & 0xc3ff_ffff);
+        }
+        let (b, _) = same_both_ways(&src);
+        replays += b.timing().expect("timing").memo_stats().1;
+    }
+    assert!(replays > 10_000, "only {replays} block replays");
+}
+
+/// Deferred register writes at the core's block replays: block X ends with a 6-cycle `fm`
+/// into $20 and a hinted branch to B, block Y ends with an `ai` elsewhere and a hinted
+/// branch to B; B writes neither and C reads $20 at once, stalling only after X. The
+/// rounds take X four times, then Y four times, and so on, so X, Y, B and C all replay;
+/// X's write waits in the deferred writes across B's replay until C needs it.
+#[test]
+fn deferred_writes_survive_a_replayed_block_that_writes_other_registers() {
+    let mut src = String::from(
+        "        .text\n        .global _start\n_start: il $4, 32\n il $9, 1\n\
+         ilhu $21, 0x3f80\nloop: andi $10, $4, 4\n brz $10, y\n\
+         x: hbrr .Lx, b\n",
+    );
+    src += &" nop\n lnop\n".repeat(4);
+    src += " fm $20, $21, $21\n.Lx: br b\ny: hbrr .Ly, b\n";
+    src += &" nop\n lnop\n".repeat(4);
+    src += " ai $23, $23, 1\n.Ly: br b\n";
+    src += "b: ai $7, $7, 1\n brz $9, end\n";
+    src += "c: fa $22, $20, $20\n ai $4, $4, -1\n brnz $4, loop\nend: stop 0x2000\n";
+    let (b, pb) = same_both_ways(&src);
+    // C stalls after X (16 rounds) and not after Y.
+    let c = pb
+        .addresses()
+        .find(|(_, s)| s.executions == 32 && s.stall_total() > 0)
+        .map(|(_, s)| *s);
+    assert!(c.is_some_and(|s| s.stall_total() % 16 == 0), "{c:?}");
+    assert!(b.timing().expect("timing").memo_stats().1 > 50);
 }
