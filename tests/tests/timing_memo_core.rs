@@ -1,6 +1,7 @@
-//! The core replays a memoized block in one go (`Spu::replay_block`): for real programs run
-//! on the simulated SPU, that must give exactly what timing every instruction does — the
-//! same registers, cycles, totals and per-address counters.
+//! The core replays memoized blocks in one go (`Spu::run_block_replays`,
+//! `Spu::replay_block`): for real programs run on the simulated SPU, that must give
+//! exactly what timing every instruction does — the same registers, cycles, totals and
+//! per-address counters.
 
 use spu_isa::machine::{MainMemory, Spu, StopReason};
 use spu_isa::profile::Profile;
