@@ -1467,9 +1467,29 @@ impl Timing {
     /// the first cycle a DMA holds: the model then asks of it exactly what it asked when
     /// the block was recorded (with no DMA), so the record holds.
     #[inline]
-    fn clear_of_dma(&self, id: usize) -> bool {
-        self.fetch.dma_min == u64::MAX
-            || self.fetch.dma_min > self.now + self.memo.memos[id].dma_horizon_rel
+    fn clear_of_dma(&mut self, id: usize) -> bool {
+        let horizon = self.now + self.memo.memos[id].dma_horizon_rel;
+        if self.fetch.dma_min > horizon {
+            return true;
+        }
+        self.drop_past_dma_cycles();
+        self.fetch.dma_min > horizon
+    }
+
+    /// Forgets DMA cycles no fetch probe can reach any more: those before now and before
+    /// a waiting prefetch's probe (probes only move forward, and `fetch_first_free` skips
+    /// such cycles without counting them).
+    #[cold]
+    fn drop_past_dma_cycles(&mut self) {
+        let bound = if self.fetch.pending {
+            self.now.min(self.fetch.probe)
+        } else {
+            self.now
+        };
+        while self.fetch.dma.front().is_some_and(|&c| c < bound) {
+            self.fetch.dma.pop_front();
+        }
+        self.fetch.dma_min = self.fetch.dma.front().copied().unwrap_or(u64::MAX);
     }
 
     /// The words memo `id` recorded, and the core's code epoch at which local store last
