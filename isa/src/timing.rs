@@ -1022,6 +1022,9 @@ mod memo {
     pub(super) struct Memos {
         /// Per word address: 0 none, `NEVER`, or memo index + 1.
         pub slots: Vec<u32>,
+        /// Per word address, a second record for the same start in another entry state
+        /// (0 none, or memo index + 1): a block entered in two recurring states keeps both.
+        pub second: Vec<u32>,
         pub fails: Vec<u8>,
         pub memos: Vec<Memo>,
         pub rec: Option<Box<Recording>>,
@@ -1280,6 +1283,7 @@ impl Timing {
         let idx = Self::slot_index(pc);
         if idx >= self.memo.slots.len() {
             self.memo.slots.resize(0x1_0000, 0);
+            self.memo.second.resize(0x1_0000, 0);
             self.memo.fails.resize(0x1_0000, 0);
         }
         // While DMA holds local-store cycles, blocks replay only clear of them and are not
@@ -1296,6 +1300,9 @@ impl Timing {
                     self.memo.fails[idx] = self.memo.fails[idx].saturating_add(1);
                     if self.memo.fails[idx] >= 8 {
                         self.memo.flush(id, &mut self.profile);
+                        if let Some(other) = self.second_memo(idx) {
+                            self.memo.flush(other, &mut self.profile);
+                        }
                         self.memo.slots[idx] = memo::NEVER;
                         return self.issue_slow(pc, inst);
                     }
@@ -1332,25 +1339,46 @@ impl Timing {
         if slot == 0 {
             return Lookup::Absent;
         }
-        let id = (slot - 1) as usize;
+        let first = (slot - 1) as usize;
+        if self.entry_matches(first, pc, inst) {
+            return Lookup::Hit(first);
+        }
+        match self.second_memo(idx) {
+            Some(second) if self.entry_matches(second, pc, inst) => Lookup::Hit(second),
+            // Record again over the one replayed less.
+            Some(second) if self.memo.memos[second].hits <= self.memo.memos[first].hits => {
+                Lookup::Differs(second)
+            }
+            _ => Lookup::Differs(first),
+        }
+    }
+
+    /// The second record for word address `idx`, if any.
+    #[inline]
+    fn second_memo(&self, idx: usize) -> Option<usize> {
+        match self.memo.second.get(idx) {
+            Some(&s) if s != 0 => Some((s - 1) as usize),
+            _ => None,
+        }
+    }
+
+    /// Whether memo `id` is the block at `pc` starting with `inst` and the current state
+    /// matches its signature.
+    #[inline]
+    fn entry_matches(&self, id: usize, pc: u32, inst: Inst) -> bool {
         let m = &self.memo.memos[id];
         if m.start != pc || m.words[0] != inst.word {
-            return Lookup::Differs(id);
+            return false;
         }
         let branch_at = (m.branch_pc != NO_PC).then(|| (m.branch_pc, m.words.len() as u64 - 1));
         let e = self.entry_ref();
         let mut pos = 0usize;
         let sig = &m.sig[..];
-        let hit = self.signature(&e, &m.live, pc, branch_at, &mut |v| {
+        self.signature(&e, &m.live, pc, branch_at, &mut |v| {
             let same = sig.get(pos) == Some(&v);
             pos += 1;
             same
-        }) && pos == sig.len();
-        if hit {
-            Lookup::Hit(id)
-        } else {
-            Lookup::Differs(id)
-        }
+        }) && pos == sig.len()
     }
 
     /// [`Timing::memo_lookup`], first through the chain of the block whose full replay
@@ -1727,14 +1755,31 @@ impl Timing {
         }
         let idx = Self::slot_index(memo.start);
         let slot = self.memo.slots[idx];
-        if slot != 0 && slot != memo::NEVER {
-            let id = (slot - 1) as usize;
-            self.memo.flush(id, &mut self.profile);
-            self.memo.memos[id] = memo;
-        } else {
+        if slot == 0 || slot == memo::NEVER {
             self.memo.memos.push(memo);
             self.memo.slots[idx] = self.memo.memos.len() as u32;
+            return;
         }
+        let first = (slot - 1) as usize;
+        // A block at the same start with other words (the code changed) replaces the first
+        // record; another entry state takes the second place, or replaces the record
+        // replayed less.
+        let same_words = self.memo.memos[first].words == memo.words;
+        let victim = match self.second_memo(idx) {
+            None if same_words => {
+                self.memo.memos.push(memo);
+                self.memo.second[idx] = self.memo.memos.len() as u32;
+                return;
+            }
+            Some(second)
+                if same_words && self.memo.memos[second].hits <= self.memo.memos[first].hits =>
+            {
+                second
+            }
+            _ => first,
+        };
+        self.memo.flush(victim, &mut self.profile);
+        self.memo.memos[victim] = memo;
     }
 
     /// Replays the next instruction of the block in progress, or brings the state up to
