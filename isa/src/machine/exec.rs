@@ -1199,28 +1199,28 @@ unsafe fn sp4_truncating<const K: u8, const TRUNCATING: bool>(
     );
     // Outside the fast loops, MXCSR is set to truncate around the operation.
     let held = (!TRUNCATING).then(TruncatingFloats::hold);
+    macro_rules! binary {
+        ($template:expr) => {{
+            let mut x = fa;
+            asm!(
+                $template,
+                x = inout(xmm_reg) x,
+                y = in(xmm_reg) fb,
+                options(nostack, preserves_flags, nomem),
+            );
+            x
+        }};
+    }
     // With FMA3 (and so AVX) the VEX forms: a legacy SSE instruction inside code that uses
     // the upper halves of the vector registers costs a state transition.
     macro_rules! one {
-        ($op:literal, $vex:literal) => {{
-            let mut x = fa;
+        ($op:literal, $vex:literal) => {
             if fma3 {
-                asm!(
-                    concat!($vex, " {x}, {x}, {y}"),
-                    x = inout(xmm_reg) x,
-                    y = in(xmm_reg) fb,
-                    options(nostack, preserves_flags, nomem),
-                );
+                binary!(concat!($vex, " {x}, {x}, {y}"))
             } else {
-                asm!(
-                    concat!($op, " {x}, {y}"),
-                    x = inout(xmm_reg) x,
-                    y = in(xmm_reg) fb,
-                    options(nostack, preserves_flags, nomem),
-                );
+                binary!(concat!($op, " {x}, {y}"))
             }
-            x
-        }};
+        };
     }
     macro_rules! fused {
         ($op:literal) => {{
