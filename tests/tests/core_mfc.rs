@@ -666,28 +666,35 @@ fn inbound_mailbox_gives_four_values_in_order_then_a_fifth_read_deadlocks() {
     assert_eq!(spu.read_outbound_mailbox(), None);
 }
 
-/// Two SPUs driven like loader/src/runtime.rs: each quantum, every unfinished SPU runs to
-/// `until` against the shared memory view, then `apply_quantum` publishes their writes.
+/// Drives SPUs like loader/src/runtime.rs until each stops with 0x100: each quantum, every
+/// unfinished SPU runs to `until` against the shared memory view (an SPU blocked on a
+/// channel the host feeds waits), then `apply_quantum` publishes their writes.
+fn run_in_quanta(spus: &mut [Spu], mem: &mut MainMemory, quantum: u64, limit: u64) {
+    let mut finished = vec![false; spus.len()];
+    let mut until = 0;
+    while finished.iter().any(|f| !f) {
+        until += quantum;
+        assert!(until < limit, "no progress");
+        for (i, s) in spus.iter_mut().enumerate() {
+            if !finished[i] {
+                match s.run_quantum(mem, until) {
+                    Some(StopReason::Stop(0x100)) => finished[i] = true,
+                    Some(StopReason::Blocked { .. }) | None => {}
+                    Some(other) => panic!("SPU {i}: {other}"),
+                }
+            }
+        }
+        apply_quantum(spus, mem);
+    }
+}
+
+/// Two SPUs sharing main memory in quanta ([`run_in_quanta`]).
 #[test]
 fn two_spus_increment_a_shared_counter_100_times_each() {
     let mut spus = vec![atomic_incrementer(100), atomic_incrementer(100)];
     spus[1].index = 1;
     let mut mem = MainMemory::zeroed(64 * 1024);
-    let mut finished = [false; 2];
-    let mut until = 0;
-    while !finished.iter().all(|d| *d) {
-        until += 500;
-        assert!(until < 200_000_000, "no progress");
-        for (i, s) in spus.iter_mut().enumerate() {
-            if !finished[i] {
-                if let Some(stop) = s.run_quantum(&mem, until) {
-                    assert_eq!(stop, StopReason::Stop(0x100), "SPU {i}");
-                    finished[i] = true;
-                }
-            }
-        }
-        apply_quantum(&mut spus, &mut mem);
-    }
+    run_in_quanta(&mut spus, &mut mem, 500, 200_000_000);
     assert_eq!(mem.read_u32(0x2000), 200);
     // The incrementer adds 1 to all four words of the first quadword (`ai` on the whole
     // register); the rest of the 128-byte line stays zero.
@@ -767,23 +774,7 @@ fn sndsig_writes_another_spus_signal_registers() {
     spus[1].signal_or_mode[1] = true;
     // Its signals come from outside it (here SPU 0), so an empty channel waits.
     spus[1].host_feeds = true;
-    let mut mem = memory();
-    let mut finished = [false; 2];
-    let mut until = 0;
-    while !finished.iter().all(|d| *d) {
-        until += 1000;
-        assert!(until < 10_000_000, "no progress");
-        for (i, s) in spus.iter_mut().enumerate() {
-            if !finished[i] {
-                match s.run_quantum(&mem, until) {
-                    Some(StopReason::Stop(0x100)) => finished[i] = true,
-                    Some(StopReason::Blocked { .. }) | None => {}
-                    Some(other) => panic!("SPU {i}: {other}"),
-                }
-            }
-        }
-        apply_quantum(&mut spus, &mut mem);
-    }
+    run_in_quanta(&mut spus, &mut memory(), 1000, 10_000_000);
     assert_eq!(spus[1].reg(3)[0], 0x2a);
     assert_eq!(spus[1].reg(4)[0], 0x35);
     assert_eq!(spus[0].reg(10)[0], 0b1100);
@@ -828,23 +819,7 @@ fn four_spus_share_the_chip_memory_bandwidth() {
         for (i, s) in spus.iter_mut().enumerate() {
             s.index = i as u32;
         }
-        let mut mem = memory();
-        let mut finished = vec![false; n];
-        let mut until = 0;
-        while finished.iter().any(|f| !f) {
-            until += 10_000;
-            assert!(until < 10_000_000, "no progress");
-            for (i, s) in spus.iter_mut().enumerate() {
-                if !finished[i] {
-                    match s.run_quantum(&mem, until) {
-                        Some(StopReason::Stop(0x100)) => finished[i] = true,
-                        None => {}
-                        Some(other) => panic!("SPU {i}: {other}"),
-                    }
-                }
-            }
-            apply_quantum(&mut spus, &mut mem);
-        }
+        run_in_quanta(&mut spus, &mut memory(), 10_000, 10_000_000);
         spus.iter().map(|s| s.cycles()).collect()
     };
     let alone = run(1)[0];

@@ -1353,6 +1353,24 @@ mod tests {
         x.to_bits()
     }
 
+    /// Fast-path cases checked by hand (all operands normal, results normal).
+    fn hand_cases() -> [(u32, u32, u32); 6] {
+        let p60 = f(2f32.powi(-30));
+        [
+            // 1 - 2^-60: f64 rounds to 1.0 (a single), the error points toward zero, so
+            // truncation gives the single just below 1.0 (0x3f7fffff).
+            (p60, p60 | 0x8000_0000, f(1.0)),
+            // 1 + 2^-60 truncates to 1.0.
+            (p60, p60, f(1.0)),
+            // -1 + 2^-60 truncates toward zero: -0x3f7fffff.
+            (p60, p60, f(-1.0)),
+            // An exact zero: +0.
+            (f(1.5), f(2.0), f(-3.0)),
+            (f(3.0e30), f(2.5e7), f(-1.0)),
+            (0x3fffffff, 0x3fffffff, 0x3f800001),
+        ]
+    }
+
     /// Random single-precision operands for the fast-path tests: a wide exponent spread
     /// (from `low`, `span` values), short and full mantissas, and some zeros, denormals and
     /// exponent-255 and exponent-254 values.
@@ -1404,20 +1422,7 @@ mod tests {
     #[test]
     fn four_lane_fast_path_matches_the_exact_functions() {
         let p60 = f(2f32.powi(-30));
-        let cases: &[(u32, u32, u32)] = &[
-            // 1 - 2^-60: f64 rounds to 1.0 (a single), the error points toward zero, so
-            // truncation gives the single just below 1.0 (0x3f7fffff).
-            (p60, p60 | 0x8000_0000, f(1.0)),
-            // 1 + 2^-60 truncates to 1.0.
-            (p60, p60, f(1.0)),
-            // -1 + 2^-60 truncates toward zero: -0x3f7fffff.
-            (p60, p60, f(-1.0)),
-            // An exact zero: +0.
-            (f(1.5), f(2.0), f(-3.0)),
-            (f(3.0e30), f(2.5e7), f(-1.0)),
-            (0x3fffffff, 0x3fffffff, 0x3f800001),
-        ];
-        for &(a, b, c) in cases {
+        for (a, b, c) in hand_cases() {
             let ra = [a; 4];
             let rb = [b; 4];
             let rc = [c; 4];
@@ -1536,17 +1541,10 @@ mod tests {
     fn truncating_host_path_agrees_with_the_exact_functions() {
         let mut singles = Singles::new(0x2545_f491_4f6c_dd1d, 90, 76);
         let p60 = f(2f32.powi(-30));
-        let mut triples: Vec<(Reg, Reg, Reg)> = [
-            (p60, p60 | 0x8000_0000, f(1.0)),
-            (p60, p60, f(1.0)),
-            (p60, p60, f(-1.0)),
-            (f(1.5), f(2.0), f(-3.0)),
-            (f(3.0e30), f(2.5e7), f(-1.0)),
-            (0x3fffffff, 0x3fffffff, 0x3f800001),
-        ]
-        .iter()
-        .map(|&(a, b, c)| ([a; 4], [b; 4], [c; 4]))
-        .collect();
+        let mut triples: Vec<(Reg, Reg, Reg)> = hand_cases()
+            .iter()
+            .map(|&(a, b, c)| ([a; 4], [b; 4], [c; 4]))
+            .collect();
         for _ in 0..50_000 {
             let a: Reg = singles.reg();
             let b: Reg = singles.reg();

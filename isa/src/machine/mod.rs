@@ -854,12 +854,14 @@ impl Spu {
             };
             let t = self.timing.as_ref().expect("timing");
             let (words, verified) = t.memo_words(id);
-            if words.len() != n || !self.block_in_store(pc, words, verified) {
-                return;
+            if verified != self.code_epoch {
+                if words.len() != n || !self.block_in_store(pc, words, verified) {
+                    return;
+                }
+                let epoch = self.code_epoch;
+                let t = self.timing.as_mut().expect("timing");
+                t.set_memo_verified(id, epoch);
             }
-            let epoch = self.code_epoch;
-            let t = self.timing.as_mut().expect("timing");
-            t.set_memo_verified(id, epoch);
             self.run_replayed_block(pc, n, id);
         }
     }
