@@ -57,6 +57,9 @@ pub struct Args {
     /// by cause, dual issue; then per label and totals), merged over all SPEs.
     #[arg(long)]
     profile: Option<PathBuf>,
+    /// No progress bar or summary (for `spu paper`, which runs many renders at once).
+    #[arg(long, hide = true)]
+    quiet: bool,
 }
 
 /// Loads a built-in scene by name, or a file.
@@ -136,13 +139,15 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         args.bvh_cache,
         args.tri_cache,
     )?;
-    eprintln!(
-        "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
-        args.scene,
-        scene.triangles.len(),
-        staged.nodes.len(),
-        started.elapsed().as_secs_f64()
-    );
+    if !args.quiet {
+        eprintln!(
+            "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
+            args.scene,
+            scene.triangles.len(),
+            staged.nodes.len(),
+            started.elapsed().as_secs_f64()
+        );
+    }
     let threads = args.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
             .map(|n| n.get())
@@ -153,6 +158,9 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         indicatif::ProgressStyle::with_template("{spinner} tiles {pos}/{len} {wide_bar} {elapsed}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
+    if args.quiet {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
     let sim_started = Instant::now();
     let run = spu_loader::runtime::render_frame(
         &staged,
@@ -194,7 +202,8 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         0.0
     };
     let instructions: u64 = run.spus.iter().map(|s| s.instructions).sum();
-    println!(
+    if !args.quiet {
+        println!(
         "{} SPE(s): {} cycles per frame, {:.2} MRays/s at {} GHz; {} instructions simulated in {:.1} s ({:.0} M/s); wrote {}",
         args.spes,
         run.frame_cycles,
@@ -205,6 +214,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         instructions as f64 / host_seconds / 1e6,
         args.output.display()
     );
+    }
     if let Some((n, bad)) = validation {
         println!("validation: {bad} of {n} pixels differ from the host reference");
     }
