@@ -1,7 +1,7 @@
 //! `spu timing`: static timing of assembly source per basic block, in the layout of IBM's
 //! `spu_timing` (see `docs/timing.md`).
 
-use spu_isa::profile::{analyze_source, render_static, static_json};
+use spu_isa::static_timing::{analyze_source, render_static, static_json};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
