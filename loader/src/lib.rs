@@ -10,6 +10,7 @@
 //!   records, paper section 5.1) and the staged main-memory image.
 //! - [`reference`]: a scalar ray caster over the same records that defines the expected
 //!   kernel output.
+//! - [`stats`]: a frame's statistics as typed JSON (`spu render --stats`).
 
 pub mod bvh;
 pub mod camera;
@@ -29,3 +30,4 @@ pub use scene::{Material, Scene, Triangle};
 pub mod frame;
 pub mod kernel_abi;
 pub mod runtime;
+pub mod stats;

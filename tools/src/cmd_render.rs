@@ -209,14 +209,17 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         println!("validation: {bad} of {n} pixels differ from the host reference");
     }
     if let Some(path) = &args.stats {
-        let json = run.stats_json(
-            &args.scene,
-            args.width,
-            args.height,
-            args.clock,
-            mrays,
+        let json = spu_loader::stats::FrameStats::new(
+            &run,
+            &spu_loader::stats::FrameSetup {
+                scene: &args.scene,
+                width: args.width,
+                height: args.height,
+                clock_ghz: args.clock,
+            },
             validation,
-        );
+        )
+        .to_json();
         std::fs::write(path, json).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     if let Some(path) = &args.profile {
