@@ -85,6 +85,42 @@ pub const QUANTUM_CYCLES: u64 = 10_000;
 /// Stop code of a kernel that finished its frame (`stop 0x2000`, exit status 0).
 pub const STOP_DONE: u16 = 0x2000;
 
+/// Why a frame did not complete, in kinds a caller can tell apart (`spu render` gives each
+/// its own exit status).
+#[derive(Debug, Clone, PartialEq)]
+pub enum FrameError {
+    /// The frame could not be set up (the kernel did not assemble, ...).
+    Setup(String),
+    /// The SPUs had not all finished within this many cycles.
+    CycleLimit(u64),
+    /// An SPU stopped abnormally (illegal instruction, DMA error, deadlock, ...).
+    SpuStopped { spu: usize, reason: String },
+}
+
+impl std::fmt::Display for FrameError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FrameError::Setup(message) => f.write_str(message),
+            FrameError::CycleLimit(cycles) => {
+                write!(f, "the frame did not finish within {cycles} cycles")
+            }
+            FrameError::SpuStopped { spu, reason } => write!(f, "SPU {spu} stopped: {reason}"),
+        }
+    }
+}
+
+impl From<String> for FrameError {
+    fn from(message: String) -> FrameError {
+        FrameError::Setup(message)
+    }
+}
+
+impl From<FrameError> for String {
+    fn from(error: FrameError) -> String {
+        error.to_string()
+    }
+}
+
 /// Renders one frame with `spes` SPUs on `threads` host threads; `progress` hears the
 /// number of tiles taken so far.
 #[allow(clippy::too_many_arguments)]
@@ -97,7 +133,7 @@ pub fn render_frame(
     fill: bool,
     max_cycles: u64,
     progress: &mut dyn FnMut(u32, u32),
-) -> Result<FrameRun, String> {
+) -> Result<FrameRun, FrameError> {
     use spu_isa::machine::{apply_quantum, MainMemory, Spu, StopReason};
     let (source, name) = if fill {
         (FILL_SOURCE, "kernels/fill.s")
@@ -123,11 +159,9 @@ pub fn render_frame(
     let threads = threads.clamp(1, spes);
     let mut until = 0u64;
     while finished.iter().any(|f| f.is_none()) {
-        until += QUANTUM_CYCLES;
+        until = until.saturating_add(QUANTUM_CYCLES);
         if until > max_cycles {
-            return Err(format!(
-                "the frame did not finish within {max_cycles} cycles"
-            ));
+            return Err(FrameError::CycleLimit(max_cycles));
         }
         let memory_view = &memory;
         let mut outcomes: Vec<Option<StopReason>> = vec![None; spes];
@@ -163,12 +197,20 @@ pub fn render_frame(
                 None => {}
                 Some(StopReason::Stop(code)) if code == STOP_DONE => {
                     if spus[i].read_outbound_mailbox() != Some(1) {
-                        return Err(format!("SPU {i} stopped without its end-of-frame message"));
+                        return Err(FrameError::SpuStopped {
+                            spu: i,
+                            reason: "without its end-of-frame message".into(),
+                        });
                     }
                     finished[i] = Some(spus[i].cycles());
                 }
                 Some(StopReason::Blocked { .. }) => {}
-                Some(other) => return Err(format!("SPU {i} stopped: {other:?}")),
+                Some(other) => {
+                    return Err(FrameError::SpuStopped {
+                        spu: i,
+                        reason: other.to_string(),
+                    })
+                }
             }
         }
         let taken = memory
