@@ -77,6 +77,49 @@ pub fn assemble_kernel(source: &str, name: &str) -> Result<Program, String> {
     }
 }
 
+/// Local store of one SPU.
+pub const LOCAL_STORE_BYTES: u32 = 256 * 1024;
+
+/// The caches and packet contexts the kernel carves after its `cache_area` must fit in the
+/// local store.
+fn check_local_store(program: &Program, layout: &FrameLayout) -> Result<(), String> {
+    let Some(start) = program
+        .symbols
+        .iter()
+        .find(|(n, _)| n == "cache_area")
+        .map(|(_, a)| *a)
+    else {
+        return Ok(());
+    };
+    let p = &layout.params;
+    let (bvh, tri, sht) = (
+        1u32 << p.bvh_cache_log2,
+        1u32 << p.tri_cache_log2,
+        p.sht_contexts.max(1),
+    );
+    let end = start as u64 + crate::kernel_abi::carved_bytes(bvh, tri, sht) as u64;
+    if end > LOCAL_STORE_BYTES as u64 {
+        return Err(format!(
+            "local store: {bvh} BVH and {tri} triangle cache lines and {sht} packet contexts need {} bytes after the kernel's {start} bytes, {} available",
+            end - start as u64,
+            LOCAL_STORE_BYTES - start.min(LOCAL_STORE_BYTES)
+        ));
+    }
+    Ok(())
+}
+
+/// A leaf's triangles are fetched into a packet context's staging slots, so no leaf may hold
+/// more of them than there are slots.
+fn check_leaves_fit(staged: &StagedScene) -> Result<(), String> {
+    let limit = crate::kernel_abi::context::STAGE_TRIANGLES;
+    match staged.nodes.iter().map(|n| n.triangle_count()).max() {
+        Some(most) if most > limit => Err(format!(
+            "a BVH leaf holds {most} triangles; the kernel fetches at most {limit} per leaf"
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Simulated cycles each SPU runs between two synchronisations of main memory. Writes and
 /// atomic updates become visible to other SPUs at these boundaries, in a fixed order, so a
 /// frame's result does not depend on how the SPUs are spread over host threads.
@@ -141,6 +184,10 @@ pub fn render_frame(
         (RAYTRACE_SOURCE, "kernels/raytrace.s")
     };
     let program = assemble_kernel(source, name)?;
+    if !fill {
+        check_local_store(&program, layout)?;
+        check_leaves_fit(staged)?;
+    }
     let mut memory = MainMemory::new(layout.memory_image(staged));
     let mut spus: Vec<Spu> = (0..spes)
         .map(|i| {

@@ -36,11 +36,20 @@ pub struct Args {
     #[arg(long, allow_hyphen_values = true)]
     camera: Option<String>,
     /// Lines in the BVH-node cache (power of two, 128..1024).
-    #[arg(long = "bvh-cache", default_value_t = 256)]
+    #[arg(long = "bvh-cache", default_value_t = 256, value_parser = cache_lines)]
     bvh_cache: u32,
     /// Lines in the triangle cache (power of two, 128..1024).
-    #[arg(long = "tri-cache", default_value_t = 256)]
+    #[arg(long = "tri-cache", default_value_t = 256, value_parser = cache_lines)]
     tri_cache: u32,
+    /// Ways of both caches: 1 (direct mapped) or 4 (set-associative, LRU).
+    #[arg(long, default_value_t = 1, value_parser = associativity)]
+    assoc: u32,
+    /// Packets each SPE keeps in flight (software hyperthreading, 1..8; 1 = blocking misses).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=8))]
+    sht: u32,
+    /// Main-memory latency of a DMA in nanoseconds before its bytes move.
+    #[arg(long = "dma-latency-ns", default_value_t = 100.0, value_parser = latency_ns, allow_hyphen_values = true)]
+    dma_latency_ns: f64,
     /// Run the fill pattern program instead of the ray tracer (tests the runtime).
     #[arg(long)]
     fill: bool,
@@ -60,6 +69,40 @@ pub struct Args {
     /// by cause, dual issue; then per label and totals), merged over all SPEs.
     #[arg(long)]
     profile: Option<PathBuf>,
+}
+
+/// `--bvh-cache` / `--tri-cache`: a power of two from 128 to 1024.
+fn cache_lines(text: &str) -> Result<u32, String> {
+    let lines: u32 = text
+        .parse()
+        .map_err(|_| format!("{text:?} is not a number of cache lines"))?;
+    spu_loader::kernel_abi::check_kernel_options(lines, lines, 1, 1)
+        .map_err(|_| format!("{lines} lines: must be a power of two from 128 to 1024"))?;
+    Ok(lines)
+}
+
+/// `--assoc`: 1 or 4 ways.
+fn associativity(text: &str) -> Result<u32, String> {
+    match text {
+        "1" => Ok(1),
+        "4" => Ok(4),
+        _ => Err(format!(
+            "{text:?}: must be 1 (direct mapped) or 4 (4-way, LRU)"
+        )),
+    }
+}
+
+/// `--dma-latency-ns`: finite, not negative, at most a millisecond.
+fn latency_ns(text: &str) -> Result<f64, String> {
+    let ns: f64 = text
+        .parse()
+        .map_err(|_| format!("{text:?} is not a latency in nanoseconds"))?;
+    if !ns.is_finite() || !(0.0..=1e6).contains(&ns) {
+        return Err(format!(
+            "{ns} ns: must be a finite latency from 0 to 1000000 ns"
+        ));
+    }
+    Ok(ns)
 }
 
 /// Loads a built-in scene by name, or a file.
@@ -175,7 +218,8 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         args.spes,
         args.bvh_cache,
         args.tri_cache,
-    )?;
+    )?
+    .with_kernel_options(args.assoc, args.sht)?;
     eprintln!(
         "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
         args.scene,
@@ -201,6 +245,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         threads,
         &spu_isa::timing::TimingConfig {
             clock_ghz: args.clock,
+            dma_latency_ns: args.dma_latency_ns,
             ..Default::default()
         },
         args.fill,
