@@ -77,6 +77,49 @@ pub fn assemble_kernel(source: &str, name: &str) -> Result<Program, String> {
     }
 }
 
+/// Local store of one SPU.
+pub const LOCAL_STORE_BYTES: u32 = 256 * 1024;
+
+/// The caches and packet contexts the kernel carves after its `cache_area` must fit in the
+/// local store.
+fn check_local_store(program: &Program, layout: &FrameLayout) -> Result<(), String> {
+    let Some(start) = program
+        .symbols
+        .iter()
+        .find(|(n, _)| n == "cache_area")
+        .map(|(_, a)| *a)
+    else {
+        return Ok(());
+    };
+    let p = &layout.params;
+    let (bvh, tri, sht) = (
+        1u32 << p.bvh_cache_log2,
+        1u32 << p.tri_cache_log2,
+        p.sht_contexts.max(1),
+    );
+    let end = start as u64 + crate::kernel_abi::carved_bytes(bvh, tri, sht) as u64;
+    if end > LOCAL_STORE_BYTES as u64 {
+        return Err(format!(
+            "local store: {bvh} BVH and {tri} triangle cache lines and {sht} packet contexts need {} bytes after the kernel's {start} bytes, {} available",
+            end - start as u64,
+            LOCAL_STORE_BYTES - start.min(LOCAL_STORE_BYTES)
+        ));
+    }
+    Ok(())
+}
+
+/// A leaf's triangles are fetched into a packet context's staging slots, so no leaf may hold
+/// more of them than there are slots.
+fn check_leaves_fit(staged: &StagedScene) -> Result<(), String> {
+    let limit = crate::kernel_abi::context::STAGE_TRIANGLES;
+    match staged.nodes.iter().map(|n| n.triangle_count()).max() {
+        Some(most) if most > limit => Err(format!(
+            "a BVH leaf holds {most} triangles; the kernel fetches at most {limit} per leaf"
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Simulated cycles each SPU runs between two synchronisations of main memory. Writes and
 /// atomic updates become visible to other SPUs at these boundaries, in a fixed order, so a
 /// frame's result does not depend on how the SPUs are spread over host threads.
@@ -84,6 +127,42 @@ pub const QUANTUM_CYCLES: u64 = 10_000;
 
 /// Stop code of a kernel that finished its frame (`stop 0x2000`, exit status 0).
 pub const STOP_DONE: u16 = 0x2000;
+
+/// Why a frame did not complete, in kinds a caller can tell apart (`spu render` gives each
+/// its own exit status).
+#[derive(Debug, Clone, PartialEq)]
+pub enum FrameError {
+    /// The frame could not be set up (the kernel did not assemble, ...).
+    Setup(String),
+    /// The SPUs had not all finished within this many cycles.
+    CycleLimit(u64),
+    /// An SPU stopped abnormally (illegal instruction, DMA error, deadlock, ...).
+    SpuStopped { spu: usize, reason: String },
+}
+
+impl std::fmt::Display for FrameError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FrameError::Setup(message) => f.write_str(message),
+            FrameError::CycleLimit(cycles) => {
+                write!(f, "the frame did not finish within {cycles} cycles")
+            }
+            FrameError::SpuStopped { spu, reason } => write!(f, "SPU {spu} stopped: {reason}"),
+        }
+    }
+}
+
+impl From<String> for FrameError {
+    fn from(message: String) -> FrameError {
+        FrameError::Setup(message)
+    }
+}
+
+impl From<FrameError> for String {
+    fn from(error: FrameError) -> String {
+        error.to_string()
+    }
+}
 
 /// Renders one frame with `spes` SPUs on `threads` host threads; `progress` hears the
 /// number of tiles taken so far.
@@ -97,7 +176,7 @@ pub fn render_frame(
     fill: bool,
     max_cycles: u64,
     progress: &mut dyn FnMut(u32, u32),
-) -> Result<FrameRun, String> {
+) -> Result<FrameRun, FrameError> {
     use spu_isa::machine::{apply_quantum, MainMemory, Spu, StopReason};
     let (source, name) = if fill {
         (FILL_SOURCE, "kernels/fill.s")
@@ -105,6 +184,10 @@ pub fn render_frame(
         (RAYTRACE_SOURCE, "kernels/raytrace.s")
     };
     let program = assemble_kernel(source, name)?;
+    if !fill {
+        check_local_store(&program, layout)?;
+        check_leaves_fit(staged)?;
+    }
     let mut memory = MainMemory::new(layout.memory_image(staged));
     let mut spus: Vec<Spu> = (0..spes)
         .map(|i| {
@@ -123,11 +206,9 @@ pub fn render_frame(
     let threads = threads.clamp(1, spes);
     let mut until = 0u64;
     while finished.iter().any(|f| f.is_none()) {
-        until += QUANTUM_CYCLES;
+        until = until.saturating_add(QUANTUM_CYCLES);
         if until > max_cycles {
-            return Err(format!(
-                "the frame did not finish within {max_cycles} cycles"
-            ));
+            return Err(FrameError::CycleLimit(max_cycles));
         }
         let memory_view = &memory;
         let mut outcomes: Vec<Option<StopReason>> = vec![None; spes];
@@ -163,12 +244,20 @@ pub fn render_frame(
                 None => {}
                 Some(StopReason::Stop(code)) if code == STOP_DONE => {
                     if spus[i].read_outbound_mailbox() != Some(1) {
-                        return Err(format!("SPU {i} stopped without its end-of-frame message"));
+                        return Err(FrameError::SpuStopped {
+                            spu: i,
+                            reason: "without its end-of-frame message".into(),
+                        });
                     }
                     finished[i] = Some(spus[i].cycles());
                 }
                 Some(StopReason::Blocked { .. }) => {}
-                Some(other) => return Err(format!("SPU {i} stopped: {other:?}")),
+                Some(other) => {
+                    return Err(FrameError::SpuStopped {
+                        spu: i,
+                        reason: other.to_string(),
+                    })
+                }
             }
         }
         let taken = memory

@@ -4,6 +4,7 @@
 //! The runs are independent `spu render` jobs: run here on host threads, or listed
 //! (`--list-jobs`) to spread over machines and collected afterwards (`--collect`).
 
+use crate::exit::{self, Error};
 use crate::paper_jobs::{select_scenes, shell_word, Caps, Job};
 use crate::paper_report::{build, Figure, Report, ReportScene};
 use crate::paper_tables::{tables, Measured, Setup, TableSpec};
@@ -47,16 +48,19 @@ pub struct Args {
     max_spes: usize,
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> exit::Result<ExitCode> {
     let size = args.size.unwrap_or(if args.quick { 256 } else { 1024 });
     if !(8..=8192).contains(&size) {
-        return Err(format!("--size {size}: must be 8 to 8192"));
+        return Err(Error::input(format!("--size {size}: must be 8 to 8192")));
     }
     if !(1..=16).contains(&args.max_spes) {
-        return Err(format!("--max-spes {}: must be 1 to 16", args.max_spes));
+        return Err(Error::input(format!(
+            "--max-spes {}: must be 1 to 16",
+            args.max_spes
+        )));
     }
     let threads = match args.threads {
-        Some(0) => return Err("--threads 0: must be at least 1".into()),
+        Some(0) => return Err(Error::input("--threads 0: must be at least 1")),
         Some(n) => n,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
@@ -92,13 +96,15 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     let stats_dir = match &args.collect {
         Some(dir) => {
             if !dir.is_dir() {
-                return Err(format!("--collect {}: not a directory", dir.display()));
+                return Err(Error::input(format!(
+                    "--collect {}: not a directory",
+                    dir.display()
+                )));
             }
             dir.clone()
         }
         None => {
-            std::fs::create_dir_all(&jobs_dir)
-                .map_err(|e| format!("{}: {e}", jobs_dir.display()))?;
+            std::fs::create_dir_all(&jobs_dir).map_err(|e| Error::output(&jobs_dir, e))?;
             run_jobs(&jobs, &jobs_dir, threads);
             jobs_dir
         }
@@ -143,7 +149,8 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     };
     if let Some(t) = report.tables.iter().find(|t| t.id == "figure2") {
         let series = crate::paper_figure::series(t);
-        let files = crate::paper_figure::write_figure2(&args.out, "figure2", &series)?;
+        let files = crate::paper_figure::write_figure2(&args.out, "figure2", &series)
+            .map_err(Error::failure)?;
         report.figures.push(Figure {
             id: "figure2".into(),
             title: "Figure 2: speed-up over SPEs".into(),
@@ -151,7 +158,8 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         });
     }
     write(&args.out.join("report.json"), &{
-        let mut s = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+        let mut s =
+            serde_json::to_string_pretty(&report).map_err(|e| Error::failure(e.to_string()))?;
         s.push('\n');
         s
     })?;
@@ -166,11 +174,21 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     if missing.is_empty() {
         Ok(ExitCode::SUCCESS)
     } else {
-        Err(format!(
-            "{} of {} runs have no statistics (the report says which):\n  {}",
-            missing.len(),
-            jobs.len(),
-            missing.join("\n  ")
+        // stats that a --collect directory lacks are bad input; runs that failed here are
+        // failures
+        let status = if args.collect.is_some() {
+            exit::Status::BadInput
+        } else {
+            exit::Status::Failure
+        };
+        Err(Error::new(
+            status,
+            format!(
+                "{} of {} runs have no statistics (the report says which):\n  {}",
+                missing.len(),
+                jobs.len(),
+                missing.join("\n  ")
+            ),
         ))
     }
 }
@@ -189,16 +207,15 @@ pub fn unique_jobs(specs: &[TableSpec]) -> Vec<Job> {
 
 /// Makes the output directory and checks that files can be written into it, before any
 /// work starts.
-fn prepare_out(out: &Path) -> Result<(), String> {
-    std::fs::create_dir_all(out).map_err(|e| format!("--out {}: {e}", out.display()))?;
-    let probe = out.join(".spu-paper-write-test");
-    std::fs::write(&probe, b"").map_err(|e| format!("--out {}: {e}", out.display()))?;
-    let _ = std::fs::remove_file(&probe);
-    Ok(())
+fn prepare_out(out: &Path) -> exit::Result<()> {
+    std::fs::create_dir_all(out)
+        .map_err(|e| Error::input(format!("--out {}: {e}", out.display())))?;
+    exit::check_writable(&out.join("report.json"))
+        .map_err(|e| Error::input(format!("--out: {}", e.message.unwrap_or_default())))
 }
 
-fn write(path: &Path, text: &str) -> Result<(), String> {
-    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+fn write(path: &Path, text: &str) -> exit::Result<()> {
+    exit::write_file(path, text.as_bytes())
 }
 
 #[derive(clap::Parser)]
@@ -273,7 +290,7 @@ fn run_job(job: &Job, dir: &Path) -> Result<(), String> {
     let mut words = job.render_args(dir);
     words.extend(["--threads".into(), "1".into(), "--quiet".into()]);
     let cli = <RenderCli as clap::Parser>::try_parse_from(&words).map_err(|e| e.to_string())?;
-    crate::cmd_render::run(cli.args)?;
+    crate::cmd_render::run(cli.args).map_err(|e| e.message.unwrap_or_default())?;
     Ok(())
 }
 
