@@ -1,4 +1,4 @@
-//! The contract between the host and the ray-tracing kernel (`kernels/raytrace.s`): the
+//! The contract between the host and the ray-tracing kernel (`kernels/primary.s`): the
 //! parameter block the kernel fetches at start, the statistics block it writes at the end,
 //! and the packet-major frame buffer it fills.
 //!
