@@ -40,7 +40,7 @@ packet_done:
         wrch    $MFC_WrTagUpdate, $73
         nop
         rdch    $74, $MFC_RdTagStat
-        ila     $75, ray_dx
+        ori     $75, RAYS, 0
         lqd     $76, 0+2048($75)
         nop
         lqd     $77, 0+2304($75)
@@ -219,7 +219,7 @@ packet_done:
         fm      $110, $87, $88
         lqd     $73, 240+2304($75)
         and     $112, $76, $100
-        lqa     $114, vars+V_TILE
+        lqd     $114, CTX_TILE64(RAYS)
         fm      $77, $92, $95
         lqd     $116, 128+1792($75)
         and     $118, $78, $100
@@ -237,7 +237,7 @@ packet_done:
         cfltu   $123, $107, 8
         lqd     $125, 240+1792($75)
         and     $122, $99, $100
-        lqa     $93, vars+V_PKT
+        lqd     $93, CTX_PACKET(RAYS)
         cfltu   $109, $112, 8
         lqd     $79, 128+1536($75)
         and     $124, $91, $100
@@ -286,7 +286,7 @@ packet_done:
         shufb   $100, $77, $77, $103
         selb    $118, $96, $102, $78
         shufb   $85, $99, $99, $103
-        shli    $121, $114, 6
+        ori     $121, $114, 0
         shufb   $70, $91, $91, $103
         ceqi    $122, $116, -1
         shufb   $124, $118, $118, $103
@@ -344,13 +344,4 @@ packet_done:
         lnop
         nop
         stqa    $92, vars+V_OUTSEL
-        ai      $90, $93, 1
-        lnop
-        nop
-        stqa    $90, vars+V_PKT
-        ceqi    $108, $90, 64
-        lnop
-        nop
-        brz     $108, packet_loop
-        nop
-        br      next_tile
+        br      packet_start                  # the context's next packet (modules/frame.s)

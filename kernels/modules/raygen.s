@@ -1,7 +1,8 @@
 # raygen.s — ray generation and packet setup for one 8x8 packet of primary rays.
 #
-# The packet's rays (row-major, ray i = row*8 + col) are written to ray_dx/dy/dz and their
-# reciprocals to ray_rx/ry/rz, four vectors (two rows) per pass; t starts at 1e30 and the
+# The packet's rays (row-major, ray i = row*8 + col) are written to the current packet
+# context (RAYS: ray_dx/dy/dz, then the reciprocals ray_rx/ry/rz, see
+# loader::kernel_abi::context), four vectors (two rows) per pass; t starts at 1e30 and the
 # hit id at -1. The packet setup then builds the frustum of the corner rays for the
 # interval-arithmetic box tests (PA*, PB*, OA*, OB*, F2), the first ray's data, and enters
 # traversal (modules/traverse.s) at the root's children.
@@ -9,7 +10,7 @@
         .text
 packet_loop:
         # ---- ray generation: d = dir00 + (px0 + col)*du + (py0 + row)*dv
-        lqa     $66, vars+V_PKT
+        lqa     $66, vars+V_CURPKT
         lqa     $67, vars+V_TX
         lqa     $68, vars+V_TY
         lqa     $73, vars+V_DIR00
@@ -46,16 +47,16 @@ packet_loop:
         fma     $93, $87, $80, $83
         fma     $94, $87, $81, $84
         fma     $95, $87, $82, $85
-        ila     $88, ray_dx                   # vector pointer
+        ori     $88, RAYS, 0                  # vector pointer
         il      $89, 0                        # row (float)
         fma     $93, $86, $77, $93
         fma     $94, $86, $78, $94
         fma     $95, $86, $79, $95
         il      $90, 4                        # row pairs left
         il      $118, -1
-        stqa    $93, corners
-        stqa    $94, corners+16
-        stqa    $95, corners+32
+        stqd    $93, CTX_CORNERS(RAYS)
+        stqd    $94, CTX_CORNERS+16(RAYS)
+        stqd    $95, CTX_CORNERS+32(RAYS)
 
         # four vectors (two rows) per pass, scheduled into even/odd pairs
         .align  3
@@ -270,16 +271,16 @@ packet_loop:
         .align  3
 .Lsetup:
         il      FIRST, 0
-        lqa     $66, corners
+        lqd     $66, CTX_CORNERS(RAYS)
         ila     $106, k_pat
-        lqa     $67, corners+16
+        lqd     $67, CTX_CORNERS+16(RAYS)
         andi    $101, FIRST, 3
-        lqa     $68, corners+32
+        lqd     $68, CTX_CORNERS+32(RAYS)
         rotmi   $100, FIRST, -2
         lqa     $69, k_eps
         shli    $101, $101, 4   # its lane * 16
         lqa     $70, k_abs
-        ila     $102, ray_rx
+        nop
         lqa     $71, k_eps20
         ori     STK, STKBASE, 0
         frest   $72, $66
@@ -297,19 +298,19 @@ packet_loop:
         lnop
         ila     $106, k_tpat
         lnop
-        a       $102, $102, $100
+        a       $102, RAYS, $100
         lnop
         nop
         lqx     FT_PAT, $106, $101
-        ila     $106, ray_t
-        lqd     $103, 0($102)
+        nop
+        lqd     $103, CTX_RAY_RX($102)
         fnms    $76, $66, $72, ONE
-        lqd     $104, 256($102)
+        lqd     $104, CTX_RAY_RX+256($102)
         fnms    $77, $67, $73, ONE
-        lqd     $105, 512($102)
+        lqd     $105, CTX_RAY_RX+512($102)
         fnms    $78, $68, $74, ONE
         lnop
-        a       FT_ADDR, $106, $100
+        a       FT_ADDR, RAYS, $100
         lnop
         and     F2, NBIG, $75
         lqa     $106, k_eps

@@ -37,7 +37,7 @@ trav:
         nop
         lqx     $71, BDATA32, $66   # z
         andi    $69, $67, 0x30   # split axis * 16
-        lqd     $74, 0(FT_ADDR)   # the first ray's t
+        lqd     $74, CTX_RAY_T(FT_ADDR)   # the first ray's t
         rotmi   $97, $67, -6   # triangle count: a leaf
         lqx     $73, BDATA48, $66   # (link', meta) of both children
         nop
@@ -135,7 +135,7 @@ trav:
         fcgt    $114, $110, $113   # the frustum misses
         lnop
         selb    $119, $78, $79, $118   # next state's pattern
-        brz     $115, bvh_miss
+        biz     $115, BMISSH
         selb    $120, $79, $78, $118   # pushed state's pattern
         lnop
         a       $124, $116, $117
@@ -254,7 +254,8 @@ find_first:
         ai      $89, FIRST, -1
         lqa     $113, k_epslo
         lqa     $114, k_epshi
-        ila     $88, ray_rx
+        ila     $88, CTX_RAY_RX
+        a       $88, $88, RAYS
         # two vectors per pass (scheduled into even/odd pairs)
         .align  3
 1:
@@ -424,16 +425,16 @@ set_first:
         shli    $100, $100, 4                 # its vector's byte offset
         andi    $101, FIRST, 3
         shli    $101, $101, 4                 # its lane * 16
-        ila     $102, ray_rx
+        ori     $102, RAYS, 0
         a       $102, $102, $100
-        lqd     $103, 0($102)
-        lqd     $104, 256($102)
-        lqd     $105, 512($102)
+        lqd     $103, CTX_RAY_RX($102)
+        lqd     $104, CTX_RAY_RX+256($102)
+        lqd     $105, CTX_RAY_RX+512($102)
         ila     $106, k_pat
         lqx     $107, $106, $101
         ila     $106, k_tpat
         lqx     FT_PAT, $106, $101
-        ila     $106, ray_t
+        ori     $106, RAYS, 0
         a       FT_ADDR, $106, $100
         shufb   $103, $103, $103, $107        # 1/d splats
         shufb   $104, $104, $104, $107

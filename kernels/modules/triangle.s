@@ -11,31 +11,42 @@
 # ---- leaf: test the active rays against each triangle of the leaf
 leaf:
         lqa     $80, vars+V_LEAVES
+        ai      $80, $80, 1
+        stqa    $80, vars+V_LEAVES
+        # a new visit: what the staging slots hold is from an older leaf
+        il      $86, -1
+        .irp    J, 0, 1, 2, 3, 4, 5, 6, 7
+        stqd    $86, CTX_STAGE_TAGS+\J*16(RAYS)
+        .endr
+leaf_probe:                                   # (a suspended leaf resumes here)
         ori     $66, CUR, 0                   # first triangle
         rotqbyi $67, CUR, 4
-        ai      $80, $80, 1
         rotmi   $67, $67, -6                  # count (meta << 4 >> 2 ... see bvh_miss)
-        stqa    $80, vars+V_LEAVES
-        # bring every missing triangle of the leaf into the cache with one wait: the
-        # DMAs queue back to back, so a leaf pays the memory latency once
+        # bring every missing triangle of the leaf in with one wait: the DMAs queue back
+        # to back, so a leaf pays the memory latency once (or once per suspension)
         ori     $76, $66, 0
         ori     $77, $67, 0
         il      $78, 0                        # any miss
         il      $79, 64
+        lqa     $75, vars+V_PFMISS            # the miss handler for the configuration
         hbrr    .Lpf_br, .Lpf
 .Lpf:   and     $80, $76, TMASK
         shli    $81, $80, 4
         lqx     $82, TTAGS, $81
         ceq     $83, $82, $76
-        brz     $83, .Lpf_miss                # hits fall through
+        biz     $83, $75                      # hits fall through
 .Lpf_next:
         ai      $76, $76, 1
         ai      $77, $77, -1
 .Lpf_br:
         brnz    $77, .Lpf
         brz     $78, tri_loop
+        lqa     $86, vars+V_NCTX1
+        brz     $86, .Lpf_suspend
+        lqd     $86, CTX_TAG(RAYS)
+        rotqbyi $87, $86, 4
         il      $86, 2
-        wrch    $MFC_WrTagMask, $86
+        wrch    $MFC_WrTagMask, $87
         wrch    $MFC_WrTagUpdate, $86
         rdch    $86, $MFC_RdTagStat
 tri_loop:
@@ -53,7 +64,7 @@ tri_loop:
 .Ltri_hit:
         ila     $90, k_axoff
         lqd     $86, TRI_N_U($84)   # (n_u, n_v, n_d, k)
-        ila     $97, ray_dx
+        ori     $97, RAYS, 0
         lqd     $87, TRI_B_NU($84)   # (b_nu, b_nv, b_d, -)
         rotmi   $119, FIRST, -4
         lqd     $88, TRI_C_NU($84)   # (c_nu, c_nv, c_d, -)
@@ -95,7 +106,7 @@ tri_loop:
         lnop
         rotmi   $101, $98, -4
         lnop
-        ila     $97, corners
+        ai      $97, RAYS, CTX_CORNERS
         shufb   $94, $92, $92, PAT0   # o_k
         rotmi   $102, $99, -4
         shufb   $121, $92, $92, PAT1   # o_u
@@ -190,22 +201,22 @@ tri_loop:
         # barycentrics, hit = t in (0, t_old) and inside, selb updates of t, id, n.d/|n|)
         .align  3
 ray_loop:
-        ila     $59, ray_t
+        nop
         lqx     $65, $125, $119
-        ila     $78, ray_id
+        nop
         lqx     $79, $126, $119
-        ila     $80, ray_nd
+        nop
         lqx     $81, $127, $119
-        a       $82, $59, $119
+        a       $82, RAYS, $119
         lnop
-        a       $83, $78, $119
+        nop
         lnop
-        a       $84, $80, $119
-        lqd     $85, 0($82)
+        nop
+        lqd     $85, CTX_RAY_T+0($82)
         ai      $119, $119, 16
-        lqd     $86, 16($82)
+        lqd     $86, CTX_RAY_T+16($82)
         fma     $87, $68, $79, $65
-        lqd     $88, 32($82)
+        lqd     $88, CTX_RAY_T+32($82)
         nop
         lqx     $89, $125, $119
         nop
@@ -213,9 +224,9 @@ ray_loop:
         nop
         lqx     $91, $127, $119
         ai      $119, $119, 16
-        lqd     $92, 48($82)
+        lqd     $92, CTX_RAY_T+48($82)
         nop
-        lqd     $93, 0($83)
+        lqd     $93, CTX_RAY_ID+0($82)
         fma     $87, $69, $81, $87
         lqx     $94, $125, $119
         nop
@@ -223,9 +234,9 @@ ray_loop:
         fma     $96, $68, $90, $89
         lqx     $97, $127, $119
         ai      $119, $119, 16
-        lqd     $98, 0($84)
+        lqd     $98, CTX_RAY_ND+0($82)
         nop
-        lqd     $99, 16($83)
+        lqd     $99, CTX_RAY_ID+16($82)
         nop
         lqx     $100, $125, $119
         fm      $101, $87, $123
@@ -235,15 +246,15 @@ ray_loop:
         fma     $96, $69, $91, $96
         frest   $105, $87
         ai      $119, $119, 16
-        lqd     $106, 16($84)
+        lqd     $106, CTX_RAY_ND+16($82)
         nop
-        lqd     $107, 32($83)
+        lqd     $107, CTX_RAY_ID+32($82)
         ceqi    $112, $119, 256
-        lqd     $108, 32($84)
+        lqd     $108, CTX_RAY_ND+32($82)
         fma     $109, $68, $102, $100
-        lqd     $110, 48($83)
+        lqd     $110, CTX_RAY_ID+48($82)
         fma     $103, $69, $97, $103
-        lqd     $111, 48($84)
+        lqd     $111, CTX_RAY_ND+48($82)
         fi      $105, $87, $105
         frest   $113, $96
         fm      $114, $96, $123
@@ -417,29 +428,29 @@ ray_loop:
         selb    $93, $93, $124, $104
         lnop
         selb    $98, $98, $101, $104
-        stqd    $85, 0($82)
+        stqd    $85, CTX_RAY_T+0($82)
         selb    $86, $86, $94, $81
-        stqd    $93, 0($83)
+        stqd    $93, CTX_RAY_ID+0($82)
         selb    $99, $99, $124, $81
-        stqd    $98, 0($84)
+        stqd    $98, CTX_RAY_ND+0($82)
         selb    $106, $106, $114, $81
-        stqd    $86, 16($82)
+        stqd    $86, CTX_RAY_T+16($82)
         selb    $88, $88, $100, $105
-        stqd    $99, 16($83)
+        stqd    $99, CTX_RAY_ID+16($82)
         selb    $107, $107, $124, $105
-        stqd    $106, 16($84)
+        stqd    $106, CTX_RAY_ND+16($82)
         selb    $108, $108, $116, $105
-        stqd    $88, 32($82)
+        stqd    $88, CTX_RAY_T+32($82)
         selb    $92, $92, $103, $117
-        stqd    $107, 32($83)
+        stqd    $107, CTX_RAY_ID+32($82)
         selb    $110, $110, $124, $117
-        stqd    $108, 32($84)
+        stqd    $108, CTX_RAY_ND+32($82)
         selb    $111, $111, $118, $117
-        stqd    $92, 48($82)
+        stqd    $92, CTX_RAY_T+48($82)
         nop
-        stqd    $110, 48($83)
+        stqd    $110, CTX_RAY_ID+48($82)
         nop
-        stqd    $111, 48($84)
+        stqd    $111, CTX_RAY_ND+48($82)
         nop
 .Lray_br:
         brz     $112, ray_loop
@@ -450,9 +461,9 @@ tri_next:
         ai      $67, $67, -1
         brnz    $67, tri_loop
         # the packet's largest t shrinks as rays hit: refresh the IA exit bound
-        ila     $80, ray_t
+        
         .irp    J, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
-        lqd     (\J+81), \J*16($80)
+        lqd     (\J+81), CTX_RAY_T+\J*16(RAYS)
         .endr
         .irp    J, 0, 2, 4, 6, 8, 10, 12, 14
         fcgt    (\J+100), (\J+82), (\J+81)
@@ -481,6 +492,7 @@ tri_next:
         lqa     $84, k_oddmask
         and     $81, $81, $84
         xor     F2, $81, NEGODD               # (0, -tmax, 0, -tmax)
+        lqa     BMISSH, vars+V_BMISSH         # (the ray loop used the register)
 
 # ---- pop: continue with the entry on top of the stack, or finish the packet
 pop:
