@@ -33,6 +33,7 @@ pub use layout::StagedScene;
 pub use scene::{Material, Scene, Triangle};
 pub mod frame;
 pub mod kernel_abi;
+pub mod kernels;
 pub mod runtime;
 pub mod stats;
 pub mod timeline;

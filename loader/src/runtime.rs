@@ -49,15 +49,6 @@ impl FrameRun {
     }
 }
 
-/// The kernels' sources, built into the binary so `spu render` needs no files.
-pub const RAYTRACE_SOURCE: &str = include_str!("../../kernels/raytrace.s");
-pub const FILL_SOURCE: &str = include_str!("../../kernels/fill.s");
-
-/// The generated `layout.inc` every kernel includes: record layouts and the kernel ABI.
-pub fn layout_include() -> String {
-    crate::layout::spu_layout_include() + &crate::kernel_abi::spu_include()
-}
-
 /// An assembled SPU program: a flat local-store image and its entry point.
 #[derive(Clone, Debug)]
 pub struct Program {
@@ -66,10 +57,10 @@ pub struct Program {
     pub symbols: Vec<(String, u32)>,
 }
 
-/// Assembles a kernel with the generated include.
+/// Assembles a kernel with its includes from memory (`layout.inc`, the kernel modules).
 pub fn assemble_kernel(source: &str, name: &str) -> Result<Program, String> {
     let opts = spu_asm::Options {
-        virtual_files: vec![("layout.inc".to_string(), layout_include())],
+        virtual_files: crate::kernels::include_files(),
         ..Default::default()
     };
     match spu_asm::assemble(source, name, &opts) {
@@ -213,11 +204,7 @@ pub fn render_frame_with(
     progress: &mut dyn FnMut(u32, u32),
 ) -> Result<FrameRun, FrameError> {
     use spu_isa::machine::{apply_quantum, MainMemory, Spu, StopReason};
-    let (source, name) = if fill {
-        (FILL_SOURCE, "kernels/fill.s")
-    } else {
-        (RAYTRACE_SOURCE, "kernels/raytrace.s")
-    };
+    let (source, name) = crate::kernels::frame_program(fill);
     let program = assemble_kernel(source, name)?;
     if !fill {
         check_local_store(&program, layout)?;

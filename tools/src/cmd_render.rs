@@ -360,11 +360,7 @@ fn kernel_profile(run: &spu_loader::runtime::FrameRun, fill: bool) -> Result<Str
         .profile
         .as_ref()
         .ok_or("no profile: the timing model was off (SPU_NO_TIMING)")?;
-    let (source, name) = if fill {
-        (spu_loader::runtime::FILL_SOURCE, "kernels/fill.s")
-    } else {
-        (spu_loader::runtime::RAYTRACE_SOURCE, "kernels/raytrace.s")
-    };
+    let (source, name) = spu_loader::kernels::frame_program(fill);
     let program = spu_loader::runtime::assemble_kernel(source, name)?;
     let lines = executed_lines(profile, &program.image, &program.symbols);
     let opts = ListingOptions {
