@@ -85,7 +85,7 @@ fn heatmap_and_trace_of_a_small_frame() {
             assert!(e["dur"].as_f64().unwrap() >= 0.0, "{e}");
         }
     }
-    // packets nest in their SPU's tiles
+    // without SHT each packet lies within its tile's span on the SPU's tile track
     for pk in &packets {
         let (ts, end) = (
             pk["ts"].as_f64().unwrap(),
@@ -94,7 +94,10 @@ fn heatmap_and_trace_of_a_small_frame() {
         let tile = pk["name"].as_str().unwrap()[7..].split('.').next().unwrap();
         let t = tiles
             .iter()
-            .find(|t| t["name"] == format!("tile {tile}") && t["tid"] == pk["tid"])
+            .find(|t| {
+                t["name"] == format!("tile {tile}")
+                    && t["tid"].as_u64() == pk["tid"].as_u64().map(|s| s + 200)
+            })
             .unwrap_or_else(|| panic!("no tile for {pk}"));
         let (a, b) = (
             t["ts"].as_f64().unwrap(),
@@ -107,7 +110,7 @@ fn heatmap_and_trace_of_a_small_frame() {
         .filter(|e| e["ph"] == "M" && e["name"] == "thread_name")
         .map(|e| e["args"]["name"].as_str().unwrap())
         .collect();
-    assert!(names.contains(&"SPU 0") && names.contains(&"SPU 1 DMA waits"));
+    assert!(names.contains(&"SPU 0 packets") && names.contains(&"SPU 1 DMA waits"));
     assert!(events
         .iter()
         .any(|e| e["ph"] == "C" && e["name"] == "memory interface"));
