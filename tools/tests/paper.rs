@@ -209,7 +209,11 @@ fn collect_names_missing_and_corrupt_stats_and_reports_the_rest() {
         ],
     ]
     .concat());
-    assert_eq!(collected.status.code(), Some(2), "stats missing from --collect");
+    assert_eq!(
+        collected.status.code(),
+        Some(2),
+        "stats missing from --collect"
+    );
     let err = String::from_utf8_lossy(&collected.stderr);
     for gone in &stats[..2] {
         let name = gone.file_name().unwrap().to_str().unwrap();
