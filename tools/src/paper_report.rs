@@ -132,7 +132,17 @@ pub fn build(
 fn describe_jobs(jobs: &[Job]) -> String {
     match jobs {
         [one] => one.describe(),
-        [a, b] => format!("{} vs {}", a.describe(), b.describe()),
+        [a, b] => {
+            // the second run as it differs from the first
+            let first = a.describe();
+            let second = b.describe();
+            let shared: Vec<&str> = first.split(", ").collect();
+            let differs: Vec<&str> = second
+                .split(", ")
+                .filter(|part| !shared.contains(part))
+                .collect();
+            format!("{first} vs {}", differs.join(", "))
+        }
         _ => jobs.iter().map(Job::name).collect::<Vec<_>>().join(", "),
     }
 }
