@@ -11,6 +11,7 @@
 
 use crate::table::Unit;
 use crate::timing::{StallCause, STALL_CLASSES};
+use serde_json::{json, Value};
 use std::collections::HashMap;
 use std::fmt::Write as _;
 
@@ -305,46 +306,41 @@ impl Totals {
 
     /// The totals as a JSON object.
     pub fn json(&self) -> String {
-        let mut s = String::from("{");
-        let _ = write!(
-            s,
-            "\"cycles\":{},\"instructions\":{},\"instructions_without_nops\":{},\"cpi\":{},\"cpi_without_nops\":{},\
-             \"single_cycles\":{},\"dual_cycles\":{},\"branches_taken\":{},\"branches_not_taken\":{},\
-             \"branch_misses\":{},\"hints\":{},\"hint_hits\":{},\"pair_dependency\":{},\"ls_contention\":{},\
-             \"dma_contention\":{},\"idle_cycles\":{},\"spus\":{},\"stall\":{}",
-            self.cycles,
-            self.instructions,
-            self.instructions - self.nops,
-            json_f64(self.cpi()),
-            json_f64(self.cpi_without_nops()),
-            self.single_cycles(),
-            self.dual_cycles,
-            self.branches_taken,
-            self.branches_not_taken,
-            self.branch_misses,
-            self.hints,
-            self.hint_hits,
-            self.pair_dependency,
-            self.ls_contention,
-            self.dma_contention,
-            self.idle_cycles,
-            self.spus,
-            stall_json(&self.stall),
-        );
-        s.push_str(",\"dependency_by_unit\":{");
-        for (i, unit) in UNITS.iter().enumerate() {
-            if i > 0 {
-                s.push(',');
-            }
-            let _ = write!(
-                s,
-                "\"{}\":{}",
-                unit_name(*unit),
-                self.dep_by_unit[*unit as usize]
-            );
-        }
-        s.push_str("}}");
-        s
+        self.json_value().to_string()
+    }
+
+    /// The totals as a JSON value (keys in the order of IBM's report).
+    pub fn json_value(&self) -> Value {
+        let dependency_by_unit: serde_json::Map<String, Value> = UNITS
+            .iter()
+            .map(|&unit| {
+                (
+                    unit_name(unit).to_string(),
+                    json!(self.dep_by_unit[unit as usize]),
+                )
+            })
+            .collect();
+        json!({
+            "cycles": self.cycles,
+            "instructions": self.instructions,
+            "instructions_without_nops": self.instructions - self.nops,
+            "cpi": json_ratio(self.cpi()),
+            "cpi_without_nops": json_ratio(self.cpi_without_nops()),
+            "single_cycles": self.single_cycles(),
+            "dual_cycles": self.dual_cycles,
+            "branches_taken": self.branches_taken,
+            "branches_not_taken": self.branches_not_taken,
+            "branch_misses": self.branch_misses,
+            "hints": self.hints,
+            "hint_hits": self.hint_hits,
+            "pair_dependency": self.pair_dependency,
+            "ls_contention": self.ls_contention,
+            "dma_contention": self.dma_contention,
+            "idle_cycles": self.idle_cycles,
+            "spus": self.spus,
+            "stall": stall_json(&self.stall),
+            "dependency_by_unit": dependency_by_unit,
+        })
     }
 }
 
@@ -381,46 +377,23 @@ pub fn unit_name(u: Unit) -> &'static str {
     }
 }
 
-/// A JSON number for a float (finite, two decimals are enough for CPI).
-pub fn json_f64(x: f64) -> String {
+/// A JSON number for a ratio such as a CPI: four decimals, `null` where it is not finite
+/// (no instructions), so that the output is always valid JSON.
+pub fn json_ratio(x: f64) -> Value {
     if x.is_finite() {
-        format!("{:.4}", x)
+        json!((x * 1e4).round() / 1e4)
     } else {
-        "null".into()
+        Value::Null
     }
 }
 
-/// A JSON string literal.
-pub fn json_str(s: &str) -> String {
-    let mut out = String::with_capacity(s.len() + 2);
-    out.push('"');
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            '\n' => out.push_str("\\n"),
-            '\t' => out.push_str("\\t"),
-            '\r' => out.push_str("\\r"),
-            c if (c as u32) < 0x20 => {
-                let _ = write!(out, "\\u{:04x}", c as u32);
-            }
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
-}
-
-fn stall_json(stall: &[u64; STALL_CLASSES]) -> String {
-    let mut s = String::from("{");
-    for (i, name) in StallCause::NAMES.iter().enumerate() {
-        if i > 0 {
-            s.push(',');
-        }
-        let _ = write!(s, "\"{name}\":{}", stall[i]);
-    }
-    s.push('}');
-    s
+fn stall_json(stall: &[u64; STALL_CLASSES]) -> Value {
+    let map: serde_json::Map<String, Value> = StallCause::NAMES
+        .iter()
+        .zip(stall)
+        .map(|(name, cycles)| (name.to_string(), json!(cycles)))
+        .collect();
+    Value::Object(map)
 }
 
 /// The counters of one SPU run (or of several, merged).
@@ -909,6 +882,12 @@ mod listing {
         let mut insts = Vec::new();
         let mut labels: Vec<(String, u32, RangeSum)> = Vec::new();
         let mut range_sum = RangeSum::default();
+        let pairs = |items: &[(u32, u64)], key: &str| -> Value {
+            items
+                .iter()
+                .map(|(k, c)| json!({ key: k, "cycles": c }))
+                .collect()
+        };
         for line in lines {
             match line {
                 ListingLine::Label(name) => {
@@ -927,67 +906,57 @@ mod listing {
                         l.2.add(&s);
                     }
                     range_sum.add(&s);
-                    let deps: Vec<String> = profile
-                        .dependency_sources(*addr)
-                        .iter()
-                        .map(|(p, c)| format!("{{\"addr\":{p},\"cycles\":{c}}}"))
-                        .collect();
-                    let chans: Vec<String> = profile
+                    let channels: Vec<(u32, u64)> = profile
                         .channel_stalls(*addr)
                         .iter()
-                        .map(|(ch, c)| format!("{{\"channel\":{ch},\"cycles\":{c}}}"))
+                        .map(|&(ch, c)| (ch as u32, c))
                         .collect();
-                    insts.push(format!(
-                        "{{\"addr\":{},\"text\":{},\"executions\":{},\"cycles\":{},\"dual\":{},\"stall\":{},\"waits_on\":[{}],\"channels\":[{}]}}",
-                        addr,
-                        json_str(text),
-                        s.executions,
-                        s.cycles,
-                        s.dual,
-                        stall_json(&s.stall),
-                        deps.join(","),
-                        chans.join(",")
-                    ));
+                    insts.push(json!({
+                        "addr": addr,
+                        "text": text,
+                        "executions": s.executions,
+                        "cycles": s.cycles,
+                        "dual": s.dual,
+                        "stall": stall_json(&s.stall),
+                        "waits_on": pairs(&profile.dependency_sources(*addr), "addr"),
+                        "channels": pairs(&channels, "channel"),
+                    }));
                 }
             }
         }
-        let labels: Vec<String> = labels
+        let sum_json = |s: &RangeSum| {
+            json!({
+                "executions": s.executions,
+                "cycles": s.cycles,
+                "cpi": json_ratio(s.cpi()),
+                "dual": s.dual,
+                "stall": stall_json(&s.stall),
+            })
+        };
+        let labels: Vec<Value> = labels
             .iter()
             .filter(|l| l.2.executions > 0 || l.2.cycles > 0)
             .map(|(name, addr, s)| {
-                format!(
-                    "{{\"label\":{},\"addr\":{},\"executions\":{},\"cycles\":{},\"cpi\":{},\"dual\":{},\"stall\":{}}}",
-                    json_str(name),
-                    addr,
-                    s.executions,
-                    s.cycles,
-                    json_f64(s.cpi()),
-                    s.dual,
-                    stall_json(&s.stall)
-                )
+                let mut entry = json!({ "label": name, "addr": addr });
+                if let (Value::Object(entry), Value::Object(sum)) = (&mut entry, sum_json(s)) {
+                    entry.extend(sum);
+                }
+                entry
             })
             .collect();
-        let range = format!(
-            "{{\"executions\":{},\"cycles\":{},\"cpi\":{},\"dual\":{},\"stall\":{}}}",
-            range_sum.executions,
-            range_sum.cycles,
-            json_f64(range_sum.cpi()),
-            range_sum.dual,
-            stall_json(&range_sum.stall)
-        );
-        let chans: Vec<String> = profile
+        let channels: Vec<(u32, u64)> = profile
             .channel_totals()
             .iter()
-            .map(|(ch, c)| format!("{{\"channel\":{ch},\"cycles\":{c}}}"))
+            .map(|&(ch, c)| (ch as u32, c))
             .collect();
-        format!(
-            "{{\"totals\":{},\"range\":{},\"channels\":[{}],\"labels\":[{}],\"instructions\":[{}]}}\n",
-            profile.totals.json(),
-            range,
-            chans.join(","),
-            labels.join(","),
-            insts.join(",")
-        )
+        let report = json!({
+            "totals": profile.totals.json_value(),
+            "range": sum_json(&range_sum),
+            "channels": pairs(&channels, "channel"),
+            "labels": labels,
+            "instructions": insts,
+        });
+        format!("{report}\n")
     }
 }
 
@@ -1012,6 +981,9 @@ mod static_timing {
         /// Instructions on the line (usually at most one): address, decoded instruction,
         /// mnemonic and operand text.
         pub insts: Vec<SourceInst>,
+        /// Statements in a code section that name no instruction (and are not directives):
+        /// not timed, and reported so that nothing is skipped silently.
+        pub unknown: Vec<String>,
     }
 
     #[derive(Clone, Debug)]
@@ -1178,6 +1150,7 @@ mod static_timing {
                 text: raw.to_string(),
                 labels: Vec::new(),
                 insts: Vec::new(),
+                unknown: Vec::new(),
             };
             let code = strip_comments(raw);
             for stmt in code.split(';') {
@@ -1214,25 +1187,30 @@ mod static_timing {
                                 || name.starts_with(".init")
                                 || name.starts_with(".fini");
                         }
+                        // Addresses wrap as the local store does, whatever the sizes.
                         ".align" | ".p2align" if in_text => {
                             let a = 1u32 << arg(0).unwrap_or(0).clamp(0, 16);
-                            addr = addr.div_ceil(a) * a;
+                            addr = addr.div_ceil(a).wrapping_mul(a);
                         }
                         ".balign" if in_text => {
                             let a = arg(0).unwrap_or(1).clamp(1, 1 << 16) as u32;
-                            addr = addr.div_ceil(a) * a;
+                            addr = addr.div_ceil(a).wrapping_mul(a);
                         }
                         ".word" | ".long" | ".int" | ".float" | ".ffloat" if in_text => {
-                            addr += 4 * split_operands(rest).len() as u32
+                            addr = addr.wrapping_add(4 * split_operands(rest).len() as u32)
                         }
                         ".short" | ".half" | ".hword" if in_text => {
-                            addr += 2 * split_operands(rest).len() as u32
+                            addr = addr.wrapping_add(2 * split_operands(rest).len() as u32)
                         }
-                        ".byte" if in_text => addr += split_operands(rest).len() as u32,
+                        ".byte" if in_text => {
+                            addr = addr.wrapping_add(split_operands(rest).len() as u32)
+                        }
                         ".quad" | ".double" | ".dfloat" if in_text => {
-                            addr += 8 * split_operands(rest).len() as u32
+                            addr = addr.wrapping_add(8 * split_operands(rest).len() as u32)
                         }
-                        ".space" | ".skip" if in_text => addr += arg(0).unwrap_or(0).max(0) as u32,
+                        ".space" | ".skip" if in_text => {
+                            addr = addr.wrapping_add(arg(0).unwrap_or(0).max(0) as u32)
+                        }
                         _ => {}
                     }
                     continue;
@@ -1247,7 +1225,9 @@ mod static_timing {
                         mnemonic: lower.clone(),
                         operands: rest.split_whitespace().collect::<Vec<_>>().join(" "),
                     });
-                    addr += 4;
+                    addr = addr.wrapping_add(4);
+                } else {
+                    line.unknown.push(word.to_string());
                 }
             }
             lines.push(line);
@@ -1311,6 +1291,17 @@ mod static_timing {
         pub blocks: Vec<StaticBlock>,
         /// The source lines shown (all, or the one block asked for).
         pub shown: std::ops::Range<usize>,
+    }
+
+    impl StaticTiming {
+        /// Statements that were not timed because they name no instruction: (1-based line,
+        /// word), in source order.
+        pub fn unknown_statements(&self) -> impl Iterator<Item = (usize, &str)> {
+            self.lines
+                .iter()
+                .enumerate()
+                .flat_map(|(i, line)| line.unknown.iter().map(move |word| (i + 1, word.as_str())))
+        }
     }
 
     /// The configuration `spu timing` uses: no fetch model and no hint window (as
@@ -1533,45 +1524,40 @@ mod static_timing {
     /// instructions_detail:[..]}],"instructions":[{addr,text,pipe,issue,cycle,stall,dual,
     /// mark,latency,block}]}`.
     pub fn static_json(t: &StaticTiming) -> String {
-        let insts: Vec<String> = t
+        let instructions: Vec<Value> = t
             .rows
             .iter()
             .map(|r| {
-                format!(
-                    "{{\"addr\":{},\"text\":{},\"pipe\":{},\"issue\":{},\"cycle\":{},\"stall\":{},\"dual\":{},\"mark\":{},\"latency\":{},\"block\":{}}}",
-                    r.addr,
-                    json_str(&r.text),
-                    r.pipe,
-                    r.issue,
-                    r.cycle,
-                    r.stall,
-                    r.dual,
-                    json_str(r.mark.to_string().trim()),
-                    r.latency,
-                    r.block
-                )
+                json!({
+                    "addr": r.addr,
+                    "text": r.text,
+                    "pipe": r.pipe,
+                    "issue": r.issue,
+                    "cycle": r.cycle,
+                    "stall": r.stall,
+                    "dual": r.dual,
+                    "mark": r.mark.to_string().trim(),
+                    "latency": r.latency,
+                    "block": r.block,
+                })
             })
             .collect();
-        let blocks: Vec<String> = t
+        let blocks: Vec<Value> = t
             .blocks
             .iter()
             .map(|b| {
-                format!(
-                    "{{\"label\":{},\"addr\":{},\"instructions\":{},\"cycles\":{},\"cpi\":{},\"dual\":{},\"stall\":{}}}",
-                    b.label.as_deref().map(json_str).unwrap_or_else(|| "null".into()),
-                    b.addr,
-                    b.instructions,
-                    b.cycles,
-                    json_f64(b.cpi()),
-                    b.dual,
-                    b.stall
-                )
+                json!({
+                    "label": b.label,
+                    "addr": b.addr,
+                    "instructions": b.instructions,
+                    "cycles": b.cycles,
+                    "cpi": json_ratio(b.cpi()),
+                    "dual": b.dual,
+                    "stall": b.stall,
+                })
             })
             .collect();
-        format!(
-            "{{\"blocks\":[{}],\"instructions\":[{}]}}\n",
-            blocks.join(","),
-            insts.join(",")
-        )
+        let report = json!({ "blocks": blocks, "instructions": instructions });
+        format!("{report}\n")
     }
 }
