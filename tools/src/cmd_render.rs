@@ -267,9 +267,14 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         let text = kernel_profile(&run, args.fill).map_err(Error::failure)?;
         exit::write_file(path, text.as_bytes())?;
     }
+    Ok(validation_status(validation).into())
+}
+
+/// `--validate` that found differing pixels exits 3 (after writing every output).
+fn validation_status(validation: Option<(usize, usize)>) -> Status {
     match validation {
-        Some((_, bad)) if bad > 0 => Ok(Status::Differences.into()),
-        _ => Ok(ExitCode::SUCCESS),
+        Some((_, bad)) if bad > 0 => Status::Differences,
+        _ => Status::Success,
     }
 }
 
@@ -306,4 +311,35 @@ fn write_png(path: &PathBuf, pixels: &[PixelResult], width: u32, height: u32) ->
         .write_image(&rgb, width, height, image::ExtendedColorType::Rgb8)
         .map_err(|e| Error::output(path, e))?;
     exit::write_file(path, &png)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spu_loader::reference::Hit;
+
+    #[test]
+    fn differing_pixels_make_validation_exit_3() {
+        let pixel = |triangle, t| PixelResult {
+            triangle,
+            t,
+            rgba: 0,
+        };
+        let hit = |triangle, t| Hit {
+            triangle,
+            t,
+            record: 0,
+        };
+        let kernel = [pixel(0, 1.0), pixel(MISS, 0.0), pixel(1, 2.0)];
+        let same = [hit(10, 1.0), Hit::NONE, hit(11, 2.0)];
+        let records = [10, 11];
+        assert_eq!(validate(&kernel, &same, &records, 3), (3, 0));
+        assert_eq!(validation_status(Some((3, 0))), Status::Success);
+        // A miss where the reference hits, and a hit at another distance.
+        let other = [hit(10, 1.0), hit(10, 5.0), hit(11, 2.5)];
+        assert_eq!(validate(&kernel, &other, &records, 3), (3, 2));
+        assert_eq!(validation_status(Some((3, 2))), Status::Differences);
+        assert_eq!(ExitCode::from(Status::Differences), ExitCode::from(3));
+        assert_eq!(validation_status(None), Status::Success);
+    }
 }

@@ -457,3 +457,38 @@ fn a_closed_pipe_ends_quietly() {
         assert_eq!(stderr, "", "spu {args:?}");
     }
 }
+
+/// A render that validates cleanly exits 0; one whose statistics cannot be written exits 1
+/// after writing the image whole.
+#[test]
+fn render_statuses() {
+    let d = dir("render");
+    let png = d.join("room.png");
+    let png = png.to_str().unwrap();
+    let small = ["render", "--width", "16", "--height", "16", "-o", png];
+    let out = spu(&[&small[..], &["--validate"]].concat());
+    assert_eq!(out.status, 0, "{}", out.stderr);
+    assert!(
+        out.stdout
+            .contains("validation: 0 of 256 pixels differ from the host reference"),
+        "{}",
+        out.stdout
+    );
+    if Path::new("/dev/full").exists() {
+        std::fs::remove_file(png).unwrap();
+        let out = spu(&[&small[..], &["--stats", "/dev/full"]].concat());
+        assert_eq!(out.status, 1, "{}", out.stderr);
+        assert!(
+            out.stderr.contains("/dev/full: No space left"),
+            "{}",
+            out.stderr
+        );
+        assert!(image_is_complete(png));
+    }
+    assert_eq!(files_in(&d), ["room.png"], "no temporary file is left");
+}
+
+fn image_is_complete(path: &str) -> bool {
+    let bytes = std::fs::read(path).unwrap();
+    bytes.starts_with(b"\x89PNG") && bytes.ends_with(b"IEND\xae\x42\x60\x82")
+}
