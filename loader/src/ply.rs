@@ -230,6 +230,9 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, LoadError> {
                 let count = count
                     .parse::<usize>()
                     .map_err(|_| error(format!("bad element count '{count}'")))?;
+                if elements.iter().any(|e| e.name == *name) {
+                    return Err(error(format!("element '{name}' declared twice")));
+                }
                 elements.push(Element {
                     name: name.to_string(),
                     count,
