@@ -136,6 +136,11 @@ fn check_options(args: &Args) -> exit::Result<Option<Camera>> {
             )));
         }
     }
+    if args.fill && args.validate {
+        return Err(Error::input(
+            "--validate compares the ray tracer's hits; --fill renders none",
+        ));
+    }
     let camera = match &args.camera {
         Some(text) => Some(Camera::parse(text).map_err(|e| format!("--camera: {e}"))?),
         None => None,
