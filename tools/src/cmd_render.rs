@@ -36,11 +36,20 @@ pub struct Args {
     #[arg(long, allow_hyphen_values = true)]
     camera: Option<String>,
     /// Lines in the BVH-node cache (power of two, 128..1024).
-    #[arg(long = "bvh-cache", default_value_t = 256)]
+    #[arg(long = "bvh-cache", default_value_t = 256, value_parser = cache_lines)]
     bvh_cache: u32,
     /// Lines in the triangle cache (power of two, 128..1024).
-    #[arg(long = "tri-cache", default_value_t = 256)]
+    #[arg(long = "tri-cache", default_value_t = 256, value_parser = cache_lines)]
     tri_cache: u32,
+    /// Ways of both caches: 1 (direct mapped) or 4 (set-associative, LRU).
+    #[arg(long, default_value_t = 1, value_parser = associativity)]
+    assoc: u32,
+    /// Packets each SPE keeps in flight (software hyperthreading, 1..8; 1 = blocking misses).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=8))]
+    sht: u32,
+    /// Main-memory latency of a DMA in nanoseconds before its bytes move.
+    #[arg(long = "dma-latency-ns", default_value_t = 100.0, value_parser = latency_ns, allow_hyphen_values = true)]
+    dma_latency_ns: f64,
     /// Run the fill pattern program instead of the ray tracer (tests the runtime).
     #[arg(long)]
     fill: bool,
@@ -60,6 +69,43 @@ pub struct Args {
     /// by cause, dual issue; then per label and totals), merged over all SPEs.
     #[arg(long)]
     profile: Option<PathBuf>,
+    /// No progress bar or summary (for `spu paper`, which runs many renders at once).
+    #[arg(long, hide = true)]
+    quiet: bool,
+}
+
+/// `--bvh-cache` / `--tri-cache`: a power of two from 128 to 1024.
+fn cache_lines(text: &str) -> Result<u32, String> {
+    let lines: u32 = text
+        .parse()
+        .map_err(|_| format!("{text:?} is not a number of cache lines"))?;
+    spu_loader::kernel_abi::check_kernel_options(lines, lines, 1, 1)
+        .map_err(|_| format!("{lines} lines: must be a power of two from 128 to 1024"))?;
+    Ok(lines)
+}
+
+/// `--assoc`: 1 or 4 ways.
+fn associativity(text: &str) -> Result<u32, String> {
+    match text {
+        "1" => Ok(1),
+        "4" => Ok(4),
+        _ => Err(format!(
+            "{text:?}: must be 1 (direct mapped) or 4 (4-way, LRU)"
+        )),
+    }
+}
+
+/// `--dma-latency-ns`: finite, not negative, at most a millisecond.
+fn latency_ns(text: &str) -> Result<f64, String> {
+    let ns: f64 = text
+        .parse()
+        .map_err(|_| format!("{text:?} is not a latency in nanoseconds"))?;
+    if !ns.is_finite() || !(0.0..=1e6).contains(&ns) {
+        return Err(format!(
+            "{ns} ns: must be a finite latency from 0 to 1000000 ns"
+        ));
+    }
+    Ok(ns)
 }
 
 /// Loads a built-in scene by name, or a file.
@@ -126,16 +172,6 @@ fn check_options(args: &Args) -> exit::Result<Option<Camera>> {
     }
     options::clock_ghz(args.clock)?;
     options::max_cycles(args.max_cycles)?;
-    for (name, lines) in [
-        ("--bvh-cache", args.bvh_cache),
-        ("--tri-cache", args.tri_cache),
-    ] {
-        if !(lines.is_power_of_two() && (128..=1024).contains(&lines)) {
-            return Err(Error::input(format!(
-                "{name} {lines}: must be a power of two from 128 to 1024"
-            )));
-        }
-    }
     if args.fill && args.validate {
         return Err(Error::input(
             "--validate compares the ray tracer's hits; --fill renders none",
@@ -180,14 +216,17 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         args.spes,
         args.bvh_cache,
         args.tri_cache,
-    )?;
-    eprintln!(
-        "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
-        args.scene,
-        scene.triangles.len(),
-        staged.nodes.len(),
-        started.elapsed().as_secs_f64()
-    );
+    )?
+    .with_kernel_options(args.assoc, args.sht)?;
+    if !args.quiet {
+        eprintln!(
+            "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
+            args.scene,
+            scene.triangles.len(),
+            staged.nodes.len(),
+            started.elapsed().as_secs_f64()
+        );
+    }
     let threads = args.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
             .map(|n| n.get())
@@ -198,6 +237,9 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         indicatif::ProgressStyle::with_template("{spinner} tiles {pos}/{len} {wide_bar} {elapsed}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
+    if args.quiet {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
     let sim_started = Instant::now();
     let run = spu_loader::runtime::render_frame(
         &staged,
@@ -206,6 +248,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         threads,
         &spu_isa::timing::TimingConfig {
             clock_ghz: args.clock,
+            dma_latency_ns: args.dma_latency_ns,
             ..Default::default()
         },
         args.fill,
@@ -243,7 +286,8 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         0.0
     };
     let instructions: u64 = run.spus.iter().map(|s| s.instructions).sum();
-    outln!(
+    if !args.quiet {
+        outln!(
         "{} SPE(s): {} cycles per frame, {:.2} MRays/s at {} GHz; {} instructions simulated in {:.1} s ({:.0} M/s); wrote {}",
         args.spes,
         run.frame_cycles,
@@ -254,18 +298,22 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         instructions as f64 / host_seconds / 1e6,
         args.output.display()
     );
+    }
     if let Some((n, bad)) = validation {
         outln!("validation: {bad} of {n} pixels differ from the host reference");
     }
     if let Some(path) = &args.stats {
-        let json = run.stats_json(
-            &args.scene,
-            args.width,
-            args.height,
-            args.clock,
-            mrays,
+        let json = spu_loader::stats::FrameStats::new(
+            &run,
+            &spu_loader::stats::FrameSetup {
+                scene: &args.scene,
+                width: args.width,
+                height: args.height,
+                clock_ghz: args.clock,
+            },
             validation,
-        );
+        )
+        .to_json();
         exit::write_file(path, json.as_bytes())?;
     }
     if let Some(path) = &args.profile {
@@ -290,11 +338,7 @@ fn kernel_profile(run: &spu_loader::runtime::FrameRun, fill: bool) -> Result<Str
         .profile
         .as_ref()
         .ok_or("no profile: the timing model was off (SPU_NO_TIMING)")?;
-    let (source, name) = if fill {
-        (spu_loader::runtime::FILL_SOURCE, "kernels/fill.s")
-    } else {
-        (spu_loader::runtime::RAYTRACE_SOURCE, "kernels/raytrace.s")
-    };
+    let (source, name) = spu_loader::kernels::frame_program(fill);
     let program = spu_loader::runtime::assemble_kernel(source, name)?;
     let lines = executed_lines(profile, &program.image, &program.symbols);
     let opts = ListingOptions {

@@ -3,7 +3,7 @@
 
 use crate::exit;
 use crate::options;
-use spu_isa::profile::{analyze_source, render_static, static_json};
+use spu_isa::static_timing::{analyze_source, render_static, static_json};
 use std::path::PathBuf;
 use std::process::ExitCode;
 

@@ -179,11 +179,11 @@ fn numeric_options_are_checked_before_any_work() {
         ),
         (
             &["render", "--bvh-cache", "200"],
-            "--bvh-cache 200: must be a power of two from 128 to 1024",
+            "'--bvh-cache <BVH_CACHE>': 200 lines: must be a power of two from 128 to 1024",
         ),
         (
             &["render", "--tri-cache", "2048"],
-            "--tri-cache 2048: must be a power of two from 128 to 1024",
+            "'--tri-cache <TRI_CACHE>': 2048 lines: must be a power of two from 128 to 1024",
         ),
         (
             &["render", "--camera=0,0,0,0,0,-1,0,1,0,inf"],
