@@ -69,6 +69,9 @@ pub struct Args {
     /// by cause, dual issue; then per label and totals), merged over all SPEs.
     #[arg(long)]
     profile: Option<PathBuf>,
+    /// No progress bar or summary (for `spu paper`, which runs many renders at once).
+    #[arg(long, hide = true)]
+    quiet: bool,
 }
 
 /// `--bvh-cache` / `--tri-cache`: a power of two from 128 to 1024.
@@ -220,13 +223,15 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         args.tri_cache,
     )?
     .with_kernel_options(args.assoc, args.sht)?;
-    eprintln!(
-        "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
-        args.scene,
-        scene.triangles.len(),
-        staged.nodes.len(),
-        started.elapsed().as_secs_f64()
-    );
+    if !args.quiet {
+        eprintln!(
+            "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
+            args.scene,
+            scene.triangles.len(),
+            staged.nodes.len(),
+            started.elapsed().as_secs_f64()
+        );
+    }
     let threads = args.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
             .map(|n| n.get())
@@ -237,6 +242,9 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         indicatif::ProgressStyle::with_template("{spinner} tiles {pos}/{len} {wide_bar} {elapsed}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
+    if args.quiet {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
     let sim_started = Instant::now();
     let run = spu_loader::runtime::render_frame(
         &staged,
@@ -283,7 +291,8 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         0.0
     };
     let instructions: u64 = run.spus.iter().map(|s| s.instructions).sum();
-    outln!(
+    if !args.quiet {
+        outln!(
         "{} SPE(s): {} cycles per frame, {:.2} MRays/s at {} GHz; {} instructions simulated in {:.1} s ({:.0} M/s); wrote {}",
         args.spes,
         run.frame_cycles,
@@ -294,6 +303,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         instructions as f64 / host_seconds / 1e6,
         args.output.display()
     );
+    }
     if let Some((n, bad)) = validation {
         outln!("validation: {bad} of {n} pixels differ from the host reference");
     }
