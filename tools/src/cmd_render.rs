@@ -45,7 +45,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1, value_parser = associativity)]
     assoc: u32,
     /// Packets each SPE keeps in flight (software hyperthreading, 1..8; 1 = blocking misses).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=8))]
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=8))]
     sht: u32,
     /// Main-memory latency of a DMA in nanoseconds before its bytes move.
     #[arg(long = "dma-latency-ns", default_value_t = 100.0, value_parser = latency_ns, allow_hyphen_values = true)]
