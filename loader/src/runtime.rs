@@ -29,6 +29,8 @@ pub struct FrameRun {
     pub kernel_image: Vec<u8>,
     /// Each SPU's MFC commands and channel waits, when [`FrameOptions::event_log`] was on.
     pub events: Vec<Vec<spu_isa::machine::SpuEvent>>,
+    /// The caches, packets in flight and memory latency the frame ran with.
+    pub config: KernelConfig,
 }
 
 /// What a frame records beyond its image and statistics.
@@ -36,6 +38,31 @@ pub struct FrameRun {
 pub struct FrameOptions {
     /// Log every SPU's MFC commands and channel waits (for heat maps and timelines).
     pub event_log: bool,
+}
+
+/// The kernel configuration of a frame, as `--stats` reports it.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct KernelConfig {
+    /// Packets each SPU keeps in flight (software hyperthreading; 1 = blocking misses).
+    pub sht: u32,
+    /// Ways of both caches (1 = direct mapped, 4 = 4-way LRU).
+    pub assoc: u32,
+    pub bvh_cache_lines: u32,
+    pub tri_cache_lines: u32,
+    pub dma_latency_ns: f64,
+}
+
+impl KernelConfig {
+    pub fn new(layout: &FrameLayout, timing: &spu_isa::timing::TimingConfig) -> Self {
+        let p = &layout.params;
+        KernelConfig {
+            sht: p.sht_contexts,
+            assoc: p.cache_assoc,
+            bvh_cache_lines: 1 << p.bvh_cache_log2,
+            tri_cache_lines: 1 << p.tri_cache_log2,
+            dma_latency_ns: timing.dma_latency_ns,
+        }
+    }
 }
 
 impl FrameRun {
@@ -330,5 +357,6 @@ pub fn render_frame_with(
         profile,
         symbols: program.symbols.clone(),
         kernel_image: program.image.clone(),
+        config: KernelConfig::new(layout, timing),
     })
 }

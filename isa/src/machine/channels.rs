@@ -337,7 +337,7 @@ impl Spu {
                 self.dec_value = v;
                 self.dec_written_at = now;
                 let tick = self.decrementer_cycles_per_tick.max(1);
-                self.dec_event_at = Some(now + (v as u64 + 1) * tick);
+                self.dec_event_at = Some(now.saturating_add((v as u64 + 1).saturating_mul(tick)));
             }
             WR_SRR0 => self.core.srr0 = v,
             LSA => self.lsa = v,

@@ -346,7 +346,7 @@ impl Spu {
     pub fn run(&mut self, memory: &mut MainMemory, max_cycles: u64) -> StopReason {
         const QUANTUM: u64 = 4096;
         loop {
-            let until = (self.cycle + QUANTUM).min(max_cycles);
+            let until = self.cycle.saturating_add(QUANTUM).min(max_cycles);
             let outcome = self.run_quantum(memory, until);
             apply_quantum(std::slice::from_mut(self), memory);
             match outcome {
