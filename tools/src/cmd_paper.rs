@@ -340,5 +340,18 @@ fn read_stats(text: &str, job: &Job) -> Result<Measured, String> {
             job.spes
         ));
     }
+    let c = &stats.config;
+    // files written before the configuration was recorded have none (sht 0)
+    if c.sht != 0
+        && (c.sht != job.sht.unwrap_or(1)
+            || c.assoc != job.assoc.unwrap_or(1)
+            || c.bvh_cache_lines != job.cache
+            || c.tri_cache_lines != job.cache)
+    {
+        return Err(format!(
+            "holds a run with SHT {}, {}-way {}/{}-line caches, not the job's",
+            c.sht, c.assoc, c.bvh_cache_lines, c.tri_cache_lines
+        ));
+    }
     Ok(Measured { stats, raw })
 }

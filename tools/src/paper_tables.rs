@@ -342,8 +342,15 @@ pub fn value(metric: Metric, measured: &[&Measured]) -> Result<f64, String> {
     let first = measured.first().ok_or("no job")?;
     let t2 = &first.stats.table2;
     let v = match metric {
-        Metric::BvhHitPct => t2.bvh_cache_hit_pct,
-        Metric::TriangleHitPct => t2.triangle_cache_hit_pct,
+        // per lookup, where the stats have it (older files: Table 2's figure)
+        Metric::BvhHitPct => match &first.stats.caches {
+            c if c.bvh_lookups > 0 => c.bvh_hit_pct,
+            _ => t2.bvh_cache_hit_pct,
+        },
+        Metric::TriangleHitPct => match &first.stats.caches {
+            c if c.triangle_lookups > 0 => c.triangle_hit_pct,
+            _ => t2.triangle_cache_hit_pct,
+        },
         Metric::TraversalSteps => t2.traversal_steps_per_packet,
         Metric::TriangleTests => t2.triangle_tests_per_packet,
         Metric::EarlyExitsPct => t2.early_exits_pct,

@@ -18,7 +18,8 @@ fn heatmap_and_trace_of_a_small_frame() {
     std::fs::create_dir_all(&dir).unwrap();
     let p = |name: &str| dir.join(name).to_str().unwrap().to_string();
     let base = [
-        "render", "--scene", "room", "--width", "128", "--height", "128", "--spes", "2",
+        "render", "--scene", "room", "--width", "128", "--height", "128", "--spes", "2", "--sht",
+        "1",
     ];
     let plain = spu(&[&base[..], &["-o", &p("a.png"), "--stats", &p("a.json")]].concat());
     assert!(plain.status.success());
