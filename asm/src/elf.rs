@@ -16,6 +16,7 @@ fn be32(v: u32) -> [u8; 4] {
 pub fn write_elf(
     image: &[u8],
     sections: &[(String, u32, u32, bool)],
+    nobits: &[bool],
     symbols: &[(String, u32)],
     globals: &[String],
     entry: u32,
@@ -105,7 +106,9 @@ pub fn write_elf(
     out.extend(be32(0));
     let file_size = sections
         .iter()
-        .filter(|s| s.0 != ".bss")
+        .enumerate()
+        .filter(|(k, s)| !nobits.get(*k).copied().unwrap_or(s.0 == ".bss"))
+        .map(|(_, s)| s)
         .map(|s| s.1 + s.2)
         .max()
         .unwrap_or(0);
@@ -132,8 +135,8 @@ pub fn write_elf(
         }
     };
     sh(&mut out, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0);
-    for ((name, addr, size, code), n) in sections.iter().zip(&names) {
-        let (ty, flags) = if name == ".bss" {
+    for (k, ((name, addr, size, code), n)) in sections.iter().zip(&names).enumerate() {
+        let (ty, flags) = if nobits.get(k).copied().unwrap_or(name == ".bss") {
             (8, 3)
         } else if *code {
             (1, 6)
@@ -331,6 +334,7 @@ mod tests {
         let elf = write_elf(
             &image,
             &sections,
+            &[false],
             &[("_start".into(), 0), ("x".into(), 4)],
             &["_start".into()],
             0,
@@ -346,7 +350,14 @@ mod tests {
     fn malformed_input_is_an_error() {
         assert!(read_elf(b"\x7fELF").is_err());
         assert!(read_elf(&[]).is_err());
-        let mut elf = write_elf(&[0; 4], &[(".text".into(), 0, 4, true)], &[], &[], 0);
+        let mut elf = write_elf(
+            &[0; 4],
+            &[(".text".into(), 0, 4, true)],
+            &[false],
+            &[],
+            &[],
+            0,
+        );
         elf.truncate(60);
         assert!(read_elf(&elf).is_err());
     }
