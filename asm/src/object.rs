@@ -350,10 +350,12 @@ impl Object {
             });
         }
         for s in sections.iter() {
-            let Some((relas, target)) = s.rela(endian, data).map_err(err)? else {
+            let Some((relas, _symtab)) = s.rela(endian, data).map_err(err)? else {
                 continue;
             };
-            let Some(k) = ours.get(target.0).copied().flatten() else {
+            // sh_info names the section the relocations apply to.
+            let target = s.sh_info(endian) as usize;
+            let Some(k) = ours.get(target).copied().flatten() else {
                 continue;
             };
             for r in relas {

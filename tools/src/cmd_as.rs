@@ -1,16 +1,22 @@
-//! `spu as`: assemble GNU-as SPU assembly into an SPU ELF or a flat local-store image.
+//! `spu as`: assemble GNU-as SPU assembly into an SPU ELF executable, a flat local-store
+//! image, or (`-c`) a relocatable object; several sources are assembled and linked.
 
-use spu_asm::{assemble_file, Options, Severity};
+use spu_asm::link::{link, LinkOptions};
+use spu_asm::{assemble_file, assemble_object_file, Diagnostic, Options, Severity};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Assembly source.
-    input: PathBuf,
+    /// Assembly sources (several are assembled separately and linked).
+    #[arg(required = true)]
+    input: Vec<PathBuf>,
     /// Output file.
     #[arg(short = 'o', long, default_value = "a.out")]
     output: PathBuf,
+    /// Write a relocatable object (ELF ET_REL) instead of an executable.
+    #[arg(short = 'c')]
+    object: bool,
     /// `elf` (an SPU ELF executable) or `bin` (the flat image loaded at address 0).
     #[arg(long, default_value = "elf")]
     format: String,
@@ -23,6 +29,19 @@ pub struct Args {
     /// Define a symbol: NAME=VALUE.
     #[arg(long = "defsym")]
     defsym: Vec<String>,
+}
+
+/// Prints diagnostics; the exit status for a failed assembly.
+fn report(diagnostics: &[Diagnostic]) -> ExitCode {
+    let errors = diagnostics
+        .iter()
+        .filter(|d| d.severity == Severity::Error)
+        .count();
+    for d in diagnostics {
+        eprintln!("{d}");
+    }
+    eprintln!("{errors} error(s); nothing written");
+    ExitCode::from(2)
 }
 
 pub fn run(args: Args) -> Result<ExitCode, String> {
@@ -45,34 +64,67 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             v.map_err(|_| format!("--defsym {d}: bad value"))?,
         ));
     }
-    match assemble_file(&args.input, &opts) {
+    if !matches!(args.format.as_str(), "elf" | "bin") {
+        return Err(format!("--format {}: expected elf or bin", args.format));
+    }
+    let write = |bytes: &[u8]| {
+        std::fs::write(&args.output, bytes).map_err(|e| format!("{}: {e}", args.output.display()))
+    };
+    if args.object || args.input.len() > 1 {
+        if args.object && args.input.len() > 1 {
+            return Err("-c takes one source (one object per source)".into());
+        }
+        if args.listing.is_some() {
+            return Err("--listing is for one source assembled to an executable".into());
+        }
+        let mut objects = Vec::new();
+        for input in &args.input {
+            match assemble_object_file(input, &opts) {
+                Ok((obj, warnings)) => {
+                    for w in &warnings {
+                        eprintln!("{w}");
+                    }
+                    objects.push(obj);
+                }
+                Err(d) => return Ok(report(&d)),
+            }
+        }
+        if args.object {
+            write(&objects[0].to_elf()?)?;
+            return Ok(ExitCode::SUCCESS);
+        }
+        let linked = match link(&objects, &LinkOptions::default()) {
+            Ok(l) => l,
+            Err(errors) => {
+                for e in &errors {
+                    eprintln!("spu ld: {e}");
+                }
+                return Ok(ExitCode::from(2));
+            }
+        };
+        write(if args.format == "bin" {
+            &linked.image
+        } else {
+            &linked.elf
+        })?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    match assemble_file(&args.input[0], &opts) {
         Ok(out) => {
             for w in &out.warnings {
                 eprintln!("{w}");
             }
-            let bytes = match args.format.as_str() {
-                "elf" => &out.elf,
-                "bin" => &out.image,
-                other => return Err(format!("--format {other}: expected elf or bin")),
-            };
-            std::fs::write(&args.output, bytes)
-                .map_err(|e| format!("{}: {e}", args.output.display()))?;
+            write(if args.format == "bin" {
+                &out.image
+            } else {
+                &out.elf
+            })?;
             if let Some(path) = &args.listing {
                 std::fs::write(path, &out.listing)
                     .map_err(|e| format!("{}: {e}", path.display()))?;
             }
             Ok(ExitCode::SUCCESS)
         }
-        Err(diagnostics) => {
-            let errors = diagnostics
-                .iter()
-                .filter(|d| d.severity == Severity::Error)
-                .count();
-            for d in &diagnostics {
-                eprintln!("{d}");
-            }
-            eprintln!("{errors} error(s); nothing written");
-            Ok(ExitCode::from(1))
-        }
+        Err(diagnostics) => Ok(report(&diagnostics)),
     }
 }
