@@ -207,7 +207,18 @@ pub struct LoadedElf {
     /// (name, address, bytes, is code)
     pub sections: Vec<(String, u32, Vec<u8>, bool)>,
     pub symbols: Vec<(String, u32)>,
+    /// The same symbols with what objdump weighs when it names an address: whether the
+    /// symbol is global (or weak) and whether it is absolute (not in any section).
+    pub symbol_kinds: Vec<SymbolKind>,
     pub entry: u32,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SymbolKind {
+    pub name: String,
+    pub addr: u32,
+    pub global: bool,
+    pub absolute: bool,
 }
 
 /// Reads an SPU ELF executable; never panics on malformed input.
@@ -309,11 +320,18 @@ pub fn read_elf(bytes: &[u8]) -> Result<LoadedElf, String> {
                     let n = u32::from_be_bytes([sym[0], sym[1], sym[2], sym[3]]);
                     let v = u32::from_be_bytes([sym[4], sym[5], sym[6], sym[7]]);
                     let info = sym[12];
-                    if info & 0xf == 3 || info & 0xf == 4 {
-                        continue; // section and file symbols
+                    let shndx = u16::from_be_bytes([sym[14], sym[15]]);
+                    if info & 0xf == 3 || info & 0xf == 4 || shndx == 0 {
+                        continue; // section, file and undefined symbols
                     }
                     let s = name(strtab, n);
                     if !s.is_empty() {
+                        out.symbol_kinds.push(SymbolKind {
+                            name: s.clone(),
+                            addr: v,
+                            global: info >> 4 != 0,
+                            absolute: shndx == 0xfff1,
+                        });
                         out.symbols.push((s, v));
                     }
                 }
