@@ -328,7 +328,8 @@ fn split_top(s: &str, sep: char) -> Vec<String> {
     parts
 }
 
-const CHANNELS: &[(&str, u32)] = &[
+/// SPU channel names (`$SPU_RdInMbox`) and their numbers, as gas's `ch_reg_name`.
+pub const CHANNELS: &[(&str, u32)] = &[
     ("SPU_RdEventStat", 0),
     ("SPU_WrEventMask", 1),
     ("SPU_WrEventAck", 2),
@@ -1893,8 +1894,9 @@ impl<'o> Assembler<'o> {
         }
         let digits = q.bytes().take_while(u8::is_ascii_digit).count();
         if digits > 0 {
-            let n: u64 = q[..digits].parse().unwrap_or(u64::MAX);
-            return (n < 128).then_some((n as i64, &q[digits..]));
+            // Any number is a register here; one past 127 is reported as out of range.
+            let n: i64 = q[..digits].parse().unwrap_or(i64::MAX);
+            return Some((n, &q[digits..]));
         }
         let names: &[(&str, u32)] = match kind {
             OperandKind::Ch => CHANNELS,
@@ -1941,6 +1943,12 @@ impl<'o> Assembler<'o> {
                 let (v, rest) = self
                     .get_reg(p, OperandKind::Ra, true)
                     .ok_or(CalcErr::Syntax(i))?;
+                if !(0..128).contains(&v) {
+                    return Err(CalcErr::Hard(
+                        at(p),
+                        format!("register number {v} out of range [0, 127]"),
+                    ));
+                }
                 p = rest
                     .trim_start()
                     .strip_prefix(')')
@@ -1948,6 +1956,19 @@ impl<'o> Assembler<'o> {
                 out.push(Operand::Reg(kind, v));
             } else if kind.is_register() {
                 let (v, rest) = self.get_reg(p, kind, true).ok_or(CalcErr::Syntax(i))?;
+                // gas ORs an expression's value in unmasked; a value outside the 7-bit
+                // field would silently change other fields, so it is an error here.
+                if !(0..128).contains(&v) {
+                    let what = match kind {
+                        OperandKind::Ch => "channel",
+                        OperandKind::Spr => "special-purpose register",
+                        _ => "register",
+                    };
+                    return Err(CalcErr::Hard(
+                        col,
+                        format!("{what} number {v} out of range [0, 127]"),
+                    ));
+                }
                 p = rest;
                 out.push(Operand::Reg(kind, v));
             } else {
@@ -2199,6 +2220,16 @@ impl<'o> Assembler<'o> {
                 return Err(format!(
                     "Constant expression {v} out of range, [{}, {}].",
                     enc.lo, enc.hi
+                ));
+            } else if enc.hi <= enc.lo
+                && !(-(1i64 << (enc.size - 1))..(1i64 << enc.size)).contains(&(v >> enc.rshift))
+            {
+                // gas checks no range for this field and masks the value; one that fits
+                // neither signed nor unsigned would silently be another number.
+                return Err(format!(
+                    "Constant expression {v} out of range, [{}, {}].",
+                    -(1i64 << (enc.size - 1)) << enc.rshift,
+                    ((1i64 << enc.size) - 1) << enc.rshift
                 ));
             } else if enc.whi > enc.wlo && (v < enc.wlo || v > enc.whi) {
                 warning = Some(format!(

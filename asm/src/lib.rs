@@ -11,7 +11,7 @@ pub mod reloc;
 
 pub use gas::{
     assemble, assemble_object, Diagnostic, Location, Options, Output, Reloc, RelocTarget, Severity,
-    MAX_SOURCE,
+    CHANNELS, MAX_SOURCE,
 };
 
 fn read_failure(path: &std::path::Path, e: String) -> Vec<Diagnostic> {

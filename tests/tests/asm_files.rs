@@ -153,4 +153,5 @@ asm_files! {
     include => "include.s",
     errors => "errors.s",
     gnu_directives => "gnu_directives.s",
+    bad_input => "bad_input.s",
 }

@@ -1,6 +1,8 @@
 //! `spu run`: run a program on one simulated SPU and report how it stopped.
 
+use spu_isa::disasm::{instruction_text, SymbolTable};
 use spu_isa::machine::{MainMemory, Spu, StopReason};
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -21,8 +23,12 @@ pub struct Args {
     #[arg(long = "mbox-in")]
     mbox_in: Vec<String>,
     /// Run with the cycle-level timing model (otherwise one cycle per instruction).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "trace")]
     timing: bool,
+    /// Print every executed instruction: address, text and the registers it wrote (like
+    /// IBM systemsim's instruction trace).
+    #[arg(long)]
+    trace: bool,
     /// Main memory in bytes.
     #[arg(long, default_value_t = 1 << 20)]
     memory: usize,
@@ -80,7 +86,7 @@ pub fn load(file: &PathBuf) -> Result<(Spu, Vec<(String, u32)>), String> {
 }
 
 pub fn run(args: Args) -> Result<ExitCode, String> {
-    let (mut spu, _) = load(&args.file)?;
+    let (mut spu, symbols) = load(&args.file)?;
     for v in &args.mbox_in {
         if !spu.write_inbound_mailbox(number(v)? as u32) {
             return Err("the inbound mailbox holds 4 values".into());
@@ -90,13 +96,18 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         spu.enable_timing(Default::default());
     }
     let mut memory = MainMemory::zeroed(args.memory);
-    let stop = spu.run(&mut memory, args.max_cycles);
+    let stop = if args.trace {
+        let symbols = SymbolTable::new(symbols.iter().map(|(n, a)| (*a, n.clone())).collect());
+        trace(&mut spu, &mut memory, args.max_cycles, &symbols)
+    } else {
+        spu.run(&mut memory, args.max_cycles)
+    };
     let out_mbox = spu.read_outbound_mailbox();
     if args.json {
         let regs: Vec<String> = (0..128).map(|n| format!("{:?}", spu.reg(n))).collect();
         println!(
             "{{\"stop\": \"{}\", \"pc\": {}, \"instructions\": {}, \"cycles\": {}, \"outbound_mailbox\": {}, \"registers\": [{}]}}",
-            stop,
+            describe(&stop),
             spu.pc(),
             spu.instructions(),
             spu.cycles(),
@@ -104,7 +115,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             regs.join(", ")
         );
     } else {
-        println!("stopped: {stop}");
+        println!("stopped: {}", describe(&stop));
         println!("pc: {:#x}", spu.pc());
         println!("instructions: {}", spu.instructions());
         println!("cycles: {}", spu.cycles());
@@ -136,4 +147,78 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     } else {
         ExitCode::from(2)
     })
+}
+
+/// A channel's name (`SPU_RdInMbox`), with its number.
+fn channel_name(channel: u8) -> String {
+    match spu_asm::CHANNELS.iter().find(|c| c.1 == channel as u32) {
+        Some((name, n)) => format!("{name} ({n})"),
+        None => format!("{channel}"),
+    }
+}
+
+/// How a program stopped, with channels named and what a stop code means to the Cell
+/// SDK's loader (`stop 0x2000|n` is exit with status n).
+pub fn describe(stop: &StopReason) -> String {
+    match stop {
+        StopReason::Stop(code) if (0x2000..=0x20ff).contains(code) => {
+            format!("stop {code:#x} (exit status {})", code & 0xff)
+        }
+        StopReason::Stop(0x3fff) => "stop 0x3fff (debugger breakpoint)".to_string(),
+        StopReason::InvalidChannel { pc, channel } => {
+            format!("invalid channel {} at {pc:#x}", channel_name(*channel))
+        }
+        StopReason::Deadlock { pc, channel } => {
+            format!("deadlock at {pc:#x} on channel {}", channel_name(*channel))
+        }
+        StopReason::Blocked { channel } => {
+            format!("blocked on channel {}", channel_name(*channel))
+        }
+        other => other.to_string(),
+    }
+}
+
+/// Runs one instruction at a time (no timing model: one cycle each), printing each one's
+/// address, text and the registers it changed.
+fn trace(
+    spu: &mut Spu,
+    memory: &mut MainMemory,
+    max_cycles: u64,
+    symbols: &SymbolTable,
+) -> StopReason {
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    loop {
+        if spu.cycles() >= max_cycles {
+            return StopReason::CycleLimit;
+        }
+        let pc = spu.pc();
+        let at = pc as usize & (256 * 1024 - 4);
+        let ls = spu.ls();
+        let word = u32::from_be_bytes([ls[at], ls[at + 1], ls[at + 2], ls[at + 3]]);
+        let before: Vec<_> = (0..128).map(|n| spu.reg(n)).collect();
+        let stop = spu.run(memory, spu.cycles() + 1);
+        let mut line = format!(
+            "{pc:05x}: {:08x}  {}",
+            word,
+            instruction_text(word, pc, symbols)
+        );
+        for (n, old) in before.iter().enumerate() {
+            let r = spu.reg(n);
+            if r != *old {
+                line.push_str(&format!(
+                    "\t${n} <- {:08x} {:08x} {:08x} {:08x}",
+                    r[0], r[1], r[2], r[3]
+                ));
+            }
+        }
+        // A closed pipe (`| head`) ends the trace quietly.
+        if writeln!(out, "{line}").is_err() {
+            return stop;
+        }
+        if stop != StopReason::CycleLimit {
+            let _ = out.flush();
+            return stop;
+        }
+    }
 }
