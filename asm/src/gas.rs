@@ -2221,16 +2221,6 @@ impl<'o> Assembler<'o> {
                     "Constant expression {v} out of range, [{}, {}].",
                     enc.lo, enc.hi
                 ));
-            } else if enc.hi <= enc.lo
-                && !(-(1i64 << (enc.size - 1))..(1i64 << enc.size)).contains(&(v >> enc.rshift))
-            {
-                // gas checks no range for this field and masks the value; one that fits
-                // neither signed nor unsigned would silently be another number.
-                return Err(format!(
-                    "Constant expression {v} out of range, [{}, {}].",
-                    -(1i64 << (enc.size - 1)) << enc.rshift,
-                    ((1i64 << enc.size) - 1) << enc.rshift
-                ));
             } else if enc.whi > enc.wlo && (v < enc.wlo || v > enc.whi) {
                 warning = Some(format!(
                     "Constant expression {v} out of range, [{}, {}].",

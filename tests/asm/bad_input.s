@@ -4,7 +4,7 @@
 	ai	$3, (200), 1		# error: 4:9: register number 200 out of range [0, 127]
 	lqd	$3, 0($130)		# error: 5:12: register number 130 out of range [0, 127]
 	wrch	$ch200, $3		# error: 6:7: channel number 200 out of range
-	rotqbyi	$3, $4, 200		# error: 7:18: Constant expression 200 out of range, [-64, 127].
+	rotqbyi	$3, $4, 200		# GNU as keeps the low 7 bits of a rotate count (as here)
 	.popsection			# error: 8:2: .popsection without corresponding .pushsection
 	.byte	1
 	.balignl 4, 0x01020304		# error: 10:2: alignment padding (3 bytes) not a multiple of 4

@@ -1,6 +1,6 @@
 //! `spu timing`: the static listing in `spu_timing`'s layout.
 
-use spu_isa::profile::{analyze_source, render_static, static_json};
+use spu_isa::static_timing::{analyze_source, render_static, static_json};
 
 const EULER: &str = include_str!("data/timing_euler.s");
 
@@ -91,8 +91,9 @@ fn label_shared_with_another_finds_the_block() {
     let by_first = analyze_source(src, Some(".L18")).unwrap();
     let by_second = analyze_source(src, Some(".L19")).unwrap();
     assert_eq!(by_first.rows.len(), 2);
-    let cycles =
-        |t: &spu_isa::profile::StaticTiming| t.rows.iter().map(|r| r.cycle).collect::<Vec<_>>();
+    let cycles = |t: &spu_isa::static_timing::StaticTiming| {
+        t.rows.iter().map(|r| r.cycle).collect::<Vec<_>>()
+    };
     assert_eq!(cycles(&by_first), cycles(&by_second));
     assert!(analyze_source(src, Some(".L20"))
         .unwrap_err()

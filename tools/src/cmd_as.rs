@@ -1,6 +1,7 @@
 //! `spu as`: assemble GNU-as SPU assembly into an SPU ELF executable, a flat local-store
 //! image, or (`-c`) a relocatable object; several sources are assembled and linked.
 
+use crate::exit::{self, Error, Status};
 use spu_asm::link::{link, LinkOptions};
 use spu_asm::{assemble_file, assemble_object_file, Diagnostic, Options, Severity};
 use std::path::PathBuf;
@@ -31,20 +32,17 @@ pub struct Args {
     defsym: Vec<String>,
 }
 
-/// Prints diagnostics; the exit status for a failed assembly.
-fn report(diagnostics: &[Diagnostic]) -> ExitCode {
-    let errors = diagnostics
-        .iter()
-        .filter(|d| d.severity == Severity::Error)
-        .count();
-    for d in diagnostics {
-        eprintln!("{d}");
+pub fn run(args: Args) -> exit::Result<ExitCode> {
+    if args.format != "elf" && args.format != "bin" {
+        return Err(Error::input(format!(
+            "--format {}: expected elf or bin",
+            args.format
+        )));
     }
-    eprintln!("{errors} error(s); nothing written");
-    ExitCode::from(2)
-}
-
-pub fn run(args: Args) -> Result<ExitCode, String> {
+    exit::check_writable(&args.output)?;
+    if let Some(path) = &args.listing {
+        exit::check_writable(path)?;
+    }
     let mut opts = Options {
         include_dirs: args.include.clone(),
         ..Default::default()
@@ -64,67 +62,83 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             v.map_err(|_| format!("--defsym {d}: bad value"))?,
         ));
     }
-    if !matches!(args.format.as_str(), "elf" | "bin") {
-        return Err(format!("--format {}: expected elf or bin", args.format));
-    }
-    let write = |bytes: &[u8]| {
-        std::fs::write(&args.output, bytes).map_err(|e| format!("{}: {e}", args.output.display()))
-    };
     if args.object || args.input.len() > 1 {
-        if args.object && args.input.len() > 1 {
-            return Err("-c takes one source (one object per source)".into());
-        }
-        if args.listing.is_some() {
-            return Err("--listing is for one source assembled to an executable".into());
-        }
-        let mut objects = Vec::new();
-        for input in &args.input {
-            match assemble_object_file(input, &opts) {
-                Ok((obj, warnings)) => {
-                    for w in &warnings {
-                        eprintln!("{w}");
-                    }
-                    objects.push(obj);
-                }
-                Err(d) => return Ok(report(&d)),
-            }
-        }
-        if args.object {
-            write(&objects[0].to_elf()?)?;
-            return Ok(ExitCode::SUCCESS);
-        }
-        let linked = match link(&objects, &LinkOptions::default()) {
-            Ok(l) => l,
-            Err(errors) => {
-                for e in &errors {
-                    eprintln!("spu ld: {e}");
-                }
-                return Ok(ExitCode::from(2));
-            }
-        };
-        write(if args.format == "bin" {
-            &linked.image
-        } else {
-            &linked.elf
-        })?;
-        return Ok(ExitCode::SUCCESS);
+        return objects(&args, &opts);
     }
     match assemble_file(&args.input[0], &opts) {
         Ok(out) => {
             for w in &out.warnings {
                 eprintln!("{w}");
             }
-            write(if args.format == "bin" {
+            let bytes = if args.format == "bin" {
                 &out.image
             } else {
                 &out.elf
-            })?;
+            };
+            exit::write_file(&args.output, bytes)?;
             if let Some(path) = &args.listing {
-                std::fs::write(path, &out.listing)
-                    .map_err(|e| format!("{}: {e}", path.display()))?;
+                exit::write_file(path, out.listing.as_bytes())?;
             }
             Ok(ExitCode::SUCCESS)
         }
         Err(diagnostics) => Ok(report(&diagnostics)),
     }
+}
+
+/// Prints diagnostics; the exit status for a failed assembly.
+fn report(diagnostics: &[Diagnostic]) -> ExitCode {
+    let errors = diagnostics
+        .iter()
+        .filter(|d| d.severity == Severity::Error)
+        .count();
+    for d in diagnostics {
+        eprintln!("{d}");
+    }
+    eprintln!("{errors} error(s); nothing written");
+    Status::BadInput.into()
+}
+
+/// `-c` (one object) or several sources (assembled to objects, then linked).
+fn objects(args: &Args, opts: &Options) -> exit::Result<ExitCode> {
+    if args.object && args.input.len() > 1 {
+        return Err(Error::input("-c takes one source (one object per source)"));
+    }
+    if args.listing.is_some() {
+        return Err(Error::input(
+            "--listing is for one source assembled to an executable",
+        ));
+    }
+    let mut objects = Vec::new();
+    for input in &args.input {
+        match assemble_object_file(input, opts) {
+            Ok((obj, warnings)) => {
+                for w in &warnings {
+                    eprintln!("{w}");
+                }
+                objects.push(obj);
+            }
+            Err(d) => return Ok(report(&d)),
+        }
+    }
+    if args.object {
+        let bytes = objects[0].to_elf().map_err(Error::failure)?;
+        exit::write_file(&args.output, &bytes)?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    let linked = match link(&objects, &LinkOptions::default()) {
+        Ok(l) => l,
+        Err(errors) => {
+            for e in &errors {
+                eprintln!("spu ld: {e}");
+            }
+            return Ok(Status::BadInput.into());
+        }
+    };
+    let bytes = if args.format == "bin" {
+        &linked.image
+    } else {
+        &linked.elf
+    };
+    exit::write_file(&args.output, bytes)?;
+    Ok(ExitCode::SUCCESS)
 }

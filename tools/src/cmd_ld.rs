@@ -1,5 +1,6 @@
 //! `spu ld`: link relocatable SPU objects (from `spu as -c` or GNU as) into an executable.
 
+use crate::exit::{self, Status};
 use spu_asm::link::{link, LinkOptions};
 use spu_asm::object::Object;
 use std::path::PathBuf;
@@ -33,16 +34,17 @@ fn parse_address(s: &str) -> Result<u32, String> {
     Ok(v)
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> exit::Result<ExitCode> {
+    exit::check_writable(&args.output)?;
     let mut objects = Vec::new();
     for path in &args.input {
         let name = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|e| format!("{name}: {e}"))?;
+        let bytes = crate::options::read_input(path, 64 << 20)?;
         match Object::from_elf(&name, &bytes) {
             Ok(o) => objects.push(o),
             Err(e) => {
                 eprintln!("spu ld: {e}");
-                return Ok(ExitCode::from(2));
+                return Ok(Status::BadInput.into());
             }
         }
     }
@@ -52,15 +54,14 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
     };
     match link(&objects, &opts) {
         Ok(linked) => {
-            std::fs::write(&args.output, &linked.elf)
-                .map_err(|e| format!("{}: {e}", args.output.display()))?;
+            exit::write_file(&args.output, &linked.elf)?;
             Ok(ExitCode::SUCCESS)
         }
         Err(errors) => {
             for e in &errors {
                 eprintln!("spu ld: {e}");
             }
-            Ok(ExitCode::from(2))
+            Ok(Status::BadInput.into())
         }
     }
 }
