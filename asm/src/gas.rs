@@ -367,7 +367,7 @@ const MAX_DIAGNOSTICS: usize = 100;
 
 /// Statements that macros, `.rept` and `.irp` may expand to in all: a bound on work, so
 /// nested repetitions cannot run for ever.
-const MAX_EXPANDED: usize = 4_000_000;
+const MAX_EXPANDED: usize = 1_000_000;
 
 /// Bytes of SPU local store: the most a program can occupy.
 const LOCAL_STORE: usize = 256 * 1024;
@@ -433,6 +433,8 @@ enum CalcErr {
     /// The operands do not have this form's shape (0-based operand index).
     Syntax(usize),
     Hard(usize, String),
+    /// A register number outside its field: an error unless another form fits.
+    Range(usize, String),
 }
 
 /// gas `insn_fmt_string`: `lqd\treg,imm(reg)` with the failing operand in capitals.
@@ -1944,7 +1946,7 @@ impl<'o> Assembler<'o> {
                     .get_reg(p, OperandKind::Ra, true)
                     .ok_or(CalcErr::Syntax(i))?;
                 if !(0..128).contains(&v) {
-                    return Err(CalcErr::Hard(
+                    return Err(CalcErr::Range(
                         at(p),
                         format!("register number {v} out of range [0, 127]"),
                     ));
@@ -1964,7 +1966,7 @@ impl<'o> Assembler<'o> {
                         OperandKind::Spr => "special-purpose register",
                         _ => "register",
                     };
-                    return Err(CalcErr::Hard(
+                    return Err(CalcErr::Range(
                         col,
                         format!("{what} number {v} out of range [0, 127]"),
                     ));
@@ -2066,6 +2068,7 @@ impl<'o> Assembler<'o> {
             .unwrap_or(col);
         let param = args.trim();
         let mut failure = (forms[0], 0);
+        let mut range_failure: Option<(usize, String)> = None;
         let mut parsed = None;
         for form in &forms {
             match self.calcop(form, param) {
@@ -2074,6 +2077,11 @@ impl<'o> Assembler<'o> {
                     break;
                 }
                 Err(CalcErr::Syntax(arg)) => failure = (form, arg),
+                // Another form may take this operand as something else (`hgti $3,-16`
+                // is the two-operand form); reported only if no form fits.
+                Err(CalcErr::Range(c, m)) => {
+                    range_failure.get_or_insert((c, m));
+                }
                 Err(CalcErr::Hard(c, m)) => {
                     self.diag(Severity::Error, line, arg_col + c, m);
                     self.emit(&[0; 4]);
@@ -2082,6 +2090,11 @@ impl<'o> Assembler<'o> {
             }
         }
         let Some((form, ops)) = parsed else {
+            if let Some((c, m)) = range_failure {
+                self.diag(Severity::Error, line, arg_col + c, m);
+                self.emit(&[0; 4]);
+                return;
+            }
             let (form, arg) = failure;
             self.diag(
                 Severity::Error,
@@ -2787,6 +2800,9 @@ impl<'o> Assembler<'o> {
             if self.diags.iter().any(|d| d.severity == Severity::Error) {
                 break;
             }
+        }
+        if self.expanded > MAX_EXPANDED {
+            return; // reported by the layout walk; a second walk would only repeat it
         }
         self.run_pass(lines, 2);
         if self.nonzero_in_nobits {
