@@ -503,6 +503,17 @@ impl<'o> Assembler<'o> {
 
     fn value_of(&self, name: &str, sv: &SymVal) -> Val {
         match sv {
+            // A local name for an address in a section (`alias = later`) is that address:
+            // gas resolves a branch to it like one to a local label.
+            SymVal::Abs(v)
+                if v.sect.is_some()
+                    && !self.attrs.get(name).is_some_and(|a| a.global || a.weak) =>
+            {
+                Val {
+                    sym: None,
+                    ..v.clone()
+                }
+            }
             SymVal::Abs(v) => v.clone(),
             SymVal::Label(s, off) => {
                 let v = (self.bases.get(s).copied().unwrap_or(0) + off) as i64;
@@ -777,17 +788,18 @@ impl<'o> Assembler<'o> {
             }
             let text = strip_comment(&line.text);
             let trimmed = text.trim();
-            let first_word = trimmed
+            let word = trimmed
                 .split(|c: char| c.is_whitespace() || c == ',')
                 .next()
-                .unwrap_or("")
-                .to_ascii_lowercase();
+                .unwrap_or("");
+            let rest_of_line = &trimmed[word.len()..];
+            let first_word = block_word(word, &self.macros);
             let active = cond.iter().all(|c| c.0);
             // Conditionals are tracked even while inactive.
             match first_word.as_str() {
                 ".if" | ".ifdef" | ".ifndef" | ".ifeq" | ".ifne" | ".ifc" | ".ifnc" => {
                     let value = if active {
-                        self.condition(&first_word, trimmed[first_word.len()..].trim(), line)
+                        self.condition(&first_word, rest_of_line.trim(), line)
                     } else {
                         false
                     };
@@ -799,7 +811,7 @@ impl<'o> Assembler<'o> {
                     let outer = cond.len() < 2 || cond[..cond.len() - 1].iter().all(|c| c.0);
                     if let Some(top) = cond.last_mut() {
                         let taken = top.1;
-                        let v = !taken && outer && self.condition(".if", trimmed[7..].trim(), line);
+                        let v = !taken && outer && self.condition(".if", rest_of_line.trim(), line);
                         *top = (v, taken || v);
                     }
                     i += 1;
@@ -851,7 +863,7 @@ impl<'o> Assembler<'o> {
                         format!("missing end of {first_word}"),
                     );
                 }
-                let args = trimmed[first_word.len()..].trim().to_string();
+                let args = rest_of_line.trim().to_string();
                 self.block(&first_word, &args, body, line);
                 i = next;
                 continue;
@@ -999,6 +1011,7 @@ impl<'o> Assembler<'o> {
             } else if lw.starts_with('.') {
                 self.directive(&lw, &args, line, col);
             } else if !args.starts_with('=')
+                && lw != "set"
                 && forms_named(&lw).next().is_none()
                 && is_directive(&format!(".{lw}"))
             {
@@ -1246,6 +1259,16 @@ impl<'o> Assembler<'o> {
                 line,
                 col,
                 format!("expected NAME, SIZE after {d}"),
+            );
+            return;
+        }
+        if d == ".lcomm" && parts.len() > 2 {
+            // spu-elf-as 2.40's .lcomm takes no alignment.
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                "junk at end of line, first unrecognized character is `,'",
             );
             return;
         }
@@ -1563,7 +1586,7 @@ impl<'o> Assembler<'o> {
                     self.prev_sect = p;
                 }
                 None => self.diag(
-                    Severity::Error,
+                    Severity::Warning,
                     line,
                     col,
                     ".popsection without corresponding .pushsection; ignored",
@@ -1657,8 +1680,13 @@ impl<'o> Assembler<'o> {
             ".extern" | ".file" | ".ident" | ".loc" | ".loc_mark_labels" | ".local" | ".brinfo"
             | ".end" | ".nolist" | ".list" | ".eject" | ".psize" | ".title" | ".sbttl"
             | ".version" | ".gnu_attribute" | ".lflags" => {}
-            // Call-frame information is accepted; no .eh_frame/.debug_frame is written.
-            c if c.starts_with(".cfi_") => {}
+            // spu-elf-as 2.40 has no CFI support and says so.
+            c if c.starts_with(".cfi_") => self.diag(
+                Severity::Error,
+                line,
+                col,
+                "CFI is not supported for this target",
+            ),
             ".align" | ".p2align" | ".balign" => {
                 // `boundary[, [fill][, max]]`: an empty fill is the default, and the
                 // alignment is skipped when it needs more than `max` bytes.
@@ -2049,6 +2077,13 @@ impl<'o> Assembler<'o> {
 
     fn instruction(&mut self, mnemonic: &str, args: &str, line: &Line, col: usize) {
         let pc = self.here();
+        if mnemonic == "nop" && !split_top(args, ',').iter().skip(1).any(|_| true) {
+            // GNU as for SPU reads pseudo-ops without their dot, and `nop` is gas's `.nop`:
+            // the target's no-op word whatever the operand (`nop $41` is 0x40200000, as
+            // spu-elf-as 2.40 writes it).
+            self.emit(&0x4020_0000u32.to_be_bytes());
+            return;
+        }
         let forms: Vec<&'static FormInfo> = forms_named(mnemonic).collect();
         if forms.is_empty() {
             self.diag(
@@ -2172,9 +2207,9 @@ impl<'o> Assembler<'o> {
         self.emit(&word.to_be_bytes());
     }
 
-    /// An operand that depends on an address, in an object: a PC-relative reference into
-    /// this very section is resolved now (as gas's `fixup_segment` does); anything else is
-    /// left in `pending` for a relocation.
+    /// An operand that depends on an address, in an object: a PC-relative reference to a
+    /// local label of this very section is resolved now (as gas's `fixup_segment` does);
+    /// anything else is left in `pending` for a relocation.
     fn object_immediate(
         &mut self,
         format: Format,
@@ -2193,7 +2228,9 @@ impl<'o> Assembler<'o> {
         if val.cross || (val.sect.is_none() && val.sym.is_none()) {
             return Err("expression too complex for a relocation".into());
         }
-        if pcrel && val.sect == Some(here) && !weak && !high && !low {
+        // Only references to local labels are resolved: gas leaves a relocation for a
+        // global or weak symbol even in the same section (checked with spu-elf-as 2.40).
+        if pcrel && val.sect == Some(here) && val.sym.is_none() && !weak && !high && !low {
             let local = Val { sym: None, ..val };
             return self
                 .immediate(format, kind, local, false, false, pc)
@@ -2370,7 +2407,23 @@ fn is_directive(name: &str) -> bool {
         || name.starts_with(".cfi_")
         || matches!(
             name,
-            ".macro" | ".endm" | ".rept" | ".endr" | ".irp" | ".irpc" | ".if" | ".else" | ".endif"
+            ".macro"
+                | ".endm"
+                | ".rept"
+                | ".endr"
+                | ".irp"
+                | ".irpc"
+                | ".if"
+                | ".ifdef"
+                | ".ifndef"
+                | ".ifeq"
+                | ".ifne"
+                | ".ifc"
+                | ".ifnc"
+                | ".elseif"
+                | ".else"
+                | ".endif"
+                | ".exitm"
         )
 }
 
@@ -2525,16 +2578,32 @@ fn substitute(text: &str, vars: &[(String, String)], counter: Option<&str>) -> S
     out
 }
 
+/// The directive a line's first word names for block and conditional handling: itself
+/// lower-cased, with the dot added when written without one (`rept`, `endr`, `if`), as gas
+/// for SPU reads pseudo-ops, unless it is a macro or an instruction.
+fn block_word(word: &str, macros: &HashMap<String, Macro>) -> String {
+    let lw = word.to_ascii_lowercase();
+    if lw.starts_with('.') || macros.contains_key(&lw) || forms_named(&lw).next().is_some() {
+        return lw;
+    }
+    let dotted = format!(".{lw}");
+    if is_directive(&dotted) && lw != "set" {
+        dotted
+    } else {
+        lw
+    }
+}
+
 fn collect_block(lines: &[Line], start: usize) -> (Vec<Line>, usize) {
     let mut depth = 1;
     let mut i = start;
+    let no_macros = HashMap::new();
     while i < lines.len() {
-        let w = strip_comment(&lines[i].text)
-            .trim()
-            .split_whitespace()
-            .next()
-            .unwrap_or("")
-            .to_ascii_lowercase();
+        let text = strip_comment(&lines[i].text);
+        let w = block_word(
+            text.trim().split_whitespace().next().unwrap_or(""),
+            &no_macros,
+        );
         match w.as_str() {
             ".macro" | ".rept" | ".irp" | ".irpc" => depth += 1,
             ".endm" | ".endr" => {

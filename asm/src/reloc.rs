@@ -47,31 +47,20 @@ pub fn name(kind: u32) -> Option<&'static str> {
     NAMES.iter().find(|n| n.0 == kind).map(|n| n.1)
 }
 
-/// A relocation by its ELF name (`R_SPU_ADDR32`) or its BFD name (`BFD_RELOC_32`, the
-/// generic ones `.reloc` also takes).
+/// A relocation as `.reloc` names it in spu-elf-as: the howto name (`SPU_ADDR32`, the ELF
+/// name without `R_`) or one of the generic BFD names (`BFD_RELOC_32`).
 pub fn by_name(text: &str) -> Option<u32> {
     let upper = text.trim().to_ascii_uppercase();
-    if let Some(n) = NAMES.iter().find(|n| n.1 == upper) {
+    if let Some(n) = NAMES
+        .iter()
+        .find(|n| n.1.strip_prefix("R_") == Some(upper.as_str()))
+    {
         return Some(n.0);
     }
     Some(match upper.as_str() {
         "BFD_RELOC_NONE" => R_SPU_NONE,
         "BFD_RELOC_32" => R_SPU_ADDR32,
         "BFD_RELOC_32_PCREL" => R_SPU_REL32,
-        "BFD_RELOC_SPU_IMM10W" => R_SPU_ADDR10,
-        "BFD_RELOC_SPU_IMM16W" => R_SPU_ADDR16,
-        "BFD_RELOC_SPU_HI16" => R_SPU_ADDR16_HI,
-        "BFD_RELOC_SPU_LO16" => R_SPU_ADDR16_LO,
-        "BFD_RELOC_SPU_IMM18" => R_SPU_ADDR18,
-        "BFD_RELOC_SPU_PCREL16" => R_SPU_REL16,
-        "BFD_RELOC_SPU_IMM7" => R_SPU_ADDR7,
-        "BFD_RELOC_SPU_PCREL9A" => R_SPU_REL9,
-        "BFD_RELOC_SPU_PCREL9B" => R_SPU_REL9I,
-        "BFD_RELOC_SPU_IMM10" => R_SPU_ADDR10I,
-        "BFD_RELOC_SPU_IMM16" => R_SPU_ADDR16I,
-        "BFD_RELOC_SPU_PPU32" => R_SPU_PPU32,
-        "BFD_RELOC_SPU_PPU64" => R_SPU_PPU64,
-        "BFD_RELOC_SPU_ADD_PIC" => R_SPU_ADD_PIC,
         _ => return None,
     })
 }

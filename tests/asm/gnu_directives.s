@@ -1,15 +1,16 @@
 # Directives real SPU code uses, with the bytes GNU as gives them: sections with flags and
 # types, the section stack, subsections, local commons, LEB128, .org and dot assignment,
-# alignment with fill patterns, symbol attributes, CFI (accepted; no frame data written).
+# alignment with fill patterns, symbol attributes, pseudo-ops without their dot; each
+# form checked against spu-elf-as 2.40.
 # Layout (GNU ld's SPU order): .init at 0; .text at 0x20 (its alignment is 32), its
 # subsections 0, 1, 2 joined in order (sub 0 is 0x4c bytes, so `late` is at 0x6c);
 # .data.rel at 0x80; .bss at 0xa0 (buf, then flag at 0xac).
 	.file	"gnu_directives.c"
+	.file	1 "gnu_directives.c"
 	.text
 	.global	start
 	.type	start, @function
 start:	il $3,1			# => 40800083
-	.cfi_startproc
 	.section .init,"ax",@progbits
 init:	il $4,2			# => 40800104
 	.previous
@@ -26,13 +27,12 @@ d1:	.long 0x11223344	# => 11223344
 late:	il $7,5
 	.text 0
 	ila $8,late		# => 42003608
-	.cfi_endproc
 	.size	start, .-start
 	.loc 1 2 0
 	.extern	elsewhere
 	.weak	maybe
 	.hidden	start
-	.lcomm	buf, 12, 16
+	.lcomm	buf, 12
 	.lcomm	flag, 1
 	ila $9,buf		# => 42005009
 	ila $10,flag		# => 4200560a
@@ -44,7 +44,7 @@ late:	il $7,5
 	.p2alignl 5, 0x00200000	# => 00200000 00200000 00200000 00200000
 	il $11,6		# => 4080030b
 	GLOBL	start
-	SET	answer, 42
+	EQU	answer, 42
 	il $12,answer		# => 4080150c
 	.subsection 2
 	il $13,7
