@@ -69,6 +69,13 @@ pub struct Args {
     /// by cause, dual issue; then per label and totals), merged over all SPEs.
     #[arg(long)]
     profile: Option<PathBuf>,
+    /// Heat map of the simulated cycles per packet (PNG), and beside it (NAME-wait.png)
+    /// the share of them spent waiting on DMA.
+    #[arg(long)]
+    heatmap: Option<PathBuf>,
+    /// Timeline of the frame over simulated time (Chrome/Perfetto trace JSON).
+    #[arg(long)]
+    trace: Option<PathBuf>,
     /// No progress bar or summary (for `spu paper`, which runs many renders at once).
     #[arg(long, hide = true)]
     quiet: bool,
@@ -192,7 +199,10 @@ fn check_options(args: &Args) -> exit::Result<Option<Camera>> {
         )));
     }
     exit::check_writable(&args.output)?;
-    for path in [&args.stats, &args.profile].into_iter().flatten() {
+    for path in [&args.stats, &args.profile, &args.heatmap, &args.trace]
+        .into_iter()
+        .flatten()
+    {
         exit::check_writable(path)?;
     }
     Ok(camera)
@@ -241,7 +251,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
     let sim_started = Instant::now();
-    let run = spu_loader::runtime::render_frame(
+    let run = spu_loader::runtime::render_frame_with(
         &staged,
         &layout,
         args.spes,
@@ -253,6 +263,9 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         },
         args.fill,
         args.max_cycles,
+        &spu_loader::runtime::FrameOptions {
+            event_log: args.heatmap.is_some() || args.trace.is_some(),
+        },
         &mut |taken, _| bar.set_position(taken as u64),
     );
     bar.finish_and_clear();
@@ -315,6 +328,15 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         )
         .to_json();
         exit::write_file(path, json.as_bytes())?;
+    }
+    if args.heatmap.is_some() || args.trace.is_some() {
+        crate::frame_views::write(
+            &run,
+            &layout,
+            (args.width, args.height, args.spes, args.clock),
+            args.heatmap.as_deref(),
+            args.trace.as_deref(),
+        )?;
     }
     if let Some(path) = &args.profile {
         let text = kernel_profile(&run, args.fill).map_err(Error::failure)?;

@@ -360,7 +360,11 @@ impl Spu {
                     let earliest = self.queue.iter().map(|c| c.complete).min().unwrap_or(now);
                     return ChannelOutcome::WaitUntil(earliest);
                 }
-                return self.mfc_command(v & 0xff, now, memory);
+                let outcome = self.mfc_command(v & 0xff, now, memory);
+                if self.events.is_some() {
+                    self.log_mfc_command(v as u8, now, &outcome);
+                }
+                return outcome;
             }
             WR_OUT_MBOX => {
                 if self.out_mbox.is_some() {
