@@ -87,7 +87,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
                 .chain(job.render_args(&jobs_dir))
                 .map(|w| shell_word(&w))
                 .collect();
-            println!("{}", words.join(" "));
+            outln!("{}", words.join(" "));
         }
         return Ok(ExitCode::SUCCESS);
     }
