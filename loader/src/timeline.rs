@@ -2,7 +2,8 @@
 //! without help from the kernel: an SPU puts each packet's 1 KiB result block to the frame
 //! buffer (the address names the tile and packet) and takes each tile with an atomic
 //! update of the shared counter. A packet's cycles run from the SPU's previous packet put
-//! (or, for a tile's first packet, from the tile's atomic update) to its own put. A tile's
+//! (or, for a tile's first packet, from the moment the tile's atomic update is known to
+//! have succeeded) to its own put. A tile's
 //! span runs from its take to the SPU's next take (or last put); with software
 //! hyperthreading the last packets of the previous tile finish inside it, and the span is
 //! named after the newest tile it completes packets of.
@@ -10,7 +11,7 @@
 use crate::frame::FrameLayout;
 use crate::kernel_abi::{PACKETS_PER_TILE, PACKET_BLOCK_BYTES, PACKET_SIZE, TILE_SIZE};
 use crate::runtime::FrameRun;
-use spu_isa::machine::SpuEvent;
+use spu_isa::machine::{ch, SpuEvent};
 
 /// The MFC's put command (and its fenced and barrier forms).
 const PUTS: [u8; 3] = [0x20, 0x21, 0x22];
@@ -88,7 +89,14 @@ impl Timeline {
                         until,
                         channel,
                     } => {
-                        waited += until.saturating_sub(cycle);
+                        if channel == ch::RD_ATOMIC_STAT {
+                            // the tile counter's update is known: the tile is taken now,
+                            // and the next packet starts from here
+                            mark = mark.max(until);
+                            waited = 0;
+                        } else {
+                            waited += until.saturating_sub(cycle);
+                        }
                         t.waits.push(Wait {
                             spu,
                             start: cycle,

@@ -68,7 +68,8 @@ pub fn write(path: &Path, timeline: &Timeline) -> Result<(), String> {
         &wait_path,
         timeline,
         &wait,
-        (0.0, 100.0),
+        // from none to the most any packet waited (at least 1%), so small waits show
+        (0.0, wait.iter().flatten().fold(1.0f64, |a, &b| a.max(b))),
         "% waiting on DMA",
     )
 }
