@@ -150,7 +150,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     let out_mbox = spu.read_outbound_mailbox();
     if args.json {
         let report = RunReport {
-            stop: stop.to_string(),
+            stop: describe(&stop),
             exit_code: exit::program_exit_code(&stop),
             pc: spu.pc(),
             instructions: spu.instructions(),
