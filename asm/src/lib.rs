@@ -4,6 +4,7 @@
 pub mod elf;
 mod expr;
 mod gas;
+pub mod sched;
 
 pub use gas::{assemble, Diagnostic, Location, Options, Output, Severity};
 
