@@ -659,7 +659,9 @@ fn list_schedule(
         if live_now + new > pool {
             return false;
         }
-        new <= freed || live_now + new + 4 <= pool
+        // Growth keeps a margin so that work that frees registers can always issue.
+        let margin = if pool >= 16 { 4 } else { (pool / 4).max(1) };
+        new <= freed || live_now + new + margin <= pool
     };
     let retire = |i: usize, live: &mut [bool], uses_left: &mut [u32]| {
         for v in virtual_regs(&insts[i]) {
