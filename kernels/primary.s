@@ -26,6 +26,7 @@
         .include "modules/bvh_cache.s"      # BVH cache misses
         .include "modules/triangle.s"       # leaves: the triangle test
         .include "modules/tri_cache.s"      # triangle cache misses
-        # software hyperthreading (SHT) goes here: modules/sht.s
+        .include "modules/lru.s"            # the 4-way caches' sets
+        .include "modules/sht.s"            # software hyperthreading
         .include "modules/output.s"         # shading and packet output
         .include "modules/frame_done.s"     # statistics and the end of the frame

@@ -967,6 +967,11 @@ impl Names {
         eval.eval(&ast).ok().map(|v| v.v)
     }
 
+    /// The value of a defined name.
+    pub fn value_of(&self, name: &str) -> Option<i64> {
+        self.values.get(name).copied()
+    }
+
     /// The register a scheduled operand names: `$lr`, `$sp`, a name or an expression.
     pub fn register(&self, text: &str) -> Option<u8> {
         let t = text.trim();

@@ -1,7 +1,8 @@
 # data.s — the ray tracer's local store: the parameter and statistics buffers, the
-# constants (k_*: shuffle patterns, masks, tolerances), the packet's rays in structure-of-
-# arrays form, the output double buffer, the traversal stack, and `cache_area`, which the
-# frame driver carves into the BVH and triangle caches at start.
+# constants (k_*: shuffle patterns, masks, tolerances), the output double buffer, and
+# `cache_area`, which the frame driver carves into the BVH and triangle caches and the
+# packet contexts at start (each context: a packet's rays in structure-of-arrays form, its
+# traversal stack and what software hyperthreading saves; see loader::kernel_abi::context).
 
 # ---- local-store data
         .data
@@ -9,9 +10,9 @@
 params:         .space 128
 lockbuf:        .space 128
 statbuf:        .space 128
-vars:           .space 320
+vars:           .space 576
 nodebuf:        .space 64
-negtab:         .space 48
+
         .align 4
 k_pat:          .long 0x00010203, 0x00010203, 0x00010203, 0x00010203
                 .long 0x04050607, 0x04050607, 0x04050607, 0x04050607
@@ -67,21 +68,8 @@ k_ff:           .long 0x000000ff, 0x000000ff, 0x000000ff, 0x000000ff
 k_c255:         .long 255, 255, 255, 255
 k_abs:          .long 0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff
 
-        .align 4
-ray_dx:         .space 256      # structure of arrays, 16 vectors of 4 rays each, contiguous
-ray_dy:         .space 256      # in this order (stores use offsets from ray_dx)
-ray_dz:         .space 256
-ray_rx:         .space 256
-ray_ry:         .space 256
-ray_rz:         .space 256
-ray_t:          .space 256
-ray_id:         .space 256
-ray_nd:         .space 256      # cosine numerator: (n.d)/|n| of the hit
-ray_invd:       .space 256      # 1/|d|
-corners:        .space 48       # corner rays' x, y, z (rays 0, 7, 56, 63)
         .align 7
 outbuf:         .space 2048     # two packet result blocks, alternating
-        .space  16              # below the stack: what popping an empty stack reads
-stack:          .space 2048     # traversal stack
         .align 7
-cache_area:                     # carved at start: BVH tags, BVH lines, triangle tags, lines
+cache_area:                     # carved at start: BVH tags, BVH lines, triangle tags, lines,
+                                # packet contexts

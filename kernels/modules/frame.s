@@ -45,8 +45,8 @@ _start:
         lqa     SWAP, k_swap
         ilhu    SIGNS, 0x8000
         lqa     NEGODD, k_negodd
-        ila     NEGTAB, negtab
-        ila     STKBASE, stack
+        nop
+        nop
 
         # parameters
         ila     $66, params
@@ -79,14 +79,32 @@ _start:
         lqd     $67, PARAM_BVH_LOG2($66)      # quad 6: bvh log2, tri log2, stats EA
         rotqbyi $68, $67, 8
         stqa    $68, vars+V_EASTATS
-        # carve the caches: lines = 1 << log2
+        # carve the caches: lines = 1 << log2. A 4-way cache keeps its ways as four
+        # direct-mapped quarters of S = lines/4 sets (way w of set s is line w*S + s), the
+        # most recently used first, so a hit in way 0 is the direct-mapped hit path
+        lqd     $76, PARAM_SHT($66)           # quad 7: packet contexts, ways
         il      $69, 1
         shl     $70, $69, $67                 # BVH lines
         rotqbyi $71, $67, 4
         shl     $71, $69, $71                 # triangle lines
-        ai      BMASK64, $70, -1
+        rotqbyi $77, $76, 4
+        ceqi    $78, $77, 4
+        stqa    $78, vars+V_ASSOC4
+        andi    $79, $78, 2                   # log2 of the ways
+        sfi     $81, $79, 0
+        rotm    $80, $70, $81                 # BVH sets
+        rotm    $82, $71, $81                 # triangle sets
+        ai      BMASK64, $80, -1
         shli    BMASK64, BMASK64, 6
-        ai      TMASK, $71, -1
+        ai      TMASK, $82, -1
+        shli    $83, $80, 4
+        stqa    $83, vars+V_BWAYT
+        shli    $83, $80, 6
+        stqa    $83, vars+V_BWAYD
+        shli    $83, $82, 4
+        stqa    $83, vars+V_TWAYT
+        shli    $83, $82, 6
+        stqa    $83, vars+V_TWAYD
         ila     BTAGS, cache_area
         shli    $72, $70, 4
         a       BDATA, BTAGS, $72
@@ -97,6 +115,57 @@ _start:
         a       TTAGS, BDATA, $72
         shli    $72, $71, 4
         a       TDATA, TTAGS, $72
+        # the packet contexts follow: none suspended, nothing staged
+        shli    $72, $71, 6
+        a       $84, TDATA, $72
+        stqa    $84, vars+V_CTX0
+        stqa    $76, vars+V_NCTX
+        ceqi    $85, $76, 1
+        stqa    $85, vars+V_NCTX1
+        # the miss handlers: one per configuration, each a straight line
+        ila     $86, .Lb_sht_fetch
+        ila     $87, .Lb_one_fetch
+        selb    $86, $86, $87, $85
+        stqa    $86, vars+V_BFETCH
+        ila     $86, bvh_miss_sht
+        ila     $87, bvh_miss_one
+        selb    $86, $86, $87, $85
+        ila     $87, bvh_miss_ways
+        selb    BMISSH, $86, $87, $78
+        stqa    BMISSH, vars+V_BMISSH
+        ila     $86, .Lpf_stage
+        ila     $87, .Lpf_one_evict
+        selb    $86, $86, $87, $85
+        stqa    $86, vars+V_PFFETCH
+        ila     $86, .Lpf_stage
+        ila     $87, .Lpf_one
+        selb    $86, $86, $87, $85
+        ila     $87, .Lpf_ways
+        selb    $86, $86, $87, $78
+        stqa    $86, vars+V_PFMISS
+        il      $72, -1
+        ori     $86, $76, 0
+        ai      $87, $84, CTX_HEADER
+        il      $88, CTX_BYTES
+        il      $89, CONTEXT_TAG0
+        il      $90, 1
+        lqa     $91, k_entry
+1:      stqd    ZERO, CTX_RESUME($87)
+        .irp    J, 0, 1, 2, 3, 4, 5, 6, 7
+        stqd    $72, CTX_STAGE_TAGS+\J*16($87)
+        .endr
+        shl     $92, $90, $89
+        shufb   $92, $89, $92, $91            # (tag, 1 << tag)
+        stqd    $92, CTX_TAG($87)
+        ai      $89, $89, 1
+        a       $93, $87, $88
+        ai      $86, $86, -1
+        ai      $94, $84, CTX_HEADER          # the last one's next is the first
+        ceqi    $95, $86, 0
+        selb    $93, $93, $94, $95
+        stqd    $93, CTX_NEXT($87)
+        ori     $87, $93, 0
+        brnz    $86, 1b
         # invalidate every tag of both caches
         il      $72, -1
         ori     $73, BTAGS, 0
@@ -165,6 +234,21 @@ _start:
         stqa    ZERO, vars+V_PACKETS
         stqa    ZERO, vars+V_OUTSEL
 
+        stqa    ZERO, vars+V_EXH
+        il      $66, 64
+        stqa    $66, vars+V_PKT               # no tile yet
+        lqa     RAYS, vars+V_CTX0             # the first packet context
+        ai      RAYS, RAYS, CTX_HEADER
+        ai      NEGTAB, RAYS, CTX_NEGTAB
+        ila     $97, CTX_STACK
+        a       STKBASE, RAYS, $97
+        br      packet_start
+
+# ---- the current tile is done: take the next one, if any
+new_tile:
+        lqa     $66, vars+V_EXH
+        brnz    $66, sched_next               # no tile left: the context stays empty
+
 # ---- take the next tile: atomic fetch-and-increment of the shared counter
 next_tile:
         ila     $66, lockbuf
@@ -189,7 +273,7 @@ next_tile:
         brnz    $68, 2b                       # reservation lost: retry
         lqa     $73, vars+V_NTILES
         clgt    $68, $73, $71
-        brz     $68, frame_done
+        brz     $68, no_tiles
         stqa    $71, vars+V_TILE
         # tile coordinates: TY = TILE / TILESX, TX = TILE % TILESX (few tiles per row)
         lqa     $74, vars+V_TILESX
@@ -203,3 +287,24 @@ next_tile:
 4:      stqa    $76, vars+V_TX
         stqa    $75, vars+V_TY
         stqa    ZERO, vars+V_PKT
+        br      have_packet
+no_tiles:
+        il      $66, 1
+        stqa    $66, vars+V_EXH
+        br      sched_next
+
+# ---- a new packet in the current context: the next of the tile, or of the next tile;
+# its rays are generated next (modules/raygen.s)
+packet_start:
+        lqa     $66, vars+V_PKT
+        ceqi    $67, $66, 64
+        brnz    $67, new_tile                 # the tile is done
+have_packet:
+        lqa     $66, vars+V_PKT
+        lqa     $67, vars+V_TILE
+        stqa    $66, vars+V_CURPKT
+        stqd    $66, CTX_PACKET(RAYS)         # where packet_done puts the results
+        shli    $67, $67, 6
+        stqd    $67, CTX_TILE64(RAYS)
+        ai      $66, $66, 1
+        stqa    $66, vars+V_PKT

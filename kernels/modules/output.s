@@ -24,7 +24,7 @@ packet_done:
         il      %two, 2
       ! wrch    $MFC_WrTagUpdate, %two
       ! rdch    %st, $MFC_RdTagStat
-        ila     %base, ray_dx
+        ori     %base, RAYS, 0
         lqa     %bg, k_bg
         lqa     %pat, k_shade
         lqa     %abs, k_abs
@@ -64,11 +64,10 @@ packet_done:
       ~ stqd    %t\J, \J+256($80)
       ~ stqd    %rgba\J, \J+512($80)
         .endr
-        lqa     %tile, vars+V_TILE
-        lqa     $93, vars+V_PKT
+        lqd     %tile, CTX_TILE64(RAYS)   # tile * 64
+        lqd     $93, CTX_PACKET(RAYS)
         lqa     %eafb, vars+V_EAFB
-        shli    %q, %tile, 6
-        a       %q2, %q, $93
+        a       %q2, %tile, $93
         shli    %q3, %q2, 10
         a       %ea, %q3, %eafb
         il      %size, 1024
@@ -81,9 +80,5 @@ packet_done:
       ! wrch    $MFC_Cmd, %cmd
         xor     %os, $66, %size
       ! stqa    %os, vars+V_OUTSEL
-        ai      %pk, $93, 1
-      ! stqa    %pk, vars+V_PKT
-        ceqi    %last, %pk, 64
-      ! brz     %last, packet_loop
-      ! br      next_tile
+      ! br      packet_start                  # the context's next packet (modules/frame.s)
         .endsched

@@ -1,7 +1,8 @@
 # raygen.s — ray generation and packet setup for one 8x8 packet of primary rays.
 #
-# The packet's rays (row-major, ray i = row*8 + col) are written to ray_dx/dy/dz and their
-# reciprocals to ray_rx/ry/rz, four vectors (two rows) per pass; t starts at 1e30 and the
+# The packet's rays (row-major, ray i = row*8 + col) are written to the current packet
+# context (RAYS: ray_dx/dy/dz, then the reciprocals ray_rx/ry/rz, see
+# loader::kernel_abi::context), four vectors (two rows) per pass; t starts at 1e30 and the
 # hit id at -1. The packet setup then builds the frustum of the corner rays for the
 # interval-arithmetic box tests (PA*, PB*, OA*, OB*, F2), the first ray's data, and enters
 # traversal (modules/traverse.s) at the root's children.
@@ -9,7 +10,7 @@
         .text
 packet_loop:
         # ---- ray generation: d = dir00 + (px0 + col)*du + (py0 + row)*dv
-        lqa     $66, vars+V_PKT
+        lqa     $66, vars+V_CURPKT
         lqa     $67, vars+V_TX
         lqa     $68, vars+V_TY
         lqa     $73, vars+V_DIR00
@@ -46,16 +47,16 @@ packet_loop:
         fma     $93, $87, $80, $83
         fma     $94, $87, $81, $84
         fma     $95, $87, $82, $85
-        ila     $88, ray_dx                   # vector pointer
+        ori     $88, RAYS, 0                  # vector pointer
         il      $89, 0                        # row (float)
         fma     $93, $86, $77, $93
         fma     $94, $86, $78, $94
         fma     $95, $86, $79, $95
         il      $90, 4                        # row pairs left
         il      $118, -1
-        stqa    $93, corners
-        stqa    $94, corners+16
-        stqa    $95, corners+32
+        stqd    $93, CTX_CORNERS(RAYS)
+        stqd    $94, CTX_CORNERS+16(RAYS)
+        stqd    $95, CTX_CORNERS+32(RAYS)
 
         # four vectors (two rows) per pass, scheduled into even/odd pairs
         .sched  scratch=66-127
@@ -202,9 +203,9 @@ packet_loop:
         # directions have both signs and give no bound.
         .sched  pool=66-99,113-127 scratch=66-127
 .Lsetup:
-        lqa     %c0, corners
-        lqa     %c1, corners+16
-        lqa     %c2, corners+32
+        lqd     %c0, CTX_CORNERS(RAYS)
+        lqd     %c1, CTX_CORNERS+16(RAYS)
+        lqd     %c2, CTX_CORNERS+32(RAYS)
         .irp    K, 0, 1, 2
         frest   %y\K, %c\K
         fi      %y\K, %c\K, %y\K
@@ -250,17 +251,15 @@ packet_loop:
         shli    $100, $100, 4                 # its vector's byte offset
         andi    $101, FIRST, 3
         shli    $101, $101, 4                 # its lane * 16
-        ila     $102, ray_rx
-        a       $102, $102, $100
-        lqd     $103, 0($102)
-        lqd     $104, 256($102)
-        lqd     $105, 512($102)
+        a       $102, RAYS, $100
+        lqd     $103, CTX_RAY_RX($102)
+        lqd     $104, CTX_RAY_RX+256($102)
+        lqd     $105, CTX_RAY_RX+512($102)
         ila     $106, k_pat
         lqx     $107, $106, $101
         ila     $106, k_tpat
         lqx     FT_PAT, $106, $101
-        ila     $106, ray_t
-        a       FT_ADDR, $106, $100
+        a       FT_ADDR, RAYS, $100
         shufb   $103, $103, $103, $107        # 1/d splats
         shufb   $104, $104, $104, $107
         shufb   $105, $105, $105, $107

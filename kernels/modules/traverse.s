@@ -37,7 +37,7 @@ trav:
         lqx     $75, BTAGS, $72
         andi    $69, $67, 0x30                # split axis * 16
         lqx     $76, NEGTAB, $69              # all ones: child 1 is the near one
-        lqd     $74, 0(FT_ADDR)               # the first ray's t
+        lqd     $74, CTX_RAY_T(FT_ADDR)               # the first ray's t
         lqd     $77, -16(STK)                 # the entry a pop takes
         lqa     $78, k_pc0
         lqa     $79, k_pc1
@@ -86,7 +86,7 @@ trav:
         xor     $113, $113, SIGNS
         fcgt    $114, $110, $113              # the frustum misses
         ceq     $115, $75, CUR                # the line holds this pair
-      ! brz     $115, bvh_miss
+      ! biz     $115, BMISSH
         shufb   $116, $112, $112, PAT0        # child 0 missed, every lane
         shufb   $117, $112, $112, PAT2        # child 1 missed
         or      $118, $116, $76
@@ -201,7 +201,8 @@ find_first:
         ai      $89, FIRST, -1
         lqa     $113, k_epslo
         lqa     $114, k_epshi
-        ila     $88, ray_rx
+        ila     $88, CTX_RAY_RX
+        a       $88, $88, RAYS
         # two vectors per pass (scheduled into even/odd pairs)
         .sched  pool=91-96,98-102,105-111,116,118-124,127,87 scratch=66-127
 1:
@@ -275,16 +276,16 @@ set_first:
         shli    $100, $100, 4                 # its vector's byte offset
         andi    $101, FIRST, 3
         shli    $101, $101, 4                 # its lane * 16
-        ila     $102, ray_rx
+        ori     $102, RAYS, 0
         a       $102, $102, $100
-        lqd     $103, 0($102)
-        lqd     $104, 256($102)
-        lqd     $105, 512($102)
+        lqd     $103, CTX_RAY_RX($102)
+        lqd     $104, CTX_RAY_RX+256($102)
+        lqd     $105, CTX_RAY_RX+512($102)
         ila     $106, k_pat
         lqx     $107, $106, $101
         ila     $106, k_tpat
         lqx     FT_PAT, $106, $101
-        ila     $106, ray_t
+        ori     $106, RAYS, 0
         a       FT_ADDR, $106, $100
         shufb   $103, $103, $103, $107        # 1/d splats
         shufb   $104, $104, $104, $107

@@ -11,31 +11,42 @@
 # ---- leaf: test the active rays against each triangle of the leaf
 leaf:
         lqa     $80, vars+V_LEAVES
+        ai      $80, $80, 1
+        stqa    $80, vars+V_LEAVES
+        # a new visit: what the staging slots hold is from an older leaf
+        il      $86, -1
+        .irp    J, 0, 1, 2, 3, 4, 5, 6, 7
+        stqd    $86, CTX_STAGE_TAGS+\J*16(RAYS)
+        .endr
+leaf_probe:                                   # (a suspended leaf resumes here)
         ori     $66, CUR, 0                   # first triangle
         rotqbyi $67, CUR, 4
-        ai      $80, $80, 1
         rotmi   $67, $67, -6                  # count (meta << 4 >> 2 ... see bvh_miss)
-        stqa    $80, vars+V_LEAVES
-        # bring every missing triangle of the leaf into the cache with one wait: the
-        # DMAs queue back to back, so a leaf pays the memory latency once
+        # bring every missing triangle of the leaf in with one wait: the DMAs queue back
+        # to back, so a leaf pays the memory latency once (or once per suspension)
         ori     $76, $66, 0
         ori     $77, $67, 0
         il      $78, 0                        # any miss
         il      $79, 64
+        lqa     $75, vars+V_PFMISS            # the miss handler for the configuration
         hbrr    .Lpf_br, .Lpf
 .Lpf:   and     $80, $76, TMASK
         shli    $81, $80, 4
         lqx     $82, TTAGS, $81
         ceq     $83, $82, $76
-        brz     $83, .Lpf_miss                # hits fall through
+        biz     $83, $75                      # hits fall through
 .Lpf_next:
         ai      $76, $76, 1
         ai      $77, $77, -1
 .Lpf_br:
         brnz    $77, .Lpf
         brz     $78, tri_loop
+        lqa     $86, vars+V_NCTX1
+        brz     $86, .Lpf_suspend
+        lqd     $86, CTX_TAG(RAYS)
+        rotqbyi $87, $86, 4
         il      $86, 2
-        wrch    $MFC_WrTagMask, $86
+        wrch    $MFC_WrTagMask, $87
         wrch    $MFC_WrTagUpdate, $86
         rdch    $86, $MFC_RdTagStat
 tri_loop:
@@ -83,14 +94,14 @@ tri_loop:
         frsqest $96, $95
         fi      $123, $95, $96                # 1/|n|, n = (1, n_u, n_v) in (k, u, v)
         shufb   $124, $66, $66, PAT0          # triangle index
-        ila     $97, ray_dx
+        ori     $97, RAYS, 0
         rotqbyi $98, $91, 4
         rotqbyi $99, $91, 8
         a       $125, $97, $91                # base of d_k
         a       $126, $97, $98                # d_u
         a       $127, $97, $99                # d_v
         # frustum culling with the packet's corner rays (0, 7, 56, 63)
-        ila     $97, corners
+        ai      $97, RAYS, CTX_CORNERS
         rotmi   $100, $91, -4
         rotmi   $101, $98, -4
         rotmi   $102, $99, -4
@@ -149,12 +160,7 @@ tri_loop:
         .sched  pool=59,65,78-111,113-118 scratch=66-127
 ray_loop:
         hbrr    .Lray_br, ray_loop
-        ila     %tb, ray_t
-        ila     %ib, ray_id
-        ila     %nb, ray_nd
-        a       %tp, %tb, $119
-        a       %ip, %ib, $119
-        a       %np, %nb, $119
+        a       %tp, RAYS, $119
         lqx     %dk0, $125, $119
         lqx     %du0, $126, $119
         lqx     %dv0, $127, $119
@@ -172,7 +178,7 @@ ray_loop:
         fma     %ga0, $74, %du0, $120
         fma     %be0, $72, %dv0, %be0
         fma     %ga0, $75, %dv0, %ga0
-        lqd     %to0, 0(%tp)
+        lqd     %to0, CTX_RAY_T+0(%tp)
         fa      %bg0, %be0, %ga0
         fcgt    %o10, $76, %be0
         fcgt    %o20, $76, %ga0
@@ -183,15 +189,15 @@ ray_loop:
         and     %cl0, %cl0, %cl20
         or      %o10, %o10, %o30
         andc    %hit0, %cl0, %o10
-        lqd     %io0, 0(%ip)
-        lqd     %no0, 0(%np)
+        lqd     %io0, CTX_RAY_ID+0(%tp)
+        lqd     %no0, CTX_RAY_ND+0(%tp)
         fm      %nd0, %den0, $123
         selb    %to0, %to0, %t0, %hit0
         selb    %io0, %io0, $124, %hit0
         selb    %no0, %no0, %nd0, %hit0
-      ~ stqd    %to0, 0(%tp)
-      ~ stqd    %io0, 0(%ip)
-      ~ stqd    %no0, 0(%np)
+      ~ stqd    %to0, CTX_RAY_T+0(%tp)
+      ~ stqd    %io0, CTX_RAY_ID+0(%tp)
+      ~ stqd    %no0, CTX_RAY_ND+0(%tp)
         lqx     %dk1, $125, $119
         lqx     %du1, $126, $119
         lqx     %dv1, $127, $119
@@ -209,7 +215,7 @@ ray_loop:
         fma     %ga1, $74, %du1, $120
         fma     %be1, $72, %dv1, %be1
         fma     %ga1, $75, %dv1, %ga1
-        lqd     %to1, 16(%tp)
+        lqd     %to1, CTX_RAY_T+16(%tp)
         fa      %bg1, %be1, %ga1
         fcgt    %o11, $76, %be1
         fcgt    %o21, $76, %ga1
@@ -220,15 +226,15 @@ ray_loop:
         and     %cl1, %cl1, %cl21
         or      %o11, %o11, %o31
         andc    %hit1, %cl1, %o11
-        lqd     %io1, 16(%ip)
-        lqd     %no1, 16(%np)
+        lqd     %io1, CTX_RAY_ID+16(%tp)
+        lqd     %no1, CTX_RAY_ND+16(%tp)
         fm      %nd1, %den1, $123
         selb    %to1, %to1, %t1, %hit1
         selb    %io1, %io1, $124, %hit1
         selb    %no1, %no1, %nd1, %hit1
-      ~ stqd    %to1, 16(%tp)
-      ~ stqd    %io1, 16(%ip)
-      ~ stqd    %no1, 16(%np)
+      ~ stqd    %to1, CTX_RAY_T+16(%tp)
+      ~ stqd    %io1, CTX_RAY_ID+16(%tp)
+      ~ stqd    %no1, CTX_RAY_ND+16(%tp)
         lqx     %dk2, $125, $119
         lqx     %du2, $126, $119
         lqx     %dv2, $127, $119
@@ -246,7 +252,7 @@ ray_loop:
         fma     %ga2, $74, %du2, $120
         fma     %be2, $72, %dv2, %be2
         fma     %ga2, $75, %dv2, %ga2
-        lqd     %to2, 32(%tp)
+        lqd     %to2, CTX_RAY_T+32(%tp)
         fa      %bg2, %be2, %ga2
         fcgt    %o12, $76, %be2
         fcgt    %o22, $76, %ga2
@@ -257,15 +263,15 @@ ray_loop:
         and     %cl2, %cl2, %cl22
         or      %o12, %o12, %o32
         andc    %hit2, %cl2, %o12
-        lqd     %io2, 32(%ip)
-        lqd     %no2, 32(%np)
+        lqd     %io2, CTX_RAY_ID+32(%tp)
+        lqd     %no2, CTX_RAY_ND+32(%tp)
         fm      %nd2, %den2, $123
         selb    %to2, %to2, %t2, %hit2
         selb    %io2, %io2, $124, %hit2
         selb    %no2, %no2, %nd2, %hit2
-      ~ stqd    %to2, 32(%tp)
-      ~ stqd    %io2, 32(%ip)
-      ~ stqd    %no2, 32(%np)
+      ~ stqd    %to2, CTX_RAY_T+32(%tp)
+      ~ stqd    %io2, CTX_RAY_ID+32(%tp)
+      ~ stqd    %no2, CTX_RAY_ND+32(%tp)
         lqx     %dk3, $125, $119
         lqx     %du3, $126, $119
         lqx     %dv3, $127, $119
@@ -283,7 +289,7 @@ ray_loop:
         fma     %ga3, $74, %du3, $120
         fma     %be3, $72, %dv3, %be3
         fma     %ga3, $75, %dv3, %ga3
-        lqd     %to3, 48(%tp)
+        lqd     %to3, CTX_RAY_T+48(%tp)
         fa      %bg3, %be3, %ga3
         fcgt    %o13, $76, %be3
         fcgt    %o23, $76, %ga3
@@ -294,15 +300,15 @@ ray_loop:
         and     %cl3, %cl3, %cl23
         or      %o13, %o13, %o33
         andc    %hit3, %cl3, %o13
-        lqd     %io3, 48(%ip)
-        lqd     %no3, 48(%np)
+        lqd     %io3, CTX_RAY_ID+48(%tp)
+        lqd     %no3, CTX_RAY_ND+48(%tp)
         fm      %nd3, %den3, $123
         selb    %to3, %to3, %t3, %hit3
         selb    %io3, %io3, $124, %hit3
         selb    %no3, %no3, %nd3, %hit3
-      ~ stqd    %to3, 48(%tp)
-      ~ stqd    %io3, 48(%ip)
-      ~ stqd    %no3, 48(%np)
+      ~ stqd    %to3, CTX_RAY_T+48(%tp)
+      ~ stqd    %io3, CTX_RAY_ID+48(%tp)
+      ~ stqd    %no3, CTX_RAY_ND+48(%tp)
         ceqi    $112, $119, 256
 .Lray_br:
       ! brz     $112, ray_loop
@@ -314,9 +320,9 @@ tri_next:
         ai      $67, $67, -1
         brnz    $67, tri_loop
         # the packet's largest t shrinks as rays hit: refresh the IA exit bound
-        ila     $80, ray_t
+        
         .irp    J, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
-        lqd     (\J+81), \J*16($80)
+        lqd     (\J+81), CTX_RAY_T+\J*16(RAYS)
         .endr
         .irp    J, 0, 2, 4, 6, 8, 10, 12, 14
         fcgt    (\J+100), (\J+82), (\J+81)
@@ -345,6 +351,7 @@ tri_next:
         lqa     $84, k_oddmask
         and     $81, $81, $84
         xor     F2, $81, NEGODD               # (0, -tmax, 0, -tmax)
+        lqa     BMISSH, vars+V_BMISSH         # (the ray loop used the register)
 
 # ---- pop: continue with the entry on top of the stack, or finish the packet
 pop:

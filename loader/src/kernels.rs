@@ -43,6 +43,8 @@ pub const MODULES: &[(&str, &str)] = &[
         "modules/tri_cache.s",
         include_str!("../../kernels/modules/tri_cache.s"),
     ),
+    ("modules/lru.s", include_str!("../../kernels/modules/lru.s")),
+    ("modules/sht.s", include_str!("../../kernels/modules/sht.s")),
     (
         "modules/output.s",
         include_str!("../../kernels/modules/output.s"),

@@ -70,6 +70,9 @@ pub struct Scene {
     pub triangles: Vec<Triangle>,
     pub materials: Vec<Material>,
     pub camera: Camera,
+    /// The scene's own point lights (the procedural scenes place theirs); empty means
+    /// [`crate::shading::default_lights`] derives one from the camera.
+    pub lights: Vec<crate::shading::Light>,
 }
 
 impl Scene {
@@ -127,6 +130,7 @@ impl Scene {
             triangles,
             materials,
             camera: Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 45.0),
+            lights: Vec::new(),
         };
         match normals {
             Some(normals) if normals.len() == scene.positions.len() => scene.normals = normals,

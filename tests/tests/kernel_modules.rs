@@ -43,6 +43,7 @@ impl Harness {
         spu.load_image(&program.image);
         spu.enable_timing(Default::default());
         let mut names = Names::default();
+        names.collect(include_str!("../../kernels/layout.inc"), &mut |_| None);
         names.collect(include_str!("../../kernels/modules/regs.inc"), &mut |_| {
             None
         });
@@ -72,6 +73,13 @@ impl Harness {
     fn set(&mut self, name: &str, value: [u32; 4]) {
         let r = self.reg_number(name);
         self.spu.set_reg(r, value);
+    }
+
+    /// A constant of the register map or `layout.inc` (`CTX_RAY_T`, `V_PFMISS`, ...).
+    fn value(&self, name: &str) -> u32 {
+        self.names
+            .value_of(name)
+            .unwrap_or_else(|| panic!("no constant {name}")) as u32
     }
 
     fn reg(&self, name: &str) -> [u32; 4] {
@@ -111,11 +119,32 @@ impl Harness {
         self.splat("SIGNS", 0x8000_0000);
         let q = self.quad(self.sym("k_negodd"));
         self.set("NEGODD", q);
-        let negtab = self.sym("negtab");
-        self.splat("NEGTAB", negtab);
-        let stack = self.sym("stack");
+    }
+
+    /// One packet context at `base` (blocking misses, as `_start` sets up one context):
+    /// RAYS points past its header; its DMA tag is the first context's.
+    fn context(&mut self, base: u32) {
+        let rays = base + self.value("CTX_HEADER");
+        self.splat("RAYS", rays);
+        self.splat("NEGTAB", rays.wrapping_add(self.value("CTX_NEGTAB")));
+        let stack = rays + self.value("CTX_STACK");
         self.splat("STKBASE", stack);
         self.splat("STK", stack);
+        let tag = self.value("CONTEXT_TAG0");
+        self.write_words(rays + self.value("CTX_TAG"), &[tag, 1 << tag, 0, 0]);
+        self.var("V_NCTX1", [u32::MAX; 4]);
+        self.var("V_ASSOC4", [0; 4]);
+    }
+
+    /// Writes a cold variable (`vars+V_*`).
+    fn var(&mut self, name: &str, value: [u32; 4]) {
+        let addr = self.sym("vars") + self.value(name);
+        self.write_words(addr, &value);
+    }
+
+    /// An address in the current packet context.
+    fn ctx(&self, offset: &str) -> u32 {
+        self.reg("RAYS")[0].wrapping_add(self.value(offset))
     }
 
     /// The triangle cache as `_start` carves it (after a BVH cache of `bvh_lines`), every
@@ -143,7 +172,8 @@ impl Harness {
         }
     }
 
-    /// Named registers, then local-store regions (label, bytes), as hex words.
+    /// Named registers, then local-store regions (a label, or an offset `CTX_*` in the
+    /// packet context; bytes), as hex words.
     fn snapshot(&self, exit: &str, regs: &[&str], regions: &[(&str, u32)]) -> String {
         let mut out = format!("exit: {exit}\ncycles: {}\n", self.spu.cycles());
         for r in regs {
@@ -156,7 +186,11 @@ impl Harness {
             .unwrap();
         }
         for (label, len) in regions {
-            let base = self.sym(label);
+            let base = if label.starts_with("CTX_") {
+                self.ctx(label)
+            } else {
+                self.sym(label)
+            };
             writeln!(out, "{label}:").unwrap();
             for off in (0..*len).step_by(16) {
                 let q = self.quad(base + off);
@@ -188,9 +222,9 @@ fn packet_rays(origin: [f32; 3]) -> Vec<[f32; 3]> {
 #[test]
 fn triangle_test_on_a_packet() {
     let mut h = Harness::new(
-        &["modules/triangle.s", "modules/tri_cache.s"],
-        &["packet_done", "trav"],
-        "        .set    .Lnewcur, trav\n",
+        &["modules/triangle.s", "modules/tri_cache.s", "modules/lru.s"],
+        &["packet_done", "trav", "suspend"],
+        "        .set    .Lnewcur, trav\nharness_pf_one: br .Lpf_one\n",
     );
     h.frame_constants();
     // A quad made of two triangles across part of the packet, and one triangle off to the
@@ -212,6 +246,10 @@ fn triangle_test_on_a_packet() {
     }
     assert!(h.memory.write_bytes(ea as u64, &bytes));
     h.triangle_cache(256, 128, ea);
+    let contexts = h.reg("TDATA")[0] + 128 * 64;
+    h.context(contexts);
+    let pf_one = h.sym("harness_pf_one");
+    h.var("V_PFMISS", [pf_one; 4]);
     // The packet: origin, directions (structure of arrays), t = 1e30, no hit yet.
     let origin = [0.1f32, -0.2, 3.0];
     h.set(
@@ -224,20 +262,20 @@ fn triangle_test_on_a_packet() {
         ],
     );
     let rays = packet_rays(origin);
-    let dx = h.sym("ray_dx");
+    let dx = h.ctx("CTX_RAY_DX");
     for axis in 0..3 {
         let words: Vec<u32> = rays.iter().map(|d| d[axis].to_bits()).collect();
         h.write_words(dx + 256 * axis as u32, &words);
         let recip: Vec<u32> = rays.iter().map(|d| (1.0 / d[axis]).to_bits()).collect();
         h.write_words(dx + 256 * (3 + axis as u32), &recip);
     }
-    let t_addr = h.sym("ray_t");
+    let t_addr = h.ctx("CTX_RAY_T");
     h.write_words(t_addr, &[0x7149_f2ca; 64]);
-    h.write_words(h.sym("ray_id"), &[u32::MAX; 64]);
+    h.write_words(h.ctx("CTX_RAY_ID"), &[u32::MAX; 64]);
     let corners: Vec<u32> = (0..3)
         .flat_map(|axis| [0, 7, 56, 63].map(|i| rays[i][axis].to_bits()))
         .collect();
-    h.write_words(h.sym("corners"), &corners);
+    h.write_words(h.ctx("CTX_CORNERS"), &corners);
     h.splat("FIRST", 0);
     h.set("CUR", [0, (records.len() as u32) << 6, 0, 0]);
     for s in ["S_TRIS", "S_CULLED", "S_TLOOK"] {
@@ -257,7 +295,7 @@ fn triangle_test_on_a_packet() {
             }
         }
         let (vec, lane) = (i as u32 / 4 * 16, i as u32 % 4);
-        let id = h.quad(h.sym("ray_id") + vec)[lane as usize];
+        let id = h.quad(h.ctx("CTX_RAY_ID") + vec)[lane as usize];
         let t = h.quad(t_addr + vec)[lane as usize];
         match best {
             Some((bt, bk)) => {
@@ -287,9 +325,9 @@ fn triangle_test_on_a_packet() {
         &exit,
         &["S_TRIS", "S_CULLED", "S_TLOOK", "F2"],
         &[
-            ("ray_t", 256),
-            ("ray_id", 256),
-            ("ray_nd", 256),
+            ("CTX_RAY_T", 256),
+            ("CTX_RAY_ID", 256),
+            ("CTX_RAY_ND", 256),
             ("vars", 272)
         ],
     ));
@@ -321,8 +359,9 @@ fn ray_generation_packet_setup_and_one_traversal_step() {
             "modules/raygen.s",
             "modules/traverse.s",
             "modules/bvh_cache.s",
+            "modules/lru.s",
         ],
-        &["leaf", "packet_done"],
+        &["leaf", "packet_done", "suspend"],
         "",
     );
     h.frame_constants();
@@ -361,6 +400,10 @@ fn ray_generation_packet_setup_and_one_traversal_step() {
     assert!(h.memory.write_bytes(ea as u64, &bytes));
     bvh_cache(&mut h, 256, ea);
     h.triangle_cache(256, 128, 0x4000);
+    let contexts = h.reg("TDATA")[0] + 128 * 64;
+    h.context(contexts);
+    let miss = h.sym("bvh_miss_one");
+    h.splat("BMISSH", miss);
     // The root as a traversal state, as `_start` makes it: (child-pair offset, meta << 4).
     let root = &nodes[0];
     h.set("ROOTST", [root.link * 32, root.count_axis << 4, 0, 0]);
@@ -378,11 +421,10 @@ fn ray_generation_packet_setup_and_one_traversal_step() {
     for (k, name) in ["OXS", "OYS", "OZS"].iter().enumerate() {
         h.splat(name, origin[k].to_bits());
     }
-    let vars = h.sym("vars");
     let word = |x: f32| x.to_bits();
-    h.write_words(vars + 176, &[word(-0.6), word(-0.7), word(-3.0), 0]); // V_DIR00
-    h.write_words(vars + 192, &[word(0.15), 0, 0, 0]); // V_DU
-    h.write_words(vars + 208, &[0, word(0.18), 0, 0]); // V_DV
+    h.var("V_DIR00", [word(-0.6), word(-0.7), word(-3.0), 0]);
+    h.var("V_DU", [word(0.15), 0, 0, 0]);
+    h.var("V_DV", [0, word(0.18), 0, 0]);
     for s in ["S_STEPS", "M1V", "EEV", "S_TRIS", "S_CULLED", "S_TLOOK"] {
         h.splat(s, 0);
     }
@@ -408,6 +450,6 @@ fn ray_generation_packet_setup_and_one_traversal_step() {
     insta::assert_snapshot!(h.snapshot(
         &exit,
         &["CUR", "STK", "FIRST", "S_STEPS", "M1V", "EEV", "F2", "PAX", "PBX", "OAX", "OBX"],
-        &[("stack", 32), ("corners", 48), ("cache_area", 32)],
+        &[("CTX_STACK", 32), ("CTX_CORNERS", 48), ("cache_area", 32)],
     ));
 }

@@ -2,6 +2,7 @@
 //! `.sched` blocks, shown as source), so a block written in logical order with virtual
 //! registers can be read, timed and pasted as the assembler would lay it out.
 
+use crate::exit;
 use spu_asm::sched::{find_blocks, parse_options, parse_registers, schedule, Names, SchedOptions};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -32,7 +33,12 @@ pub struct Args {
     output: Option<PathBuf>,
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+/// Exit status 0, 1 when the output cannot be written, 2 for bad input (an unreadable
+/// source, a block that does not schedule, bad options).
+pub fn run(args: Args) -> exit::Result<ExitCode> {
+    if let Some(path) = &args.output {
+        exit::check_writable(path)?;
+    }
     let read =
         |p: &PathBuf| std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()));
     let source = read(&args.input)?;
@@ -112,8 +118,8 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         }
     }
     match &args.output {
-        Some(path) => std::fs::write(path, out).map_err(|e| format!("{}: {e}", path.display()))?,
-        None => print!("{out}"),
+        Some(path) => exit::write_file(path, out.as_bytes())?,
+        None => crate::out!("{out}"),
     }
     Ok(ExitCode::SUCCESS)
 }
