@@ -595,9 +595,10 @@ fn dependencies(insts: &[Inst], scratch: &dyn Fn(Reg) -> bool) -> Vec<Vec<(usize
 /// Instruction fetch reads 128-byte lines (docs/timing.md, R8).
 const FETCH_LINE: u32 = 128;
 /// The last pair of a line (0..15) that may leave the prefetch of the next line waiting
-/// for a free local-store cycle: a fill takes 6 cycles, so a line whose first free cycle
-/// comes later makes the next line wait.
-const LATEST_FETCH_SLOT: u32 = 10;
+/// for a free local-store cycle: a fill takes 6 cycles after it, so a line whose first
+/// free cycle comes later makes the next line wait (8 rather than 10 leaves a margin for
+/// the request itself, measured on the kernels' loops).
+const LATEST_FETCH_SLOT: u32 = 8;
 
 /// The slots of a schedule (even, odd, even, odd, ...), the issue cycle of each pair, and
 /// the number of issue cycles.

@@ -128,7 +128,7 @@ fn a_hint_goes_late_but_far_enough_from_the_branch() {
 #[test]
 fn each_fetch_line_keeps_a_cycle_for_the_prefetch() {
     // 14 loads paired with 14 adds: at address 0 every pair would use the local store;
-    // the scheduler leaves the odd slot of pair 10 to the instruction prefetch.
+    // the scheduler leaves the odd slot of pair 8 to the instruction prefetch.
     let mut block = String::new();
     for k in 0..14 {
         block += &format!(
@@ -140,7 +140,7 @@ fn each_fetch_line_keeps_a_cycle_for_the_prefetch() {
         );
     }
     let (at_line_start, _) = run(&block, &SchedOptions::default(), Some(0));
-    assert_eq!(at_line_start[1 + 2 * 10 + 1], "lnop", "{at_line_start:?}");
+    assert_eq!(at_line_start[1 + 2 * 8 + 1], "lnop", "{at_line_start:?}");
     let (unknown, _) = run(&block, &SchedOptions::default(), None);
     assert!(!unknown.iter().any(|l| l == "lnop"), "{unknown:?}");
 }

@@ -59,6 +59,7 @@ packet_loop:
         stqd    $95, CTX_CORNERS+32(RAYS)
 
         # four vectors (two rows) per pass, scheduled into even/odd pairs
+        .align  6                     # the loop starts early in a fetch line (as ray_loop)
         .sched  scratch=66-127
 .Lrow:
       ! hbrr    .Lrow_br, .Lrow

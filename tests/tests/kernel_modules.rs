@@ -177,7 +177,11 @@ impl Harness {
     fn snapshot(&self, exit: &str, regs: &[&str], regions: &[(&str, u32)]) -> String {
         let mut out = format!("exit: {exit}\ncycles: {}\n", self.spu.cycles());
         for r in regs {
-            let q = self.reg(r);
+            let mut q = self.reg(r);
+            if *r == "STK" {
+                // Relative to the stack's base: the snapshot does not move with the code.
+                q = q.map(|w| w.wrapping_sub(self.reg("STKBASE")[0]));
+            }
             writeln!(
                 out,
                 "{r:<8} {:08x} {:08x} {:08x} {:08x}",
