@@ -893,14 +893,12 @@ pub struct Names {
 
 impl crate::expr::Env for Names {
     fn symbol(&self, name: &str) -> Option<crate::expr::Val> {
-        self.values
-            .get(name)
-            .map(|&v| crate::expr::Val { v, reloc: false })
+        self.values.get(name).map(|&v| crate::expr::Val::abs(v))
     }
-    fn dot(&self) -> i64 {
-        0
+    fn dot(&self) -> crate::expr::Val {
+        crate::expr::Val::abs(0)
     }
-    fn local(&self, _: u32, _: bool) -> Option<i64> {
+    fn local(&self, _: u32, _: bool) -> Option<crate::expr::Val> {
         None
     }
     fn lenient(&self) -> bool {

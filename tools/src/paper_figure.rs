@@ -46,7 +46,7 @@ pub fn series(table: &Table) -> Vec<Series> {
     out
 }
 
-fn register_font() -> Result<(), String> {
+pub fn register_font() -> Result<(), String> {
     static REGISTERED: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
     REGISTERED
         .get_or_init(|| {
@@ -112,6 +112,8 @@ where
     chart
         .configure_mesh()
         .x_desc("SPEs")
+        .x_labels(max_spes + 2)
+        .x_label_formatter(&|x| format!("{}", x.round() as i64))
         .y_desc("speed-up over 1 SPE")
         .label_style(("sans-serif", 14))
         .draw()?;
