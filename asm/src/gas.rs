@@ -852,6 +852,19 @@ impl<'o> Assembler<'o> {
             if self.exitm {
                 break;
             }
+            // A list-scheduled block (crate::sched) up to its `.endsched`.
+            if first_word == ".sched" {
+                let end = lines[i + 1..]
+                    .iter()
+                    .position(|l| first_word_of(&l.text) == ".endsched");
+                let Some(k) = end else {
+                    self.diag(Severity::Error, line, 1, "missing .endsched");
+                    break;
+                };
+                self.sched_block(trimmed[6..].trim(), &lines[i + 1..i + 1 + k], line);
+                i += k + 2;
+                continue;
+            }
             // Block directives that swallow lines up to their end.
             if matches!(first_word.as_str(), ".macro" | ".rept" | ".irp" | ".irpc") {
                 let (body, next) = collect_block(lines, i + 1);
@@ -877,6 +890,44 @@ impl<'o> Assembler<'o> {
             }
         }
         self.depth -= 1;
+    }
+
+    /// `.sched OPTIONS` ... `.endsched`: the block list-scheduled into dual-issue pairs,
+    /// then assembled line by line, each scheduled line keeping its source location.
+    fn sched_block(&mut self, args: &str, body: &[Line], line: &Line) {
+        let opts = match crate::sched::parse_options(args) {
+            Ok(opts) => opts,
+            Err(message) => return self.diag(Severity::Error, line, 1, message),
+        };
+        let texts: Vec<&str> = body.iter().map(|l| l.text.as_str()).collect();
+        let resolve = |text: &str| {
+            self.get_reg(text, OperandKind::Ra, true)
+                .filter(|(_, rest)| rest.trim().is_empty())
+                .and_then(|(v, _)| u8::try_from(v).ok())
+        };
+        let here = self.offsets.get(&self.sect).copied().unwrap_or(0);
+        let start = (here + 7) & !7;
+        match crate::sched::schedule(&texts, &opts, Some(start), &resolve) {
+            Ok(scheduled) => {
+                let lines: Vec<Line> = scheduled
+                    .lines
+                    .into_iter()
+                    .map(|(text, origin)| {
+                        let at = origin.and_then(|k| body.get(k)).unwrap_or(line);
+                        Line {
+                            text,
+                            file: at.file.clone(),
+                            line: at.line,
+                        }
+                    })
+                    .collect();
+                self.run_lines(&lines);
+            }
+            Err(e) => {
+                let at = body.get(e.line).unwrap_or(line);
+                self.diag(Severity::Error, at, e.column, e.message);
+            }
+        }
     }
 
     fn condition(&mut self, kind: &str, args: &str, line: &Line) -> bool {
@@ -1873,7 +1924,7 @@ impl<'o> Assembler<'o> {
                     ),
                 }
             }
-            ".endm" | ".endr" => self.diag(
+            ".endm" | ".endr" | ".endsched" => self.diag(
                 Severity::Error,
                 line,
                 col,
@@ -2576,6 +2627,14 @@ fn substitute(text: &str, vars: &[(String, String)], counter: Option<&str>) -> S
         i += 1;
     }
     out
+}
+
+fn first_word_of(text: &str) -> String {
+    strip_comment(text)
+        .split_whitespace()
+        .next()
+        .unwrap_or("")
+        .to_ascii_lowercase()
 }
 
 /// The directive a line's first word names for block and conditional handling: itself

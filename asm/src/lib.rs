@@ -8,6 +8,7 @@ mod gas;
 pub mod link;
 pub mod object;
 pub mod reloc;
+pub mod sched;
 
 pub use gas::{
     assemble, assemble_object, Diagnostic, Location, Options, Output, Reloc, RelocTarget, Severity,

@@ -13,6 +13,7 @@ mod cmd_paper;
 mod cmd_prof;
 mod cmd_render;
 mod cmd_run;
+mod cmd_sched;
 mod cmd_timing;
 mod frame_views;
 mod heatmap;
@@ -54,6 +55,8 @@ enum Command {
     Timing(cmd_timing::Args),
     /// Ray-trace a scene on 1 to 16 simulated SPEs.
     Render(cmd_render::Args),
+    /// List-schedule straight-line code into dual-issue pairs (`.sched` blocks).
+    Sched(cmd_sched::Args),
     /// Measure simulator speed: simulated instructions per host second.
     Bench(cmd_bench::Args),
     /// Re-run the paper's experiments and report its numbers next to ours.
@@ -71,6 +74,7 @@ fn main() -> ExitCode {
         Command::Timing(args) => cmd_timing::run(args),
         Command::Render(args) => cmd_render::run(args),
         Command::Bench(args) => cmd_bench::run(args),
+        Command::Sched(args) => cmd_sched::run(args),
         Command::Paper(args) => cmd_paper::run(args),
     };
     match result {
