@@ -2,7 +2,9 @@
 //! without help from the kernel: an SPU puts each packet's 1 KiB result block to the frame
 //! buffer (the address names the tile and packet) and takes each tile with an atomic
 //! update of the shared counter. A packet's cycles run from the SPU's previous packet put
-//! (or, for a tile's first packet, from the tile's atomic update) to its own put.
+//! (or, for a tile's first packet, from the tile's atomic update) to its own put; with
+//! several packets in flight (software hyperthreading) that is the time between two
+//! packets finishing, not one packet's own.
 
 use crate::frame::FrameLayout;
 use crate::kernel_abi::{PACKETS_PER_TILE, PACKET_BLOCK_BYTES, PACKET_SIZE, TILE_SIZE};
@@ -127,11 +129,16 @@ impl Timeline {
                                 end: cycle,
                                 wait: waited,
                             });
-                            match t.tiles.last_mut() {
-                                Some(last) if last.spu == spu && last.tile == tile => {
-                                    last.end = cycle
-                                }
-                                _ => t.tiles.push(TileSpan {
+                            // with packets in flight (SHT) an SPU's puts of two tiles
+                            // interleave: a tile spans its first to its last put
+                            match t
+                                .tiles
+                                .iter_mut()
+                                .rev()
+                                .find(|s| s.spu == spu && s.tile == tile)
+                            {
+                                Some(span) => span.end = cycle,
+                                None => t.tiles.push(TileSpan {
                                     spu,
                                     tile,
                                     start: tile_taken.min(mark),
