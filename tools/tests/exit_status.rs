@@ -103,7 +103,7 @@ fn abnormal_stops_exit_134_with_the_reason() {
     let out = spu(&["run", &deadlock]);
     assert_eq!(out.status, 134);
     assert!(
-        out.stderr.contains("deadlock at 0x0 on channel 29"),
+        out.stderr.contains("deadlock at 0x0 on channel SPU_RdInMbox (29)"),
         "{}",
         out.stderr
     );
@@ -250,6 +250,14 @@ fn outputs_are_checked_up_front_and_never_left_partial() {
     assert!(
         out.stderr
             .contains("the image is written as PNG; name it .png"),
+        "{}",
+        out.stderr
+    );
+    let out = spu(&["render", "--heatmap", jpg.to_str().unwrap()]);
+    assert_eq!(out.status, 2);
+    assert!(
+        out.stderr.contains("--heatmap")
+            && out.stderr.contains("x.jpg: the image is written as PNG"),
         "{}",
         out.stderr
     );
@@ -409,7 +417,7 @@ fn json_outputs_are_well_formed() {
     assert_eq!(run["exit_code"], 7);
     assert_eq!(run["outbound_mailbox"], 7);
     assert_eq!(run["registers"][3][0], 7);
-    assert_eq!(run["stop"], "stop 0x2007");
+    assert_eq!(run["stop"], "stop 0x2007 (exit status 7)");
 
     let out = spu(&["prof", &src, "--json"]);
     assert_eq!(out.status, 0);
