@@ -500,3 +500,29 @@ fn image_is_complete(path: &str) -> bool {
     let bytes = std::fs::read(path).unwrap();
     bytes.starts_with(b"\x89PNG") && bytes.ends_with(b"IEND\xae\x42\x60\x82")
 }
+
+/// Found by the `assemble` fuzz target: a macro that defines itself again while expanding
+/// ran for ever (before the nesting limit and expansion budget); now bad input, with both
+/// reasons named.
+#[test]
+fn recursive_macro_from_the_fuzzer_is_bad_input() {
+    let src = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fuzz_regressions/asm-recursive-macro.s"
+    );
+    let d = dir("fuzz-asm");
+    let out = spu(&["as", src, "-o", d.join("x.elf").to_str().unwrap()]);
+    assert_eq!(out.status, 2, "{}", out.stderr);
+    assert!(
+        out.stderr
+            .contains("macros, includes or repetitions nested too deeply"),
+        "{}",
+        out.stderr
+    );
+    assert!(
+        out.stderr.ends_with("error(s); nothing written\n"),
+        "{}",
+        out.stderr
+    );
+    assert_eq!(files_in(&d), Vec::<String>::new());
+}
