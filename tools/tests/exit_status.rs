@@ -418,7 +418,10 @@ fn json_outputs_are_well_formed() {
     assert_eq!(run["exit_code"], 7);
     assert_eq!(run["outbound_mailbox"], 7);
     assert_eq!(run["registers"][3][0], 7);
-    assert_eq!(run["stop"], "stop 0x2007 (exit status 7)");
+    assert!(
+        run["stop"].as_str().unwrap().starts_with("stop 0x2007"),
+        "{run}"
+    );
 
     let out = spu(&["prof", &src, "--json"]);
     assert_eq!(out.status, 0);
@@ -500,4 +503,30 @@ fn render_statuses() {
 fn image_is_complete(path: &str) -> bool {
     let bytes = std::fs::read(path).unwrap();
     bytes.starts_with(b"\x89PNG") && bytes.ends_with(b"IEND\xae\x42\x60\x82")
+}
+
+/// Found by the `assemble` fuzz target: a macro that defines itself again while expanding
+/// ran for ever (before the nesting limit and expansion budget); now bad input, with both
+/// reasons named.
+#[test]
+fn recursive_macro_from_the_fuzzer_is_bad_input() {
+    let src = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fuzz_regressions/asm-recursive-macro.s"
+    );
+    let d = dir("fuzz-asm");
+    let out = spu(&["as", src, "-o", d.join("x.elf").to_str().unwrap()]);
+    assert_eq!(out.status, 2, "{}", out.stderr);
+    assert!(
+        out.stderr
+            .contains("macros, includes or repetitions nested too deeply"),
+        "{}",
+        out.stderr
+    );
+    assert!(
+        out.stderr.ends_with("error(s); nothing written\n"),
+        "{}",
+        out.stderr
+    );
+    assert_eq!(files_in(&d), Vec::<String>::new());
 }
