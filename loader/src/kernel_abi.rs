@@ -103,6 +103,93 @@ impl ParamBlock {
     }
 }
 
+/// Offset in the parameter block of the shading block's address (`reserved[0]`; zero
+/// when the frame is not shaded, `--shade none`).
+pub const PARAM_EA_SHADING: usize = std::mem::offset_of!(ParamBlock, reserved);
+
+/// Shading modes as the kernel reads them ([`ShadingBlock::mode`]).
+pub const SHADE_SIMPLE: u32 = 1;
+pub const SHADE_SHADOWS: u32 = 2;
+
+/// The shading block (`modules/shade.s`), at [`PARAM_EA_SHADING`]: where the vertex and
+/// material records and the 32-bit colour frame buffer are, the mode, the shading caches'
+/// sizes and up to [`crate::shading::MAX_LIGHTS`] point lights.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ShadingBlock {
+    pub ea_vertices: u32,
+    pub ea_materials: u32,
+    /// The colour frame buffer: 256 bytes (64 pixels 0xRRGGBBAA, row-major in the packet)
+    /// per packet, packet-major like the result blocks: 4 MiB for a 1024x1024 frame.
+    pub ea_colour: u32,
+    pub mode: u32,
+    /// Shadow packets stop as soon as every active ray is occluded.
+    pub shadow_early: bool,
+    /// log2 of the entries of the direct-mapped vertex and material caches (4..=8).
+    pub vertex_cache_log2: u32,
+    pub material_cache_log2: u32,
+    pub lights: Vec<crate::shading::Light>,
+}
+
+/// Bytes of the shading block.
+pub const SHADING_BLOCK_BYTES: usize = 384;
+pub const SHB_EA_VERTICES: usize = 0;
+pub const SHB_LIGHT_COUNT: usize = 12;
+pub const SHB_MODE: usize = 16;
+pub const SHB_LIGHTS: usize = 64;
+/// Bytes per light: position (x, y, z, 0), colour (r, g, b, 0).
+pub const SHB_LIGHT_BYTES: usize = 32;
+/// Bytes of one packet's block in the colour frame buffer.
+pub const COLOUR_BLOCK_BYTES: u32 = 256;
+
+impl ShadingBlock {
+    pub fn to_be_bytes(&self) -> [u8; SHADING_BLOCK_BYTES] {
+        let mut words = [0u32; SHADING_BLOCK_BYTES / 4];
+        words[0] = self.ea_vertices;
+        words[1] = self.ea_materials;
+        words[2] = self.ea_colour;
+        words[3] = self.lights.len() as u32;
+        words[4] = self.mode;
+        words[5] = self.shadow_early as u32;
+        words[6] = self.vertex_cache_log2;
+        words[7] = self.material_cache_log2;
+        for (i, light) in self.lights.iter().enumerate() {
+            let at = (SHB_LIGHTS + i * SHB_LIGHT_BYTES) / 4;
+            for c in 0..3 {
+                words[at + c] = light.position[c].to_bits();
+                words[at + 4 + c] = light.colour[c].to_bits();
+            }
+        }
+        let mut out = [0u8; SHADING_BLOCK_BYTES];
+        for (chunk, w) in out.chunks_exact_mut(4).zip(words) {
+            chunk.copy_from_slice(&w.to_be_bytes());
+        }
+        out
+    }
+}
+
+/// Bytes of the packet-major 32-bit colour frame buffer for a `width x height` image.
+pub fn colour_buffer_bytes(width: u32, height: u32) -> usize {
+    frame_buffer_bytes(width, height) / (PACKET_BLOCK_BYTES / COLOUR_BLOCK_BYTES) as usize
+}
+
+/// Decodes the colour frame buffer into row-major 0xRRGGBBAA pixels.
+pub fn decode_colour_buffer(fb: &[u8], width: u32, height: u32) -> Vec<u32> {
+    let tiles_x = width.div_ceil(TILE_SIZE);
+    let mut out = Vec::with_capacity((width * height) as usize);
+    for y in 0..height {
+        for x in 0..width {
+            let (block, i) = pixel_location(x, y, tiles_x);
+            let off = block / (PACKET_BLOCK_BYTES / COLOUR_BLOCK_BYTES) as usize + 4 * i;
+            out.push(
+                fb.get(off..off + 4)
+                    .map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+                    .unwrap_or(0),
+            );
+        }
+    }
+    out
+}
+
 /// Bytes of one SPU's statistics block.
 pub const STATS_BYTES: usize = 128;
 
@@ -189,6 +276,20 @@ pub fn spu_include() -> String {
         ("PARAM_DU", PARAM_DU),
         ("PARAM_DV", PARAM_DV),
         ("PARAM_BVH_LOG2", PARAM_BVH_LOG2),
+        ("PARAM_EA_SHADING", PARAM_EA_SHADING),
+        ("SHADING_BLOCK_BYTES", SHADING_BLOCK_BYTES),
+        ("SHB_EA_VERTICES", SHB_EA_VERTICES),
+        ("SHB_LIGHT_COUNT", SHB_LIGHT_COUNT),
+        ("SHB_MODE", SHB_MODE),
+        ("SHB_LIGHTS", SHB_LIGHTS),
+        ("SHB_LIGHT_BYTES", SHB_LIGHT_BYTES),
+        ("SHADE_SIMPLE", SHADE_SIMPLE as usize),
+        ("SHADE_SHADOWS", SHADE_SHADOWS as usize),
+        ("AMBIENT_BITS", crate::shading::AMBIENT.to_bits() as usize),
+        (
+            "SHADOW_LIMIT_BITS",
+            (1.0 - crate::shading::SHADOW_EPSILON).to_bits() as usize,
+        ),
         ("STAT_PACKETS", STAT_PACKETS),
         ("STAT_M1SUM", STAT_M1SUM),
         ("STAT_TRIS", STAT_TRIS),
