@@ -9,6 +9,8 @@ pub mod disasm;
 pub mod float;
 pub mod machine;
 pub mod profile;
+pub mod stall;
+pub mod static_timing;
 pub mod table;
 pub mod timing;
 

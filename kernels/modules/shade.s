@@ -1,12 +1,13 @@
 # shade.s — shading of a traced 8x8 packet (paper section 7): the i-set, the vertex and
 # material caches, multi-pass diffuse shading and the 32-bit colour frame buffer.
 #
-# `brsl $0, shade_packet` once a packet is traced. In: ray_id (the hit triangle's record
-# per ray, -1 for a miss), ray_t, ray_dx/dy/dz (16 vectors of 4 rays each), the camera
-# origin in params, the packet number vars+V_TILE * 64 + vars+V_PKT. Out: the packet's 64
-# pixels 0xRRGGBBff, row-major, put to ShadingBlock.ea_colour + packet * 256 (tags 6/7,
-# alternating; the frame's end waits for both). Model: loader/src/shading.rs.
-# Keeps $1..$65 (the frame's registers; reads EATRIS, TDATA, TMASK), uses $66..$127 and $0.
+# `brsl $0, shade_packet` once a packet is traced. In: $68 = local-store address of the
+# packet's ray arrays (16 vectors of 4 rays each: dx, dy, dz at +0, +256, +512, t at
+# +CTX_RAY_T, the hit triangle's record per ray or -1 at +CTX_RAY_ID), $69 = the packet number
+# (tile * 64 + packet), the camera origin and the shading addresses in params. Out: the
+# packet's 64 pixels 0xRRGGBBff, row-major, put to ShadingBlock.ea_colour + packet * 256
+# (tags 6/7, alternating; the frame's end waits for both). Model: loader/src/shading.rs.
+# Keeps $1..$65 (the frame's registers; reads ZERO and EATRIS), uses $66..$127 and $0.
 #
 # 1. The i-set: per intersection packet of 4 rays, a flag says whether all 4 hit the same
 #    triangle; then its record (64 bytes: the barycentric rows and, in the spare 16 bytes,
@@ -21,8 +22,9 @@
 #    packets under the mask of its rays, and then clears their references; until none is
 #    left (the paper's 1-2 passes per packet).
 #
-# The shading area is carved above the triangle cache (TDATA + lines * 64) and set up on
-# the first call (the block is fetched from PARAM_EA_SHADING). Its counters (SH_STATS, one
+# The shading area (SH_AREA_BYTES of local store, at the address the host puts in params
+# beside the shading block's, above everything the kernel carves) is set up on the first
+# call: the block is fetched, the lights splatted, the caches' tags cleared. Its counters (SH_STATS, one
 # per quadword, word 0) are read by the host from local store, as the PPE reads an SPE's
 # memory-mapped local store.
 
@@ -56,7 +58,9 @@
         .set SH_MTAGS, 27008            # material cache tags (up to 256 x 16)
         .set SH_MDATA, 31104            # material cache lines (up to 256 x 32)
         .set SH_AREA_BYTES, 39296
-        .set SH_TAG, 5                  # fetches; colour output on 6 and 7
+        .set SH_TAG, 5
+        .set CTX_RAY_T, 1536
+        .set CTX_RAY_ID, 1792                  # fetches; colour output on 6 and 7
 
 # rt = ra + an area offset (beyond ai's 10 bits; $96 is the scratch)
         .macro  SH_ADDI rt, ra, off
@@ -165,9 +169,12 @@ sh_const:
 
         .align  3
 shade_packet:
-        ai      $66, TMASK, 1
-        shli    $66, $66, 6
-        a       $66, $66, TDATA               # the shading area
+        ori     $99, $68, 0                   # the rays
+        ori     $97, $69, 0                   # the packet number
+        ila     $70, params
+        lqd     $71, PARAM_SHADING_QUAD($70)
+        rotqbyi $71, $71, PARAM_SHADING_ROT   # shading block EA, area
+        rotqbyi $66, $71, 4                   # the shading area
         lqd     $67, SH_FLAG($66)
         ilhu    $68, 0x5348
         iohl    $68, 0x4144                   # "SHAD"
@@ -176,8 +183,6 @@ shade_packet:
 
         # ---- first call: fetch the block, splat the lights, clear counters and caches
         stqd    $68, SH_FLAG($66)
-        ila     $70, params
-        lqd     $71, PARAM_EA_SHADING($70)
         SH_ADDI $72, $66, SH_BLOCK
         il      $73, SHADING_BLOCK_BYTES
         SH_GET  $72, $71, $73, $74
@@ -259,9 +264,9 @@ shade_packet:
         shufb   $108, $71, $71, $92
         lqd     $93, 96($90)
         shufb   $109, $71, $71, $93
-        ila     $111, ray_id
-        ila     $112, ray_t
-        ila     $113, ray_dx
+        SH_ADDI $111, $99, CTX_RAY_ID
+        SH_ADDI $112, $99, CTX_RAY_T
+        ori     $113, $99, 0
 
         # ---- 1. the i-set
         il      $67, 0                        # intersection packet * 16
@@ -570,13 +575,9 @@ shade_packet:
         brz     $71, .Lsh_packet
         br      .Lsh_pass
 
-        # ---- 4. put the block to ea_colour + (tile * 64 + packet) * 256
+        # ---- 4. put the block to ea_colour + packet * 256
 .Lsh_done:
-        lqa     $70, vars+V_TILE
-        lqa     $71, vars+V_PKT
-        shli    $70, $70, 6
-        a       $70, $70, $71
-        shli    $70, $70, 8
+        shli    $70, $97, 8
         a       $70, $70, $102
         il      $71, 256
         wrch    $MFC_LSA, $115

@@ -6,9 +6,12 @@
 
 use crate::camera::CameraBasis;
 use crate::kernel_abi::{
-    colour_buffer_bytes, frame_buffer_bytes, ParamBlock, ShadingBlock, SHADING_BLOCK_BYTES,
-    STATS_BYTES,
+    check_kernel_options, colour_buffer_bytes, frame_buffer_bytes, ParamBlock, ShadingBlock,
+    SHADING_AREA_BYTES, SHADING_BLOCK_BYTES, STATS_BYTES,
 };
+
+/// Bytes of an SPU's local store.
+const LS_BYTES: usize = 256 * 1024;
 use crate::layout::StagedScene;
 
 /// Main-memory address where the staged scene image starts.
@@ -56,13 +59,7 @@ impl FrameLayout {
         if staged.base != SCENE_BASE {
             return Err(format!("the scene must be staged at {SCENE_BASE:#x}"));
         }
-        for (what, lines) in [("BVH", bvh_cache_lines), ("triangle", tri_cache_lines)] {
-            if !lines.is_power_of_two() || !(128..=1024).contains(&lines) {
-                return Err(format!(
-                    "{what} cache of {lines} lines: must be a power of two from 128 to 1024"
-                ));
-            }
-        }
+        check_kernel_options(bvh_cache_lines, tri_cache_lines, 1, 1)?;
         let scene_end = SCENE_BASE as u64 + staged.image.len() as u64;
         let param_addr = align128(scene_end);
         let counter_addr = param_addr + 128;
@@ -96,12 +93,20 @@ impl FrameLayout {
     }
 
     /// Adds the shading block (its record addresses filled in from `staged`) and the colour
-    /// frame buffer after the frame's other regions, and points the parameter block at it.
+    /// frame buffer after the frame's other regions, and points the parameter block at it;
+    /// the shading module works in local store at `ls_area` (see `modules/shade.s`).
     pub fn with_shading(
         mut self,
         staged: &StagedScene,
         mut block: ShadingBlock,
+        ls_area: u32,
     ) -> Result<FrameLayout, String> {
+        if !ls_area.is_multiple_of(128) || ls_area as usize + SHADING_AREA_BYTES > LS_BYTES {
+            return Err(format!(
+                "the shading area at local-store address {ls_area:#x} ({SHADING_AREA_BYTES} bytes) does not fit below 256 KiB: use smaller caches"
+            ));
+        }
+        self.params.ls_shading = ls_area;
         for (what, log2) in [
             ("vertex", block.vertex_cache_log2),
             ("material", block.material_cache_log2),
@@ -132,7 +137,7 @@ impl FrameLayout {
         block.ea_vertices = staged.header.vertex_addr;
         block.ea_materials = staged.header.material_addr;
         block.ea_colour = colour_addr as u32;
-        self.params.reserved[0] = block_addr as u32;
+        self.params.ea_shading = block_addr as u32;
         self.memory_len = memory_len as usize;
         self.shading = Some(ShadingRegion {
             block_addr: block_addr as u32,
@@ -140,6 +145,20 @@ impl FrameLayout {
             colour_len,
             block,
         });
+        Ok(self)
+    }
+
+    /// Sets the caches' associativity (1 or 4) and the packets each SPU keeps in flight
+    /// (software hyperthreading, 1 to 8).
+    pub fn with_kernel_options(mut self, assoc: u32, sht: u32) -> Result<FrameLayout, String> {
+        check_kernel_options(
+            1 << self.params.bvh_cache_log2,
+            1 << self.params.tri_cache_log2,
+            assoc,
+            sht,
+        )?;
+        self.params.cache_assoc = assoc;
+        self.params.sht_contexts = sht;
         Ok(self)
     }
 
@@ -188,5 +207,10 @@ mod tests {
         let p = f.param_addr as usize;
         assert_eq!(&memory[p..p + 4], &staged.header.node_addr.to_be_bytes());
         assert!(FrameLayout::new(&staged, &basis, 128, 64, 4, 100, 256).is_err());
+        let f4 = f.clone().with_kernel_options(4, 8).unwrap();
+        assert_eq!((f4.params.cache_assoc, f4.params.sht_contexts), (4, 8));
+        assert!(f.clone().with_kernel_options(3, 1).is_err());
+        assert!(f.clone().with_kernel_options(1, 0).is_err());
+        assert!(f.with_kernel_options(1, 9).is_err());
     }
 }

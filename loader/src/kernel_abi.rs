@@ -41,7 +41,16 @@ pub struct ParamBlock {
     /// Base of the statistics blocks, one of [`STATS_BYTES`] per SPU.
     pub ea_stats: u32,
     pub flags: u32,
-    pub reserved: [u32; 4],
+    /// Packets each SPU keeps in flight (software hyperthreading, paper section 6):
+    /// 1 = blocking cache misses, up to [`MAX_SHT_CONTEXTS`].
+    pub sht_contexts: u32,
+    /// Ways of both caches: 1 (direct mapped) or 4 (set-associative, LRU).
+    pub cache_assoc: u32,
+    /// The shading block ([`ShadingBlock`]; 0 when the frame is not shaded) and the
+    /// local-store address of the shading module's area, above everything carved at
+    /// `cache_area` (the host knows the kernel's symbols and the carve).
+    pub ea_shading: u32,
+    pub ls_shading: u32,
 }
 const _: () = assert!(std::mem::size_of::<ParamBlock>() == 128);
 
@@ -52,6 +61,89 @@ pub const PARAM_DIR00: usize = std::mem::offset_of!(ParamBlock, dir00);
 pub const PARAM_DU: usize = std::mem::offset_of!(ParamBlock, du);
 pub const PARAM_DV: usize = std::mem::offset_of!(ParamBlock, dv);
 pub const PARAM_BVH_LOG2: usize = std::mem::offset_of!(ParamBlock, bvh_cache_log2);
+pub const PARAM_SHT: usize = std::mem::offset_of!(ParamBlock, sht_contexts);
+
+/// The most packets one SPU keeps in flight.
+pub const MAX_SHT_CONTEXTS: u32 = 8;
+/// Cache line counts the kernel supports (powers of two).
+pub const MIN_CACHE_LINES: u32 = 128;
+pub const MAX_CACHE_LINES: u32 = 1024;
+/// Bytes of one cache line (a BVH node pair or a triangle record) and of its tag.
+pub const CACHE_LINE_BYTES: u32 = 64;
+pub const CACHE_TAG_BYTES: u32 = 16;
+
+/// One packet context in the kernel's local store (software hyperthreading): the packet's
+/// rays, its traversal stack and what it needs to be suspended on a cache miss and resumed.
+/// Offsets from the context's base; the kernel reads them from `layout.inc`.
+pub mod context {
+    /// Ray arrays, 16 vectors of 4 rays each: directions, reciprocals, t, hit id, n.d, 1/|d|.
+    pub const RAYS: u32 = 0;
+    pub const RAY_ARRAY_BYTES: u32 = 256;
+    pub const RAY_DX: u32 = 0;
+    pub const RAY_RX: u32 = 3 * RAY_ARRAY_BYTES;
+    pub const RAY_T: u32 = 6 * RAY_ARRAY_BYTES;
+    pub const RAY_ID: u32 = 7 * RAY_ARRAY_BYTES;
+    pub const RAY_ND: u32 = 8 * RAY_ARRAY_BYTES;
+    pub const RAY_INVD: u32 = 9 * RAY_ARRAY_BYTES;
+    /// The corner rays' x, y, z (rays 0, 7, 56, 63) for the packet frustum.
+    pub const CORNERS: u32 = 10 * RAY_ARRAY_BYTES;
+    /// Per axis all ones when the first active ray points down it.
+    pub const NEGTAB: u32 = CORNERS + 48;
+    /// Record index of the triangle in each staging slot (one quadword each).
+    pub const STAGE_TAGS: u32 = NEGTAB + 48;
+    /// Triangles of one leaf the staging area holds (the BVH's leaves hold at most this).
+    pub const STAGE_TRIANGLES: u32 = 8;
+    /// Registers of the suspended packet, one quadword each, then its resume address and
+    /// its packet number (tile * 64 + packet).
+    pub const SAVE: u32 = STAGE_TAGS + 16 * STAGE_TRIANGLES;
+    pub const SAVE_SLOTS: u32 = 32;
+    /// The BVH node pair being fetched, and its pair offset (-1: none).
+    pub const STAGE_PAIR: u32 = SAVE + 16 * SAVE_SLOTS;
+    pub const STAGE_PAIR_TAG: u32 = STAGE_PAIR + 64;
+    /// Triangle records being fetched, 64 bytes each.
+    pub const STAGE_TRIS: u32 = STAGE_PAIR_TAG + 16;
+    /// The traversal stack: what popping an empty stack reads, then 128 entries.
+    pub const STACK: u32 = STAGE_TRIS + 64 * STAGE_TRIANGLES + 16;
+    pub const STACK_BYTES: u32 = 2048;
+    /// Bytes of one context (a multiple of 128).
+    pub const BYTES: u32 = (STACK + STACK_BYTES).div_ceil(128) * 128;
+}
+
+/// The context's DMA tag: `CONTEXT_TAG0 + context index`.
+pub const CONTEXT_TAG0: u32 = 8;
+
+/// Checks the cache and software-hyperthreading options the kernel supports.
+pub fn check_kernel_options(
+    bvh_cache_lines: u32,
+    tri_cache_lines: u32,
+    assoc: u32,
+    sht: u32,
+) -> Result<(), String> {
+    for (what, lines) in [("BVH", bvh_cache_lines), ("triangle", tri_cache_lines)] {
+        if !lines.is_power_of_two() || !(MIN_CACHE_LINES..=MAX_CACHE_LINES).contains(&lines) {
+            return Err(format!(
+                "{what} cache of {lines} lines: must be a power of two from {MIN_CACHE_LINES} to {MAX_CACHE_LINES}"
+            ));
+        }
+    }
+    if assoc != 1 && assoc != 4 {
+        return Err(format!(
+            "cache associativity {assoc}: must be 1 (direct mapped) or 4"
+        ));
+    }
+    if !(1..=MAX_SHT_CONTEXTS).contains(&sht) {
+        return Err(format!(
+            "{sht} packets in flight (SHT): must be 1 to {MAX_SHT_CONTEXTS}"
+        ));
+    }
+    Ok(())
+}
+
+/// Local-store bytes the kernel carves at `cache_area` for its caches and packet contexts.
+pub fn carved_bytes(bvh_cache_lines: u32, tri_cache_lines: u32, sht: u32) -> u32 {
+    (bvh_cache_lines + tri_cache_lines) * (CACHE_LINE_BYTES + CACHE_TAG_BYTES)
+        + sht * context::BYTES
+}
 
 impl ParamBlock {
     pub fn new(basis: &CameraBasis, width: u32, height: u32) -> Self {
@@ -69,6 +161,8 @@ impl ParamBlock {
             dv: v(basis.dv),
             bvh_cache_log2: 8,
             tri_cache_log2: 8,
+            sht_contexts: 1,
+            cache_assoc: 1,
             ..Default::default()
         }
     }
@@ -93,8 +187,10 @@ impl ParamBlock {
             self.tri_cache_log2,
             self.ea_stats,
             self.flags,
+            self.sht_contexts,
+            self.cache_assoc,
         ]);
-        words.extend(self.reserved);
+        words.extend([self.ea_shading, self.ls_shading]);
         let mut out = [0u8; 128];
         for (chunk, w) in out.chunks_exact_mut(4).zip(words) {
             chunk.copy_from_slice(&w.to_be_bytes());
@@ -103,9 +199,15 @@ impl ParamBlock {
     }
 }
 
-/// Offset in the parameter block of the shading block's address (`reserved[0]`; zero
-/// when the frame is not shaded, `--shade none`).
-pub const PARAM_EA_SHADING: usize = std::mem::offset_of!(ParamBlock, reserved);
+/// Offset in the parameter block of the shading block's address and the shading area's
+/// (zero when the frame is not shaded, `--shade none`): the quadword holding them and the
+/// byte rotation that brings the address to the preferred slot (the area's is 4 further).
+pub const PARAM_EA_SHADING: usize = std::mem::offset_of!(ParamBlock, ea_shading);
+pub const PARAM_SHADING_QUAD: usize = PARAM_EA_SHADING & !15;
+pub const PARAM_SHADING_ROT: usize = PARAM_EA_SHADING & 15;
+const _: () = assert!(
+    std::mem::offset_of!(ParamBlock, ls_shading) == PARAM_EA_SHADING + 4 && PARAM_SHADING_ROT <= 8
+);
 
 /// Shading modes as the kernel reads them ([`ShadingBlock::mode`]).
 pub const SHADE_SIMPLE: u32 = 1;
@@ -129,6 +231,10 @@ pub struct ShadingBlock {
     pub material_cache_log2: u32,
     pub lights: Vec<crate::shading::Light>,
 }
+
+/// Local-store bytes of the shading module's area (`SH_AREA_BYTES` in `modules/shade.s`;
+/// a test keeps the two equal).
+pub const SHADING_AREA_BYTES: usize = 39296;
 
 /// Bytes of the shading block.
 pub const SHADING_BLOCK_BYTES: usize = 384;
@@ -276,7 +382,8 @@ pub fn spu_include() -> String {
         ("PARAM_DU", PARAM_DU),
         ("PARAM_DV", PARAM_DV),
         ("PARAM_BVH_LOG2", PARAM_BVH_LOG2),
-        ("PARAM_EA_SHADING", PARAM_EA_SHADING),
+        ("PARAM_SHADING_QUAD", PARAM_SHADING_QUAD),
+        ("PARAM_SHADING_ROT", PARAM_SHADING_ROT),
         ("SHADING_BLOCK_BYTES", SHADING_BLOCK_BYTES),
         ("SHB_EA_VERTICES", SHB_EA_VERTICES),
         ("SHB_LIGHT_COUNT", SHB_LIGHT_COUNT),
@@ -290,6 +397,24 @@ pub fn spu_include() -> String {
             "SHADOW_LIMIT_BITS",
             (1.0 - crate::shading::SHADOW_EPSILON).to_bits() as usize,
         ),
+        ("PARAM_SHT", PARAM_SHT),
+        ("CONTEXT_TAG0", CONTEXT_TAG0 as usize),
+        ("STAGE_TRIANGLES", context::STAGE_TRIANGLES as usize),
+        ("CTX_RAY_DX", context::RAY_DX as usize),
+        ("CTX_RAY_RX", context::RAY_RX as usize),
+        ("CTX_RAY_T", context::RAY_T as usize),
+        ("CTX_RAY_ID", context::RAY_ID as usize),
+        ("CTX_RAY_ND", context::RAY_ND as usize),
+        ("CTX_RAY_INVD", context::RAY_INVD as usize),
+        ("CTX_CORNERS", context::CORNERS as usize),
+        ("CTX_NEGTAB", context::NEGTAB as usize),
+        ("CTX_STAGE_TAGS", context::STAGE_TAGS as usize),
+        ("CTX_SAVE", context::SAVE as usize),
+        ("CTX_STAGE_PAIR", context::STAGE_PAIR as usize),
+        ("CTX_STAGE_PAIR_TAG", context::STAGE_PAIR_TAG as usize),
+        ("CTX_STAGE_TRIS", context::STAGE_TRIS as usize),
+        ("CTX_STACK", context::STACK as usize),
+        ("CTX_BYTES", context::BYTES as usize),
         ("STAT_PACKETS", STAT_PACKETS),
         ("STAT_M1SUM", STAT_M1SUM),
         ("STAT_TRIS", STAT_TRIS),
@@ -369,6 +494,52 @@ mod tests {
             &2.0f32.to_be_bytes()
         );
         assert_eq!(PARAM_BVH_LOG2, 96);
+        assert_eq!(PARAM_SHT, 112);
+        let p = ParamBlock {
+            sht_contexts: 4,
+            cache_assoc: 4,
+            ..Default::default()
+        };
+        let b = p.to_be_bytes();
+        assert_eq!(&b[112..120], &[0, 0, 0, 4, 0, 0, 0, 4]);
+    }
+
+    #[test]
+    fn context_layout_fits_the_kernel() {
+        use context::*;
+        for off in [
+            CORNERS,
+            NEGTAB,
+            STAGE_TAGS,
+            SAVE,
+            STAGE_PAIR,
+            STAGE_PAIR_TAG,
+            STAGE_TRIS,
+            STACK,
+        ] {
+            assert_eq!(off % 16, 0, "{off}");
+        }
+        assert_eq!(BYTES % 128, 0);
+        assert!(STACK + STACK_BYTES <= BYTES);
+        assert!(STAGE_TRIS > STAGE_PAIR_TAG && STACK >= STAGE_TRIS + 64 * STAGE_TRIANGLES + 16);
+        // the largest configuration leaves room for the code and its data
+        assert!(carved_bytes(MAX_CACHE_LINES, MAX_CACHE_LINES, MAX_SHT_CONTEXTS) < 216 * 1024);
+    }
+
+    #[test]
+    fn kernel_options_are_checked() {
+        assert!(check_kernel_options(256, 256, 1, 1).is_ok());
+        assert!(check_kernel_options(128, 1024, 4, 8).is_ok());
+        for (b, t, a, s) in [
+            (100, 256, 1, 1),
+            (2048, 256, 1, 1),
+            (256, 64, 1, 1),
+            (256, 256, 3, 1),
+            (256, 256, 1, 0),
+            (256, 256, 1, 9),
+        ] {
+            assert!(check_kernel_options(b, t, a, s).is_err(), "{b} {t} {a} {s}");
+        }
     }
 
     #[test]

@@ -12,6 +12,7 @@
 //!   the shading kernels and the reference share, and the `--shade` modes.
 //! - [`reference`]: a scalar ray caster over the same records that defines the expected
 //!   kernel output.
+//! - [`stats`]: a frame's statistics as typed JSON (`spu render --stats`).
 
 pub mod bvh;
 pub mod camera;
@@ -32,3 +33,4 @@ pub use scene::{Material, Scene, Triangle};
 pub mod frame;
 pub mod kernel_abi;
 pub mod runtime;
+pub mod stats;

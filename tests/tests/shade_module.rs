@@ -12,28 +12,25 @@ use spu_loader::reference::{Hit, Reference};
 use spu_loader::shading::{self, Light};
 use spu_loader::{procedural, Bvh, BvhConfig, Scene, StagedScene};
 
-/// The driver: fetches the parameter block, shades the packet in the ray arrays, waits
-/// for its colour block and stops. The frame's registers the module reads (ZERO, EATRIS,
-/// TDATA, TMASK) are set by the host.
+/// The driver: fetches the parameter block, shades the packet in the ray arrays (laid out
+/// as in a packet context), waits for its colour block and stops. The frame's registers
+/// the module reads (ZERO, EATRIS) are set by the host; the shading area is at `area`.
 const DRIVER: &str = r#"
         .include "layout.inc"
         .set ZERO, 2
         .set EATRIS, 13
-        .set TDATA, 21
-        .set TMASK, 22
-        .set V_TILE, 0
-        .set V_PKT, 16
         .data
         .align 7
 params: .space 128
-vars:   .space 32
+packet: .space 16
 ray_dx: .space 256
 ray_dy: .space 256
 ray_dz: .space 256
+ray_rx: .space 768
 ray_t:  .space 256
 ray_id: .space 256
         .align 7
-area:   .space 64
+area:
         .text
         .global _start
 _start: ila     $66, params
@@ -50,6 +47,8 @@ _start: ila     $66, params
         il      $67, 2
         wrch    $MFC_WrTagUpdate, $67
         rdch    $67, $MFC_RdTagStat
+        ila     $68, ray_dx
+        lqa     $69, packet
         brsl    $0, shade_packet
         il      $67, 0xc0
         wrch    $MFC_WrTagMask, $67
@@ -72,10 +71,7 @@ struct Harness {
 
 fn harness(staged: &StagedScene, scene: &Scene, block: ShadingBlock) -> Harness {
     let basis = scene.camera.basis(64, 64);
-    let layout = FrameLayout::new(staged, &basis, 64, 64, 1, 256, 256)
-        .unwrap()
-        .with_shading(staged, block)
-        .unwrap();
+    let layout = FrameLayout::new(staged, &basis, 64, 64, 1, 256, 256).unwrap();
     let opts = spu_asm::Options {
         virtual_files: vec![
             (
@@ -96,13 +92,11 @@ fn harness(staged: &StagedScene, scene: &Scene, block: ShadingBlock) -> Harness 
         )
     });
     let symbols: HashMap<String, u32> = out.symbols.into_iter().collect();
+    let layout = layout.with_shading(staged, block, symbols["area"]).unwrap();
     let mut spu = Spu::new(0);
     spu.load_image(&out.image);
     let memory = MainMemory::new(layout.memory_image(staged));
     spu.set_reg(13, [staged.header.triangle_addr, 0, 0, 0]);
-    // One triangle-cache line: the shading area starts right at `area`.
-    spu.set_reg(21, [symbols["area"] - 64, 0, 0, 0]);
-    spu.set_reg(22, [0; 4]);
     Harness {
         spu,
         memory,
@@ -144,7 +138,7 @@ impl Harness {
         }
         self.ls_words("ray_t", packet.hits.iter().map(|h| h.t.to_bits()));
         self.ls_words("ray_id", packet.hits.iter().map(|h| h.record));
-        self.ls_words("vars", [0, 0, 0, 0, index, 0, 0, 0]);
+        self.ls_words("packet", [index, 0, 0, 0]);
         self.spu.set_pc(self.entry);
         self.spu.set_reg(4, [self.layout.param_addr, 0, 0, 0]);
         let stop = self.spu.run(&mut self.memory, 100_000_000);
@@ -311,4 +305,15 @@ fn shade_module_leaves_misses_black() {
         let expected = shading::pixel_colour(kd, glam::Vec3::ZERO);
         assert!(shading::channel_difference(*colour, expected) <= 1);
     }
+}
+
+/// The module's area size and the host's budget for it are the same number.
+#[test]
+fn shading_area_size_is_one_number() {
+    let line = SHADE_MODULE
+        .lines()
+        .find(|l| l.trim_start().starts_with(".set SH_AREA_BYTES,"))
+        .unwrap();
+    let value: usize = line.split(',').nth(1).unwrap().trim().parse().unwrap();
+    assert_eq!(value, spu_loader::kernel_abi::SHADING_AREA_BYTES);
 }

@@ -1,6 +1,6 @@
 //! `spu timing`: the static listing in `spu_timing`'s layout.
 
-use spu_isa::profile::{analyze_source, render_static, static_json};
+use spu_isa::static_timing::{analyze_source, render_static, static_json};
 
 const EULER: &str = include_str!("data/timing_euler.s");
 

@@ -2,13 +2,15 @@
 //! loop (loads, float multiply-adds, shuffles, adds, a hinted branch), with the timing
 //! model off and on, measured in one run.
 
+use crate::exit::{self, Status};
+use crate::options;
 use spu_isa::machine::{MainMemory, Spu, StopReason};
 use std::process::ExitCode;
 use std::time::Instant;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Loop iterations (11 instructions each).
+    /// Loop iterations (11 instructions each), at least 1.
     #[arg(long, default_value_t = 10_000_000)]
     iterations: u32,
 }
@@ -41,12 +43,13 @@ data:   .float  1.5, 2.0, 0.5, 3.0, 0.25, 1.0, 2.0, 4.0
         .space  16
 ";
 
-fn measure(iterations: u32, timing: bool) -> Result<(u64, u64, f64), String> {
+fn measure(iterations: u32, timing: bool) -> exit::Result<(u64, u64, f64)> {
     let opts = spu_asm::Options {
         defines: vec![("ITER".into(), iterations as i64)],
         ..Default::default()
     };
-    let program = spu_asm::assemble(LOOP, "bench.s", &opts).map_err(|d| format!("{d:?}"))?;
+    let program = spu_asm::assemble(LOOP, "bench.s", &opts)
+        .map_err(|d| exit::Error::failure(format!("the benchmark loop: {d:?}")))?;
     let mut spu = Spu::new(0);
     spu.load_image(&program.image);
     spu.set_pc(program.entry);
@@ -58,19 +61,23 @@ fn measure(iterations: u32, timing: bool) -> Result<(u64, u64, f64), String> {
     let stop = spu.run(&mut memory, u64::MAX);
     let seconds = started.elapsed().as_secs_f64();
     if stop != StopReason::Stop(0x2000) {
-        return Err(format!("benchmark loop stopped with {stop}"));
+        return Err(exit::Error::new(
+            Status::of_stop(&stop),
+            format!("benchmark loop stopped with {stop}"),
+        ));
     }
     Ok((spu.instructions(), spu.cycles(), seconds))
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> exit::Result<ExitCode> {
+    options::count("--iterations", args.iterations, 1..=u32::MAX)?;
     let (n_off, _, s_off) = measure(args.iterations, false)?;
     let (n_on, cycles, s_on) = measure(args.iterations, true)?;
-    let off = n_off as f64 / s_off / 1e6;
-    let on = n_on as f64 / s_on / 1e6;
-    println!("mixed loop: {} instructions", n_off);
-    println!("timing off: {off:8.1} M simulated instructions per host second");
-    println!("timing on:  {on:8.1} M simulated instructions per host second ({cycles} cycles, CPI {:.3})", cycles as f64 / n_on as f64);
-    println!("timing overhead: {:.2}x", off / on);
+    let off = n_off as f64 / s_off.max(1e-9) / 1e6;
+    let on = n_on as f64 / s_on.max(1e-9) / 1e6;
+    outln!("mixed loop: {} instructions", n_off);
+    outln!("timing off: {off:8.1} M simulated instructions per host second");
+    outln!("timing on:  {on:8.1} M simulated instructions per host second ({cycles} cycles, CPI {:.3})", cycles as f64 / n_on as f64);
+    outln!("timing overhead: {:.2}x", off / on);
     Ok(ExitCode::SUCCESS)
 }

@@ -1,7 +1,9 @@
 //! `spu timing`: static timing of assembly source per basic block, in the layout of IBM's
 //! `spu_timing` (see `docs/timing.md`).
 
-use spu_isa::profile::{analyze_source, render_static, static_json};
+use crate::exit;
+use crate::options;
+use spu_isa::static_timing::{analyze_source, render_static, static_json};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -23,9 +25,13 @@ pub struct Args {
     output: Option<PathBuf>,
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> exit::Result<ExitCode> {
+    if let Some(path) = &args.output {
+        exit::check_writable(path)?;
+    }
+    let bytes = options::read_input(&args.file, options::MAX_SOURCE_BYTES)?;
     let src =
-        std::fs::read_to_string(&args.file).map_err(|e| format!("{}: {e}", args.file.display()))?;
+        String::from_utf8(bytes).map_err(|_| format!("{}: not UTF-8 text", args.file.display()))?;
     let t = analyze_source(&src, args.label.as_deref())?;
     let text = if args.json {
         static_json(&t)
@@ -33,8 +39,8 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         render_static(&t, args.running_count)
     };
     match &args.output {
-        Some(path) => std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?,
-        None => print!("{text}"),
+        Some(path) => exit::write_file(path, text.as_bytes())?,
+        None => out!("{text}"),
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -2,6 +2,9 @@
 //!
 //! Each subcommand lives in its own module so that the commands can grow independently.
 
+#[macro_use]
+mod exit;
+
 mod cmd_as;
 mod cmd_bench;
 mod cmd_dis;
@@ -9,6 +12,7 @@ mod cmd_prof;
 mod cmd_render;
 mod cmd_run;
 mod cmd_timing;
+mod options;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -55,9 +59,11 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(code) => code,
-        Err(message) => {
-            eprintln!("spu: {message}");
-            ExitCode::from(1)
+        Err(error) => {
+            if let Some(message) = &error.message {
+                eprintln!("spu: {message}");
+            }
+            error.status.into()
         }
     }
 }

@@ -1,0 +1,1126 @@
+//! The block memo of the timing model.
+//!
+//! A basic block (up to its first branch) issued from the same relative pipeline state always
+//! times the same way. The first time a block starts at an address the model records, for
+//! each of its instructions, the state after it relative to the block's entry cycle and every
+//! counter change; when the block later starts in the same relative state (its signature),
+//! the recorded issue cycles are returned instead of recomputed, the state is set from the
+//! record at the end of the block, and the counter changes are counted once per replay and
+//! added when the profile is read. Anything unexpected in the middle of a replay (another
+//! address, a hook) first brings the state up to date at that point, so the result is exact.
+
+use super::*;
+use crate::profile::LogEntry;
+
+pub(super) const MAX_BLOCK: usize = 64;
+pub(super) const NEVER: u32 = u32::MAX;
+
+#[derive(Clone, Debug)]
+pub(super) struct Step {
+    pub issue_rel: i64,
+    pub write: u8,
+    pub ready_rel: i64,
+    pub producer: u32,
+    pub unit: Unit,
+    pub last: Last,
+    pub last_issue_rel: i64,
+    pub dp_rel: Option<i64>,
+    pub hint: Option<(HintEntry, i64, u64)>,
+    pub fetch: (u32, bool, i64, i64),
+    pub record: IssueRecord,
+    pub record_base_rel: i64,
+    pub log_end: usize,
+    pub totals: Totals,
+}
+
+#[derive(Clone, Debug)]
+pub(super) struct Memo {
+    pub start: u32,
+    pub words: Vec<u32>,
+    pub live: Vec<u8>,
+    pub branch_pc: u32,
+    pub sig: Vec<i64>,
+    pub steps: Vec<Step>,
+    pub log: Vec<LogEntry>,
+    pub hits: u64,
+    /// The core's code epoch at which it last found local store holding `words`.
+    pub verified: u64,
+    /// The last write of each register the block writes (for the end of a replay).
+    pub final_writes: Vec<FinalWrite>,
+    /// The latest of those ready cycles, relative to the entry (0 without writes).
+    pub max_ready_rel: u64,
+    /// The registers in `final_writes`, one bit each.
+    pub writes_mask: u128,
+    /// Past every cycle the block's timing looks at in the local store (the fetch
+    /// model's probes, the issue cycles), relative to the entry.
+    pub dma_horizon_rel: u64,
+    /// The block sets the hint entry (so after a replay it follows from the record).
+    pub sets_hint: bool,
+    /// Distinguishes this record from an earlier one in the same place.
+    pub generation: u64,
+    /// The blocks that followed a full replay, not taken and taken (see [`Chain`]).
+    pub chain: [Chain; 2],
+}
+
+/// A register's state after a block, relative to the block's entry (a result is never
+/// ready before its block starts).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct FinalWrite {
+    pub ready_rel: u64,
+    pub producer: u32,
+    pub reg: u8,
+    pub unit: Unit,
+}
+
+/// A block B that followed a full replay of block A once and matched its signature,
+/// in a state that A's record and the branch outcome decided entirely: the next time
+/// A replays fully with the same outcome to `pc`, B matches again without the check.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Chain {
+    pub pc: u32,
+    pub memo: u32,
+    pub generation: u64,
+    /// What B's signature saw of the hint entry (`Timing::hint_view`); the hint entry
+    /// is the one part of B's entry state A's record may leave open, so it is compared.
+    pub hint: [i64; 3],
+    /// B's live registers that A does not write: they must have been ready before B's
+    /// entry (as they were when the chain formed). Ended by 128; `UNLISTED` when
+    /// there were too many to list (then every register must have been ready).
+    pub open: [u8; OPEN_MAX],
+}
+
+pub(super) const OPEN_MAX: usize = 8;
+pub(super) const UNLISTED: u8 = 255;
+
+pub(super) const NO_CHAIN: Chain = Chain {
+    pc: NEVER,
+    memo: 0,
+    generation: 0,
+    hint: [0; 3],
+    open: [UNLISTED; OPEN_MAX],
+};
+
+/// A full replay just ended, and what the next block's chain check needs of it.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ChainFrom {
+    pub memo: usize,
+    pub generation: u64,
+    pub taken: bool,
+    /// The instruction count after the block (nothing else may issue in between).
+    pub index: u64,
+    /// The latest ready cycle of any register at the block's entry.
+    pub max_ready_at_entry: u64,
+}
+
+#[derive(Clone, Debug)]
+pub(super) struct Recording {
+    pub start: u32,
+    pub words: Vec<u32>,
+    pub entry: Box<Entry>,
+    pub dp_changed: bool,
+    pub hint_changed: bool,
+    pub steps: Vec<Step>,
+}
+
+/// The state a block's timing depends on, at its entry.
+#[derive(Clone, Debug)]
+pub(super) struct Entry {
+    pub now: u64,
+    pub index: u64,
+    pub ready: [u64; 128],
+    pub producer: [u32; 128],
+    pub unit: [Unit; 128],
+    pub last: Last,
+    pub redirect: u64,
+    pub miss_pc: u32,
+    pub dp_until: u64,
+    pub hint: HintEntry,
+    pub fetch: (u32, bool, u64, u64),
+    pub totals: Totals,
+}
+
+/// What the signature reads, borrowed from a live model or a recorded entry.
+pub(super) struct EntryRef<'a> {
+    pub now: u64,
+    pub index: u64,
+    pub ready: &'a [u64; 128],
+    pub producer: &'a [u32; 128],
+    pub unit: &'a [Unit; 128],
+    pub last: Last,
+    pub redirect: u64,
+    pub miss_pc: u32,
+    pub dp_until: u64,
+    pub hint: HintEntry,
+    pub fetch: (u32, bool, u64, u64),
+}
+
+impl Entry {
+    pub fn as_ref(&self) -> EntryRef<'_> {
+        EntryRef {
+            now: self.now,
+            index: self.index,
+            ready: &self.ready,
+            producer: &self.producer,
+            unit: &self.unit,
+            last: self.last,
+            redirect: self.redirect,
+            miss_pc: self.miss_pc,
+            dp_until: self.dp_until,
+            hint: self.hint,
+            fetch: self.fetch,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Replay {
+    pub memo: usize,
+    pub k: usize,
+    pub entry_now: u64,
+    pub entry_index: u64,
+    pub entry_max_ready: u64,
+}
+
+#[derive(Clone, Debug, Default)]
+pub(super) struct Memos {
+    /// Per word address: 0 none, `NEVER`, or memo index + 1.
+    pub slots: Vec<u32>,
+    /// Per word address, a second record for the same start in another entry state
+    /// (0 none, or memo index + 1): a block entered in two recurring states keeps both.
+    pub second: Vec<u32>,
+    pub fails: Vec<u8>,
+    pub memos: Vec<Memo>,
+    pub rec: Option<Box<Recording>>,
+    pub replay: Option<Replay>,
+    pub chain_from: Option<ChainFrom>,
+    pub generations: u64,
+}
+
+impl Memos {
+    #[inline]
+    pub fn replaying(&self) -> bool {
+        self.replay.is_some()
+    }
+
+    pub fn abort_recording(&mut self, profile: &mut Profile) {
+        if self.rec.take().is_some() {
+            profile.log = None;
+        }
+    }
+
+    pub fn clear_hits(&mut self) {
+        for m in &mut self.memos {
+            m.hits = 0;
+        }
+    }
+
+    /// Adds every replay's counters (and a replay in progress up to `partial`).
+    pub fn add_pending(&self, p: &mut Profile, partial: Option<(usize, usize)>) {
+        for m in &self.memos {
+            if m.hits > 0 {
+                p.apply_log(&m.log, m.hits);
+                p.totals.add_scaled(&m.steps.last().unwrap().totals, m.hits);
+            }
+        }
+        if let Some((id, k)) = partial {
+            let m = &self.memos[id];
+            let st = &m.steps[k - 1];
+            p.apply_log(&m.log[..st.log_end], 1);
+            p.totals.add_scaled(&st.totals, 1);
+        }
+    }
+
+    /// Adds the counters of `id`'s replays to the profile and forgets them.
+    pub fn flush(&mut self, id: usize, p: &mut Profile) {
+        let m = &mut self.memos[id];
+        if m.hits > 0 {
+            p.apply_log(&m.log, m.hits);
+            p.totals.add_scaled(&m.steps.last().unwrap().totals, m.hits);
+            m.hits = 0;
+        }
+    }
+}
+
+/// Instructions that end a block before them and are never recorded: channel and SPR
+/// access (channel stalls), `hbr` (its target comes through a hook), halts, stops and
+/// syncs, unknown words.
+pub(super) fn is_terminator(inst: Inst) -> bool {
+    use Op::*;
+    match inst.op {
+        Rdch | Wrch | Rchcnt | Mfspr | Mtspr | Stop | Stopd | Sync | Dsync | Heq | Hgt | Hlgt
+        | Heqi | Hgti | Hlgti | Unknown => true,
+        Hbr => !is_hbrp(inst),
+        _ => false,
+    }
+}
+
+/// What the memo table says of a block start.
+enum Lookup {
+    /// Never memoized here (its state kept changing).
+    Never,
+    Absent,
+    /// A memo whose recorded state (or words) differs from now.
+    Differs(usize),
+    Hit(usize),
+}
+
+/// Whether `inst` ends a memoized block (it needs the core around the pipeline: channels,
+/// stops, halts, `sync`, register-target hints, undecodable words).
+#[inline]
+pub fn ends_block(inst: Inst) -> bool {
+    is_terminator(inst)
+}
+
+impl Timing {
+    #[inline]
+    fn slot_index(pc: u32) -> usize {
+        ((pc & 0x3_ffff) >> 2) as usize
+    }
+
+    /// The signature of the current state for a block with live-in registers `live` and
+    /// final branch `branch_pc`, into `out`.
+    #[inline(always)]
+    fn signature<F: FnMut(i64) -> bool>(
+        &self,
+        e: &EntryRef,
+        live: &[u8],
+        start: u32,
+        branch_at: Option<(u32, u64)>,
+        emit: &mut F,
+    ) -> bool {
+        let now = e.now as i64;
+        for &r in live {
+            let rel = (e.ready[r as usize] as i64 - now).max(-1);
+            if !emit(rel) {
+                return false;
+            }
+            if rel > 0 {
+                if !emit(e.producer[r as usize] as i64) {
+                    return false;
+                }
+                if !emit(e.unit[r as usize] as i64) {
+                    return false;
+                }
+            }
+        }
+        let seq = e.last.pc.wrapping_add(4) == start;
+        if !emit(seq as i64) {
+            return false;
+        }
+        if seq && e.last.pairable {
+            if !emit(1 + e.last.writes as i64) {
+                return false;
+            }
+            if !emit(e.last.issue as i64 - now) {
+                return false;
+            }
+        }
+        let redirect = (e.redirect as i64 - now).max(0);
+        if !emit(redirect) {
+            return false;
+        }
+        if redirect > 0 {
+            if !emit(e.miss_pc as i64) {
+                return false;
+            }
+        }
+        if !emit((e.dp_until as i64 - now).max(0)) {
+            return false;
+        }
+        if let Some((bpc, k)) = branch_at {
+            let [bits, window, target] = self.hint_view(&e.hint, e.index, e.now, bpc, k);
+            if !emit(bits) {
+                return false;
+            }
+            if bits == 3 {
+                if !emit(window) {
+                    return false;
+                }
+                if !emit(target) {
+                    return false;
+                }
+            }
+        }
+        if self.config.model_fetch {
+            let lat = self.config.fetch_latency as i64;
+            if !emit(e.fetch.0 as i64) {
+                return false;
+            }
+            if !emit(e.fetch.1 as i64) {
+                return false;
+            }
+            if e.fetch.1 {
+                if !emit((e.fetch.2 as i64 - now).max(-lat - 1)) {
+                    return false;
+                }
+            } else {
+                if !emit((e.fetch.3 as i64 - now).max(-1)) {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// What a block whose branch is at `bpc`, `k` instructions after its start, sees of the
+    /// hint entry `h` at its entry (instruction count `index`, cycle `now`): whether the
+    /// entry names the branch and is far enough ahead (bits 0 and 1), and if both, how
+    /// long its window still runs and its target (else 0).
+    #[inline(always)]
+    fn hint_view(&self, h: &HintEntry, index: u64, now: u64, bpc: u32, k: u64) -> [i64; 3] {
+        let m = h.valid && h.branch == bpc;
+        let close = index + k - h.index >= self.config.hint_min_distance as u64;
+        if m && close {
+            [
+                3,
+                (h.issued as i64 + self.config.hint_window as i64 - now as i64).max(-1),
+                h.target as i64,
+            ]
+        } else {
+            [m as i64 | (close as i64) << 1, 0, 0]
+        }
+    }
+
+    /// [`Timing::hint_view`] of the current state for memo `id`'s branch.
+    #[inline]
+    fn hint_view_now(&self, id: usize) -> [i64; 3] {
+        let m = &self.memo.memos[id];
+        if m.branch_pc == NO_PC {
+            return [0; 3];
+        }
+        self.hint_view(
+            &self.hint,
+            self.index,
+            self.now,
+            m.branch_pc,
+            m.words.len() as u64 - 1,
+        )
+    }
+
+    fn entry(&self) -> Entry {
+        Entry {
+            now: self.now,
+            index: self.index,
+            ready: self.ready,
+            producer: self.producer,
+            unit: self.producer_unit,
+            last: self.last,
+            redirect: self.redirect,
+            miss_pc: self.miss_pc,
+            dp_until: self.dp_until,
+            hint: self.hint,
+            fetch: (
+                self.fetch.line,
+                self.fetch.pending,
+                self.fetch.probe,
+                self.fetch.next_ready,
+            ),
+            totals: self.profile.totals.clone(),
+        }
+    }
+
+    pub(super) fn issue_memo(&mut self, pc: u32, inst: Inst) -> u64 {
+        self.apply_deferred_writes();
+        if let Some(rec) = &self.memo.rec {
+            let k = rec.words.len();
+            if pc != rec.start.wrapping_add(4 * k as u32) || is_terminator(inst) || k >= MAX_BLOCK {
+                self.finish_recording();
+            } else {
+                let t = self.issue_slow(pc, inst);
+                self.record_step(inst);
+                if self.classes[inst.op as usize].flags & F_BRANCH != 0 {
+                    self.finish_recording();
+                }
+                return t;
+            }
+        }
+        if is_terminator(inst) {
+            return self.issue_slow(pc, inst);
+        }
+        let idx = Self::slot_index(pc);
+        if idx >= self.memo.slots.len() {
+            self.memo.slots.resize(0x1_0000, 0);
+            self.memo.second.resize(0x1_0000, 0);
+            self.memo.fails.resize(0x1_0000, 0);
+        }
+        // While DMA holds local-store cycles, blocks replay only clear of them and are not
+        // recorded (a record must not depend on them).
+        let dma = self.fetch.dma_min != u64::MAX;
+        match self.chained_lookup(idx, pc, inst) {
+            Lookup::Never => return self.issue_slow(pc, inst),
+            Lookup::Hit(id) if self.clear_of_dma(id) => return self.begin_replay(id, pc, inst),
+            Lookup::Hit(_) => return self.issue_slow(pc, inst),
+            _ if dma => return self.issue_slow(pc, inst),
+            Lookup::Differs(id) => {
+                // A different state: record again (keeping what the old record counted).
+                if self.memo.memos[id].hits < 2 {
+                    self.memo.fails[idx] = self.memo.fails[idx].saturating_add(1);
+                    if self.memo.fails[idx] >= 8 {
+                        self.memo.flush(id, &mut self.profile);
+                        if let Some(other) = self.second_memo(idx) {
+                            self.memo.flush(other, &mut self.profile);
+                        }
+                        self.memo.slots[idx] = NEVER;
+                        return self.issue_slow(pc, inst);
+                    }
+                }
+            }
+            Lookup::Absent => {}
+        }
+        // Record this block.
+        self.memo.rec = Some(Box::new(Recording {
+            start: pc,
+            words: Vec::new(),
+            entry: Box::new(self.entry()),
+            dp_changed: false,
+            hint_changed: false,
+            steps: Vec::new(),
+        }));
+        self.profile.log = Some(Vec::new());
+        let t = self.issue_slow(pc, inst);
+        self.record_step(inst);
+        if self.classes[inst.op as usize].flags & F_BRANCH != 0 {
+            self.finish_recording();
+        }
+        t
+    }
+
+    /// The memo for a block starting at `pc` with first instruction `inst` (slot `idx`),
+    /// and whether the current state matches the one it was recorded in.
+    #[inline]
+    fn memo_lookup(&self, idx: usize, pc: u32, inst: Inst) -> Lookup {
+        let slot = self.memo.slots[idx];
+        if slot == NEVER {
+            return Lookup::Never;
+        }
+        if slot == 0 {
+            return Lookup::Absent;
+        }
+        let first = (slot - 1) as usize;
+        if self.entry_matches(first, pc, inst) {
+            return Lookup::Hit(first);
+        }
+        match self.second_memo(idx) {
+            Some(second) if self.entry_matches(second, pc, inst) => Lookup::Hit(second),
+            // Record again over the one replayed less.
+            Some(second) if self.memo.memos[second].hits <= self.memo.memos[first].hits => {
+                Lookup::Differs(second)
+            }
+            _ => Lookup::Differs(first),
+        }
+    }
+
+    /// The second record for word address `idx`, if any.
+    #[inline]
+    fn second_memo(&self, idx: usize) -> Option<usize> {
+        match self.memo.second.get(idx) {
+            Some(&s) if s != 0 => Some((s - 1) as usize),
+            _ => None,
+        }
+    }
+
+    /// Whether memo `id` is the block at `pc` starting with `inst` and the current state
+    /// matches its signature.
+    #[inline]
+    fn entry_matches(&self, id: usize, pc: u32, inst: Inst) -> bool {
+        let m = &self.memo.memos[id];
+        if m.start != pc || m.words[0] != inst.word {
+            return false;
+        }
+        let branch_at = (m.branch_pc != NO_PC).then(|| (m.branch_pc, m.words.len() as u64 - 1));
+        let e = self.entry_ref();
+        let mut pos = 0usize;
+        let sig = &m.sig[..];
+        self.signature(&e, &m.live, pc, branch_at, &mut |v| {
+            let same = sig.get(pos) == Some(&v);
+            pos += 1;
+            same
+        }) && pos == sig.len()
+    }
+
+    /// [`Timing::memo_lookup`], first through the chain of the block whose full replay
+    /// just ended, and adding to that chain. A chain is followed only where the state at
+    /// this block's entry follows from the previous block's record: every live register
+    /// the previous block did not write was ready before now (as when the chain formed)
+    /// and nothing issued in between; the rest of the signature (readiness of what the
+    /// previous block wrote, the last issue, branch redirect, double-precision block,
+    /// fetch) is set from that record and the branch outcome, and so is the hint entry
+    /// where the previous block sets it; otherwise its view is compared.
+    #[inline(always)]
+    fn chained_lookup(&mut self, idx: usize, pc: u32, inst: Inst) -> Lookup {
+        let from = self.memo.chain_from.take().filter(|f| {
+            f.index == self.index && self.memo.memos[f.memo].generation == f.generation
+        });
+        if let Some(f) = from {
+            let a = &self.memo.memos[f.memo];
+            let c = &a.chain[f.taken as usize];
+            if c.pc == pc {
+                let b = &self.memo.memos[c.memo as usize];
+                if b.generation == c.generation
+                    && b.words[0] == inst.word
+                    && self.open_registers_ready(f.max_ready_at_entry, &c.open)
+                    && (a.sets_hint || self.hint_view_now(c.memo as usize) == c.hint)
+                {
+                    return Lookup::Hit(c.memo as usize);
+                }
+            }
+        }
+        self.apply_deferred_writes();
+        let found = self.memo_lookup(idx, pc, inst);
+        if let (Lookup::Hit(id), Some(f)) = (&found, from) {
+            // B's live registers that A does not write (when few enough to list).
+            let (a, b) = (&self.memo.memos[f.memo], &self.memo.memos[*id]);
+            let mut listed = [128u8; OPEN_MAX];
+            let mut n = 0;
+            for &r in &b.live {
+                if a.writes_mask & (1u128 << (r & 127)) == 0 {
+                    if n == OPEN_MAX {
+                        listed = [UNLISTED; OPEN_MAX];
+                        break;
+                    }
+                    listed[n] = r;
+                    n += 1;
+                }
+            }
+            if self.open_registers_ready(f.max_ready_at_entry, &listed) {
+                let chain = Chain {
+                    pc,
+                    memo: *id as u32,
+                    generation: b.generation,
+                    hint: self.hint_view_now(*id),
+                    open: listed,
+                };
+                self.memo.memos[f.memo].chain[f.taken as usize] = chain;
+            }
+        }
+        found
+    }
+
+    /// Whether the registers a chain leaves open (`open`: a list ended by 128, or
+    /// [`UNLISTED`] for any register) were all ready before now: at once when every
+    /// register was ready by the previous block's entry.
+    #[inline(always)]
+    fn open_registers_ready(&self, max_ready_at_entry: u64, open: &[u8; OPEN_MAX]) -> bool {
+        if max_ready_at_entry < self.now {
+            return true;
+        }
+        if open[0] == UNLISTED {
+            return false;
+        }
+        open.iter()
+            .take_while(|&&r| r < 128)
+            .all(|&r| self.ready[r as usize] < self.now)
+    }
+
+    /// Starts replaying memo `id` with its first instruction (`pc`, `inst`); returns that
+    /// instruction's issue cycle.
+    fn begin_replay(&mut self, id: usize, pc: u32, inst: Inst) -> u64 {
+        self.memo.replay = Some(Replay {
+            memo: id,
+            k: 0,
+            entry_now: self.now,
+            entry_index: self.index,
+            entry_max_ready: self.max_ready,
+        });
+        self.replay_next(pc, inst)
+            .expect("first replayed instruction")
+    }
+
+    /// For a core that runs whole memoized blocks: the memo (id and length) of the block
+    /// starting at `pc` with `inst` when the state matches its record and nothing else is
+    /// in progress; nothing changes. Follow with [`Timing::start_block_replay`].
+    #[inline(always)]
+    pub fn block_replay_candidate(&mut self, pc: u32, inst: Inst) -> Option<(usize, usize)> {
+        if !self.config.memoize
+            || self.memo.rec.is_some()
+            || self.memo.replay.is_some()
+            || is_terminator(inst)
+        {
+            return None;
+        }
+        let idx = Self::slot_index(pc);
+        if idx >= self.memo.slots.len() {
+            return None;
+        }
+        match self.chained_lookup(idx, pc, inst) {
+            Lookup::Hit(id) if self.clear_of_dma(id) => Some((id, self.memo.memos[id].words.len())),
+            _ => None,
+        }
+    }
+
+    /// Whether memo `id`'s block, starting now, ends its use of the local store before
+    /// the first cycle a DMA holds: the model then asks of it exactly what it asked when
+    /// the block was recorded (with no DMA), so the record holds.
+    #[inline]
+    fn clear_of_dma(&mut self, id: usize) -> bool {
+        let horizon = self.now + self.memo.memos[id].dma_horizon_rel;
+        if self.fetch.dma_min > horizon {
+            return true;
+        }
+        self.drop_past_dma_cycles();
+        self.fetch.dma_min > horizon
+    }
+
+    /// Forgets DMA cycles no fetch probe can reach any more: those before now and before
+    /// a waiting prefetch's probe (probes only move forward, and `fetch_first_free` skips
+    /// such cycles without counting them).
+    #[cold]
+    fn drop_past_dma_cycles(&mut self) {
+        let bound = if self.fetch.pending {
+            self.now.min(self.fetch.probe)
+        } else {
+            self.now
+        };
+        while self.fetch.dma.front().is_some_and(|&c| c < bound) {
+            self.fetch.dma.pop_front();
+        }
+        self.fetch.dma_min = self.fetch.dma.front().copied().unwrap_or(u64::MAX);
+    }
+
+    /// The words memo `id` recorded, and the core's code epoch at which local store last
+    /// held them.
+    #[inline]
+    pub fn memo_words(&self, id: usize) -> (&[u32], u64) {
+        let m = &self.memo.memos[id];
+        (&m.words, m.verified)
+    }
+
+    /// Notes that local store held memo `id`'s words at code epoch `epoch`.
+    #[inline]
+    pub fn set_memo_verified(&mut self, id: usize, epoch: u64) {
+        self.memo.memos[id].verified = epoch;
+    }
+
+    /// The entry of a block replayed whole by the core: the replay `issue` started, or
+    /// (for a [`Timing::block_replay_candidate`]) the current state.
+    #[inline]
+    fn block_entry(&mut self, id: usize) -> Replay {
+        match self.memo.replay.take() {
+            Some(rp) if rp.memo == id => rp,
+            _ => Replay {
+                memo: id,
+                k: 0,
+                entry_now: self.now,
+                entry_index: self.index,
+                entry_max_ready: self.max_ready,
+            },
+        }
+    }
+
+    /// The core ran memo `id`'s block whole (a [`Timing::block_replay_candidate`], or the
+    /// replay `issue` started): the state and counters become what issuing each of its
+    /// instructions would have made them, and `branch` (its last instruction's address,
+    /// the instruction, whether it was taken and where to) resolves.
+    #[inline(always)]
+    pub fn block_replayed(&mut self, id: usize, branch: Option<(u32, Inst, bool, u32)>) {
+        let mut rp = self.block_entry(id);
+        let m = &mut self.memo.memos[id];
+        m.hits += 1;
+        rp.k = m.words.len();
+        self.materialize(rp, false);
+        self.chain_after(rp);
+        if let Some((pc, inst, taken, target)) = branch {
+            self.branch_resolved(pc, inst, taken, target);
+        }
+    }
+
+    /// The core ran the first `k` instructions of memo `id`'s block and stopped (the rest
+    /// go through `issue`).
+    pub fn block_replayed_partly(&mut self, id: usize, k: usize) {
+        let mut rp = self.block_entry(id);
+        rp.k = k;
+        self.memo.replay = Some(rp);
+        self.sync();
+    }
+
+    /// The memo whose replay `issue` started.
+    #[inline]
+    pub fn replay_memo(&self) -> Option<usize> {
+        self.memo.replay.map(|rp| rp.memo)
+    }
+
+    /// A view of the current state for the signature.
+    fn entry_ref(&self) -> EntryRef<'_> {
+        EntryRef {
+            now: self.now,
+            index: self.index,
+            ready: &self.ready,
+            producer: &self.producer,
+            unit: &self.producer_unit,
+            last: self.last,
+            redirect: self.redirect,
+            miss_pc: self.miss_pc,
+            dp_until: self.dp_until,
+            hint: self.hint,
+            fetch: (
+                self.fetch.line,
+                self.fetch.pending,
+                self.fetch.probe,
+                self.fetch.next_ready,
+            ),
+        }
+    }
+
+    fn record_step(&mut self, inst: Inst) {
+        self.apply_deferred_writes();
+        let Some(rec) = self.memo.rec.as_mut() else {
+            return;
+        };
+        let e = &rec.entry;
+        let now = e.now as i64;
+        let class = self.classes[inst.op as usize];
+        if class.flags & F_FPD != 0 {
+            rec.dp_changed = true;
+        }
+        if class.flags & F_HINT != 0 && !is_hbrp(inst) {
+            rec.hint_changed = true;
+        }
+        let w = self.last.writes;
+        let (ready_rel, producer, unit) = if w < 128 {
+            (
+                self.ready[w as usize] as i64 - now,
+                self.producer[w as usize],
+                self.producer_unit[w as usize],
+            )
+        } else {
+            (0, NO_PC, Unit::NOP)
+        };
+        let step = Step {
+            issue_rel: self.last.issue as i64 - now,
+            write: w,
+            ready_rel,
+            producer,
+            unit,
+            last: self.last,
+            last_issue_rel: self.last.issue as i64 - now,
+            dp_rel: rec.dp_changed.then(|| self.dp_until as i64 - now),
+            hint: rec.hint_changed.then(|| {
+                (
+                    self.hint,
+                    self.hint.issued as i64 - now,
+                    self.hint.index - e.index,
+                )
+            }),
+            fetch: (
+                self.fetch.line,
+                self.fetch.pending,
+                self.fetch.probe as i64 - now,
+                self.fetch.next_ready as i64 - now,
+            ),
+            record: self.record,
+            record_base_rel: self.record.base as i64 - now,
+            log_end: self.profile.log.as_ref().map_or(0, |l| l.len()),
+            totals: self.profile.totals.since(&e.totals),
+        };
+        rec.words.push(inst.word);
+        rec.steps.push(step);
+    }
+
+    fn finish_recording(&mut self) {
+        // The record may replace the deferred block's memo.
+        self.apply_deferred_writes();
+        let Some(rec) = self.memo.rec.take() else {
+            return;
+        };
+        let log = self.profile.log.take().unwrap_or_default();
+        if rec.steps.is_empty() {
+            return;
+        }
+        // Live-in registers: read before the block writes them.
+        let mut written = [false; 128];
+        let mut live = Vec::new();
+        let mut branch_pc = NO_PC;
+        for (k, &word) in rec.words.iter().enumerate() {
+            let inst = crate::codec::decode(word);
+            let c = self.classes[inst.op as usize];
+            let mut read = |r: u8| {
+                let r = r & 127;
+                if !written[r as usize] && !live.contains(&r) {
+                    live.push(r);
+                }
+            };
+            if c.regs & R_RA != 0 {
+                read(inst.ra);
+            }
+            if c.regs & R_RB != 0 {
+                read(inst.rb);
+            }
+            if c.regs & R_RC != 0 {
+                read(inst.rc);
+            }
+            if c.regs & R_RT != 0 {
+                read(inst.rt);
+            }
+            if c.regs & W_RT != 0 {
+                written[(inst.rt & 127) as usize] = true;
+            }
+            if c.flags & F_BRANCH != 0 {
+                branch_pc = rec.start.wrapping_add(4 * k as u32);
+            }
+        }
+        let branch_at = (branch_pc != NO_PC).then(|| (branch_pc, rec.words.len() as u64 - 1));
+        let mut sig = Vec::new();
+        self.signature(
+            &Entry::as_ref(&rec.entry),
+            &live,
+            rec.start,
+            branch_at,
+            &mut |v| {
+                sig.push(v);
+                true
+            },
+        );
+        let memo = Memo {
+            start: rec.start,
+            words: rec.words,
+            live,
+            branch_pc,
+            sig,
+            steps: rec.steps,
+            log,
+            hits: 0,
+            verified: u64::MAX,
+            final_writes: Vec::new(),
+            max_ready_rel: 0,
+            writes_mask: 0,
+            dma_horizon_rel: 0,
+            generation: self.memo.generations,
+            sets_hint: rec.hint_changed,
+            chain: [NO_CHAIN; 2],
+        };
+        self.memo.generations += 1;
+        let mut memo = memo;
+        memo.dma_horizon_rel = memo
+            .steps
+            .iter()
+            .map(|st| st.issue_rel.max(st.fetch.2).max(0) as u64)
+            .max()
+            .unwrap_or(0)
+            + 2;
+        for st in memo.steps.iter().rev() {
+            if st.write < 128 && !memo.final_writes.iter().any(|w| w.reg == st.write) {
+                let ready_rel = st.ready_rel.max(0) as u64;
+                memo.final_writes.push(FinalWrite {
+                    ready_rel,
+                    producer: st.producer,
+                    reg: st.write,
+                    unit: st.unit,
+                });
+                memo.max_ready_rel = memo.max_ready_rel.max(ready_rel);
+                memo.writes_mask |= 1u128 << st.write;
+            }
+        }
+        let idx = Self::slot_index(memo.start);
+        let slot = self.memo.slots[idx];
+        if slot == 0 || slot == NEVER {
+            self.memo.memos.push(memo);
+            self.memo.slots[idx] = self.memo.memos.len() as u32;
+            return;
+        }
+        let first = (slot - 1) as usize;
+        // A block at the same start with other words (the code changed) replaces the first
+        // record; another entry state takes the second place, or replaces the record
+        // replayed less.
+        let same_words = self.memo.memos[first].words == memo.words;
+        let victim = match self.second_memo(idx) {
+            None if same_words => {
+                self.memo.memos.push(memo);
+                self.memo.second[idx] = self.memo.memos.len() as u32;
+                return;
+            }
+            Some(second)
+                if same_words && self.memo.memos[second].hits <= self.memo.memos[first].hits =>
+            {
+                second
+            }
+            _ => first,
+        };
+        self.memo.flush(victim, &mut self.profile);
+        self.memo.memos[victim] = memo;
+    }
+
+    /// Replays the next instruction of the block in progress, or brings the state up to
+    /// date and returns `None` when `pc`/`inst` is not what the block recorded.
+    #[inline]
+    pub(super) fn replay_next(&mut self, pc: u32, inst: Inst) -> Option<u64> {
+        let rp = self.memo.replay.as_mut()?;
+        let m = &mut self.memo.memos[rp.memo];
+        let k = rp.k;
+        if k < m.words.len() && pc == m.start.wrapping_add(4 * k as u32) && inst.word == m.words[k]
+        {
+            let issue = (rp.entry_now as i64 + m.steps[k].issue_rel) as u64;
+            self.now = issue + 1;
+            rp.k = k + 1;
+            if rp.k == m.words.len() {
+                m.hits += 1;
+                let rp = *rp;
+                self.memo.replay = None;
+                self.materialize(rp, false);
+                self.chain_after(rp);
+            }
+            Some(issue)
+        } else {
+            self.sync();
+            None
+        }
+    }
+
+    /// Applies the register writes of the block in `deferred_writes`.
+    #[inline]
+    pub(super) fn apply_deferred_writes(&mut self) {
+        if let Some((id, entry)) = self.deferred_writes.take() {
+            for w in &self.memo.memos[id].final_writes {
+                let r = (w.reg & 127) as usize;
+                self.ready[r] = entry + w.ready_rel;
+                self.producer[r] = w.producer;
+                self.producer_unit[r] = w.unit;
+            }
+        }
+    }
+
+    /// Sets the state after `rp.k` replayed instructions; `eager`: also apply their
+    /// counter changes now (a partial block).
+    #[inline]
+    fn materialize(&mut self, rp: Replay, eager: bool) {
+        let k = rp.k;
+        if k == self.memo.memos[rp.memo].steps.len() {
+            // The registers wait in `deferred_writes`; the previous deferred block's are
+            // applied first unless this block overwrites them all.
+            if let Some((d, _)) = self.deferred_writes {
+                let covered =
+                    self.memo.memos[d].writes_mask & !self.memo.memos[rp.memo].writes_mask;
+                if covered != 0 {
+                    self.apply_deferred_writes();
+                }
+            }
+            self.deferred_writes = Some((rp.memo, rp.entry_now));
+            let m = &self.memo.memos[rp.memo];
+            self.max_ready = self.max_ready.max(rp.entry_now + m.max_ready_rel);
+        } else {
+            self.apply_deferred_writes();
+        }
+        let m = &self.memo.memos[rp.memo];
+        let base = rp.entry_now as i64;
+        let at = |rel: i64| (base + rel).max(0) as u64;
+        if k < m.steps.len() {
+            for st in &m.steps[..k] {
+                if st.write < 128 {
+                    self.ready[st.write as usize] = at(st.ready_rel);
+                    self.max_ready = self.max_ready.max(at(st.ready_rel));
+                    self.producer[st.write as usize] = st.producer;
+                    self.producer_unit[st.write as usize] = st.unit;
+                }
+            }
+        }
+        let st = &m.steps[k - 1];
+        self.last = st.last;
+        self.last.issue = at(st.last_issue_rel);
+        self.now = self.last.issue + 1;
+        if let Some(d) = st.dp_rel {
+            self.dp_until = at(d);
+        }
+        if let Some((h, issued, index)) = st.hint {
+            self.hint = h;
+            self.hint.issued = at(issued);
+            self.hint.index = rp.entry_index + index;
+        }
+        self.fetch.line = st.fetch.0;
+        self.fetch.pending = st.fetch.1;
+        self.fetch.probe = at(st.fetch.2);
+        self.fetch.next_ready = at(st.fetch.3);
+        self.record = st.record;
+        self.record.issue = self.last.issue;
+        self.record.base = at(st.record_base_rel);
+        self.index = rp.entry_index + k as u64;
+        if eager {
+            let (log_end, totals) = (st.log_end, st.totals.clone());
+            let log: Vec<_> = m.log[..log_end].to_vec();
+            self.profile.apply_log(&log, 1);
+            self.profile.totals.add_scaled(&totals, 1);
+        }
+    }
+
+    /// Right after `issue` started replaying a memoized block with the block's first
+    /// instruction: the block's length. The core may then execute the block's remaining
+    /// instructions without calling `issue` and finish with [`Timing::block_replayed`]
+    /// (or stop early with [`Timing::block_replayed_partly`]): the result is the same.
+    #[inline]
+    pub fn replay_started(&self) -> Option<usize> {
+        let rp = self.memo.replay.as_ref()?;
+        (rp.k == 1).then(|| self.memo.memos[rp.memo].words.len())
+    }
+
+    /// The words of the block being replayed (to check local store still holds them).
+    #[inline]
+    pub fn replay_words(&self) -> &[u32] {
+        match &self.memo.replay {
+            Some(rp) => &self.memo.memos[rp.memo].words,
+            None => &[],
+        }
+    }
+
+    /// The core's code epoch at which the replayed block's words were last checked.
+    #[inline]
+    pub fn replay_verified(&self) -> u64 {
+        match &self.memo.replay {
+            Some(rp) => self.memo.memos[rp.memo].verified,
+            None => u64::MAX,
+        }
+    }
+
+    /// Notes that local store held the replayed block's words at code epoch `epoch`.
+    #[inline]
+    pub fn set_replay_verified(&mut self, epoch: u64) {
+        if let Some(rp) = &self.memo.replay {
+            self.memo.memos[rp.memo].verified = epoch;
+        }
+    }
+
+    /// After a full replay: what lets the next block skip its signature.
+    fn chain_after(&mut self, rp: Replay) {
+        self.memo.chain_from = Some(ChainFrom {
+            memo: rp.memo,
+            generation: self.memo.memos[rp.memo].generation,
+            taken: false,
+            index: self.index,
+            max_ready_at_entry: rp.entry_max_ready,
+        });
+    }
+
+    /// Brings a replay in progress up to date (before a hook or an unexpected address).
+    pub(super) fn sync(&mut self) {
+        if let Some(rp) = self.memo.replay.take() {
+            if rp.k > 0 {
+                self.materialize(rp, true);
+            }
+        }
+    }
+
+    /// A `hint` hook call that repeats what a replayed hint instruction already recorded.
+    pub(super) fn replay_hint_matches(&self, pc: u32, branch: u32, target: u32) -> bool {
+        let Some(rp) = &self.memo.replay else {
+            return false;
+        };
+        let m = &self.memo.memos[rp.memo];
+        if rp.k == 0 || pc != m.start.wrapping_add(4 * (rp.k as u32 - 1)) {
+            return false;
+        }
+        matches!(m.steps[rp.k - 1].hint, Some((h, _, _)) if h.branch == branch & 0x3_ffff && h.target == target & 0x3_ffff)
+    }
+
+    pub(super) fn replay_done_counts(&self) -> Option<(usize, usize)> {
+        self.memo
+            .replay
+            .filter(|rp| rp.k > 0)
+            .map(|rp| (rp.memo, rp.k))
+    }
+}
+
+impl Timing {
+    /// Memoization statistics: (blocks recorded, replays, addresses given up on).
+    pub fn memo_stats(&self) -> (usize, u64, usize) {
+        let hits = self.memo.memos.iter().map(|m| m.hits).sum();
+        let never = self.memo.slots.iter().filter(|&&s| s == NEVER).count();
+        (self.memo.memos.len(), hits, never)
+    }
+}
