@@ -1944,6 +1944,14 @@ tri_miss:
 # ---- the packet is done: shade and send its results
         .align  3
 packet_done:
+        .ifdef  SHADE                         # shading (--shade simple): modules/shade.s
+        ila     $68, ray_dx
+        lqa     $69, vars+V_TILE
+        lqa     $70, vars+V_PKT
+        shli    $69, $69, 6
+        a       $69, $69, $70
+        brsl    $0, shade_packet
+        .endif
         # (scheduled into even/odd pairs) wait until this buffer's previous transfer (tag
         # 2 + OUTSEL/1024) is done; per ray the hit, t and the shade |n.d / |n| * 1/|d||
         # * 256 clamped to 255, gray and opaque, background for misses; put the 1 KiB block
@@ -2292,7 +2300,11 @@ packet_done:
 
 # ---- no tiles left: statistics, end-of-frame message, stop
 frame_done:
+        .ifdef  SHADE
+        il      $80, 12 | 0xc0                # tags 2, 3 and the colours' 6, 7
+        .else
         il      $80, 12                       # tags 2 and 3: the last results
+        .endif
         wrch    $MFC_WrTagMask, $80
         il      $80, 2
         wrch    $MFC_WrTagUpdate, $80
@@ -2345,3 +2357,7 @@ frame_done:
         il      $84, 1
         wrch    $SPU_WrOutMbox, $84
         stop    0x2000
+
+        .ifdef  SHADE
+        .include "modules/shade.s"
+        .endif

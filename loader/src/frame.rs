@@ -93,20 +93,13 @@ impl FrameLayout {
     }
 
     /// Adds the shading block (its record addresses filled in from `staged`) and the colour
-    /// frame buffer after the frame's other regions, and points the parameter block at it;
-    /// the shading module works in local store at `ls_area` (see `modules/shade.s`).
+    /// frame buffer after the frame's other regions, and points the parameter block at it
+    /// (the runtime places the module's local-store area: [`FrameLayout::set_shading_area`]).
     pub fn with_shading(
         mut self,
         staged: &StagedScene,
         mut block: ShadingBlock,
-        ls_area: u32,
     ) -> Result<FrameLayout, String> {
-        if !ls_area.is_multiple_of(128) || ls_area as usize + SHADING_AREA_BYTES > LS_BYTES {
-            return Err(format!(
-                "the shading area at local-store address {ls_area:#x} ({SHADING_AREA_BYTES} bytes) does not fit below 256 KiB: use smaller caches"
-            ));
-        }
-        self.params.ls_shading = ls_area;
         for (what, log2) in [
             ("vertex", block.vertex_cache_log2),
             ("material", block.material_cache_log2),
@@ -146,6 +139,19 @@ impl FrameLayout {
             block,
         });
         Ok(self)
+    }
+
+    /// Where the shading module works in local store (`modules/shade.s`): `ls_area`,
+    /// rounded up to 128 bytes, must leave its SHADING_AREA_BYTES below 256 KiB.
+    pub fn set_shading_area(&mut self, ls_area: u32) -> Result<(), String> {
+        let ls_area = ls_area.div_ceil(128) * 128;
+        if ls_area as usize + SHADING_AREA_BYTES > LS_BYTES {
+            return Err(format!(
+                "local store: the shading area ({SHADING_AREA_BYTES} bytes) does not fit above the kernel's caches at {ls_area:#x}: use smaller caches or fewer packets in flight"
+            ));
+        }
+        self.params.ls_shading = ls_area;
+        Ok(())
     }
 
     /// Sets the caches' associativity (1 or 4) and the packets each SPU keeps in flight

@@ -15,10 +15,21 @@ pub struct SpuReport {
     pub stats: KernelStats,
 }
 
+/// Offset of the shading module's counters in its local-store area (`SH_STATS`).
+pub const SHADE_STATS_OFFSET: usize = 16;
+
+/// The shading module's counters, in the order of `SHS_*` in `modules/shade.s`.
+pub type ShadeCounters = [u64; 8];
+
 /// The outcome of one frame.
 #[derive(Clone, Debug, Default)]
 pub struct FrameRun {
     pub frame_buffer: Vec<u8>,
+    /// The 32-bit colour frame buffer of a shaded frame.
+    pub colour_buffer: Option<Vec<u8>>,
+    /// Per SPU, the shading module's counters (intersection packets with a hit, of them
+    /// on one triangle, passes, packets, vertex lookups, misses, material lookups, misses).
+    pub shade_counters: Vec<ShadeCounters>,
     pub frame_cycles: u64,
     pub spus: Vec<SpuReport>,
     /// The timing model's counters, merged over all SPUs.
@@ -57,10 +68,31 @@ pub struct Program {
     pub symbols: Vec<(String, u32)>,
 }
 
+/// The shading module (`kernels/modules/shade.s`), included by kernels assembled with
+/// `SHADE` defined.
+pub const SHADE_MODULE_SOURCE: &str = include_str!("../../kernels/modules/shade.s");
+
 /// Assembles a kernel with the generated include.
 pub fn assemble_kernel(source: &str, name: &str) -> Result<Program, String> {
+    assemble_kernel_with(source, name, &[])
+}
+
+/// Assembles a kernel with the generated include, the kernel modules and `defines` (as
+/// `--defsym`: `SHADE` selects the shading kernel).
+pub fn assemble_kernel_with(
+    source: &str,
+    name: &str,
+    defines: &[(&str, i64)],
+) -> Result<Program, String> {
     let opts = spu_asm::Options {
-        virtual_files: vec![("layout.inc".to_string(), layout_include())],
+        virtual_files: vec![
+            ("layout.inc".to_string(), layout_include()),
+            (
+                "modules/shade.s".to_string(),
+                SHADE_MODULE_SOURCE.to_string(),
+            ),
+        ],
+        defines: defines.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
         ..Default::default()
     };
     match spu_asm::assemble(source, name, &opts) {
@@ -75,6 +107,14 @@ pub fn assemble_kernel(source: &str, name: &str) -> Result<Program, String> {
             .collect::<Vec<_>>()
             .join("\n")),
     }
+}
+
+fn symbol(program: &Program, name: &str) -> Option<u32> {
+    program
+        .symbols
+        .iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, a)| *a)
 }
 
 /// Local store of one SPU.
@@ -183,11 +223,27 @@ pub fn render_frame(
     } else {
         (RAYTRACE_SOURCE, "kernels/raytrace.s")
     };
-    let program = assemble_kernel(source, name)?;
+    let shaded = layout.shading.is_some() && !fill;
+    let defines: &[(&str, i64)] = if shaded { &[("SHADE", 1)] } else { &[] };
+    let program = assemble_kernel_with(source, name, defines)?;
+    let mut layout = layout.clone();
     if !fill {
-        check_local_store(&program, layout)?;
+        check_local_store(&program, &layout)?;
         check_leaves_fit(staged)?;
     }
+    if shaded {
+        // The shading area goes above everything the kernel carves at `cache_area`.
+        let start = symbol(&program, "cache_area")
+            .ok_or_else(|| "the kernel has no cache_area".to_string())?;
+        let p = &layout.params;
+        let carved = crate::kernel_abi::carved_bytes(
+            1 << p.bvh_cache_log2,
+            1 << p.tri_cache_log2,
+            p.sht_contexts.max(1),
+        );
+        layout.set_shading_area(start + carved)?;
+    }
+    let layout = &layout;
     let mut memory = MainMemory::new(layout.memory_image(staged));
     let mut spus: Vec<Spu> = (0..spes)
         .map(|i| {
@@ -296,7 +352,30 @@ pub fn render_frame(
             }
         }
     }
+    let (colour_buffer, shade_counters) = match &layout.shading {
+        Some(shading) if shaded => {
+            let at = shading.colour_addr as usize;
+            let area = layout.params.ls_shading as usize + SHADE_STATS_OFFSET;
+            let counters = spus
+                .iter()
+                .map(|spu| {
+                    // The PPE reads the counters from each SPE's memory-mapped local store.
+                    std::array::from_fn(|i| {
+                        let w = &spu.ls()[area + 16 * i..area + 16 * i + 4];
+                        u32::from_be_bytes([w[0], w[1], w[2], w[3]]) as u64
+                    })
+                })
+                .collect();
+            (
+                Some(memory.bytes()[at..at + shading.colour_len].to_vec()),
+                counters,
+            )
+        }
+        _ => (None, Vec::new()),
+    };
     Ok(FrameRun {
+        colour_buffer,
+        shade_counters,
         frame_buffer: memory.bytes()[fb..fb + layout.frame_buffer_len].to_vec(),
         frame_cycles: spus_report.iter().map(|s| s.cycles).max().unwrap_or(0),
         spus: spus_report,

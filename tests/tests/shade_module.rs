@@ -92,7 +92,8 @@ fn harness(staged: &StagedScene, scene: &Scene, block: ShadingBlock) -> Harness 
         )
     });
     let symbols: HashMap<String, u32> = out.symbols.into_iter().collect();
-    let layout = layout.with_shading(staged, block, symbols["area"]).unwrap();
+    let mut layout = layout.with_shading(staged, block).unwrap();
+    layout.set_shading_area(symbols["area"]).unwrap();
     let mut spu = Spu::new(0);
     spu.load_image(&out.image);
     let memory = MainMemory::new(layout.memory_image(staged));

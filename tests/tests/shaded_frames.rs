@@ -1,0 +1,120 @@
+//! Whole shaded frames (`--shade simple|shadows`): the ray-tracing kernel with the shading
+//! module on simulated SPUs, the 32-bit colour frame buffer against the host reference's
+//! shading, hit for hit and colour for colour (within `shading::COLOUR_TOLERANCE`).
+
+use spu_isa::timing::TimingConfig;
+use spu_loader::frame::{FrameLayout, SCENE_BASE};
+use spu_loader::kernel_abi::{
+    decode_colour_buffer, decode_frame_buffer, ShadingBlock, MISS, SHADE_SHADOWS, SHADE_SIMPLE,
+};
+use spu_loader::reference::Reference;
+use spu_loader::runtime::{render_frame, FrameRun};
+use spu_loader::shading::{self, Light};
+use spu_loader::{procedural, Bvh, BvhConfig, Scene, StagedScene};
+
+struct Shaded {
+    run: FrameRun,
+    colours: Vec<u32>,
+    /// Pixels whose hit triangle differs from the reference's, and whose colour differs by
+    /// more than the tolerance.
+    triangle_mismatches: usize,
+    colour_mismatches: usize,
+}
+
+fn shaded_frame(
+    scene: &Scene,
+    size: u32,
+    spes: usize,
+    mode: u32,
+    lights: &[Light],
+    shadow_early: bool,
+) -> Shaded {
+    let bvh = Bvh::build(
+        scene,
+        &BvhConfig {
+            threads: 1,
+            ..BvhConfig::default()
+        },
+    );
+    let staged = StagedScene::new(scene, &bvh, SCENE_BASE).unwrap();
+    let basis = scene.camera.basis(size, size);
+    let block = ShadingBlock {
+        mode,
+        shadow_early,
+        vertex_cache_log2: 6,
+        material_cache_log2: 6,
+        lights: lights.to_vec(),
+        ..Default::default()
+    };
+    let layout = FrameLayout::new(&staged, &basis, size, size, spes, 256, 256)
+        .unwrap()
+        .with_shading(&staged, block)
+        .unwrap();
+    let run = render_frame(
+        &staged,
+        &layout,
+        spes,
+        2,
+        &TimingConfig::default(),
+        false,
+        50_000_000_000,
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let colours = decode_colour_buffer(run.colour_buffer.as_ref().unwrap(), size, size);
+    let pixels = decode_frame_buffer(&run.frame_buffer, size, size);
+    let reference = Reference::from_staged(&staged);
+    let hits = reference.render(&scene.camera, size, size, 2);
+    let expected = reference.shade_image(
+        &hits,
+        &scene.camera,
+        size,
+        size,
+        lights,
+        mode == SHADE_SHADOWS,
+        2,
+    );
+    let mut triangle_mismatches = 0;
+    let mut colour_mismatches = 0;
+    for (i, ((p, hit), (&c, &e))) in pixels
+        .iter()
+        .zip(&hits)
+        .zip(colours.iter().zip(&expected))
+        .enumerate()
+    {
+        let kernel = if p.triangle == MISS {
+            MISS
+        } else {
+            staged.triangles[p.triangle as usize].original_index
+        };
+        triangle_mismatches += (kernel != hit.triangle) as usize;
+        if shading::channel_difference(c, e) > shading::COLOUR_TOLERANCE {
+            if colour_mismatches < 5 {
+                eprintln!("pixel {}: kernel {c:08x}, reference {e:08x}", i);
+            }
+            colour_mismatches += 1;
+        }
+    }
+    Shaded {
+        run,
+        colours,
+        triangle_mismatches,
+        colour_mismatches,
+    }
+}
+
+#[test]
+fn simple_shading_of_the_room_matches_the_reference() {
+    let scene = procedural::room();
+    let lights = shading::default_lights(&scene);
+    let shaded = shaded_frame(&scene, 128, 2, SHADE_SIMPLE, &lights, false);
+    assert_eq!(shaded.triangle_mismatches, 0);
+    assert_eq!(shaded.colour_mismatches, 0);
+    let distinct: std::collections::HashSet<u32> = shaded.colours.iter().copied().collect();
+    assert!(distinct.len() > 500, "{} colours", distinct.len());
+    // Every packet was shaded once, on one SPU or the other.
+    let packets: u64 = shaded.run.shade_counters.iter().map(|c| c[3]).sum();
+    assert_eq!(packets, 16 * 16);
+    let passes: u64 = shaded.run.shade_counters.iter().map(|c| c[2]).sum();
+    assert!(passes > packets && passes < 3 * packets, "{passes} passes");
+}
