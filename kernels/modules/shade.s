@@ -29,7 +29,7 @@
 # memory-mapped local store.
 
         .set SH_FLAG, 0                 # "SHAD" once set up
-        .set SH_STATS, 16               # 8 counters, one per quadword:
+        .set SH_STATS, 16               # 10 counters, one per quadword:
         .set SHS_GROUPS, 0              #   intersection packets with a hit
         .set SHS_SAME, 16               #   ... whose 4 rays hit the same triangle
         .set SHS_PASSES, 32             #   shading passes
@@ -38,6 +38,8 @@
         .set SHS_VMISS, 80
         .set SHS_MLOOK, 96              #   material cache lookups, misses
         .set SHS_MMISS, 112
+        .set SHS_TLOOK, 128             #   triangle records looked up in the traversal's
+        .set SHS_TMISS, 144             #   triangle cache, and fetched past it
         .set SH_BLOCK, 256              # the shading block (SHADING_BLOCK_BYTES)
         .set SH_LIGHTS, 640             # per light: px, py, pz, r, g, b splats (96 bytes)
         .set SH_SCRATCH, 1408           # the normals' columns (144 bytes), the same flag
@@ -138,12 +140,29 @@
         il      $81, -1
         stqd    $81, SH_STAGE+\lane*64+48($66)
         br      3f
-2:      shli    $81, $80, 6
+2:      SH_COUNT SHS_TLOOK, $84
+        .ifdef  TTAGS                         # in the traversal's triangle cache?
+        and     $81, $80, TMASK
+        shli    $82, $81, 4
+        lqx     $83, TTAGS, $82
+        ceq     $83, $83, $80
+        brz     $83, 4f
+        shli    $82, $81, 6
+        a       $82, $82, TDATA
+        .irp    Q, 0, 16, 32, 48
+        lqd     $83, \Q($82)
+        stqd    $83, SH_STAGE+\lane*64+\Q($66)
+        .endr
+        br      5f
+4:
+        .endif
+        SH_COUNT SHS_TMISS, $84
+        shli    $81, $80, 6
         a       $81, $81, EATRIS
         SH_ADDI $82, $66, SH_STAGE+\lane*64
         il      $83, 64
         SH_GET  $82, $81, $83, $84
-        lqd     $80, SH_STAGE+\lane*64+48($66)
+5:      lqd     $80, SH_STAGE+\lane*64+48($66)
         SH_VERTEX \lane, 0
         SH_VERTEX \lane, 1
         SH_VERTEX \lane, 2
@@ -186,7 +205,7 @@ shade_packet:
         SH_ADDI $72, $66, SH_BLOCK
         il      $73, SHADING_BLOCK_BYTES
         SH_GET  $72, $71, $73, $74
-        il      $70, 8
+        il      $70, 10
         SH_ADDI $71, $66, SH_STATS
 1:      stqd    ZERO, 0($71)
         ai      $71, $71, 16

@@ -19,7 +19,7 @@ pub struct SpuReport {
 pub const SHADE_STATS_OFFSET: usize = 16;
 
 /// The shading module's counters, in the order of `SHS_*` in `modules/shade.s`.
-pub type ShadeCounters = [u64; 8];
+pub type ShadeCounters = [u64; 10];
 
 /// The outcome of one frame.
 #[derive(Clone, Debug, Default)]
@@ -28,7 +28,8 @@ pub struct FrameRun {
     /// The 32-bit colour frame buffer of a shaded frame.
     pub colour_buffer: Option<Vec<u8>>,
     /// Per SPU, the shading module's counters (intersection packets with a hit, of them
-    /// on one triangle, passes, packets, vertex lookups, misses, material lookups, misses).
+    /// on one triangle, passes, packets, vertex lookups, misses, material lookups, misses,
+    /// triangle records looked up in the traversal's triangle cache, fetched past it).
     pub shade_counters: Vec<ShadeCounters>,
     pub frame_cycles: u64,
     pub spus: Vec<SpuReport>,

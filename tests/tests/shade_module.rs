@@ -14,11 +14,16 @@ use spu_loader::{procedural, Bvh, BvhConfig, Scene, StagedScene};
 
 /// The driver: fetches the parameter block, shades the packet in the ray arrays (laid out
 /// as in a packet context), waits for its colour block and stops. The frame's registers
-/// the module reads (ZERO, EATRIS) are set by the host; the shading area is at `area`.
+/// the module reads (ZERO, EATRIS, the triangle cache's TTAGS, TDATA, TMASK) are set by
+/// the host; the shading area is at `area`. The host's 16-line triangle cache holds
+/// records 0 to 15, so the module finds some records there and fetches the others.
 const DRIVER: &str = r#"
         .include "layout.inc"
         .set ZERO, 2
         .set EATRIS, 13
+        .set TTAGS, 20
+        .set TDATA, 21
+        .set TMASK, 22
         .data
         .align 7
 params: .space 128
@@ -29,6 +34,9 @@ ray_dz: .space 256
 ray_rx: .space 768
 ray_t:  .space 256
 ray_id: .space 256
+        .align 7
+tri_tags: .space 16 * 16
+tri_lines: .space 16 * 64
         .align 7
 area:
         .text
@@ -98,6 +106,18 @@ fn harness(staged: &StagedScene, scene: &Scene, block: ShadingBlock) -> Harness 
     spu.load_image(&out.image);
     let memory = MainMemory::new(layout.memory_image(staged));
     spu.set_reg(13, [staged.header.triangle_addr, 0, 0, 0]);
+    spu.set_reg(20, [symbols["tri_tags"], 0, 0, 0]);
+    spu.set_reg(21, [symbols["tri_lines"], 0, 0, 0]);
+    spu.set_reg(22, [15, 0, 0, 0]);
+    for r in 0..16u32 {
+        spu.write_ls(
+            symbols["tri_tags"] + 16 * r,
+            &[r.to_be_bytes(), [0; 4], [0; 4], [0; 4]].concat(),
+        );
+        let mut line = [0u8; 64];
+        staged.triangles[r as usize].write_be(&mut line);
+        spu.write_ls(symbols["tri_lines"] + 64 * r, &line);
+    }
     Harness {
         spu,
         memory,
@@ -151,8 +171,8 @@ impl Harness {
     }
 
     /// The module's counters (groups, same, passes, packets, vertex lookups and misses,
-    /// material lookups and misses).
-    fn counters(&self) -> [u32; 8] {
+    /// material lookups and misses, triangle lookups and misses).
+    fn counters(&self) -> [u32; 10] {
         let stats = self.symbols["area"] as usize + 16;
         let ls = self.spu.ls();
         std::array::from_fn(|i| {
@@ -166,7 +186,7 @@ impl Harness {
 struct Model {
     vertex_tags: Vec<u32>,
     material_tags: Vec<u32>,
-    counters: [u32; 8],
+    counters: [u32; 10],
 }
 
 impl Model {
@@ -174,7 +194,7 @@ impl Model {
         Model {
             vertex_tags: vec![u32::MAX; vertex_entries],
             material_tags: vec![u32::MAX; material_entries],
-            counters: [0; 8],
+            counters: [0; 10],
         }
     }
 
@@ -189,6 +209,8 @@ impl Model {
             self.counters[1] += same as u32;
             let lanes = if same { &group[..1] } else { group };
             for hit in lanes.iter().filter(|h| h.is_hit()) {
+                self.counters[8] += 1;
+                self.counters[9] += (hit.record >= 16) as u32;
                 for v in reference.triangles[hit.record as usize].vertices {
                     let entry = v as usize % self.vertex_tags.len();
                     self.counters[4] += 1;
@@ -285,6 +307,10 @@ fn shade_module_matches_the_reference_on_the_room() {
         "some packets need several passes"
     );
     assert!(counters[5] > 0 && counters[7] > 0, "the small caches miss");
+    assert!(
+        counters[9] > 0 && counters[9] < counters[8],
+        "the triangle cache hits some"
+    );
 }
 
 /// A packet that hits nothing is black, takes no pass and touches no cache.
@@ -296,7 +322,7 @@ fn shade_module_leaves_misses_black() {
     packet.hits = vec![Hit::NONE; 64];
     let colours = h.shade(&packet, 3);
     assert!(colours.iter().all(|&c| c == 0x0000_00ff));
-    assert_eq!(h.counters(), [0, 0, 0, 1, 0, 0, 0, 0]);
+    assert_eq!(h.counters(), [0, 0, 0, 1, 0, 0, 0, 0, 0, 0]);
     // Without lights, a hit is the ambient term of its material.
     let packet = trace_packet(&reference, &scene, 24, 24);
     let colours = h.shade(&packet, 4);
