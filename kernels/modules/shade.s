@@ -34,7 +34,7 @@
         .set SHS_SAME, 16               #   ... whose 4 rays hit the same triangle
         .set SHS_PASSES, 32             #   shading passes
         .set SHS_PACKETS, 48            #   packets shaded
-        .set SHS_VLOOK, 64              #   vertex cache lookups, misses
+        .set SHS_VLOOK, 64              #   vertex cache lookups (3 per record: the host's), misses
         .set SHS_VMISS, 80
         .set SHS_MLOOK, 96              #   material cache lookups, misses
         .set SHS_MMISS, 112
@@ -107,61 +107,48 @@
         .endm
 
 # vertex I of lane LANE: the normal of vertex word I of $80 (the record's spare quad) to
-# SH_NRM + LANE*64 + I*16, through the vertex cache ($104 mask, $100 EA of the vertices)
+# SH_NRM + LANE*64 + I*16, through the vertex cache ($104 index mask, $115 tags, $116
+# lines); a miss calls sh_vertex_miss ($114) without a taken branch on the hit path
         .macro  SH_VERTEX lane, i
         rotqbyi $81, $80, 4*\i
         and     $82, $81, $104
         shli    $83, $82, 4
-        SH_ADDI $83, $83, SH_VTAGS
-        a       $83, $83, $66                 # tag address
         shli    $84, $82, 6
-        SH_ADDI $84, $84, SH_VDATA
-        a       $84, $84, $66                 # line address
+        a       $83, $83, $115                # tag address
+        a       $84, $84, $116                # line address
         lqd     $85, 0($83)
+        ila     $88, 1f
         ceq     $86, $85, $81
-        SH_COUNT SHS_VLOOK, $87
-        brnz    $86, 1f
-        shli    $85, $81, 6
-        a       $85, $85, $100
-        il      $86, 64
-        SH_GET  $84, $85, $86, $87
-        stqd    $81, 0($83)
-        SH_COUNT SHS_VMISS, $87
+        biz     $86, $114
 1:      lqd     $85, 16($84)
         stqd    $85, SH_NRM+\lane*64+\i*16($66)
         .endm
 
 # lane LANE of the intersection packet in $70 (ids): its record to SH_STAGE + LANE*64 and
-# its vertex normals to SH_NRM + LANE*64; a miss gets material -1
+# its vertex normals to SH_NRM + LANE*64 (nothing for a miss); a record the traversal's
+# triangle cache does not hold is fetched by sh_tri_miss ($106)
         .macro  SH_FETCH lane
         rotqbyi $80, $70, 4*\lane
         ceqi    $81, $80, -1
-        brz     $81, 2f
-        il      $81, -1
-        stqd    $81, SH_STAGE+\lane*64+48($66)
-        br      3f
-2:      SH_COUNT SHS_TLOOK, $84
-        .ifdef  TTAGS                         # in the traversal's triangle cache?
-        and     $81, $80, TMASK
-        shli    $82, $81, 4
-        lqx     $83, TTAGS, $82
-        ceq     $83, $83, $80
-        brz     $83, 4f
-        shli    $82, $81, 6
-        a       $82, $82, TDATA
-        .irp    Q, 0, 16, 32, 48
-        lqd     $83, \Q($82)
-        stqd    $83, SH_STAGE+\lane*64+\Q($66)
-        .endr
-        br      5f
-4:
-        .endif
-        SH_COUNT SHS_TMISS, $84
-        shli    $81, $80, 6
-        a       $81, $81, EATRIS
+        brnz    $81, 3f
+        SH_COUNT SHS_TLOOK, $84
         SH_ADDI $82, $66, SH_STAGE+\lane*64
-        il      $83, 64
-        SH_GET  $82, $81, $83, $84
+        ila     $88, 5f
+        .ifdef  TTAGS
+        and     $81, $80, TMASK
+        shli    $83, $81, 4
+        lqx     $83, TTAGS, $83
+        shli    $85, $81, 6
+        a       $85, $85, TDATA
+        ceq     $83, $83, $80
+        biz     $83, $106
+        .irp    Q, 0, 16, 32, 48
+        lqd     $83, \Q($85)
+        stqd    $83, \Q($82)
+        .endr
+        .else
+        bi      $106
+        .endif
 5:      lqd     $80, SH_STAGE+\lane*64+48($66)
         SH_VERTEX \lane, 0
         SH_VERTEX \lane, 1
@@ -238,7 +225,14 @@ shade_packet:
         ai      $73, $73, 96
         ai      $71, $71, -1
         brnz    $71, 1b
-2:      lqd     $70, SH_BLOCK+SHB_MODE($66)   # mode, early, vertex log2, material log2
+2:      il      $74, -1                       # every light visible (no shadow rays)
+        SH_ADDI $72, $66, SH_VIS
+        il      $71, 8 * 16
+1:      stqd    $74, 0($72)
+        ai      $72, $72, 16
+        ai      $71, $71, -1
+        brnz    $71, 1b
+        lqd     $70, SH_BLOCK+SHB_MODE($66)   # mode, early, vertex log2, material log2
         il      $74, -1
         il      $75, 1
         rotqbyi $71, $70, 8
@@ -288,17 +282,18 @@ shade_packet:
         ori     $113, $99, 0
 
         # ---- 1. the i-set
+        ila     $114, sh_vertex_miss
+        ila     $106, sh_tri_miss
+        SH_ADDI $115, $66, SH_VTAGS
+        SH_ADDI $116, $66, SH_VDATA
         il      $67, 0                        # intersection packet * 16
 .Lsh_group:
         lqx     $70, $111, $67                # ids
-        ceqi    $71, $70, -1
-        gb      $72, $71
+        ceqi    $78, $70, -1                  # misses
+        gb      $72, $78
         ceqi    $73, $72, 15
-        brz     $73, 1f
-        SH_ADDI $74, $66, SH_MAT              # no hit: no material
-        stqx    $71, $74, $67
-        br      .Lsh_group_next
-1:      SH_COUNT SHS_GROUPS, $74
+        brnz    $73, .Lsh_group_empty
+        SH_COUNT SHS_GROUPS, $74
         shufb   $74, $70, $70, $91
         ceq     $75, $70, $74
         gb      $75, $75
@@ -308,6 +303,7 @@ shade_packet:
         lqd     $75, SH_SAME($66)
         brz     $75, .Lsh_lanes
         SH_COUNT SHS_SAME, $74
+        hbrr    .Lsh_copied, .Lsh_fetched
         .irp    L, 1, 2, 3
         .irp    Q, 0, 16, 32, 48
         lqd     $74, SH_STAGE+\Q($66)
@@ -318,6 +314,7 @@ shade_packet:
         stqd    $74, SH_NRM+\L*64+\Q($66)
         .endr
         .endr
+.Lsh_copied:
         br      .Lsh_fetched
 .Lsh_lanes:
         SH_FETCH 1
@@ -346,6 +343,7 @@ shade_packet:
         lqd     $72, SH_STAGE+176($66)
         lqd     $73, SH_STAGE+240($66)
         SH_TRANSPOSE $70, $71, $72, $73, $74, $75, $76, $127, $80, $81, $82, $83
+        or      $127, $127, $78               # misses: no material
         SH_ADDI $74, $66, SH_MAT
         stqx    $127, $74, $67                # materials (-1 for misses)
         # the hit point o + t d and its projection (u, v) by k
@@ -417,6 +415,7 @@ shade_packet:
         xor     $85, $85, $88
         xor     $86, $86, $88
         xor     $87, $87, $88
+        hbrr    .Lsh_group_br, .Lsh_group
         SH_ADDI $74, $66, SH_NX
         stqx    $85, $74, $67
         SH_ADDI $74, $66, SH_NY
@@ -426,9 +425,16 @@ shade_packet:
 .Lsh_group_next:
         ai      $67, $67, 16
         ceqi    $74, $67, 256
+.Lsh_group_br:
         brz     $74, .Lsh_group
+        br      .Lsh_colour
+.Lsh_group_empty:                             # no hit: no material
+        SH_ADDI $74, $66, SH_MAT
+        stqx    $78, $74, $67
+        br      .Lsh_group_next
 
         # ---- 2. the colour block: wait for its previous put, clear to black
+.Lsh_colour:
         lqd     $70, SH_STATS+SHS_PACKETS($66)
         andi    $114, $70, 1                  # which block
         shli    $115, $114, 8
@@ -450,19 +456,21 @@ shade_packet:
         brz     $73, 1b
 
         # ---- 3. one pass per material still referenced
-.Lsh_pass:
         SH_ADDI $68, $66, SH_MAT
-        il      $67, 0
-1:      lqx     $70, $68, $67
+        il      $107, 0                       # packets before this one are all done
+.Lsh_pass:
+        ori     $67, $107, 0
+1:      ceqi    $73, $67, 256
+        brnz    $73, .Lsh_done
+        lqx     $70, $68, $67
         ceqi    $71, $70, -1
         gb      $72, $71
         ceqi    $73, $72, 15
-        brz     $73, 2f
         ai      $67, $67, 16
-        ceqi    $73, $67, 256
-        brz     $73, 1b
-        br      .Lsh_done
-2:      xori    $72, $72, 15                  # lanes with a material: the first
+        brnz    $73, 1b
+        ai      $67, $67, -16
+        ori     $107, $67, 0
+        xori    $72, $72, 15                  # lanes with a material: the first
         clz     $72, $72
         ai      $72, $72, -28
         shli    $72, $72, 2
@@ -538,12 +546,9 @@ shade_packet:
         fma     $89, $86, $86, $89
         fma     $89, $87, $87, $89
         fcgt    $94, $88, ZERO                # lit: facing the light
-        lqd     $95, SH_BLOCK+SHB_MODE($66)
-        ceqi    $95, $95, SHADE_SHADOWS
-        brz     $95, 6f
         lqx     $95, $83, $67                 # and not occluded
         and     $94, $94, $95
-6:      fm      $89, $78, $89                 # 1 / sqrt(dot(N, N) dot(L, L)): estimate,
+        fm      $89, $78, $89                 # 1 / sqrt(dot(N, N) dot(L, L)): estimate,
         frsqest $95, $89                      # interpolation, one Newton step
         fi      $95, $89, $95
         fm      $96, $89, $95
@@ -564,7 +569,8 @@ shade_packet:
         ai      $83, $83, 256
         ai      $84, $84, -1
         brnz    $84, 4b
-5:      fa      $79, $79, $124                # kd * (ambient + irradiance), clamped,
+5:      hbrr    .Lsh_packet_br, .Lsh_packet
+        fa      $79, $79, $124                # kd * (ambient + irradiance), clamped,
         fa      $80, $80, $124                # to 8 bits: (c 255 + 0.5) truncated
         fa      $81, $81, $124
         fm      $79, $79, $121
@@ -591,6 +597,7 @@ shade_packet:
 .Lsh_packet_next:
         ai      $67, $67, 16
         ceqi    $71, $67, 256
+.Lsh_packet_br:
         brz     $71, .Lsh_packet
         br      .Lsh_pass
 
@@ -608,3 +615,22 @@ shade_packet:
         wrch    $MFC_Cmd, $71
         SH_COUNT SHS_PACKETS, $74
         bi      $0
+
+# a vertex cache miss: vertex $81 into line $84, tag $83; back to $88
+sh_vertex_miss:
+        shli    $85, $81, 6
+        a       $85, $85, $100
+        il      $86, 64
+        SH_GET  $84, $85, $86, $87
+        stqd    $81, 0($83)
+        SH_COUNT SHS_VMISS, $87
+        bi      $88
+
+# a triangle record the traversal's cache does not hold: record $80 into $82; back to $88
+sh_tri_miss:
+        SH_COUNT SHS_TMISS, $84
+        shli    $81, $80, 6
+        a       $81, $81, EATRIS
+        il      $83, 64
+        SH_GET  $82, $81, $83, $84
+        bi      $88
