@@ -32,5 +32,6 @@ pub use layout::StagedScene;
 pub use scene::{Material, Scene, Triangle};
 pub mod frame;
 pub mod kernel_abi;
+pub mod kernels;
 pub mod runtime;
 pub mod stats;

@@ -52,15 +52,6 @@ impl FrameRun {
     }
 }
 
-/// The kernels' sources, built into the binary so `spu render` needs no files.
-pub const RAYTRACE_SOURCE: &str = include_str!("../../kernels/raytrace.s");
-pub const FILL_SOURCE: &str = include_str!("../../kernels/fill.s");
-
-/// The generated `layout.inc` every kernel includes: record layouts and the kernel ABI.
-pub fn layout_include() -> String {
-    crate::layout::spu_layout_include() + &crate::kernel_abi::spu_include()
-}
-
 /// An assembled SPU program: a flat local-store image and its entry point.
 #[derive(Clone, Debug)]
 pub struct Program {
@@ -69,30 +60,20 @@ pub struct Program {
     pub symbols: Vec<(String, u32)>,
 }
 
-/// The shading module (`kernels/modules/shade.s`), included by kernels assembled with
-/// `SHADE` defined.
-pub const SHADE_MODULE_SOURCE: &str = include_str!("../../kernels/modules/shade.s");
-
-/// Assembles a kernel with the generated include.
+/// Assembles a kernel with its includes from memory (`layout.inc`, the kernel modules).
 pub fn assemble_kernel(source: &str, name: &str) -> Result<Program, String> {
     assemble_kernel_with(source, name, &[])
 }
 
-/// Assembles a kernel with the generated include, the kernel modules and `defines` (as
-/// `--defsym`: `SHADE` selects the shading kernel).
+/// Assembles a kernel with its includes from memory and `defines` (as `--defsym`: `SHADE`
+/// selects the shading kernel).
 pub fn assemble_kernel_with(
     source: &str,
     name: &str,
     defines: &[(&str, i64)],
 ) -> Result<Program, String> {
     let opts = spu_asm::Options {
-        virtual_files: vec![
-            ("layout.inc".to_string(), layout_include()),
-            (
-                "modules/shade.s".to_string(),
-                SHADE_MODULE_SOURCE.to_string(),
-            ),
-        ],
+        virtual_files: crate::kernels::include_files(),
         defines: defines.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
         ..Default::default()
     };
@@ -219,11 +200,7 @@ pub fn render_frame(
     progress: &mut dyn FnMut(u32, u32),
 ) -> Result<FrameRun, FrameError> {
     use spu_isa::machine::{apply_quantum, MainMemory, Spu, StopReason};
-    let (source, name) = if fill {
-        (FILL_SOURCE, "kernels/fill.s")
-    } else {
-        (RAYTRACE_SOURCE, "kernels/raytrace.s")
-    };
+    let (source, name) = crate::kernels::frame_program(fill);
     let shaded = layout.shading.is_some() && !fill;
     let defines: &[(&str, i64)] = if shaded { &[("SHADE", 1)] } else { &[] };
     let program = assemble_kernel_with(source, name, defines)?;

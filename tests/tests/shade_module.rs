@@ -81,13 +81,7 @@ fn harness(staged: &StagedScene, scene: &Scene, block: ShadingBlock) -> Harness 
     let basis = scene.camera.basis(64, 64);
     let layout = FrameLayout::new(staged, &basis, 64, 64, 1, 256, 256).unwrap();
     let opts = spu_asm::Options {
-        virtual_files: vec![
-            (
-                "layout.inc".to_string(),
-                spu_loader::runtime::layout_include(),
-            ),
-            ("modules/shade.s".to_string(), SHADE_MODULE.to_string()),
-        ],
+        virtual_files: spu_loader::kernels::include_files(),
         ..Default::default()
     };
     let out = spu_asm::assemble(DRIVER, "driver.s", &opts).unwrap_or_else(|d| {

@@ -28,6 +28,7 @@ fn shaded_frame(
     mode: u32,
     lights: &[Light],
     shadow_early: bool,
+    (assoc, sht): (u32, u32),
 ) -> Shaded {
     let bvh = Bvh::build(
         scene,
@@ -47,6 +48,8 @@ fn shaded_frame(
         ..Default::default()
     };
     let layout = FrameLayout::new(&staged, &basis, size, size, spes, 256, 256)
+        .unwrap()
+        .with_kernel_options(assoc, sht)
         .unwrap()
         .with_shading(&staged, block)
         .unwrap();
@@ -107,7 +110,7 @@ fn shaded_frame(
 fn simple_shading_of_the_room_matches_the_reference() {
     let scene = procedural::room();
     let lights = shading::default_lights(&scene);
-    let shaded = shaded_frame(&scene, 128, 2, SHADE_SIMPLE, &lights, false);
+    let shaded = shaded_frame(&scene, 128, 2, SHADE_SIMPLE, &lights, false, (1, 1));
     assert_eq!(shaded.triangle_mismatches, 0);
     assert_eq!(shaded.colour_mismatches, 0);
     let distinct: std::collections::HashSet<u32> = shaded.colours.iter().copied().collect();
@@ -117,4 +120,22 @@ fn simple_shading_of_the_room_matches_the_reference() {
     assert_eq!(packets, 16 * 16);
     let passes: u64 = shaded.run.shade_counters.iter().map(|c| c[2]).sum();
     assert!(passes > packets && passes < 3 * packets, "{passes} passes");
+}
+
+/// With four packets in flight (software hyperthreading) and 4-way caches, packets finish
+/// out of order and the shading module reads each from its own context: still exact.
+#[test]
+fn simple_shading_with_hyperthreading_and_4_way_caches() {
+    let scene = procedural::room();
+    let lights = [
+        Light::white(glam::Vec3::new(-0.6, 2.7, 0.4)),
+        Light {
+            position: glam::Vec3::new(2.5, 1.2, 2.0),
+            colour: glam::Vec3::new(0.3, 0.3, 0.6),
+        },
+    ];
+    let shaded = shaded_frame(&scene, 64, 1, SHADE_SIMPLE, &lights, false, (4, 4));
+    assert_eq!(shaded.triangle_mismatches, 0);
+    assert_eq!(shaded.colour_mismatches, 0);
+    assert_eq!(shaded.run.shade_counters[0][3], 64);
 }

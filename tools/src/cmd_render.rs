@@ -88,6 +88,9 @@ pub struct Args {
     /// by cause, dual issue; then per label and totals), merged over all SPEs.
     #[arg(long)]
     profile: Option<PathBuf>,
+    /// No progress bar or summary (for `spu paper`, which runs many renders at once).
+    #[arg(long, hide = true)]
+    quiet: bool,
 }
 
 /// `--bvh-cache` / `--tri-cache`: a power of two from 128 to 1024.
@@ -290,13 +293,15 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             },
         )?,
     };
-    eprintln!(
-        "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
-        args.scene,
-        scene.triangles.len(),
-        staged.nodes.len(),
-        started.elapsed().as_secs_f64()
-    );
+    if !args.quiet {
+        eprintln!(
+            "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
+            args.scene,
+            scene.triangles.len(),
+            staged.nodes.len(),
+            started.elapsed().as_secs_f64()
+        );
+    }
     let threads = args.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
             .map(|n| n.get())
@@ -307,6 +312,9 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         indicatif::ProgressStyle::with_template("{spinner} tiles {pos}/{len} {wide_bar} {elapsed}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
+    if args.quiet {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
     let sim_started = Instant::now();
     let run = spu_loader::runtime::render_frame(
         &staged,
@@ -365,7 +373,8 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         0.0
     };
     let instructions: u64 = run.spus.iter().map(|s| s.instructions).sum();
-    outln!(
+    if !args.quiet {
+        outln!(
         "{} SPE(s): {} cycles per frame, {:.2} MRays/s at {} GHz; {} instructions simulated in {:.1} s ({:.0} M/s); wrote {}",
         args.spes,
         run.frame_cycles,
@@ -376,6 +385,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         instructions as f64 / host_seconds / 1e6,
         args.output.display()
     );
+    }
     match (validation, colour_validation) {
         (Some((n, bad)), Some(off)) => outln!(
             "validation: {bad} of {n} pixels differ from the host reference in the hit triangle, {off} in colour (more than {} of 255 in a channel)",
@@ -423,11 +433,7 @@ fn kernel_profile(
         .profile
         .as_ref()
         .ok_or("no profile: the timing model was off (SPU_NO_TIMING)")?;
-    let (source, name) = if fill {
-        (spu_loader::runtime::FILL_SOURCE, "kernels/fill.s")
-    } else {
-        (spu_loader::runtime::RAYTRACE_SOURCE, "kernels/raytrace.s")
-    };
+    let (source, name) = spu_loader::kernels::frame_program(fill);
     let defines: &[(&str, i64)] = if shaded { &[("SHADE", 1)] } else { &[] };
     let program = spu_loader::runtime::assemble_kernel_with(source, name, defines)?;
     let lines = executed_lines(profile, &program.image, &program.symbols);
