@@ -634,3 +634,4 @@ sh_tri_miss:
         il      $83, 64
         SH_GET  $82, $81, $83, $84
         bi      $88
+shade_end:

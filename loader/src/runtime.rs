@@ -35,6 +35,9 @@ pub struct FrameRun {
     pub spus: Vec<SpuReport>,
     /// The timing model's counters, merged over all SPUs.
     pub profile: Option<spu_isa::profile::Profile>,
+    /// Bytes the SPUs' MFCs read from and wrote to each named main-memory region, summed
+    /// over the SPUs: `(region, read, written)` (see [`traffic_regions`]).
+    pub traffic: Vec<(String, u64, u64)>,
     /// The kernel's symbols (to split the profile by code section).
     pub symbols: Vec<(String, u32)>,
     /// The kernel's local-store image (to tell its no-ops apart in the profile).
@@ -97,6 +100,52 @@ fn symbol(program: &Program, name: &str) -> Option<u32> {
         .iter()
         .find(|(n, _)| n == name)
         .map(|(_, a)| *a)
+}
+
+/// The main-memory regions whose traffic a frame counts, by name: the scene's node,
+/// triangle-record, vertex and material arrays (the paper's Table 6 rows), the packet
+/// result blocks and, for a shaded frame, the 32-bit colour frame buffer.
+pub fn traffic_regions(staged: &StagedScene, layout: &FrameLayout) -> Vec<(String, u64, u64)> {
+    use crate::layout::{MATERIAL_SIZE, NODE_SIZE, TRI_SIZE, VERTEX_SIZE};
+    let h = &staged.header;
+    let array = |addr: u32, count: u32, size: usize| {
+        (addr as u64, addr as u64 + count as u64 * size as u64)
+    };
+    let mut regions = vec![
+        ("bvh_nodes", array(h.node_addr, h.node_count, NODE_SIZE)),
+        (
+            "triangle_records",
+            array(h.triangle_addr, h.triangle_count, TRI_SIZE),
+        ),
+        (
+            "vertices",
+            array(h.vertex_addr, h.vertex_count, VERTEX_SIZE),
+        ),
+        (
+            "materials",
+            array(h.material_addr, h.material_count, MATERIAL_SIZE),
+        ),
+        (
+            "result_blocks",
+            (
+                layout.frame_buffer_addr as u64,
+                layout.frame_buffer_addr as u64 + layout.frame_buffer_len as u64,
+            ),
+        ),
+    ];
+    if let Some(shading) = &layout.shading {
+        regions.push((
+            "colour_frame_buffer",
+            (
+                shading.colour_addr as u64,
+                shading.colour_addr as u64 + shading.colour_len as u64,
+            ),
+        ));
+    }
+    regions
+        .into_iter()
+        .map(|(name, (start, end))| (name.to_string(), start, end))
+        .collect()
 }
 
 /// Local store of one SPU.
@@ -222,6 +271,7 @@ pub fn render_frame(
         layout.set_shading_area(start + carved)?;
     }
     let layout = &layout;
+    let regions = traffic_regions(staged, layout);
     let mut memory = MainMemory::new(layout.memory_image(staged));
     let mut spus: Vec<Spu> = (0..spes)
         .map(|i| {
@@ -233,6 +283,7 @@ pub fn render_frame(
             if std::env::var_os("SPU_NO_TIMING").is_none() {
                 spu.enable_timing(timing.clone());
             }
+            spu.count_traffic(regions.iter().map(|(_, s, e)| (*s, *e)).collect());
             spu
         })
         .collect();
@@ -351,7 +402,17 @@ pub fn render_frame(
         }
         _ => (None, Vec::new()),
     };
+    let traffic = regions
+        .iter()
+        .enumerate()
+        .map(|(i, (name, _, _))| {
+            let read = spus.iter().map(|s| s.traffic().read[i]).sum();
+            let written = spus.iter().map(|s| s.traffic().written[i]).sum();
+            (name.clone(), read, written)
+        })
+        .collect();
     Ok(FrameRun {
+        traffic,
         colour_buffer,
         shade_counters,
         frame_buffer: memory.bytes()[fb..fb + layout.frame_buffer_len].to_vec(),

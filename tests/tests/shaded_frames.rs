@@ -120,6 +120,36 @@ fn simple_shading_of_the_room_matches_the_reference() {
     assert_eq!(packets, 16 * 16);
     let passes: u64 = shaded.run.shade_counters.iter().map(|c| c[2]).sum();
     assert!(passes > packets && passes < 3 * packets, "{passes} passes");
+    // Table 4 and 6: the colour frame buffer is 4 bytes a pixel, the scene data read is
+    // what the caches missed; the shading section is profiled.
+    let stats = spu_loader::stats::FrameStats::new(
+        &shaded.run,
+        &spu_loader::stats::FrameSetup {
+            scene: "room",
+            width: 128,
+            height: 128,
+            clock_ghz: 2.4,
+        },
+        None,
+    );
+    let table4 = stats.table4.as_ref().unwrap();
+    assert!(
+        (50.0..100.0).contains(&table4.same_triangle_pct),
+        "{table4:?}"
+    );
+    assert!(table4.vertex_cache_hit_pct > 50.0, "{table4:?}");
+    assert!(table4.material_cache_hit_pct > 90.0, "{table4:?}");
+    let table6 = stats.table6.as_ref().unwrap();
+    assert_eq!(table6.frame_buffer_written_kb, 64.0);
+    assert_eq!(table6.result_blocks_written_kb, 256.0);
+    assert!(table6.bvh_nodes_kb > 0.0 && table6.triangle_records_kb > 0.0);
+    // every material record read is one 32-byte miss
+    let material_misses: u64 = shaded.run.shade_counters.iter().map(|c| c[7]).sum();
+    assert!((table6.shader_data_kb - material_misses as f64 * 32.0 / 1024.0).abs() < 0.006);
+    let vertex_misses: u64 = shaded.run.shade_counters.iter().map(|c| c[5]).sum();
+    assert!((table6.vertex_data_kb - vertex_misses as f64 * 64.0 / 1024.0).abs() < 0.006);
+    assert!(stats.shading.as_ref().unwrap().instructions > 0);
+    assert!(stats.fps > 0.0);
 }
 
 /// With four packets in flight (software hyperthreading) and 4-way caches, packets finish

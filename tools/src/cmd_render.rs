@@ -223,6 +223,12 @@ fn check_options(args: &Args) -> exit::Result<Option<Camera>> {
             shading::MAX_LIGHTS
         )));
     }
+    if args.shade == ShadeMode::Shadows {
+        return Err(Error::input(
+            "--shade shadows: the kernel does not trace shadow packets yet (the host reference \
+             does, loader::reference::Reference::shade); use --shade simple",
+        ));
+    }
     if args.fill && args.shade != ShadeMode::None {
         return Err(Error::input(format!(
             "--fill runs the fill program, which does not shade: drop --shade {}",
@@ -397,7 +403,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         _ => {}
     }
     if let Some(path) = &args.stats {
-        let json = spu_loader::stats::FrameStats::new(
+        let mut stats = spu_loader::stats::FrameStats::new(
             &run,
             &spu_loader::stats::FrameSetup {
                 scene: &args.scene,
@@ -406,8 +412,11 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
                 clock_ghz: args.clock,
             },
             validation,
-        )
-        .to_json();
+        );
+        if let Some(v) = stats.validation.as_mut() {
+            v.colour_mismatches = colour_validation;
+        }
+        let json = stats.to_json();
         exit::write_file(path, json.as_bytes())?;
     }
     if let Some(path) = &args.profile {
