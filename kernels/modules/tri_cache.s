@@ -7,9 +7,10 @@
 #   .Lpf_one    one context: the DMA goes straight into way 0, the leaf waits once for all
 #   .Lpf_ways   4-way: the other ways first (modules/lru.s), then V_PFFETCH
 #   .Lpf_stage  several contexts: the record goes to the packet's staging slot and the
-#               packet is suspended after the pass (modules/sht.s); when it resumes, the
-#               pass runs again and installs what was staged (.Lpf_install), so no DMA in
-#               flight ever targets a cache line
+#               packet is suspended after the pass (modules/sht.s); when it resumes,
+#               leaf_resume installs what was staged in way 0 (direct mapped: one
+#               branch-free pass; 4-way: the prefetch pass again, whose .Lpf_install evicts
+#               the least recent way), so no DMA in flight ever targets a cache line
 # `tri_miss` serves a lookup in the test loop that misses after all (a fallback: the pass
 # leaves every triangle of the leaf in the cache).
 
@@ -72,8 +73,20 @@
         stqd    $76, CTX_STAGE_TAGS($89)
         lqd     $86, CTX_TAG(RAYS)
         il      $87, 0x40
-        br      .Lpf_dma
-.Lpf_install:
+        shli    $85, $76, 6
+        a       $85, $85, EATRIS
+        wrch    $MFC_LSA, $84
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $85
+        wrch    $MFC_Size, $79
+        wrch    $MFC_TagID, $86
+        wrch    $MFC_Cmd, $87
+        lqa     $88, vars+V_TMISS
+        il      $78, 1
+        ai      $88, $88, 1
+        stqa    $88, vars+V_TMISS
+        br      .Lpf_next
+.Lpf_install:                                 # (4-way, when the pass runs again)
         il      $90, -1
         stqd    $90, CTX_STAGE_TAGS($89)
         a       $101, TTAGS, $81
@@ -96,8 +109,58 @@
         stqd    $94, 48($102)
         br      .Lpf_next
 .Lpf_suspend:
-        ila     $80, leaf_probe
+        ila     $80, leaf_resume
         br      suspend
+
+# ---- a leaf resumed after its fetches: the staged records go to way 0 of their lines
+leaf_resume:
+        ori     $66, CUR, 0                   # first triangle
+        rotqbyi $67, CUR, 4
+        rotmi   $67, $67, -6                  # count
+        lqa     $90, vars+V_ASSOC4
+        brnz    $90, leaf_probe               # 4-way: the pass installs them
+        ori     $76, $66, 0
+        ori     $77, $67, 0
+        ori     $88, RAYS, 0                  # slot j's tag at CTX_STAGE_TAGS + 16 j
+        ila     $89, CTX_STAGE_TRIS           # and its record at CTX_STAGE_TRIS + 64 j
+        a       $89, $89, RAYS
+        il      $100, -1
+        hbrr    .Lres_br, .Lres
+.Lres:  and     $80, $76, TMASK
+        lqd     $85, CTX_STAGE_TAGS($88)
+        shli    $81, $80, 4
+        shli    $82, $80, 6
+        a       $83, TTAGS, $81
+        a       $84, TDATA, $82
+        lqd     $86, 0($83)                   # the line as it is
+        lqd     $91, 0($84)
+        lqd     $92, 16($84)
+        lqd     $93, 32($84)
+        lqd     $94, 48($84)
+        lqd     $95, 0($89)                   # the staged record
+        lqd     $96, 16($89)
+        lqd     $97, 32($89)
+        lqd     $98, 48($89)
+        ceq     $99, $85, $76                 # staged: install it
+        shufb   $99, $99, $99, PAT0
+        selb    $86, $86, $76, $99
+        selb    $91, $91, $95, $99
+        selb    $92, $92, $96, $99
+        selb    $93, $93, $97, $99
+        selb    $94, $94, $98, $99
+        stqd    $86, 0($83)
+        stqd    $91, 0($84)
+        stqd    $92, 16($84)
+        stqd    $93, 32($84)
+        stqd    $94, 48($84)
+        stqd    $100, CTX_STAGE_TAGS($88)
+        ai      $76, $76, 1
+        ai      $88, $88, 16
+        ai      $89, $89, 64
+        ai      $77, $77, -1
+.Lres_br:
+        brnz    $77, .Lres
+        br      tri_loop
 
 # ---- triangle cache miss in the test loop: another way of a 4-way set, the packet's
 # staging slot (fetched while it was suspended), or a fetch it waits for

@@ -13,6 +13,7 @@
 //! - [`reference`]: a scalar ray caster over the same records that defines the expected
 //!   kernel output.
 //! - [`stats`]: a frame's statistics as typed JSON (`spu render --stats`).
+//! - [`timeline`]: when each tile and packet was traced, from the SPUs' event logs.
 
 pub mod bvh;
 pub mod camera;
@@ -35,3 +36,4 @@ pub mod kernel_abi;
 pub mod kernels;
 pub mod runtime;
 pub mod stats;
+pub mod timeline;

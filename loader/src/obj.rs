@@ -27,6 +27,7 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
         LoadError::new(path, Some(line), "invalid UTF-8")
     })?;
 
+    check_vertex_positions(path, text)?;
     let usemtl_names = used_material_names(text);
     let directory = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let material_error: RefCell<Option<LoadError>> = RefCell::new(None);
@@ -203,6 +204,25 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
     Ok(scene)
 }
 
+/// Refuses, naming the line, a `v` line whose position is not finite or too large for the
+/// kernel ([`crate::scene::check_position`]); `tobj` would take `inf` and `nan` as given.
+fn check_vertex_positions(path: &Path, text: &str) -> Result<(), LoadError> {
+    let mut index = 0;
+    for (number, line) in text.lines().enumerate() {
+        let mut words = line.split_ascii_whitespace();
+        if words.next() != Some("v") {
+            continue;
+        }
+        let values: Vec<f32> = words.take(3).map_while(|w| w.parse().ok()).collect();
+        if let [x, y, z] = values[..] {
+            crate::scene::check_position(index, Vec3::new(x, y, z))
+                .map_err(|reason| LoadError::new(path, Some(number + 1), reason))?;
+        }
+        index += 1;
+    }
+    Ok(())
+}
+
 /// Checks the colour and number statements of an MTL library line by line, so that a bad
 /// value is reported with its line (`tobj` reports only that parsing failed) and no
 /// non-finite or negative colour reaches the shaders.
@@ -362,6 +382,22 @@ mod tests {
 
     fn parse(text: &str) -> Result<Scene, LoadError> {
         parse_obj(Path::new("/nowhere/test.obj"), text.as_bytes())
+    }
+
+    #[test]
+    fn non_finite_and_huge_vertices_are_refused_with_the_line() {
+        let err = parse("v 0 0 0\n# c\nv inf 0 0\nv 0 1 0\nf 1 2 3\n").unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "/nowhere/test.obj:3: vertex 1 is not finite (inf, 0, 0)"
+        );
+        let err = parse("v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n").unwrap_err();
+        assert_eq!(err.line, Some(3));
+        let err = parse("v 0 0 0\nv 1 0 0\nv 0 -2e20 0\nf 1 2 3\n").unwrap_err();
+        assert!(
+            err.reason.contains("exceeds the largest coordinate"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -42,6 +42,42 @@ pub struct FrameRun {
     pub symbols: Vec<(String, u32)>,
     /// The kernel's local-store image (to tell its no-ops apart in the profile).
     pub kernel_image: Vec<u8>,
+    /// Each SPU's MFC commands and channel waits, when [`FrameOptions::event_log`] was on.
+    pub events: Vec<Vec<spu_isa::machine::SpuEvent>>,
+    /// The caches, packets in flight and memory latency the frame ran with.
+    pub config: KernelConfig,
+}
+
+/// What a frame records beyond its image and statistics.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrameOptions {
+    /// Log every SPU's MFC commands and channel waits (for heat maps and timelines).
+    pub event_log: bool,
+}
+
+/// The kernel configuration of a frame, as `--stats` reports it.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct KernelConfig {
+    /// Packets each SPU keeps in flight (software hyperthreading; 1 = blocking misses).
+    pub sht: u32,
+    /// Ways of both caches (1 = direct mapped, 4 = 4-way LRU).
+    pub assoc: u32,
+    pub bvh_cache_lines: u32,
+    pub tri_cache_lines: u32,
+    pub dma_latency_ns: f64,
+}
+
+impl KernelConfig {
+    pub fn new(layout: &FrameLayout, timing: &spu_isa::timing::TimingConfig) -> Self {
+        let p = &layout.params;
+        KernelConfig {
+            sht: p.sht_contexts,
+            assoc: p.cache_assoc,
+            bvh_cache_lines: 1 << p.bvh_cache_log2,
+            tri_cache_lines: 1 << p.tri_cache_log2,
+            dma_latency_ns: timing.dma_latency_ns,
+        }
+    }
 }
 
 impl FrameRun {
@@ -248,6 +284,32 @@ pub fn render_frame(
     max_cycles: u64,
     progress: &mut dyn FnMut(u32, u32),
 ) -> Result<FrameRun, FrameError> {
+    render_frame_with(
+        staged,
+        layout,
+        spes,
+        threads,
+        timing,
+        fill,
+        max_cycles,
+        &FrameOptions::default(),
+        progress,
+    )
+}
+
+/// [`render_frame`] with [`FrameOptions`].
+#[allow(clippy::too_many_arguments)]
+pub fn render_frame_with(
+    staged: &StagedScene,
+    layout: &FrameLayout,
+    spes: usize,
+    threads: usize,
+    timing: &spu_isa::timing::TimingConfig,
+    fill: bool,
+    max_cycles: u64,
+    options: &FrameOptions,
+    progress: &mut dyn FnMut(u32, u32),
+) -> Result<FrameRun, FrameError> {
     use spu_isa::machine::{apply_quantum, MainMemory, Spu, StopReason};
     let (source, name) = crate::kernels::frame_program(fill);
     let shaded = layout.shading.is_some() && !fill;
@@ -284,6 +346,9 @@ pub fn render_frame(
                 spu.enable_timing(timing.clone());
             }
             spu.count_traffic(regions.iter().map(|(_, s, e)| (*s, *e)).collect());
+            if options.event_log {
+                spu.enable_event_log();
+            }
             spu
         })
         .collect();
@@ -381,6 +446,7 @@ pub fn render_frame(
             }
         }
     }
+    let events = spus.iter_mut().map(|spu| spu.take_events()).collect();
     let (colour_buffer, shade_counters) = match &layout.shading {
         Some(shading) if shaded => {
             let at = shading.colour_addr as usize;
@@ -415,11 +481,13 @@ pub fn render_frame(
         traffic,
         colour_buffer,
         shade_counters,
+        events,
         frame_buffer: memory.bytes()[fb..fb + layout.frame_buffer_len].to_vec(),
         frame_cycles: spus_report.iter().map(|s| s.cycles).max().unwrap_or(0),
         spus: spus_report,
         profile,
         symbols: program.symbols.clone(),
         kernel_image: program.image.clone(),
+        config: KernelConfig::new(layout, timing),
     })
 }

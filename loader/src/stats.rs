@@ -27,6 +27,12 @@ pub struct FrameStats {
     pub validation: Option<Validation>,
     /// The paper's Table 2 figures.
     pub table2: Table2,
+    /// The kernel configuration: packets in flight, associativity, cache sizes, DMA latency.
+    #[serde(default)]
+    pub config: crate::runtime::KernelConfig,
+    /// Hit rates per lookup of both caches (the paper's Table 1).
+    #[serde(default)]
+    pub caches: CacheStats,
     /// The traversal code (`trav` .. `leaf`); null without the timing model.
     pub traversal: Option<SectionStats>,
     /// The intersection code (`leaf` .. `packet_done`); null without the timing model.
@@ -175,6 +181,40 @@ pub struct Table2 {
     pub bvh_cache_hit_per_node_pct: f64,
     pub triangle_cache_hit_pct: f64,
     pub mrays_per_sec_per_spu: f64,
+}
+
+/// Lookups, misses (fetches) and hits per lookup of the BVH-node and triangle caches. A
+/// BVH lookup is one traversal step (both children of a node); a triangle lookup, one
+/// triangle of a leaf the packet visits.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CacheStats {
+    pub bvh_lookups: u64,
+    pub bvh_misses: u64,
+    pub bvh_hit_pct: f64,
+    pub triangle_lookups: u64,
+    pub triangle_misses: u64,
+    pub triangle_hit_pct: f64,
+}
+
+impl CacheStats {
+    fn new(run: &FrameRun) -> Self {
+        let k = run.kernel_stats();
+        let hit = |misses: u64, lookups: u64| {
+            if lookups > 0 {
+                rounded(100.0 * (1.0 - misses as f64 / lookups as f64), 2)
+            } else {
+                0.0
+            }
+        };
+        CacheStats {
+            bvh_lookups: k.bvh_lookups,
+            bvh_misses: k.bvh_cache_misses,
+            bvh_hit_pct: hit(k.bvh_cache_misses, k.bvh_lookups),
+            triangle_lookups: k.triangle_lookups,
+            triangle_misses: k.triangle_cache_misses,
+            triangle_hit_pct: hit(k.triangle_cache_misses, k.triangle_lookups),
+        }
+    }
 }
 
 /// Stall cycles by cause, in [`StallCause::NAMES`] order.
@@ -370,6 +410,8 @@ impl FrameStats {
                 colour_mismatches: None,
             }),
             table2: Table2::new(run, rays, clock_ghz),
+            config: run.config.clone(),
+            caches: CacheStats::new(run),
             traversal: section(run, "trav", "leaf"),
             intersection: section(run, "leaf", "packet_done"),
             totals: run.profile.as_ref().map(|p| ProfileTotals::new(&p.totals)),

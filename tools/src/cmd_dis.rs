@@ -15,7 +15,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> crate::exit::Result<ExitCode> {
-    let bytes = std::fs::read(&args.file).map_err(|e| format!("{}: {e}", args.file.display()))?;
+    let bytes = crate::options::read_input(&args.file, crate::options::MAX_PROGRAM_BYTES)?;
     let name = args.file.display();
     if !args.raw && bytes.starts_with(b"\x7fELF") {
         let elf = spu_asm::elf::read_elf(&bytes).map_err(|e| format!("{name}: {e}"))?;

@@ -47,7 +47,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1, value_parser = associativity)]
     assoc: u32,
     /// Packets each SPE keeps in flight (software hyperthreading, 1..8; 1 = blocking misses).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=8))]
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=8))]
     sht: u32,
     /// Main-memory latency of a DMA in nanoseconds before its bytes move.
     #[arg(long = "dma-latency-ns", default_value_t = 100.0, value_parser = latency_ns, allow_hyphen_values = true)]
@@ -88,6 +88,13 @@ pub struct Args {
     /// by cause, dual issue; then per label and totals), merged over all SPEs.
     #[arg(long)]
     profile: Option<PathBuf>,
+    /// Heat map of the simulated cycles per packet (PNG), and beside it (NAME-wait.png)
+    /// the share of them spent waiting on DMA.
+    #[arg(long)]
+    heatmap: Option<PathBuf>,
+    /// Timeline of the frame over simulated time (Chrome/Perfetto trace JSON).
+    #[arg(long)]
+    trace: Option<PathBuf>,
     /// No progress bar or summary (for `spu paper`, which runs many renders at once).
     #[arg(long, hide = true)]
     quiet: bool,
@@ -206,15 +213,10 @@ fn check_options(args: &Args) -> exit::Result<Option<Camera>> {
     }
     options::clock_ghz(args.clock)?;
     options::max_cycles(args.max_cycles)?;
-    for (name, lines) in [
-        ("--bvh-cache", args.bvh_cache),
-        ("--tri-cache", args.tri_cache),
-    ] {
-        if !(lines.is_power_of_two() && (128..=1024).contains(&lines)) {
-            return Err(Error::input(format!(
-                "{name} {lines}: must be a power of two from 128 to 1024"
-            )));
-        }
+    if args.fill && args.validate {
+        return Err(Error::input(
+            "--validate compares the ray tracer's hits; --fill renders none",
+        ));
     }
     if args.lights.len() > shading::MAX_LIGHTS {
         return Err(Error::input(format!(
@@ -250,7 +252,10 @@ fn check_options(args: &Args) -> exit::Result<Option<Camera>> {
         )));
     }
     exit::check_writable(&args.output)?;
-    for path in [&args.stats, &args.profile].into_iter().flatten() {
+    for path in [&args.stats, &args.profile, &args.heatmap, &args.trace]
+        .into_iter()
+        .flatten()
+    {
         exit::check_writable(path)?;
     }
     Ok(camera)
@@ -322,7 +327,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
     let sim_started = Instant::now();
-    let run = spu_loader::runtime::render_frame(
+    let run = spu_loader::runtime::render_frame_with(
         &staged,
         &layout,
         args.spes,
@@ -334,6 +339,9 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         },
         args.fill,
         args.max_cycles,
+        &spu_loader::runtime::FrameOptions {
+            event_log: args.heatmap.is_some() || args.trace.is_some(),
+        },
         &mut |taken, _| bar.set_position(taken as u64),
     );
     bar.finish_and_clear();
@@ -419,15 +427,29 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         let json = stats.to_json();
         exit::write_file(path, json.as_bytes())?;
     }
+    if args.heatmap.is_some() || args.trace.is_some() {
+        crate::frame_views::write(
+            &run,
+            &layout,
+            (args.width, args.height, args.spes, args.clock),
+            args.heatmap.as_deref(),
+            args.trace.as_deref(),
+        )?;
+    }
     if let Some(path) = &args.profile {
         let text = kernel_profile(&run, args.fill, args.shade != ShadeMode::None)
             .map_err(Error::failure)?;
         exit::write_file(path, text.as_bytes())?;
     }
-    let colours_off = colour_validation.unwrap_or(0);
+    Ok(validation_status(validation, colour_validation).into())
+}
+
+/// `--validate` that found differing pixels (hit triangles, or colours beyond the
+/// tolerance) exits 3 (after writing every output).
+fn validation_status(validation: Option<(usize, usize)>, colours_off: Option<usize>) -> Status {
     match validation {
-        Some((_, bad)) if bad + colours_off > 0 => Ok(Status::Differences.into()),
-        _ => Ok(ExitCode::SUCCESS),
+        Some((_, bad)) if bad + colours_off.unwrap_or(0) > 0 => Status::Differences,
+        _ => Status::Success,
     }
 }
 
@@ -484,4 +506,41 @@ fn write_png(path: &PathBuf, colours: &[u32], width: u32, height: u32) -> exit::
         .write_image(&rgb, width, height, image::ExtendedColorType::Rgb8)
         .map_err(|e| Error::output(path, e))?;
     exit::write_file(path, &png)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spu_loader::reference::Hit;
+
+    #[test]
+    fn differing_pixels_make_validation_exit_3() {
+        let pixel = |triangle, t| PixelResult {
+            triangle,
+            t,
+            rgba: 0,
+        };
+        let hit = |triangle, t| Hit {
+            triangle,
+            t,
+            record: 0,
+        };
+        let kernel = [pixel(0, 1.0), pixel(MISS, 0.0), pixel(1, 2.0)];
+        let same = [hit(10, 1.0), Hit::NONE, hit(11, 2.0)];
+        let records = [10, 11];
+        assert_eq!(validate(&kernel, &same, &records, 3), (3, 0));
+        assert_eq!(validation_status(Some((3, 0)), None), Status::Success);
+        assert_eq!(validation_status(Some((3, 0)), Some(0)), Status::Success);
+        assert_eq!(
+            validation_status(Some((3, 0)), Some(1)),
+            Status::Differences,
+            "a colour off is a difference"
+        );
+        // A miss where the reference hits, and a hit at another distance.
+        let other = [hit(10, 1.0), hit(10, 5.0), hit(11, 2.5)];
+        assert_eq!(validate(&kernel, &other, &records, 3), (3, 2));
+        assert_eq!(validation_status(Some((3, 2)), None), Status::Differences);
+        assert_eq!(ExitCode::from(Status::Differences), ExitCode::from(3));
+        assert_eq!(validation_status(None, None), Status::Success);
+    }
 }

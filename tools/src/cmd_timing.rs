@@ -33,6 +33,12 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     let src =
         String::from_utf8(bytes).map_err(|_| format!("{}: not UTF-8 text", args.file.display()))?;
     let t = analyze_source(&src, args.label.as_deref())?;
+    for (line, word) in t.unknown_statements() {
+        eprintln!(
+            "{}:{line}: warning: `{word}` is not an SPU instruction; not timed",
+            args.file.display()
+        );
+    }
     let text = if args.json {
         static_json(&t)
     } else {

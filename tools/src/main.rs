@@ -13,12 +13,15 @@ mod cmd_prof;
 mod cmd_render;
 mod cmd_run;
 mod cmd_timing;
+mod frame_views;
+mod heatmap;
 mod options;
 mod paper_data;
 mod paper_figure;
 mod paper_jobs;
 mod paper_report;
 mod paper_tables;
+mod trace;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

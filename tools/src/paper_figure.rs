@@ -46,7 +46,7 @@ pub fn series(table: &Table) -> Vec<Series> {
     out
 }
 
-fn register_font() -> Result<(), String> {
+pub fn register_font() -> Result<(), String> {
     static REGISTERED: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
     REGISTERED
         .get_or_init(|| {

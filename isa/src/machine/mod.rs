@@ -35,12 +35,14 @@
 //! model off the clock is the instruction count, so completion times stay deterministic.
 
 mod channels;
+mod events;
 pub mod exec;
 mod memory;
 mod mfc;
 mod spu;
 
 pub use channels::{ch, event};
+pub use events::SpuEvent;
 pub use memory::{apply_quantum, MainMemory};
 pub use mfc::{
     signal_notify_ea, Traffic, PROBLEM_STATE_OFFSET, RAW_SPU_BASE, RAW_SPU_STRIDE,
