@@ -3,8 +3,9 @@
 # Per packet the block goes to FB + (tile*64 + packet)*1024:
 #   +0 hit triangle index[64] (0xffffffff = miss), +256 distance t[64] (along the
 #   unnormalised camera ray), +512 eye-light shade 0xGGGGGGff[64], +768 reserved (zero).
+# The rays are the current packet context's (RAYS) and so are the tile and packet numbers.
 # Two blocks alternate in outbuf so a packet's DMA overlaps the next packet's work; then
-# the next packet (modules/raygen.s) or the next tile (modules/frame.s).
+# the context's next packet (packet_start, modules/frame.s).
 
         .text
 # ---- the packet is done: shade and send its results

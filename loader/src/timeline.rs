@@ -2,7 +2,10 @@
 //! without help from the kernel: an SPU puts each packet's 1 KiB result block to the frame
 //! buffer (the address names the tile and packet) and takes each tile with an atomic
 //! update of the shared counter. A packet's cycles run from the SPU's previous packet put
-//! (or, for a tile's first packet, from the tile's atomic update) to its own put.
+//! (or, for a tile's first packet, from the tile's atomic update) to its own put. A tile's
+//! span runs from its take to the SPU's next take (or last put); with software
+//! hyperthreading the last packets of the previous tile finish inside it, and the span is
+//! named after the newest tile it completes packets of.
 
 use crate::frame::FrameLayout;
 use crate::kernel_abi::{PACKETS_PER_TILE, PACKET_BLOCK_BYTES, PACKET_SIZE, TILE_SIZE};
@@ -75,8 +78,9 @@ impl Timeline {
         };
         for (spu, events) in run.events.iter().enumerate() {
             let mut mark = 0u64;
-            let mut tile_taken = 0u64;
             let mut waited = 0u64;
+            // the open tile span, and whether a packet completed in it
+            let mut open: Option<(TileSpan, bool)> = None;
             for event in events {
                 match *event {
                     SpuEvent::ChannelWait {
@@ -108,13 +112,24 @@ impl Timeline {
                                 bytes: size,
                             });
                         }
-                        if ATOMICS.contains(&cmd) && ea & !127 == counter_line {
-                            tile_taken = cycle;
-                            if cmd == 0xd0 {
-                                // the wait for the next tile belongs to no packet
-                                mark = cycle;
-                                waited = 0;
+                        if cmd == 0xd0 && ea & !127 == counter_line {
+                            // taking a tile: the wait for it belongs to no packet; a span
+                            // that completed packets closes (retries keep an empty one)
+                            mark = cycle;
+                            waited = 0;
+                            if let Some((span, true)) = open {
+                                t.tiles.push(span);
+                                open = None;
                             }
+                            open.get_or_insert((
+                                TileSpan {
+                                    spu,
+                                    tile: 0,
+                                    start: cycle,
+                                    end: cycle,
+                                },
+                                false,
+                            ));
                         } else if PUTS.contains(&cmd) && (fb..fb_end).contains(&ea) {
                             let block = ((ea - fb) / PACKET_BLOCK_BYTES as u64) as u32;
                             let (tile, packet) =
@@ -127,22 +142,26 @@ impl Timeline {
                                 end: cycle,
                                 wait: waited,
                             });
-                            match t.tiles.last_mut() {
-                                Some(last) if last.spu == spu && last.tile == tile => {
-                                    last.end = cycle
-                                }
-                                _ => t.tiles.push(TileSpan {
+                            let (span, any) = open.get_or_insert((
+                                TileSpan {
                                     spu,
                                     tile,
-                                    start: tile_taken.min(mark),
+                                    start: mark,
                                     end: cycle,
-                                }),
-                            }
+                                },
+                                false,
+                            ));
+                            span.tile = if *any { span.tile.max(tile) } else { tile };
+                            span.end = cycle;
+                            *any = true;
                             mark = cycle;
                             waited = 0;
                         }
                     }
                 }
+            }
+            if let Some((span, true)) = open {
+                t.tiles.push(span);
             }
         }
         t

@@ -113,8 +113,13 @@ fn draw(
         (lo, hi),
         title,
     )?;
-    image::save_buffer(path, &rgb, full_w, scale_h, image::ColorType::Rgb8)
-        .map_err(|e| format!("{}: {e}", path.display()))
+    // Encoded in memory and written whole: a failed write leaves no partial image.
+    use image::ImageEncoder as _;
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(&rgb, full_w, scale_h, image::ExtendedColorType::Rgb8)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    crate::exit::write_file(path, &png).map_err(|e| e.message.unwrap_or_default())
 }
 
 fn label(

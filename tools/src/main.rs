@@ -8,6 +8,7 @@ mod exit;
 mod cmd_as;
 mod cmd_bench;
 mod cmd_dis;
+mod cmd_ld;
 mod cmd_paper;
 mod cmd_prof;
 mod cmd_render;
@@ -43,6 +44,8 @@ enum Command {
     As(cmd_as::Args),
     /// Disassemble an SPU ELF or a raw image, in GNU objdump's format.
     Dis(cmd_dis::Args),
+    /// Link relocatable SPU objects into an executable.
+    Ld(cmd_ld::Args),
     /// Run a program on one simulated SPU and print how it stopped.
     Run(cmd_run::Args),
     /// Run a program with the timing model and print an annotated profile.
@@ -62,6 +65,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::As(args) => cmd_as::run(args),
         Command::Dis(args) => cmd_dis::run(args),
+        Command::Ld(args) => cmd_ld::run(args),
         Command::Run(args) => cmd_run::run(args),
         Command::Prof(args) => cmd_prof::run(args),
         Command::Timing(args) => cmd_timing::run(args),

@@ -253,6 +253,14 @@ fn outputs_are_checked_up_front_and_never_left_partial() {
         "{}",
         out.stderr
     );
+    let out = spu(&["render", "--heatmap", jpg.to_str().unwrap()]);
+    assert_eq!(out.status, 2);
+    assert!(
+        out.stderr.contains("--heatmap")
+            && out.stderr.contains("x.jpg: the image is written as PNG"),
+        "{}",
+        out.stderr
+    );
     let missing = d.join("no/such/dir/out.png");
     let out = spu(&["render", "-o", missing.to_str().unwrap()]);
     assert_eq!(out.status, 2);
