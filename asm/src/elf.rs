@@ -386,6 +386,7 @@ mod tests {
         let mut elf = write_elf(
             &[0; 4],
             &[(".text".into(), 0, 4, true)],
+            &[false],
             &[("_start".into(), 0)],
             &["_start".into()],
             0,

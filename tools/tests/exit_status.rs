@@ -103,7 +103,7 @@ fn abnormal_stops_exit_134_with_the_reason() {
     let out = spu(&["run", &deadlock]);
     assert_eq!(out.status, 134);
     assert!(
-        out.stderr.contains("deadlock at 0x0 on channel 29"),
+        out.stderr.contains("deadlock at 0x0 on channel SPU_RdInMbox (29)"),
         "{}",
         out.stderr
     );
@@ -417,7 +417,7 @@ fn json_outputs_are_well_formed() {
     assert_eq!(run["exit_code"], 7);
     assert_eq!(run["outbound_mailbox"], 7);
     assert_eq!(run["registers"][3][0], 7);
-    assert_eq!(run["stop"], "stop 0x2007");
+    assert_eq!(run["stop"], "stop 0x2007 (exit status 7)");
 
     let out = spu(&["prof", &src, "--json"]);
     assert_eq!(out.status, 0);
