@@ -63,8 +63,10 @@ pub struct RaysByKind {
     pub shadow: u64,
 }
 
-/// The shading module's i-set and cache figures (the paper's Table 4).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// The shading module's i-set and cache figures (the paper's Table 4). Keys missing from a
+/// file read as 0.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Table4 {
     /// Intersection packets (4 rays, at least one hit) whose rays all hit one triangle.
     pub same_triangle_pct: f64,
@@ -76,8 +78,10 @@ pub struct Table4 {
     pub triangle_record_hit_pct: f64,
 }
 
-/// Kilobytes (1024 bytes) per frame moved by the MFCs, per main-memory region.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// Kilobytes (1024 bytes) per frame moved by the MFCs, per main-memory region. Keys
+/// missing from a file read as 0.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Table6 {
     pub bvh_nodes_kb: f64,
     pub triangle_records_kb: f64,

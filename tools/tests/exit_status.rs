@@ -103,7 +103,8 @@ fn abnormal_stops_exit_134_with_the_reason() {
     let out = spu(&["run", &deadlock]);
     assert_eq!(out.status, 134);
     assert!(
-        out.stderr.contains("deadlock at 0x0 on channel SPU_RdInMbox (29)"),
+        out.stderr
+            .contains("deadlock at 0x0 on channel SPU_RdInMbox (29)"),
         "{}",
         out.stderr
     );
