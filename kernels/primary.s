@@ -29,4 +29,7 @@
         .include "modules/lru.s"            # the 4-way caches' sets
         .include "modules/sht.s"            # software hyperthreading
         .include "modules/output.s"         # shading and packet output
+        .ifdef  SHADE
+        .include "modules/shade.s"          # --shade: i-sets, shading caches, diffuse
+        .endif
         .include "modules/frame_done.s"     # statistics and the end of the frame

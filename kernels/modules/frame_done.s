@@ -5,7 +5,11 @@
         .text
 # ---- no tiles left: statistics, end-of-frame message, stop
 frame_done:
+        .ifdef  SHADE
+        il      $80, 12 | 0xc0                # tags 2, 3 and the colours' 6, 7
+        .else
         il      $80, 12                       # tags 2 and 3: the last results
+        .endif
         wrch    $MFC_WrTagMask, $80
         il      $80, 2
         wrch    $MFC_WrTagUpdate, $80

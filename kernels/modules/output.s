@@ -9,8 +9,17 @@
 
         .text
 # ---- the packet is done: shade and send its results
-        .sched  pool=67-79,82-92,94-127 scratch=66-127
+        .align  3
 packet_done:
+        .ifdef  SHADE                         # --shade simple: modules/shade.s first
+        lqd     $69, CTX_TILE64(RAYS)
+        lqd     $70, CTX_PACKET(RAYS)
+        ori     $68, RAYS, 0
+        a       $69, $69, $70
+        brsl    $0, shade_packet
+        nop
+        .endif
+        .sched  pool=67-79,82-92,94-127 scratch=66-127
         lqa     %np, vars+V_PACKETS
         ai      %np1, %np, 1
       ! stqa    %np1, vars+V_PACKETS

@@ -5,7 +5,13 @@
 //! be a whole lock line for `getllar`/`putllc`).
 
 use crate::camera::CameraBasis;
-use crate::kernel_abi::{check_kernel_options, frame_buffer_bytes, ParamBlock, STATS_BYTES};
+use crate::kernel_abi::{
+    check_kernel_options, colour_buffer_bytes, frame_buffer_bytes, ParamBlock, ShadingBlock,
+    SHADING_AREA_BYTES, SHADING_BLOCK_BYTES, STATS_BYTES,
+};
+
+/// Bytes of an SPU's local store.
+const LS_BYTES: usize = 256 * 1024;
 use crate::layout::StagedScene;
 
 /// Main-memory address where the staged scene image starts.
@@ -26,6 +32,17 @@ pub struct FrameLayout {
     /// Total bytes of main memory needed.
     pub memory_len: usize,
     pub params: ParamBlock,
+    /// The shading block and the 32-bit colour frame buffer of a shaded frame.
+    pub shading: Option<ShadingRegion>,
+}
+
+/// Where a shaded frame's shading block and colour frame buffer live.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShadingRegion {
+    pub block_addr: u32,
+    pub colour_addr: u32,
+    pub colour_len: usize,
+    pub block: ShadingBlock,
 }
 
 impl FrameLayout {
@@ -71,7 +88,70 @@ impl FrameLayout {
             frame_buffer_len,
             memory_len: memory_len as usize,
             params,
+            shading: None,
         })
+    }
+
+    /// Adds the shading block (its record addresses filled in from `staged`) and the colour
+    /// frame buffer after the frame's other regions, and points the parameter block at it
+    /// (the runtime places the module's local-store area: [`FrameLayout::set_shading_area`]).
+    pub fn with_shading(
+        mut self,
+        staged: &StagedScene,
+        mut block: ShadingBlock,
+    ) -> Result<FrameLayout, String> {
+        for (what, log2) in [
+            ("vertex", block.vertex_cache_log2),
+            ("material", block.material_cache_log2),
+        ] {
+            if !(4..=8).contains(&log2) {
+                return Err(format!(
+                    "{what} cache of {} entries: must be a power of two from 16 to 256",
+                    1u64 << log2.min(63)
+                ));
+            }
+        }
+        if block.lights.len() > crate::shading::MAX_LIGHTS {
+            return Err(format!(
+                "{} lights: at most {}",
+                block.lights.len(),
+                crate::shading::MAX_LIGHTS
+            ));
+        }
+        let block_addr = align128(self.memory_len as u64);
+        let colour_addr = align128(block_addr + SHADING_BLOCK_BYTES as u64);
+        let colour_len = colour_buffer_bytes(self.params.width, self.params.height);
+        let memory_len = align128(colour_addr + colour_len as u64);
+        if memory_len > u32::MAX as u64 {
+            return Err(format!(
+                "the frame needs {memory_len} bytes of main memory, over 4 GiB"
+            ));
+        }
+        block.ea_vertices = staged.header.vertex_addr;
+        block.ea_materials = staged.header.material_addr;
+        block.ea_colour = colour_addr as u32;
+        self.params.ea_shading = block_addr as u32;
+        self.memory_len = memory_len as usize;
+        self.shading = Some(ShadingRegion {
+            block_addr: block_addr as u32,
+            colour_addr: colour_addr as u32,
+            colour_len,
+            block,
+        });
+        Ok(self)
+    }
+
+    /// Where the shading module works in local store (`modules/shade.s`): `ls_area`,
+    /// rounded up to 128 bytes, must leave its SHADING_AREA_BYTES below 256 KiB.
+    pub fn set_shading_area(&mut self, ls_area: u32) -> Result<(), String> {
+        let ls_area = ls_area.div_ceil(128) * 128;
+        if ls_area as usize + SHADING_AREA_BYTES > LS_BYTES {
+            return Err(format!(
+                "local store: the shading area ({SHADING_AREA_BYTES} bytes) does not fit above the kernel's caches at {ls_area:#x}: use smaller caches or fewer packets in flight"
+            ));
+        }
+        self.params.ls_shading = ls_area;
+        Ok(())
     }
 
     /// Sets the caches' associativity (1 or 4) and the packets each SPU keeps in flight
@@ -96,6 +176,10 @@ impl FrameLayout {
         memory[base..base + staged.image.len()].copy_from_slice(&staged.image);
         let p = self.param_addr as usize;
         memory[p..p + 128].copy_from_slice(&self.params.to_be_bytes());
+        if let Some(shading) = &self.shading {
+            let b = shading.block_addr as usize;
+            memory[b..b + SHADING_BLOCK_BYTES].copy_from_slice(&shading.block.to_be_bytes());
+        }
         memory
     }
 }

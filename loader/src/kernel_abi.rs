@@ -46,7 +46,11 @@ pub struct ParamBlock {
     pub sht_contexts: u32,
     /// Ways of both caches: 1 (direct mapped) or 4 (set-associative, LRU).
     pub cache_assoc: u32,
-    pub reserved: [u32; 2],
+    /// The shading block ([`ShadingBlock`]; 0 when the frame is not shaded) and the
+    /// local-store address of the shading module's area, above everything carved at
+    /// `cache_area` (the host knows the kernel's symbols and the carve).
+    pub ea_shading: u32,
+    pub ls_shading: u32,
 }
 const _: () = assert!(std::mem::size_of::<ParamBlock>() == 128);
 
@@ -204,13 +208,110 @@ impl ParamBlock {
             self.sht_contexts,
             self.cache_assoc,
         ]);
-        words.extend(self.reserved);
+        words.extend([self.ea_shading, self.ls_shading]);
         let mut out = [0u8; 128];
         for (chunk, w) in out.chunks_exact_mut(4).zip(words) {
             chunk.copy_from_slice(&w.to_be_bytes());
         }
         out
     }
+}
+
+/// Offset in the parameter block of the shading block's address and the shading area's
+/// (zero when the frame is not shaded, `--shade none`): the quadword holding them and the
+/// byte rotation that brings the address to the preferred slot (the area's is 4 further).
+pub const PARAM_EA_SHADING: usize = std::mem::offset_of!(ParamBlock, ea_shading);
+pub const PARAM_SHADING_QUAD: usize = PARAM_EA_SHADING & !15;
+pub const PARAM_SHADING_ROT: usize = PARAM_EA_SHADING & 15;
+const _: () = assert!(
+    std::mem::offset_of!(ParamBlock, ls_shading) == PARAM_EA_SHADING + 4 && PARAM_SHADING_ROT <= 8
+);
+
+/// Shading modes as the kernel reads them ([`ShadingBlock::mode`]).
+pub const SHADE_SIMPLE: u32 = 1;
+pub const SHADE_SHADOWS: u32 = 2;
+
+/// The shading block (`modules/shade.s`), at [`PARAM_EA_SHADING`]: where the vertex and
+/// material records and the 32-bit colour frame buffer are, the mode, the shading caches'
+/// sizes and up to [`crate::shading::MAX_LIGHTS`] point lights.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ShadingBlock {
+    pub ea_vertices: u32,
+    pub ea_materials: u32,
+    /// The colour frame buffer: 256 bytes (64 pixels 0xRRGGBBAA, row-major in the packet)
+    /// per packet, packet-major like the result blocks: 4 MiB for a 1024x1024 frame.
+    pub ea_colour: u32,
+    pub mode: u32,
+    /// Shadow packets stop as soon as every active ray is occluded.
+    pub shadow_early: bool,
+    /// log2 of the entries of the direct-mapped vertex and material caches (4..=8).
+    pub vertex_cache_log2: u32,
+    pub material_cache_log2: u32,
+    pub lights: Vec<crate::shading::Light>,
+}
+
+/// Local-store bytes of the shading module's area (`SH_AREA_BYTES` in `modules/shade.s`;
+/// a test keeps the two equal).
+pub const SHADING_AREA_BYTES: usize = 39296;
+
+/// Bytes of the shading block.
+pub const SHADING_BLOCK_BYTES: usize = 384;
+pub const SHB_EA_VERTICES: usize = 0;
+pub const SHB_LIGHT_COUNT: usize = 12;
+pub const SHB_MODE: usize = 16;
+pub const SHB_LIGHTS: usize = 64;
+/// Bytes per light: position (x, y, z, 0), colour (r, g, b, 0).
+pub const SHB_LIGHT_BYTES: usize = 32;
+/// Bytes of one packet's block in the colour frame buffer.
+pub const COLOUR_BLOCK_BYTES: u32 = 256;
+
+impl ShadingBlock {
+    pub fn to_be_bytes(&self) -> [u8; SHADING_BLOCK_BYTES] {
+        let mut words = [0u32; SHADING_BLOCK_BYTES / 4];
+        words[0] = self.ea_vertices;
+        words[1] = self.ea_materials;
+        words[2] = self.ea_colour;
+        words[3] = self.lights.len() as u32;
+        words[4] = self.mode;
+        words[5] = self.shadow_early as u32;
+        words[6] = self.vertex_cache_log2;
+        words[7] = self.material_cache_log2;
+        for (i, light) in self.lights.iter().enumerate() {
+            let at = (SHB_LIGHTS + i * SHB_LIGHT_BYTES) / 4;
+            for c in 0..3 {
+                words[at + c] = light.position[c].to_bits();
+                words[at + 4 + c] = light.colour[c].to_bits();
+            }
+        }
+        let mut out = [0u8; SHADING_BLOCK_BYTES];
+        for (chunk, w) in out.chunks_exact_mut(4).zip(words) {
+            chunk.copy_from_slice(&w.to_be_bytes());
+        }
+        out
+    }
+}
+
+/// Bytes of the packet-major 32-bit colour frame buffer for a `width x height` image.
+pub fn colour_buffer_bytes(width: u32, height: u32) -> usize {
+    frame_buffer_bytes(width, height) / (PACKET_BLOCK_BYTES / COLOUR_BLOCK_BYTES) as usize
+}
+
+/// Decodes the colour frame buffer into row-major 0xRRGGBBAA pixels.
+pub fn decode_colour_buffer(fb: &[u8], width: u32, height: u32) -> Vec<u32> {
+    let tiles_x = width.div_ceil(TILE_SIZE);
+    let mut out = Vec::with_capacity((width * height) as usize);
+    for y in 0..height {
+        for x in 0..width {
+            let (block, i) = pixel_location(x, y, tiles_x);
+            let off = block / (PACKET_BLOCK_BYTES / COLOUR_BLOCK_BYTES) as usize + 4 * i;
+            out.push(
+                fb.get(off..off + 4)
+                    .map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+                    .unwrap_or(0),
+            );
+        }
+    }
+    out
 }
 
 /// Bytes of one SPU's statistics block.
@@ -300,6 +401,21 @@ pub fn spu_include() -> String {
         ("PARAM_DV", PARAM_DV as i64),
         ("PARAM_BVH_LOG2", PARAM_BVH_LOG2 as i64),
         ("PARAM_SHT", PARAM_SHT as i64),
+        ("PARAM_SHADING_QUAD", PARAM_SHADING_QUAD as i64),
+        ("PARAM_SHADING_ROT", PARAM_SHADING_ROT as i64),
+        ("SHADING_BLOCK_BYTES", SHADING_BLOCK_BYTES as i64),
+        ("SHB_EA_VERTICES", SHB_EA_VERTICES as i64),
+        ("SHB_LIGHT_COUNT", SHB_LIGHT_COUNT as i64),
+        ("SHB_MODE", SHB_MODE as i64),
+        ("SHB_LIGHTS", SHB_LIGHTS as i64),
+        ("SHB_LIGHT_BYTES", SHB_LIGHT_BYTES as i64),
+        ("SHADE_SIMPLE", SHADE_SIMPLE as i64),
+        ("SHADE_SHADOWS", SHADE_SHADOWS as i64),
+        ("AMBIENT_BITS", crate::shading::AMBIENT.to_bits() as i64),
+        (
+            "SHADOW_LIMIT_BITS",
+            (1.0 - crate::shading::SHADOW_EPSILON).to_bits() as i64,
+        ),
         ("CONTEXT_TAG0", CONTEXT_TAG0 as i64),
         ("STAGE_TRIANGLES", context::STAGE_TRIANGLES as i64),
         ("CTX_HEADER", context::HEADER as i64),

@@ -53,6 +53,10 @@ pub const MODULES: &[(&str, &str)] = &[
         "modules/frame_done.s",
         include_str!("../../kernels/modules/frame_done.s"),
     ),
+    (
+        "modules/shade.s",
+        include_str!("../../kernels/modules/shade.s"),
+    ),
 ];
 
 /// The text of `layout.inc`: record layouts and the kernel ABI, from their one definition.

@@ -15,14 +15,29 @@ pub struct SpuReport {
     pub stats: KernelStats,
 }
 
+/// Offset of the shading module's counters in its local-store area (`SH_STATS`).
+pub const SHADE_STATS_OFFSET: usize = 16;
+
+/// The shading module's counters, in the order of `SHS_*` in `modules/shade.s`.
+pub type ShadeCounters = [u64; 10];
+
 /// The outcome of one frame.
 #[derive(Clone, Debug, Default)]
 pub struct FrameRun {
     pub frame_buffer: Vec<u8>,
+    /// The 32-bit colour frame buffer of a shaded frame.
+    pub colour_buffer: Option<Vec<u8>>,
+    /// Per SPU, the shading module's counters (intersection packets with a hit, of them
+    /// on one triangle, passes, packets, vertex lookups, misses, material lookups, misses,
+    /// triangle records looked up in the traversal's triangle cache, fetched past it).
+    pub shade_counters: Vec<ShadeCounters>,
     pub frame_cycles: u64,
     pub spus: Vec<SpuReport>,
     /// The timing model's counters, merged over all SPUs.
     pub profile: Option<spu_isa::profile::Profile>,
+    /// Bytes the SPUs' MFCs read from and wrote to each named main-memory region, summed
+    /// over the SPUs: `(region, read, written)` (see [`traffic_regions`]).
+    pub traffic: Vec<(String, u64, u64)>,
     /// The kernel's symbols (to split the profile by code section).
     pub symbols: Vec<(String, u32)>,
     /// The kernel's local-store image (to tell its no-ops apart in the profile).
@@ -86,8 +101,19 @@ pub struct Program {
 
 /// Assembles a kernel with its includes from memory (`layout.inc`, the kernel modules).
 pub fn assemble_kernel(source: &str, name: &str) -> Result<Program, String> {
+    assemble_kernel_with(source, name, &[])
+}
+
+/// Assembles a kernel with its includes from memory and `defines` (as `--defsym`: `SHADE`
+/// selects the shading kernel).
+pub fn assemble_kernel_with(
+    source: &str,
+    name: &str,
+    defines: &[(&str, i64)],
+) -> Result<Program, String> {
     let opts = spu_asm::Options {
         virtual_files: crate::kernels::include_files(),
+        defines: defines.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
         ..Default::default()
     };
     match spu_asm::assemble(source, name, &opts) {
@@ -102,6 +128,60 @@ pub fn assemble_kernel(source: &str, name: &str) -> Result<Program, String> {
             .collect::<Vec<_>>()
             .join("\n")),
     }
+}
+
+fn symbol(program: &Program, name: &str) -> Option<u32> {
+    program
+        .symbols
+        .iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, a)| *a)
+}
+
+/// The main-memory regions whose traffic a frame counts, by name: the scene's node,
+/// triangle-record, vertex and material arrays (the paper's Table 6 rows), the packet
+/// result blocks and, for a shaded frame, the 32-bit colour frame buffer.
+pub fn traffic_regions(staged: &StagedScene, layout: &FrameLayout) -> Vec<(String, u64, u64)> {
+    use crate::layout::{MATERIAL_SIZE, NODE_SIZE, TRI_SIZE, VERTEX_SIZE};
+    let h = &staged.header;
+    let array = |addr: u32, count: u32, size: usize| {
+        (addr as u64, addr as u64 + count as u64 * size as u64)
+    };
+    let mut regions = vec![
+        ("bvh_nodes", array(h.node_addr, h.node_count, NODE_SIZE)),
+        (
+            "triangle_records",
+            array(h.triangle_addr, h.triangle_count, TRI_SIZE),
+        ),
+        (
+            "vertices",
+            array(h.vertex_addr, h.vertex_count, VERTEX_SIZE),
+        ),
+        (
+            "materials",
+            array(h.material_addr, h.material_count, MATERIAL_SIZE),
+        ),
+        (
+            "result_blocks",
+            (
+                layout.frame_buffer_addr as u64,
+                layout.frame_buffer_addr as u64 + layout.frame_buffer_len as u64,
+            ),
+        ),
+    ];
+    if let Some(shading) = &layout.shading {
+        regions.push((
+            "colour_frame_buffer",
+            (
+                shading.colour_addr as u64,
+                shading.colour_addr as u64 + shading.colour_len as u64,
+            ),
+        ));
+    }
+    regions
+        .into_iter()
+        .map(|(name, (start, end))| (name.to_string(), start, end))
+        .collect()
 }
 
 /// Local store of one SPU.
@@ -232,11 +312,28 @@ pub fn render_frame_with(
 ) -> Result<FrameRun, FrameError> {
     use spu_isa::machine::{apply_quantum, MainMemory, Spu, StopReason};
     let (source, name) = crate::kernels::frame_program(fill);
-    let program = assemble_kernel(source, name)?;
+    let shaded = layout.shading.is_some() && !fill;
+    let defines: &[(&str, i64)] = if shaded { &[("SHADE", 1)] } else { &[] };
+    let program = assemble_kernel_with(source, name, defines)?;
+    let mut layout = layout.clone();
     if !fill {
-        check_local_store(&program, layout)?;
+        check_local_store(&program, &layout)?;
         check_leaves_fit(staged)?;
     }
+    if shaded {
+        // The shading area goes above everything the kernel carves at `cache_area`.
+        let start = symbol(&program, "cache_area")
+            .ok_or_else(|| "the kernel has no cache_area".to_string())?;
+        let p = &layout.params;
+        let carved = crate::kernel_abi::carved_bytes(
+            1 << p.bvh_cache_log2,
+            1 << p.tri_cache_log2,
+            p.sht_contexts.max(1),
+        );
+        layout.set_shading_area(start + carved)?;
+    }
+    let layout = &layout;
+    let regions = traffic_regions(staged, layout);
     let mut memory = MainMemory::new(layout.memory_image(staged));
     let mut spus: Vec<Spu> = (0..spes)
         .map(|i| {
@@ -248,6 +345,7 @@ pub fn render_frame_with(
             if std::env::var_os("SPU_NO_TIMING").is_none() {
                 spu.enable_timing(timing.clone());
             }
+            spu.count_traffic(regions.iter().map(|(_, s, e)| (*s, *e)).collect());
             if options.event_log {
                 spu.enable_event_log();
             }
@@ -349,7 +447,40 @@ pub fn render_frame_with(
         }
     }
     let events = spus.iter_mut().map(|spu| spu.take_events()).collect();
+    let (colour_buffer, shade_counters) = match &layout.shading {
+        Some(shading) if shaded => {
+            let at = shading.colour_addr as usize;
+            let area = layout.params.ls_shading as usize + SHADE_STATS_OFFSET;
+            let counters = spus
+                .iter()
+                .map(|spu| {
+                    // The PPE reads the counters from each SPE's memory-mapped local store.
+                    std::array::from_fn(|i| {
+                        let w = &spu.ls()[area + 16 * i..area + 16 * i + 4];
+                        u32::from_be_bytes([w[0], w[1], w[2], w[3]]) as u64
+                    })
+                })
+                .collect();
+            (
+                Some(memory.bytes()[at..at + shading.colour_len].to_vec()),
+                counters,
+            )
+        }
+        _ => (None, Vec::new()),
+    };
+    let traffic = regions
+        .iter()
+        .enumerate()
+        .map(|(i, (name, _, _))| {
+            let read = spus.iter().map(|s| s.traffic().read[i]).sum();
+            let written = spus.iter().map(|s| s.traffic().written[i]).sum();
+            (name.clone(), read, written)
+        })
+        .collect();
     Ok(FrameRun {
+        traffic,
+        colour_buffer,
+        shade_counters,
         events,
         frame_buffer: memory.bytes()[fb..fb + layout.frame_buffer_len].to_vec(),
         frame_cycles: spus_report.iter().map(|s| s.cycles).max().unwrap_or(0),

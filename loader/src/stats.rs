@@ -39,6 +39,119 @@ pub struct FrameStats {
     pub intersection: Option<SectionStats>,
     /// The timing model's totals over all SPUs; null without the timing model.
     pub totals: Option<ProfileTotals>,
+    /// Frames per second at `clock_ghz` (beside `mrays_per_sec`, the paper's Table 5).
+    #[serde(default)]
+    pub fps: f64,
+    /// Rays cast, by kind.
+    #[serde(default)]
+    pub rays_by_kind: RaysByKind,
+    /// The paper's Table 4 (shaded frames only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub table4: Option<Table4>,
+    /// The paper's Table 6: kilobytes per frame by main-memory region, counted by the MFC.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub table6: Option<Table6>,
+    /// The shading code (`shade_packet` .. `shade_end`, shaded frames with the timing model).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shading: Option<SectionStats>,
+}
+
+/// Rays cast in a frame, by kind.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RaysByKind {
+    pub primary: u64,
+    pub shadow: u64,
+}
+
+/// The shading module's i-set and cache figures (the paper's Table 4). Keys missing from a
+/// file read as 0.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Table4 {
+    /// Intersection packets (4 rays, at least one hit) whose rays all hit one triangle.
+    pub same_triangle_pct: f64,
+    /// Shading passes (distinct materials) per 8x8 packet.
+    pub passes_per_packet: f64,
+    pub vertex_cache_hit_pct: f64,
+    pub material_cache_hit_pct: f64,
+    /// Triangle records shading found in the traversal's triangle cache.
+    pub triangle_record_hit_pct: f64,
+}
+
+/// Kilobytes (1024 bytes) per frame moved by the MFCs, per main-memory region. Keys
+/// missing from a file read as 0.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Table6 {
+    pub bvh_nodes_kb: f64,
+    pub triangle_records_kb: f64,
+    pub vertex_data_kb: f64,
+    pub shader_data_kb: f64,
+    /// The sum of the four reads above (the paper's total).
+    pub total_read_kb: f64,
+    /// Written: the 32-bit colour frame buffer (4096 KB at 1024x1024).
+    pub frame_buffer_written_kb: f64,
+    /// Written: the packet result blocks (hit, t, grey per ray; for validation).
+    pub result_blocks_written_kb: f64,
+}
+
+impl Table4 {
+    /// From the shading module's counters summed over the SPUs.
+    pub fn new(counters: &[crate::runtime::ShadeCounters]) -> Option<Table4> {
+        if counters.is_empty() {
+            return None;
+        }
+        let sum = |i: usize| counters.iter().map(|c| c[i]).sum::<u64>();
+        let pct = |x: u64, of: u64| {
+            if of > 0 {
+                rounded(100.0 * x as f64 / of as f64, 2)
+            } else {
+                0.0
+            }
+        };
+        let (groups, same, passes, packets) = (sum(0), sum(1), sum(2), sum(3));
+        let (vmiss, mlook, mmiss, tlook, tmiss) = (sum(5), sum(6), sum(7), sum(8), sum(9));
+        let vlook = 3 * tlook;
+        Some(Table4 {
+            same_triangle_pct: pct(same, groups),
+            passes_per_packet: if packets > 0 {
+                rounded(passes as f64 / packets as f64, 3)
+            } else {
+                0.0
+            },
+            vertex_cache_hit_pct: pct(vlook - vmiss.min(vlook), vlook),
+            material_cache_hit_pct: pct(mlook - mmiss.min(mlook), mlook),
+            triangle_record_hit_pct: pct(tlook - tmiss.min(tlook), tlook),
+        })
+    }
+}
+
+impl Table6 {
+    /// From the per-region traffic of a frame (`runtime::traffic_regions`' names).
+    pub fn new(traffic: &[(String, u64, u64)]) -> Option<Table6> {
+        let find = |name: &str| traffic.iter().find(|(n, _, _)| n == name);
+        let kb = |name: &str, written: bool| {
+            find(name).map_or(0.0, |(_, r, w)| {
+                rounded((if written { *w } else { *r }) as f64 / 1024.0, 2)
+            })
+        };
+        find("colour_frame_buffer")?;
+        let (nodes, tris, verts, mats) = (
+            kb("bvh_nodes", false),
+            kb("triangle_records", false),
+            kb("vertices", false),
+            kb("materials", false),
+        );
+        Some(Table6 {
+            bvh_nodes_kb: nodes,
+            triangle_records_kb: tris,
+            vertex_data_kb: verts,
+            shader_data_kb: mats,
+            total_read_kb: rounded(nodes + tris + verts + mats, 2),
+            frame_buffer_written_kb: kb("colour_frame_buffer", true),
+            result_blocks_written_kb: kb("result_blocks", true),
+        })
+    }
 }
 
 /// What one SPU did.
@@ -53,6 +166,10 @@ pub struct SpuStats {
 pub struct Validation {
     pub pixels: usize,
     pub mismatches: usize,
+    /// Shaded frames: pixels whose colour differs from the reference shading by more than
+    /// `shading::COLOUR_TOLERANCE` in a channel.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub colour_mismatches: Option<usize>,
 }
 
 /// Per-packet averages, percentages and per-SPU speed, as in the paper's Table 2.
@@ -291,13 +408,33 @@ impl FrameStats {
                     tiles: s.tiles,
                 })
                 .collect(),
-            validation: validation.map(|(pixels, mismatches)| Validation { pixels, mismatches }),
+            validation: validation.map(|(pixels, mismatches)| Validation {
+                pixels,
+                mismatches,
+                colour_mismatches: None,
+            }),
             table2: Table2::new(run, rays, clock_ghz),
             config: run.config.clone(),
             caches: CacheStats::new(run),
             traversal: section(run, "trav", "leaf"),
             intersection: section(run, "leaf", "packet_done"),
             totals: run.profile.as_ref().map(|p| ProfileTotals::new(&p.totals)),
+            fps: if seconds > 0.0 {
+                rounded(1.0 / seconds, 3)
+            } else {
+                0.0
+            },
+            rays_by_kind: RaysByKind {
+                primary: rays,
+                shadow: 0,
+            },
+            table4: Table4::new(&run.shade_counters),
+            table6: Table6::new(&run.traffic),
+            shading: if run.shade_counters.is_empty() {
+                None
+            } else {
+                section(run, "shade_packet", "shade_end")
+            },
         }
     }
 

@@ -834,3 +834,23 @@ fn four_spus_share_the_chip_memory_bandwidth() {
     );
     assert!(last > 2 * alone);
 }
+
+/// The per-region byte counters (the paper's Table 6 bandwidth): gets count as read and
+/// puts as written in every region they overlap; bytes outside the regions are not counted.
+#[test]
+fn traffic_is_counted_per_named_region() {
+    let mut body = String::new();
+    body += &dma(0x8000, 0x1000, 64, 1, 0x40); // region 0
+    body += &dma(0x8100, 0x1ff0, 32, 1, 0x40); // straddles regions 0 and 1: 16 + 16
+    body += &dma(0x8200, 0x3000, 128, 1, 0x40); // in no region
+    body += &wait(0b10, 2, 10);
+    body += &dma(0x8000, 0x2100, 48, 2, 0x20); // a put into region 1
+    body += &wait(0b100, 2, 11);
+    let mut spu = load(&body);
+    spu.count_traffic(vec![(0x1000, 0x2000), (0x2000, 0x2800)]);
+    let mut mem = memory();
+    assert_eq!(spu.run(&mut mem, 1_000_000), StopReason::Stop(0x100));
+    let traffic = spu.traffic();
+    assert_eq!(traffic.read, vec![64 + 16, 16]);
+    assert_eq!(traffic.written, vec![0, 48]);
+}

@@ -6,9 +6,11 @@ use crate::exit::{self, Error, Status};
 use crate::options;
 use spu_loader::camera::Camera;
 use spu_loader::frame::{FrameLayout, SCENE_BASE};
+use spu_loader::kernel_abi::{decode_colour_buffer, ShadingBlock, SHADE_SHADOWS, SHADE_SIMPLE};
 use spu_loader::kernel_abi::{decode_frame_buffer, PixelResult, MISS};
 use spu_loader::reference::Reference;
 use spu_loader::runtime::FrameError;
+use spu_loader::shading::{self, Light, ShadeMode};
 use spu_loader::{procedural, Bvh, BvhConfig, Scene, StagedScene};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -53,6 +55,23 @@ pub struct Args {
     /// Run the fill pattern program instead of the ray tracer (tests the runtime).
     #[arg(long)]
     fill: bool,
+    /// What each pixel gets: none (primary rays, the eye-light grey), simple (diffuse
+    /// shading with the material colour and the interpolated normal, point lights) or
+    /// shadows (simple plus one shadow ray per light).
+    #[arg(long, default_value = "none", value_parser = ShadeMode::parse)]
+    shade: ShadeMode,
+    /// A point light x,y,z[,r,g,b] (repeatable, up to 8; default: the scene's own).
+    #[arg(long = "light", value_parser = Light::parse, allow_hyphen_values = true)]
+    lights: Vec<Light>,
+    /// Shadow packets stop as soon as every ray is occluded (on|off).
+    #[arg(long = "shadow-early", default_value = "off", value_parser = shadow_early, action = clap::ArgAction::Set)]
+    shadow_early: bool,
+    /// Entries of the direct-mapped vertex cache (power of two, 16..256).
+    #[arg(long = "vertex-cache", default_value_t = 64, value_parser = shading_cache)]
+    vertex_cache: u32,
+    /// Entries of the direct-mapped material cache (power of two, 16..256).
+    #[arg(long = "material-cache", default_value_t = 64, value_parser = shading_cache)]
+    material_cache: u32,
     /// Output image (PNG).
     #[arg(short = 'o', long, default_value = "render.png")]
     output: PathBuf,
@@ -89,6 +108,25 @@ fn cache_lines(text: &str) -> Result<u32, String> {
     spu_loader::kernel_abi::check_kernel_options(lines, lines, 1, 1)
         .map_err(|_| format!("{lines} lines: must be a power of two from 128 to 1024"))?;
     Ok(lines)
+}
+
+/// Whether the kernel traces shadow packets (`--shade shadows`); until it does, the mode
+/// is refused before any work and `spu paper` says why its shadow rows are empty.
+pub const KERNEL_TRACES_SHADOWS: bool = false;
+
+/// `--shadow-early`: on or off.
+fn shadow_early(text: &str) -> Result<bool, String> {
+    shading::parse_on_off("--shadow-early", text)
+}
+
+/// `--vertex-cache` / `--material-cache`: a power of two from 16 to 256 entries.
+fn shading_cache(text: &str) -> Result<u32, String> {
+    match text.parse::<u32>() {
+        Ok(n) if n.is_power_of_two() && (16..=256).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "{text:?}: must be a power of two from 16 to 256 entries"
+        )),
+    }
 }
 
 /// `--assoc`: 1 or 4 ways.
@@ -184,6 +222,25 @@ fn check_options(args: &Args) -> exit::Result<Option<Camera>> {
             "--validate compares the ray tracer's hits; --fill renders none",
         ));
     }
+    if args.lights.len() > shading::MAX_LIGHTS {
+        return Err(Error::input(format!(
+            "{} --light options: at most {} lights",
+            args.lights.len(),
+            shading::MAX_LIGHTS
+        )));
+    }
+    if args.shade == ShadeMode::Shadows && !KERNEL_TRACES_SHADOWS {
+        return Err(Error::input(
+            "--shade shadows: the kernel does not trace shadow packets yet (the host reference \
+             does, loader::reference::Reference::shade); use --shade simple",
+        ));
+    }
+    if args.fill && args.shade != ShadeMode::None {
+        return Err(Error::input(format!(
+            "--fill runs the fill program, which does not shade: drop --shade {}",
+            args.shade.name()
+        )));
+    }
     let camera = match &args.camera {
         Some(text) => Some(Camera::parse(text).map_err(|e| format!("--camera: {e}"))?),
         None => None,
@@ -239,6 +296,29 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         args.tri_cache,
     )?
     .with_kernel_options(args.assoc, args.sht)?;
+    let lights = if args.lights.is_empty() {
+        shading::default_lights(&scene)
+    } else {
+        args.lights.clone()
+    };
+    let layout = match args.shade {
+        ShadeMode::None => layout,
+        mode => layout.with_shading(
+            &staged,
+            ShadingBlock {
+                mode: if mode == ShadeMode::Shadows {
+                    SHADE_SHADOWS
+                } else {
+                    SHADE_SIMPLE
+                },
+                shadow_early: args.shadow_early,
+                vertex_cache_log2: args.vertex_cache.trailing_zeros(),
+                material_cache_log2: args.material_cache.trailing_zeros(),
+                lights: lights.clone(),
+                ..Default::default()
+            },
+        )?,
+    };
     if !args.quiet {
         eprintln!(
             "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
@@ -287,18 +367,30 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     })?;
     let host_seconds = sim_started.elapsed().as_secs_f64();
     let pixels = decode_frame_buffer(&run.frame_buffer, args.width, args.height);
-    write_png(&args.output, &pixels, args.width, args.height)?;
+    let colours: Vec<u32> = match &run.colour_buffer {
+        Some(buffer) => decode_colour_buffer(buffer, args.width, args.height),
+        None => pixels.iter().map(|p| p.rgba).collect(),
+    };
+    write_png(&args.output, &colours, args.width, args.height)?;
 
     let record_to_original: Vec<u32> = staged.triangles.iter().map(|t| t.original_index).collect();
+    let mut colour_validation = None;
     let validation = if args.validate && !args.fill {
-        let reference =
-            Reference::from_staged(&staged).render(&scene.camera, args.width, args.height, threads);
-        Some(validate(
-            &pixels,
-            &reference,
-            &record_to_original,
-            args.width,
-        ))
+        let reference = Reference::from_staged(&staged);
+        let hits = reference.render(&scene.camera, args.width, args.height, threads);
+        if run.colour_buffer.is_some() {
+            let expected = reference.shade_image(
+                &hits,
+                &scene.camera,
+                args.width,
+                args.height,
+                &lights,
+                args.shade == ShadeMode::Shadows,
+                threads,
+            );
+            colour_validation = Some(validate_colours(&colours, &expected, args.width));
+        }
+        Some(validate(&pixels, &hits, &record_to_original, args.width))
     } else {
         None
     };
@@ -323,11 +415,18 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         args.output.display()
     );
     }
-    if let Some((n, bad)) = validation {
-        outln!("validation: {bad} of {n} pixels differ from the host reference");
+    match (validation, colour_validation) {
+        (Some((n, bad)), Some(off)) => outln!(
+            "validation: {bad} of {n} pixels differ from the host reference in the hit triangle, {off} in colour (more than {} of 255 in a channel)",
+            shading::COLOUR_TOLERANCE
+        ),
+        (Some((n, bad)), None) => {
+            outln!("validation: {bad} of {n} pixels differ from the host reference")
+        }
+        _ => {}
     }
     if let Some(path) = &args.stats {
-        let json = spu_loader::stats::FrameStats::new(
+        let mut stats = spu_loader::stats::FrameStats::new(
             &run,
             &spu_loader::stats::FrameSetup {
                 scene: &args.scene,
@@ -336,8 +435,11 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
                 clock_ghz: args.clock,
             },
             validation,
-        )
-        .to_json();
+        );
+        if let Some(v) = stats.validation.as_mut() {
+            v.colour_mismatches = colour_validation;
+        }
+        let json = stats.to_json();
         exit::write_file(path, json.as_bytes())?;
     }
     if args.heatmap.is_some() || args.trace.is_some() {
@@ -350,29 +452,36 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         )?;
     }
     if let Some(path) = &args.profile {
-        let text = kernel_profile(&run, args.fill).map_err(Error::failure)?;
+        let text = kernel_profile(&run, args.fill, args.shade != ShadeMode::None)
+            .map_err(Error::failure)?;
         exit::write_file(path, text.as_bytes())?;
     }
-    Ok(validation_status(validation).into())
+    Ok(validation_status(validation, colour_validation).into())
 }
 
-/// `--validate` that found differing pixels exits 3 (after writing every output).
-fn validation_status(validation: Option<(usize, usize)>) -> Status {
+/// `--validate` that found differing pixels (hit triangles, or colours beyond the
+/// tolerance) exits 3 (after writing every output).
+fn validation_status(validation: Option<(usize, usize)>, colours_off: Option<usize>) -> Status {
     match validation {
-        Some((_, bad)) if bad > 0 => Status::Differences,
+        Some((_, bad)) if bad + colours_off.unwrap_or(0) > 0 => Status::Differences,
         _ => Status::Success,
     }
 }
 
 /// The annotated listing of the kernel that ran, from its image and symbols.
-fn kernel_profile(run: &spu_loader::runtime::FrameRun, fill: bool) -> Result<String, String> {
+fn kernel_profile(
+    run: &spu_loader::runtime::FrameRun,
+    fill: bool,
+    shaded: bool,
+) -> Result<String, String> {
     use spu_isa::profile::{annotated_listing, executed_lines, ListingOptions};
     let profile = run
         .profile
         .as_ref()
         .ok_or("no profile: the timing model was off (SPU_NO_TIMING)")?;
     let (source, name) = spu_loader::kernels::frame_program(fill);
-    let program = spu_loader::runtime::assemble_kernel(source, name)?;
+    let defines: &[(&str, i64)] = if shaded { &[("SHADE", 1)] } else { &[] };
+    let program = spu_loader::runtime::assemble_kernel_with(source, name, defines)?;
     let lines = executed_lines(profile, &program.image, &program.symbols);
     let opts = ListingOptions {
         range: None,
@@ -381,11 +490,30 @@ fn kernel_profile(run: &spu_loader::runtime::FrameRun, fill: bool) -> Result<Str
     Ok(annotated_listing(profile, &lines, &opts))
 }
 
-fn write_png(path: &PathBuf, pixels: &[PixelResult], width: u32, height: u32) -> exit::Result<()> {
+/// Colours against the reference shading: the pixels with a channel off by more than
+/// [`shading::COLOUR_TOLERANCE`]; the first few are printed.
+fn validate_colours(colours: &[u32], expected: &[u32], width: u32) -> usize {
+    let mut off = 0;
+    for (i, (&c, &e)) in colours.iter().zip(expected).enumerate() {
+        if shading::channel_difference(c, e) > shading::COLOUR_TOLERANCE {
+            if off < 10 {
+                eprintln!(
+                    "colour mismatch at ({}, {}): kernel {c:08x} / reference {e:08x}",
+                    i as u32 % width,
+                    i as u32 / width
+                );
+            }
+            off += 1;
+        }
+    }
+    off
+}
+
+fn write_png(path: &PathBuf, colours: &[u32], width: u32, height: u32) -> exit::Result<()> {
     use image::ImageEncoder as _;
-    let mut rgb = Vec::with_capacity(pixels.len() * 3);
-    for p in pixels {
-        let [r, g, b, _] = p.rgba.to_be_bytes();
+    let mut rgb = Vec::with_capacity(colours.len() * 3);
+    for colour in colours {
+        let [r, g, b, _] = colour.to_be_bytes();
         rgb.extend([r, g, b]);
     }
     let mut png = Vec::new();
@@ -416,12 +544,18 @@ mod tests {
         let same = [hit(10, 1.0), Hit::NONE, hit(11, 2.0)];
         let records = [10, 11];
         assert_eq!(validate(&kernel, &same, &records, 3), (3, 0));
-        assert_eq!(validation_status(Some((3, 0))), Status::Success);
+        assert_eq!(validation_status(Some((3, 0)), None), Status::Success);
+        assert_eq!(validation_status(Some((3, 0)), Some(0)), Status::Success);
+        assert_eq!(
+            validation_status(Some((3, 0)), Some(1)),
+            Status::Differences,
+            "a colour off is a difference"
+        );
         // A miss where the reference hits, and a hit at another distance.
         let other = [hit(10, 1.0), hit(10, 5.0), hit(11, 2.5)];
         assert_eq!(validate(&kernel, &other, &records, 3), (3, 2));
-        assert_eq!(validation_status(Some((3, 2))), Status::Differences);
+        assert_eq!(validation_status(Some((3, 2)), None), Status::Differences);
         assert_eq!(ExitCode::from(Status::Differences), ExitCode::from(3));
-        assert_eq!(validation_status(None), Status::Success);
+        assert_eq!(validation_status(None, None), Status::Success);
     }
 }

@@ -117,6 +117,8 @@ pub struct Caps {
     pub sht: bool,
     /// `--shade none|simple|shadows`.
     pub shade: bool,
+    /// `--shade shadows` runs (the kernel traces shadow packets).
+    pub shadows: bool,
 }
 
 impl Caps {
@@ -127,6 +129,7 @@ impl Caps {
             assoc: has("assoc"),
             sht: has("sht"),
             shade: has("shade"),
+            shadows: has("shade") && crate::cmd_render::KERNEL_TRACES_SHADOWS,
         }
     }
 }
@@ -185,6 +188,12 @@ impl Job {
         if want.sht != 1 && !caps.sht {
             return Err(
                 "needs software hyperthreading (`spu render --sht N`), not built yet".into(),
+            );
+        }
+        if want.shade == "shadows" && caps.shade && !caps.shadows {
+            return Err(
+                "needs shadow packets in the kernel (`spu render --shade shadows`), not built yet"
+                    .into(),
             );
         }
         if want.shade != "none" && !caps.shade {

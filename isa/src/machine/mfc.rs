@@ -414,7 +414,13 @@ impl Spu {
     /// Main memory as this SPU sees it: the state at the last boundary with its own
     /// logged writes (not yet applied) laid over it, in issue order. Conditional stores
     /// whose outcome the boundary has not decided yet are left out.
-    pub(super) fn read_main(&self, memory: &MainMemory, range: std::ops::Range<usize>) -> Vec<u8> {
+    pub(super) fn read_main(
+        &mut self,
+        memory: &MainMemory,
+        range: std::ops::Range<usize>,
+    ) -> Vec<u8> {
+        self.traffic
+            .count(range.start as u64, range.len() as u64, false);
         let mut data = memory.bytes()[range.clone()].to_vec();
         for w in &self.writes {
             if matches!(w.kind, WriteKind::Conditional) {
@@ -430,6 +436,7 @@ impl Spu {
     }
 
     pub(super) fn log_write(&mut self, cycle: u64, ea: u32, data: Vec<u8>, kind: WriteKind) {
+        self.traffic.count(ea as u64, data.len() as u64, true);
         self.seq += 1;
         self.writes.push(LoggedWrite {
             cycle,
@@ -438,5 +445,41 @@ impl Spu {
             data,
             kind,
         });
+    }
+}
+
+/// Bytes an SPU's MFC moved from and to named main-memory regions (the host names them,
+/// e.g. the scene's node, triangle, vertex and material arrays and the frame buffer): the
+/// per-region bandwidth of the paper's Table 6. Bytes outside every region are not counted.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Traffic {
+    /// `(start, end)` effective addresses, end exclusive.
+    pub regions: Vec<(u64, u64)>,
+    /// Bytes read (gets) and written (puts) per region.
+    pub read: Vec<u64>,
+    pub written: Vec<u64>,
+}
+
+impl Traffic {
+    pub fn new(regions: Vec<(u64, u64)>) -> Traffic {
+        let n = regions.len();
+        Traffic {
+            regions,
+            read: vec![0; n],
+            written: vec![0; n],
+        }
+    }
+
+    fn count(&mut self, ea: u64, len: u64, write: bool) {
+        for (i, &(start, end)) in self.regions.iter().enumerate() {
+            let overlap = (ea + len).min(end).saturating_sub(ea.max(start));
+            if overlap > 0 {
+                if write {
+                    self.written[i] += overlap;
+                } else {
+                    self.read[i] += overlap;
+                }
+            }
+        }
     }
 }

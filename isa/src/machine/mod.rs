@@ -45,6 +45,7 @@ pub use channels::{ch, event};
 pub use events::SpuEvent;
 pub use memory::{apply_quantum, MainMemory};
 pub use mfc::{
-    signal_notify_ea, PROBLEM_STATE_OFFSET, RAW_SPU_BASE, RAW_SPU_STRIDE, SIG_NOTIFY_OFFSETS,
+    signal_notify_ea, Traffic, PROBLEM_STATE_OFFSET, RAW_SPU_BASE, RAW_SPU_STRIDE,
+    SIG_NOTIFY_OFFSETS,
 };
 pub use spu::{Spu, StopReason};

@@ -135,6 +135,8 @@ pub struct Spu {
     /// the boundary to add.
     pub(super) bus_free_at: u64,
     pub(super) bus_log: Vec<(u64, u32)>,
+    /// Bytes moved per host-named main-memory region.
+    pub(super) traffic: super::mfc::Traffic,
     pub(super) list_stall: u32,
     pub(super) stalled_list: Option<(u8, u8, u32, u32, u32, u32)>,
     pub(super) atomic_stat: Option<(u32, u64)>,
@@ -229,6 +231,7 @@ impl Spu {
             dma_free_at: 0,
             bus_free_at: 0,
             bus_log: Vec::new(),
+            traffic: Default::default(),
             list_stall: 0,
             stalled_list: None,
             atomic_stat: None,
@@ -306,6 +309,17 @@ impl Spu {
 
     pub fn ls(&self) -> &[u8] {
         &self.core.ls[..]
+    }
+
+    /// Counts the MFC's bytes per main-memory region from now on (see
+    /// [`super::mfc::Traffic`]).
+    pub fn count_traffic(&mut self, regions: Vec<(u64, u64)>) {
+        self.traffic = super::mfc::Traffic::new(regions);
+    }
+
+    /// The bytes counted per region so far.
+    pub fn traffic(&self) -> &super::mfc::Traffic {
+        &self.traffic
     }
 
     /// Writes local store from the host (re-decoding what it covers).

@@ -1,0 +1,341 @@
+//! The shading module (`kernels/modules/shade.s`) alone on the simulator: a small driver
+//! gives it packets traced by the host reference (hit records, distances, directions), and
+//! its colour blocks are checked against the reference shading, its i-set, pass and cache
+//! counters against a host model of the same i-sets and direct-mapped caches.
+
+use std::collections::HashMap;
+
+use spu_isa::machine::{MainMemory, Spu, StopReason};
+use spu_loader::frame::{FrameLayout, SCENE_BASE};
+use spu_loader::kernel_abi::{ShadingBlock, SHADE_SIMPLE};
+use spu_loader::reference::{Hit, Reference};
+use spu_loader::shading::{self, Light};
+use spu_loader::{procedural, Bvh, BvhConfig, Scene, StagedScene};
+
+/// The driver: fetches the parameter block, shades the packet in the ray arrays (laid out
+/// as in a packet context), waits for its colour block and stops. The frame's registers
+/// the module reads (ZERO, EATRIS, the triangle cache's TTAGS, TDATA, TMASK) are set by
+/// the host; the shading area is at `area`. The host's 16-line triangle cache holds
+/// records 0 to 15, so the module finds some records there and fetches the others.
+const DRIVER: &str = r#"
+        .include "layout.inc"
+        .set ZERO, 2
+        .set EATRIS, 13
+        .set TTAGS, 20
+        .set TDATA, 21
+        .set TMASK, 22
+        .data
+        .align 7
+params: .space 128
+packet: .space 16
+ray_dx: .space 256
+ray_dy: .space 256
+ray_dz: .space 256
+ray_rx: .space 768
+ray_t:  .space 256
+ray_id: .space 256
+        .align 7
+tri_tags: .space 16 * 16
+tri_lines: .space 16 * 64
+        .align 7
+area:
+        .text
+        .global _start
+_start: ila     $66, params
+        il      $67, 128
+        wrch    $MFC_LSA, $66
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $4
+        wrch    $MFC_Size, $67
+        wrch    $MFC_TagID, ZERO
+        il      $67, 0x40
+        wrch    $MFC_Cmd, $67
+        il      $67, 1
+        wrch    $MFC_WrTagMask, $67
+        il      $67, 2
+        wrch    $MFC_WrTagUpdate, $67
+        rdch    $67, $MFC_RdTagStat
+        ila     $68, ray_dx
+        lqa     $69, packet
+        brsl    $0, shade_packet
+        il      $67, 0xc0
+        wrch    $MFC_WrTagMask, $67
+        il      $67, 2
+        wrch    $MFC_WrTagUpdate, $67
+        rdch    $67, $MFC_RdTagStat
+        stop    0x2000
+        .include "modules/shade.s"
+"#;
+
+const SHADE_MODULE: &str = include_str!("../../kernels/modules/shade.s");
+
+struct Harness {
+    spu: Spu,
+    memory: MainMemory,
+    layout: FrameLayout,
+    symbols: HashMap<String, u32>,
+    entry: u32,
+}
+
+fn harness(staged: &StagedScene, scene: &Scene, block: ShadingBlock) -> Harness {
+    let basis = scene.camera.basis(64, 64);
+    let layout = FrameLayout::new(staged, &basis, 64, 64, 1, 256, 256).unwrap();
+    let opts = spu_asm::Options {
+        virtual_files: spu_loader::kernels::include_files(),
+        ..Default::default()
+    };
+    let out = spu_asm::assemble(DRIVER, "driver.s", &opts).unwrap_or_else(|d| {
+        panic!(
+            "{}",
+            d.iter()
+                .map(|e| e.to_string())
+                .collect::<Vec<_>>()
+                .join("\n")
+        )
+    });
+    let symbols: HashMap<String, u32> = out.symbols.into_iter().collect();
+    let mut layout = layout.with_shading(staged, block).unwrap();
+    layout.set_shading_area(symbols["area"]).unwrap();
+    let mut spu = Spu::new(0);
+    spu.load_image(&out.image);
+    let memory = MainMemory::new(layout.memory_image(staged));
+    spu.set_reg(13, [staged.header.triangle_addr, 0, 0, 0]);
+    spu.set_reg(20, [symbols["tri_tags"], 0, 0, 0]);
+    spu.set_reg(21, [symbols["tri_lines"], 0, 0, 0]);
+    spu.set_reg(22, [15, 0, 0, 0]);
+    for r in 0..16u32 {
+        spu.write_ls(
+            symbols["tri_tags"] + 16 * r,
+            &[r.to_be_bytes(), [0; 4], [0; 4], [0; 4]].concat(),
+        );
+        let mut line = [0u8; 64];
+        staged.triangles[r as usize].write_be(&mut line);
+        spu.write_ls(symbols["tri_lines"] + 64 * r, &line);
+    }
+    Harness {
+        spu,
+        memory,
+        layout,
+        symbols,
+        entry: out.entry,
+    }
+}
+
+/// The host's view of one packet: hit, origin and direction per ray.
+struct Packet {
+    hits: Vec<Hit>,
+    dirs: Vec<glam::Vec3>,
+}
+
+fn trace_packet(reference: &Reference, scene: &Scene, x0: u32, y0: u32) -> Packet {
+    let basis = scene.camera.basis(64, 64);
+    let dirs: Vec<glam::Vec3> = (0..64)
+        .map(|i| basis.direction(x0 + i % 8, y0 + i / 8))
+        .collect();
+    let hits = dirs
+        .iter()
+        .map(|&d| reference.trace(basis.origin, d))
+        .collect();
+    Packet { hits, dirs }
+}
+
+impl Harness {
+    fn ls_words(&mut self, symbol: &str, words: impl IntoIterator<Item = u32>) {
+        let bytes: Vec<u8> = words.into_iter().flat_map(|w| w.to_be_bytes()).collect();
+        self.spu.write_ls(self.symbols[symbol], &bytes);
+    }
+
+    /// Shades `packet` as packet number `index` of tile 0 and returns its 64 colours.
+    fn shade(&mut self, packet: &Packet, index: u32) -> Vec<u32> {
+        for (name, axis) in [("ray_dx", 0), ("ray_dy", 1), ("ray_dz", 2)] {
+            let words: Vec<u32> = packet.dirs.iter().map(|d| d[axis].to_bits()).collect();
+            self.ls_words(name, words);
+        }
+        self.ls_words("ray_t", packet.hits.iter().map(|h| h.t.to_bits()));
+        self.ls_words("ray_id", packet.hits.iter().map(|h| h.record));
+        self.ls_words("packet", [index, 0, 0, 0]);
+        self.spu.set_pc(self.entry);
+        self.spu.set_reg(4, [self.layout.param_addr, 0, 0, 0]);
+        let stop = self.spu.run(&mut self.memory, 100_000_000);
+        assert_eq!(stop, StopReason::Stop(0x2000));
+        let colour = self.layout.shading.as_ref().unwrap().colour_addr + index * 256;
+        (0..64)
+            .map(|i| self.memory.read_u32(colour + 4 * i))
+            .collect()
+    }
+
+    /// The module's counters (groups, same, passes, packets, vertex lookups and misses,
+    /// material lookups and misses, triangle lookups and misses).
+    fn counters(&self) -> [u32; 10] {
+        let stats = self.symbols["area"] as usize + 16;
+        let ls = self.spu.ls();
+        std::array::from_fn(|i| {
+            let at = stats + 16 * i;
+            u32::from_be_bytes(ls[at..at + 4].try_into().unwrap())
+        })
+    }
+}
+
+/// The same i-sets, passes and direct-mapped caches, counted on the host.
+struct Model {
+    vertex_tags: Vec<u32>,
+    material_tags: Vec<u32>,
+    counters: [u32; 10],
+}
+
+impl Model {
+    fn new(vertex_entries: usize, material_entries: usize) -> Model {
+        Model {
+            vertex_tags: vec![u32::MAX; vertex_entries],
+            material_tags: vec![u32::MAX; material_entries],
+            counters: [0; 10],
+        }
+    }
+
+    fn packet(&mut self, reference: &Reference, hits: &[Hit]) {
+        let mut order = Vec::new();
+        for group in hits.chunks(4) {
+            if group.iter().all(|h| !h.is_hit()) {
+                continue;
+            }
+            self.counters[0] += 1;
+            let same = group.iter().all(|h| h.record == group[0].record);
+            self.counters[1] += same as u32;
+            let lanes = if same { &group[..1] } else { group };
+            for hit in lanes.iter().filter(|h| h.is_hit()) {
+                self.counters[8] += 1;
+                self.counters[4] += 3;
+                self.counters[9] += (hit.record >= 16) as u32;
+                for v in reference.triangles[hit.record as usize].vertices {
+                    let entry = v as usize % self.vertex_tags.len();
+                    if self.vertex_tags[entry] != v {
+                        self.vertex_tags[entry] = v;
+                        self.counters[5] += 1;
+                    }
+                }
+            }
+            for hit in group.iter().filter(|h| h.is_hit()) {
+                let material = reference.triangles[hit.record as usize].material;
+                if !order.contains(&material) {
+                    order.push(material);
+                }
+            }
+        }
+        for material in order {
+            self.counters[2] += 1;
+            self.counters[6] += 1;
+            let entry = material as usize % self.material_tags.len();
+            if self.material_tags[entry] != material {
+                self.material_tags[entry] = material;
+                self.counters[7] += 1;
+            }
+        }
+        self.counters[3] += 1;
+    }
+}
+
+fn room_setup() -> (Scene, StagedScene, Reference) {
+    let scene = procedural::room();
+    let bvh = Bvh::build(&scene, &BvhConfig::default());
+    let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
+    let reference = Reference::from_staged(&staged);
+    (scene, staged, reference)
+}
+
+fn block(lights: Vec<Light>, vertex_log2: u32, material_log2: u32) -> ShadingBlock {
+    ShadingBlock {
+        mode: SHADE_SIMPLE,
+        vertex_cache_log2: vertex_log2,
+        material_cache_log2: material_log2,
+        lights,
+        ..Default::default()
+    }
+}
+
+/// Every packet of a 64x64 room frame, shaded by the module, against the reference; the
+/// counters against the model (small caches, so that they miss and evict).
+#[test]
+fn shade_module_matches_the_reference_on_the_room() {
+    let (scene, staged, reference) = room_setup();
+    let lights = vec![
+        Light::white(glam::Vec3::new(-0.6, 2.7, 0.4)),
+        Light {
+            position: glam::Vec3::new(2.0, 1.0, 2.0),
+            colour: glam::Vec3::new(0.6, 0.3, 0.1),
+        },
+    ];
+    let mut h = harness(&staged, &scene, block(lights.clone(), 4, 4));
+    let mut model = Model::new(16, 16);
+    let basis = scene.camera.basis(64, 64);
+    let (mut pixels, mut off, mut worst) = (0, 0, 0);
+    let mut distinct = std::collections::HashSet::new();
+    for index in 0..64u32 {
+        let (x0, y0) = ((index % 8) * 8, (index / 8) * 8);
+        let packet = trace_packet(&reference, &scene, x0, y0);
+        let colours = h.shade(&packet, index);
+        model.packet(&reference, &packet.hits);
+        for (i, (&colour, hit)) in colours.iter().zip(&packet.hits).enumerate() {
+            let expected = reference.shade(hit, basis.origin, packet.dirs[i], &lights, false);
+            let difference = shading::channel_difference(colour, expected);
+            worst = worst.max(difference);
+            off += (difference > shading::COLOUR_TOLERANCE) as usize;
+            pixels += 1;
+            distinct.insert(colour);
+        }
+    }
+    assert_eq!(pixels, 4096);
+    assert_eq!(off, 0, "worst channel difference {worst}");
+    assert!(distinct.len() > 100, "{} colours", distinct.len());
+    let mut counters = h.counters();
+    counters[4] = 3 * counters[8]; // vertex lookups: three per record looked up
+    eprintln!(
+        "worst {worst}, {} colours, counters {counters:?}",
+        distinct.len()
+    );
+    assert_eq!(counters, model.counters);
+    assert!(
+        counters[1] > counters[0] / 2,
+        "same-triangle packets {counters:?}"
+    );
+    assert!(
+        counters[2] > counters[3],
+        "some packets need several passes"
+    );
+    assert!(counters[5] > 0 && counters[7] > 0, "the small caches miss");
+    assert!(
+        counters[9] > 0 && counters[9] < counters[8],
+        "the triangle cache hits some"
+    );
+}
+
+/// A packet that hits nothing is black, takes no pass and touches no cache.
+#[test]
+fn shade_module_leaves_misses_black() {
+    let (scene, staged, reference) = room_setup();
+    let mut h = harness(&staged, &scene, block(vec![], 6, 6));
+    let mut packet = trace_packet(&reference, &scene, 0, 0);
+    packet.hits = vec![Hit::NONE; 64];
+    let colours = h.shade(&packet, 3);
+    assert!(colours.iter().all(|&c| c == 0x0000_00ff));
+    assert_eq!(h.counters(), [0, 0, 0, 1, 0, 0, 0, 0, 0, 0]);
+    // Without lights, a hit is the ambient term of its material.
+    let packet = trace_packet(&reference, &scene, 24, 24);
+    let colours = h.shade(&packet, 4);
+    for (colour, hit) in colours.iter().zip(&packet.hits) {
+        let kd =
+            reference.materials[reference.triangles[hit.record as usize].material as usize].diffuse;
+        let expected = shading::pixel_colour(kd, glam::Vec3::ZERO);
+        assert!(shading::channel_difference(*colour, expected) <= 1);
+    }
+}
+
+/// The module's area size and the host's budget for it are the same number.
+#[test]
+fn shading_area_size_is_one_number() {
+    let line = SHADE_MODULE
+        .lines()
+        .find(|l| l.trim_start().starts_with(".set SH_AREA_BYTES,"))
+        .unwrap();
+    let value: usize = line.split(',').nth(1).unwrap().trim().parse().unwrap();
+    assert_eq!(value, spu_loader::kernel_abi::SHADING_AREA_BYTES);
+}

@@ -1,0 +1,84 @@
+//! `spu render --shade`, `--light`, `--shadow-early`: bad values are refused before any
+//! work with exit status 2; a shaded frame validates hits and colours and says so.
+
+use std::process::Command;
+
+fn spu(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_spu"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn bad_shading_options_exit_2_before_any_work() {
+    let dir = std::env::temp_dir().join(format!("spu-shade-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("x.png");
+    let out = out.to_str().unwrap();
+    let nine: Vec<String> = (0..9).map(|i| format!("--light=0,{i},0")).collect();
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["--shade", "phong"],
+        vec!["--light", "1,2"],
+        vec!["--light", "1,2,nan"],
+        vec!["--light", "0,0,0,1,-1,0"],
+        vec!["--shadow-early", "maybe"],
+        vec!["--vertex-cache", "100"],
+        vec!["--material-cache", "512"],
+        vec!["--shade", "shadows"],
+        vec!["--shade", "simple", "--fill"],
+        nine.iter().map(String::as_str).collect(),
+    ];
+    for case in cases {
+        let args = [
+            &["render", "--width", "8", "--height", "8", "-o", out][..],
+            &case,
+        ]
+        .concat();
+        let run = spu(&args);
+        assert_eq!(run.status.code(), Some(2), "{case:?}: {run:?}");
+        assert!(
+            !std::path::Path::new(out).exists(),
+            "{case:?} wrote an image"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_shaded_frame_validates_hits_and_colours() {
+    let dir = std::env::temp_dir().join(format!("spu-shade-ok-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("room.png");
+    let run = spu(&[
+        "render",
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "--shade",
+        "simple",
+        "--light",
+        "-0.6,2.7,0.4",
+        "--light=2,1,2,0.5,0.4,0.3",
+        "--validate",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert!(run.status.success(), "{run:?}");
+    assert!(
+        text.contains(
+            "0 of 4096 pixels differ from the host reference in the hit triangle, 0 in colour"
+        ),
+        "{text}"
+    );
+    let image = image::open(&png).unwrap().to_rgb8();
+    let distinct: std::collections::BTreeSet<[u8; 3]> = image.pixels().map(|p| p.0).collect();
+    assert!(
+        distinct.len() > 100,
+        "a coloured image: {} colours",
+        distinct.len()
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
