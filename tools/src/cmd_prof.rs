@@ -9,6 +9,10 @@ use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// Engine: the block compiler (jit; the default where the host has one) or the
+    /// interpreter (interp). Results are the same; only host speed differs.
+    #[arg(long, default_value_t = spu_isa::jit::Engine::host_default())]
+    engine: spu_isa::jit::Engine,
     /// Program: SPU assembly (.s), an SPU ELF or a flat image.
     file: PathBuf,
     /// Print JSON for tools.
@@ -26,6 +30,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<ExitCode, String> {
+    spu_isa::jit::Engine::set_default(args.engine);
     let (mut spu, symbols) = crate::cmd_run::load(&args.file)?;
     spu.enable_timing(Default::default());
     let mut memory = MainMemory::zeroed(args.memory);

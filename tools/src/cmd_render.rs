@@ -13,6 +13,10 @@ use std::time::Instant;
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// Engine: the block compiler (jit; the default where the host has one) or the
+    /// interpreter (interp). Results are the same; only host speed differs.
+    #[arg(long, default_value_t = spu_isa::jit::Engine::host_default())]
+    engine: spu_isa::jit::Engine,
     /// A built-in scene (room, conference, beetle) or an OBJ/PLY file (optionally .gz).
     #[arg(long, default_value = "room")]
     scene: String,
@@ -113,6 +117,7 @@ fn validate(
 }
 
 pub fn run(args: Args) -> Result<ExitCode, String> {
+    spu_isa::jit::Engine::set_default(args.engine);
     if !(1..=16).contains(&args.spes) {
         return Err(format!("--spes {}: must be 1 to 16", args.spes));
     }

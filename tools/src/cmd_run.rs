@@ -6,6 +6,10 @@ use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// Engine: the block compiler (jit; the default where the host has one) or the
+    /// interpreter (interp). Results are the same; only host speed differs.
+    #[arg(long, default_value_t = spu_isa::jit::Engine::host_default())]
+    engine: spu_isa::jit::Engine,
     /// An SPU ELF, a raw image loaded at 0, or an assembly source (.s).
     file: PathBuf,
     /// Stop after this many cycles.
@@ -80,6 +84,7 @@ pub fn load(file: &PathBuf) -> Result<(Spu, Vec<(String, u32)>), String> {
 }
 
 pub fn run(args: Args) -> Result<ExitCode, String> {
+    spu_isa::jit::Engine::set_default(args.engine);
     let (mut spu, _) = load(&args.file)?;
     for v in &args.mbox_in {
         if !spu.write_inbound_mailbox(number(v)? as u32) {

@@ -35,6 +35,7 @@
 //! model off the clock is the instruction count, so completion times stay deterministic.
 
 mod channels;
+mod compiled;
 pub mod exec;
 mod memory;
 mod mfc;
