@@ -2,7 +2,7 @@
 # shared counter (atomic getllar/putllc increment) and fills each packet block of the
 # frame buffer with a pattern, then writes its statistics and says "end of frame".
 #
-# Same protocol as raytrace.s: $3 = SPU index, $4 = parameter block EA. For every packet
+# Same protocol as primary.s: $3 = SPU index, $4 = parameter block EA. For every packet
 # of tile T the block's 64 triangle ids are T*64 + packet, the distances 1.0, the shades
 # 0x(index)(T)(packet)ff and the reserved words the SPU index, so the host can check that
 # every tile was written exactly once and by whom.

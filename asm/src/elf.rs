@@ -276,8 +276,9 @@ pub fn read_elf(bytes: &[u8]) -> Result<LoadedElf, String> {
     if shnum > 0 && shoff > 0 {
         let strtab_of = |i: usize| -> Result<(u32, u32), String> { Ok((sh(i, 4)?, sh(i, 5)?)) };
         let name = |table: (u32, u32), off: u32| -> String {
-            let start = (table.0 + off) as usize;
-            let end = (table.0 + table.1) as usize;
+            // Offsets from the file: sums that overflow name nothing, never panic.
+            let start = (table.0 as usize).saturating_add(off as usize);
+            let end = (table.0 as usize).saturating_add(table.1 as usize);
             bytes
                 .get(start..end.min(bytes.len()))
                 .map(|b| {
@@ -349,5 +350,26 @@ mod tests {
         let mut elf = write_elf(&[0; 4], &[(".text".into(), 0, 4, true)], &[], &[], 0);
         elf.truncate(60);
         assert!(read_elf(&elf).is_err());
+    }
+
+    #[test]
+    fn string_offsets_that_overflow_name_nothing() {
+        let mut elf = write_elf(
+            &[0; 4],
+            &[(".text".into(), 0, 4, true)],
+            &[("_start".into(), 0)],
+            &["_start".into()],
+            0,
+        );
+        // Every section's name offset (sh_name, the first word of each header) at the
+        // largest u32: added to the string table's offset it used to overflow.
+        let shoff = u32::from_be_bytes(elf[32..36].try_into().unwrap()) as usize;
+        let shnum = u16::from_be_bytes(elf[48..50].try_into().unwrap()) as usize;
+        for i in 1..shnum {
+            elf[shoff + 40 * i..shoff + 40 * i + 4].copy_from_slice(&u32::MAX.to_be_bytes());
+        }
+        let back = read_elf(&elf).unwrap();
+        assert!(back.sections.iter().all(|s| s.0.is_empty()));
+        assert_eq!(back.segments[0].1, vec![0; 4]);
     }
 }

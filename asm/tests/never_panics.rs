@@ -2,7 +2,11 @@
 //! assemble or come back as diagnostics.
 
 const SOURCES: &[&str] = &[
-    include_str!("../../kernels/raytrace.s"),
+    include_str!("../../kernels/modules/frame.s"),
+    include_str!("../../kernels/modules/raygen.s"),
+    include_str!("../../kernels/modules/traverse.s"),
+    include_str!("../../kernels/modules/triangle.s"),
+    include_str!("../../kernels/modules/output.s"),
     include_str!("../../kernels/fill.s"),
 ];
 
@@ -68,10 +72,16 @@ impl Lcg {
 fn mutated_sources_never_panic() {
     let mut rng = Lcg(42);
     let opts = spu_asm::Options {
-        virtual_files: vec![(
-            "layout.inc".into(),
-            ".set TRI_N_U, 0\n.set TRI_B_NU, 16\n.set TRI_C_NU, 32\n".into(),
-        )],
+        virtual_files: vec![
+            (
+                "layout.inc".into(),
+                ".set TRI_N_U, 0\n.set TRI_B_NU, 16\n.set TRI_C_NU, 32\n".into(),
+            ),
+            (
+                "modules/regs.inc".into(),
+                include_str!("../../kernels/modules/regs.inc").into(),
+            ),
+        ],
         ..Default::default()
     };
     for round in 0..300 {

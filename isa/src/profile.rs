@@ -11,6 +11,7 @@
 
 use crate::stall::{StallCause, STALL_CLASSES};
 use crate::table::Unit;
+use serde_json::{json, Value};
 use std::collections::HashMap;
 use std::fmt::Write as _;
 
@@ -305,46 +306,41 @@ impl Totals {
 
     /// The totals as a JSON object.
     pub fn json(&self) -> String {
-        let mut s = String::from("{");
-        let _ = write!(
-            s,
-            "\"cycles\":{},\"instructions\":{},\"instructions_without_nops\":{},\"cpi\":{},\"cpi_without_nops\":{},\
-             \"single_cycles\":{},\"dual_cycles\":{},\"branches_taken\":{},\"branches_not_taken\":{},\
-             \"branch_misses\":{},\"hints\":{},\"hint_hits\":{},\"pair_dependency\":{},\"ls_contention\":{},\
-             \"dma_contention\":{},\"idle_cycles\":{},\"spus\":{},\"stall\":{}",
-            self.cycles,
-            self.instructions,
-            self.instructions - self.nops,
-            json_f64(self.cpi()),
-            json_f64(self.cpi_without_nops()),
-            self.single_cycles(),
-            self.dual_cycles,
-            self.branches_taken,
-            self.branches_not_taken,
-            self.branch_misses,
-            self.hints,
-            self.hint_hits,
-            self.pair_dependency,
-            self.ls_contention,
-            self.dma_contention,
-            self.idle_cycles,
-            self.spus,
-            stall_json(&self.stall),
-        );
-        s.push_str(",\"dependency_by_unit\":{");
-        for (i, unit) in UNITS.iter().enumerate() {
-            if i > 0 {
-                s.push(',');
-            }
-            let _ = write!(
-                s,
-                "\"{}\":{}",
-                unit_name(*unit),
-                self.dep_by_unit[*unit as usize]
-            );
-        }
-        s.push_str("}}");
-        s
+        self.json_value().to_string()
+    }
+
+    /// The totals as a JSON value (keys in the order of IBM's report).
+    pub fn json_value(&self) -> Value {
+        let dependency_by_unit: serde_json::Map<String, Value> = UNITS
+            .iter()
+            .map(|&unit| {
+                (
+                    unit_name(unit).to_string(),
+                    json!(self.dep_by_unit[unit as usize]),
+                )
+            })
+            .collect();
+        json!({
+            "cycles": self.cycles,
+            "instructions": self.instructions,
+            "instructions_without_nops": self.instructions - self.nops,
+            "cpi": json_ratio(self.cpi()),
+            "cpi_without_nops": json_ratio(self.cpi_without_nops()),
+            "single_cycles": self.single_cycles(),
+            "dual_cycles": self.dual_cycles,
+            "branches_taken": self.branches_taken,
+            "branches_not_taken": self.branches_not_taken,
+            "branch_misses": self.branch_misses,
+            "hints": self.hints,
+            "hint_hits": self.hint_hits,
+            "pair_dependency": self.pair_dependency,
+            "ls_contention": self.ls_contention,
+            "dma_contention": self.dma_contention,
+            "idle_cycles": self.idle_cycles,
+            "spus": self.spus,
+            "stall": stall_json(&self.stall),
+            "dependency_by_unit": dependency_by_unit,
+        })
     }
 }
 
@@ -381,46 +377,23 @@ pub fn unit_name(u: Unit) -> &'static str {
     }
 }
 
-/// A JSON number for a float (finite, two decimals are enough for CPI).
-pub fn json_f64(x: f64) -> String {
+/// A JSON number for a ratio such as a CPI: four decimals, `null` where it is not finite
+/// (no instructions), so that the output is always valid JSON.
+pub fn json_ratio(x: f64) -> Value {
     if x.is_finite() {
-        format!("{:.4}", x)
+        json!((x * 1e4).round() / 1e4)
     } else {
-        "null".into()
+        Value::Null
     }
 }
 
-/// A JSON string literal.
-pub fn json_str(s: &str) -> String {
-    let mut out = String::with_capacity(s.len() + 2);
-    out.push('"');
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            '\n' => out.push_str("\\n"),
-            '\t' => out.push_str("\\t"),
-            '\r' => out.push_str("\\r"),
-            c if (c as u32) < 0x20 => {
-                let _ = write!(out, "\\u{:04x}", c as u32);
-            }
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
-}
-
-fn stall_json(stall: &[u64; STALL_CLASSES]) -> String {
-    let mut s = String::from("{");
-    for (i, name) in StallCause::NAMES.iter().enumerate() {
-        if i > 0 {
-            s.push(',');
-        }
-        let _ = write!(s, "\"{name}\":{}", stall[i]);
-    }
-    s.push('}');
-    s
+fn stall_json(stall: &[u64; STALL_CLASSES]) -> Value {
+    let map: serde_json::Map<String, Value> = StallCause::NAMES
+        .iter()
+        .zip(stall)
+        .map(|(name, cycles)| (name.to_string(), json!(cycles)))
+        .collect();
+    Value::Object(map)
 }
 
 /// The counters of one SPU run (or of several, merged).
@@ -909,6 +882,12 @@ mod listing {
         let mut insts = Vec::new();
         let mut labels: Vec<(String, u32, RangeSum)> = Vec::new();
         let mut range_sum = RangeSum::default();
+        let pairs = |items: &[(u32, u64)], key: &str| -> Value {
+            items
+                .iter()
+                .map(|(k, c)| json!({ key: k, "cycles": c }))
+                .collect()
+        };
         for line in lines {
             match line {
                 ListingLine::Label(name) => {
@@ -927,66 +906,56 @@ mod listing {
                         l.2.add(&s);
                     }
                     range_sum.add(&s);
-                    let deps: Vec<String> = profile
-                        .dependency_sources(*addr)
-                        .iter()
-                        .map(|(p, c)| format!("{{\"addr\":{p},\"cycles\":{c}}}"))
-                        .collect();
-                    let chans: Vec<String> = profile
+                    let channels: Vec<(u32, u64)> = profile
                         .channel_stalls(*addr)
                         .iter()
-                        .map(|(ch, c)| format!("{{\"channel\":{ch},\"cycles\":{c}}}"))
+                        .map(|&(ch, c)| (ch as u32, c))
                         .collect();
-                    insts.push(format!(
-                        "{{\"addr\":{},\"text\":{},\"executions\":{},\"cycles\":{},\"dual\":{},\"stall\":{},\"waits_on\":[{}],\"channels\":[{}]}}",
-                        addr,
-                        json_str(text),
-                        s.executions,
-                        s.cycles,
-                        s.dual,
-                        stall_json(&s.stall),
-                        deps.join(","),
-                        chans.join(",")
-                    ));
+                    insts.push(json!({
+                        "addr": addr,
+                        "text": text,
+                        "executions": s.executions,
+                        "cycles": s.cycles,
+                        "dual": s.dual,
+                        "stall": stall_json(&s.stall),
+                        "waits_on": pairs(&profile.dependency_sources(*addr), "addr"),
+                        "channels": pairs(&channels, "channel"),
+                    }));
                 }
             }
         }
-        let labels: Vec<String> = labels
+        let sum_json = |s: &RangeSum| {
+            json!({
+                "executions": s.executions,
+                "cycles": s.cycles,
+                "cpi": json_ratio(s.cpi()),
+                "dual": s.dual,
+                "stall": stall_json(&s.stall),
+            })
+        };
+        let labels: Vec<Value> = labels
             .iter()
             .filter(|l| l.2.executions > 0 || l.2.cycles > 0)
             .map(|(name, addr, s)| {
-                format!(
-                    "{{\"label\":{},\"addr\":{},\"executions\":{},\"cycles\":{},\"cpi\":{},\"dual\":{},\"stall\":{}}}",
-                    json_str(name),
-                    addr,
-                    s.executions,
-                    s.cycles,
-                    json_f64(s.cpi()),
-                    s.dual,
-                    stall_json(&s.stall)
-                )
+                let mut entry = json!({ "label": name, "addr": addr });
+                if let (Value::Object(entry), Value::Object(sum)) = (&mut entry, sum_json(s)) {
+                    entry.extend(sum);
+                }
+                entry
             })
             .collect();
-        let range = format!(
-            "{{\"executions\":{},\"cycles\":{},\"cpi\":{},\"dual\":{},\"stall\":{}}}",
-            range_sum.executions,
-            range_sum.cycles,
-            json_f64(range_sum.cpi()),
-            range_sum.dual,
-            stall_json(&range_sum.stall)
-        );
-        let chans: Vec<String> = profile
+        let channels: Vec<(u32, u64)> = profile
             .channel_totals()
             .iter()
-            .map(|(ch, c)| format!("{{\"channel\":{ch},\"cycles\":{c}}}"))
+            .map(|&(ch, c)| (ch as u32, c))
             .collect();
-        format!(
-            "{{\"totals\":{},\"range\":{},\"channels\":[{}],\"labels\":[{}],\"instructions\":[{}]}}\n",
-            profile.totals.json(),
-            range,
-            chans.join(","),
-            labels.join(","),
-            insts.join(",")
-        )
+        let report = json!({
+            "totals": profile.totals.json_value(),
+            "range": sum_json(&range_sum),
+            "channels": pairs(&channels, "channel"),
+            "labels": labels,
+            "instructions": insts,
+        });
+        format!("{report}\n")
     }
 }

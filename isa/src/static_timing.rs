@@ -19,6 +19,9 @@ pub struct SourceLine {
     /// Instructions on the line (usually at most one): address, decoded instruction,
     /// mnemonic and operand text.
     pub insts: Vec<SourceInst>,
+    /// Statements in a code section that name no instruction (and are not directives):
+    /// not timed, and reported so that nothing is skipped silently.
+    pub unknown: Vec<String>,
 }
 
 #[derive(Clone, Debug)]
@@ -185,6 +188,7 @@ pub fn parse_source(src: &str) -> Vec<SourceLine> {
             text: raw.to_string(),
             labels: Vec::new(),
             insts: Vec::new(),
+            unknown: Vec::new(),
         };
         let code = strip_comments(raw);
         for stmt in code.split(';') {
@@ -221,25 +225,30 @@ pub fn parse_source(src: &str) -> Vec<SourceLine> {
                             || name.starts_with(".init")
                             || name.starts_with(".fini");
                     }
+                    // Addresses wrap as the local store does, whatever the sizes.
                     ".align" | ".p2align" if in_text => {
                         let a = 1u32 << arg(0).unwrap_or(0).clamp(0, 16);
-                        addr = addr.div_ceil(a) * a;
+                        addr = addr.div_ceil(a).wrapping_mul(a);
                     }
                     ".balign" if in_text => {
                         let a = arg(0).unwrap_or(1).clamp(1, 1 << 16) as u32;
-                        addr = addr.div_ceil(a) * a;
+                        addr = addr.div_ceil(a).wrapping_mul(a);
                     }
                     ".word" | ".long" | ".int" | ".float" | ".ffloat" if in_text => {
-                        addr += 4 * split_operands(rest).len() as u32
+                        addr = addr.wrapping_add(4 * split_operands(rest).len() as u32)
                     }
                     ".short" | ".half" | ".hword" if in_text => {
-                        addr += 2 * split_operands(rest).len() as u32
+                        addr = addr.wrapping_add(2 * split_operands(rest).len() as u32)
                     }
-                    ".byte" if in_text => addr += split_operands(rest).len() as u32,
+                    ".byte" if in_text => {
+                        addr = addr.wrapping_add(split_operands(rest).len() as u32)
+                    }
                     ".quad" | ".double" | ".dfloat" if in_text => {
-                        addr += 8 * split_operands(rest).len() as u32
+                        addr = addr.wrapping_add(8 * split_operands(rest).len() as u32)
                     }
-                    ".space" | ".skip" if in_text => addr += arg(0).unwrap_or(0).max(0) as u32,
+                    ".space" | ".skip" if in_text => {
+                        addr = addr.wrapping_add(arg(0).unwrap_or(0).max(0) as u32)
+                    }
                     _ => {}
                 }
                 continue;
@@ -254,7 +263,9 @@ pub fn parse_source(src: &str) -> Vec<SourceLine> {
                     mnemonic: lower.clone(),
                     operands: rest.split_whitespace().collect::<Vec<_>>().join(" "),
                 });
-                addr += 4;
+                addr = addr.wrapping_add(4);
+            } else {
+                line.unknown.push(word.to_string());
             }
         }
         lines.push(line);
@@ -318,6 +329,17 @@ pub struct StaticTiming {
     pub blocks: Vec<StaticBlock>,
     /// The source lines shown (all, or the one block asked for).
     pub shown: std::ops::Range<usize>,
+}
+
+impl StaticTiming {
+    /// Statements that were not timed because they name no instruction: (1-based line,
+    /// word), in source order.
+    pub fn unknown_statements(&self) -> impl Iterator<Item = (usize, &str)> {
+        self.lines
+            .iter()
+            .enumerate()
+            .flat_map(|(i, line)| line.unknown.iter().map(move |word| (i + 1, word.as_str())))
+    }
 }
 
 /// The configuration `spu timing` uses: no fetch model and no hint window (as
@@ -540,44 +562,40 @@ pub fn render_static(t: &StaticTiming, running_count: bool) -> String {
 /// instructions_detail:[..]}],"instructions":[{addr,text,pipe,issue,cycle,stall,dual,
 /// mark,latency,block}]}`.
 pub fn static_json(t: &StaticTiming) -> String {
-    let insts: Vec<String> = t
+    use serde_json::{json, Value};
+    let instructions: Vec<Value> = t
         .rows
         .iter()
         .map(|r| {
-            format!(
-                "{{\"addr\":{},\"text\":{},\"pipe\":{},\"issue\":{},\"cycle\":{},\"stall\":{},\"dual\":{},\"mark\":{},\"latency\":{},\"block\":{}}}",
-                r.addr,
-                json_str(&r.text),
-                r.pipe,
-                r.issue,
-                r.cycle,
-                r.stall,
-                r.dual,
-                json_str(r.mark.to_string().trim()),
-                r.latency,
-                r.block
-            )
+            json!({
+                "addr": r.addr,
+                "text": r.text,
+                "pipe": r.pipe,
+                "issue": r.issue,
+                "cycle": r.cycle,
+                "stall": r.stall,
+                "dual": r.dual,
+                "mark": r.mark.to_string().trim(),
+                "latency": r.latency,
+                "block": r.block,
+            })
         })
         .collect();
-    let blocks: Vec<String> = t
+    let blocks: Vec<Value> = t
         .blocks
         .iter()
         .map(|b| {
-            format!(
-                "{{\"label\":{},\"addr\":{},\"instructions\":{},\"cycles\":{},\"cpi\":{},\"dual\":{},\"stall\":{}}}",
-                b.label.as_deref().map(json_str).unwrap_or_else(|| "null".into()),
-                b.addr,
-                b.instructions,
-                b.cycles,
-                json_f64(b.cpi()),
-                b.dual,
-                b.stall
-            )
+            json!({
+                "label": b.label,
+                "addr": b.addr,
+                "instructions": b.instructions,
+                "cycles": b.cycles,
+                "cpi": json_ratio(b.cpi()),
+                "dual": b.dual,
+                "stall": b.stall,
+            })
         })
         .collect();
-    format!(
-        "{{\"blocks\":[{}],\"instructions\":[{}]}}\n",
-        blocks.join(","),
-        insts.join(",")
-    )
+    let report = json!({ "blocks": blocks, "instructions": instructions });
+    format!("{report}\n")
 }

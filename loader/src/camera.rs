@@ -95,6 +95,13 @@ impl Camera {
         if !finite {
             return Err("camera: non-finite value".into());
         }
+        let largest = self.eye.abs().max(self.target.abs()).max_element();
+        if largest > crate::scene::MAX_COORDINATE {
+            return Err(format!(
+                "camera: coordinate {largest:e} exceeds the largest the kernel handles ({:e})",
+                crate::scene::MAX_COORDINATE
+            ));
+        }
         let forward = self.target - self.eye;
         if forward.length_squared() == 0.0 {
             return Err("camera: eye and target coincide".into());
@@ -200,6 +207,18 @@ mod tests {
         assert!(Camera::parse("0,0,0,0,0,0,0,1,0,60").is_err());
         assert!(Camera::parse("0,0,1,0,0,0,0,0,1,60").is_err());
         assert!(Camera::parse("0,0,1,0,0,0,0,1,0,x").is_err());
+        assert_eq!(
+            Camera::parse("0,0,1,0,0,0,0,1,0,inf").unwrap_err(),
+            "camera: non-finite value"
+        );
+        assert_eq!(
+            Camera::parse("0,0,1e30,0,0,0,0,1,0,60").unwrap_err(),
+            "camera: coordinate 1e30 exceeds the largest the kernel handles (1e18)"
+        );
+        assert_eq!(
+            Camera::parse("0,0,1,0,0,0,0,1,0,180").unwrap_err(),
+            "camera: fov 180 not in (0, 180) degrees"
+        );
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //! be a whole lock line for `getllar`/`putllc`).
 
 use crate::camera::CameraBasis;
-use crate::kernel_abi::{frame_buffer_bytes, ParamBlock, STATS_BYTES};
+use crate::kernel_abi::{check_kernel_options, frame_buffer_bytes, ParamBlock, STATS_BYTES};
 use crate::layout::StagedScene;
 
 /// Main-memory address where the staged scene image starts.
@@ -42,13 +42,7 @@ impl FrameLayout {
         if staged.base != SCENE_BASE {
             return Err(format!("the scene must be staged at {SCENE_BASE:#x}"));
         }
-        for (what, lines) in [("BVH", bvh_cache_lines), ("triangle", tri_cache_lines)] {
-            if !lines.is_power_of_two() || !(128..=1024).contains(&lines) {
-                return Err(format!(
-                    "{what} cache of {lines} lines: must be a power of two from 128 to 1024"
-                ));
-            }
-        }
+        check_kernel_options(bvh_cache_lines, tri_cache_lines, 1, 1)?;
         let scene_end = SCENE_BASE as u64 + staged.image.len() as u64;
         let param_addr = align128(scene_end);
         let counter_addr = param_addr + 128;
@@ -78,6 +72,20 @@ impl FrameLayout {
             memory_len: memory_len as usize,
             params,
         })
+    }
+
+    /// Sets the caches' associativity (1 or 4) and the packets each SPU keeps in flight
+    /// (software hyperthreading, 1 to 8).
+    pub fn with_kernel_options(mut self, assoc: u32, sht: u32) -> Result<FrameLayout, String> {
+        check_kernel_options(
+            1 << self.params.bvh_cache_log2,
+            1 << self.params.tri_cache_log2,
+            assoc,
+            sht,
+        )?;
+        self.params.cache_assoc = assoc;
+        self.params.sht_contexts = sht;
+        Ok(self)
     }
 
     /// The initial main-memory image: scene, parameters, a zero tile counter, empty
@@ -121,5 +129,10 @@ mod tests {
         let p = f.param_addr as usize;
         assert_eq!(&memory[p..p + 4], &staged.header.node_addr.to_be_bytes());
         assert!(FrameLayout::new(&staged, &basis, 128, 64, 4, 100, 256).is_err());
+        let f4 = f.clone().with_kernel_options(4, 8).unwrap();
+        assert_eq!((f4.params.cache_assoc, f4.params.sht_contexts), (4, 8));
+        assert!(f.clone().with_kernel_options(3, 1).is_err());
+        assert!(f.clone().with_kernel_options(1, 0).is_err());
+        assert!(f.with_kernel_options(1, 9).is_err());
     }
 }

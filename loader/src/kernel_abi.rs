@@ -1,4 +1,4 @@
-//! The contract between the host and the ray-tracing kernel (`kernels/raytrace.s`): the
+//! The contract between the host and the ray-tracing kernel (`kernels/primary.s`): the
 //! parameter block the kernel fetches at start, the statistics block it writes at the end,
 //! and the packet-major frame buffer it fills.
 //!
@@ -41,7 +41,12 @@ pub struct ParamBlock {
     /// Base of the statistics blocks, one of [`STATS_BYTES`] per SPU.
     pub ea_stats: u32,
     pub flags: u32,
-    pub reserved: [u32; 4],
+    /// Packets each SPU keeps in flight (software hyperthreading, paper section 6):
+    /// 1 = blocking cache misses, up to [`MAX_SHT_CONTEXTS`].
+    pub sht_contexts: u32,
+    /// Ways of both caches: 1 (direct mapped) or 4 (set-associative, LRU).
+    pub cache_assoc: u32,
+    pub reserved: [u32; 2],
 }
 const _: () = assert!(std::mem::size_of::<ParamBlock>() == 128);
 
@@ -52,6 +57,99 @@ pub const PARAM_DIR00: usize = std::mem::offset_of!(ParamBlock, dir00);
 pub const PARAM_DU: usize = std::mem::offset_of!(ParamBlock, du);
 pub const PARAM_DV: usize = std::mem::offset_of!(ParamBlock, dv);
 pub const PARAM_BVH_LOG2: usize = std::mem::offset_of!(ParamBlock, bvh_cache_log2);
+pub const PARAM_SHT: usize = std::mem::offset_of!(ParamBlock, sht_contexts);
+
+/// The most packets one SPU keeps in flight.
+pub const MAX_SHT_CONTEXTS: u32 = 8;
+/// Cache line counts the kernel supports (powers of two).
+pub const MIN_CACHE_LINES: u32 = 128;
+pub const MAX_CACHE_LINES: u32 = 1024;
+/// Bytes of one cache line (a BVH node pair or a triangle record) and of its tag.
+pub const CACHE_LINE_BYTES: u32 = 64;
+pub const CACHE_TAG_BYTES: u32 = 16;
+
+/// One packet context in the kernel's local store (software hyperthreading): the packet's
+/// rays, its traversal stack and what it needs to be suspended on a cache miss and resumed.
+/// Offsets are from the context pointer (the kernel's `RAYS` register, the first ray
+/// array), which sits [`context::HEADER`] bytes into the context; the kernel reads them from
+/// `layout.inc`.
+pub mod context {
+    /// Bytes before the context pointer: the corner rays and the near-child table, within
+    /// reach of an `ai` immediate.
+    pub const HEADER: i32 = 128;
+    /// The corner rays' x, y, z (rays 0, 7, 56, 63) for the packet frustum.
+    pub const CORNERS: i32 = -128;
+    /// Per axis all ones when the first active ray points down it.
+    pub const NEGTAB: i32 = -80;
+    /// Ray arrays, 16 vectors of 4 rays each: directions, reciprocals, t, hit id, n.d, 1/|d|.
+    pub const RAY_ARRAY_BYTES: i32 = 256;
+    pub const RAY_DX: i32 = 0;
+    pub const RAY_RX: i32 = 3 * RAY_ARRAY_BYTES;
+    pub const RAY_T: i32 = 6 * RAY_ARRAY_BYTES;
+    pub const RAY_ID: i32 = 7 * RAY_ARRAY_BYTES;
+    pub const RAY_ND: i32 = 8 * RAY_ARRAY_BYTES;
+    pub const RAY_INVD: i32 = 9 * RAY_ARRAY_BYTES;
+    /// Record index of the triangle in each staging slot (one quadword each; -1: none).
+    pub const STAGE_TAGS: i32 = 10 * RAY_ARRAY_BYTES;
+    /// Triangles of one leaf the staging area holds (the BVH's leaves hold at most this).
+    pub const STAGE_TRIANGLES: u32 = 8;
+    /// Registers of the suspended packet, one quadword each; then its resume address (0:
+    /// the context is not suspended), its tile * 64 and its packet number in the tile.
+    pub const SAVE: i32 = STAGE_TAGS + 16 * STAGE_TRIANGLES as i32;
+    pub const SAVE_SLOTS: i32 = 32;
+    pub const SAVED_REGISTERS: i32 = 27;
+    pub const RESUME: i32 = SAVE + 16 * SAVED_REGISTERS;
+    pub const TILE64: i32 = RESUME + 16;
+    pub const PACKET: i32 = TILE64 + 16;
+    /// The next context in turn (its context pointer), and the DMA tag: (tag, 1 << tag).
+    pub const NEXT: i32 = PACKET + 16;
+    pub const TAG: i32 = NEXT + 16;
+    /// The BVH node pair being fetched.
+    pub const STAGE_PAIR: i32 = SAVE + 16 * SAVE_SLOTS;
+    /// Triangle records being fetched, 64 bytes each.
+    pub const STAGE_TRIS: i32 = STAGE_PAIR + 64;
+    /// The traversal stack: what popping an empty stack reads, then 128 entries.
+    pub const STACK: i32 = STAGE_TRIS + 64 * STAGE_TRIANGLES as i32 + 16;
+    pub const STACK_BYTES: i32 = 2048;
+    /// Bytes of one context (a multiple of 128).
+    pub const BYTES: u32 = ((HEADER + STACK + STACK_BYTES) as u32).div_ceil(128) * 128;
+}
+
+/// The context's DMA tag: `CONTEXT_TAG0 + context index`.
+pub const CONTEXT_TAG0: u32 = 8;
+
+/// Checks the cache and software-hyperthreading options the kernel supports.
+pub fn check_kernel_options(
+    bvh_cache_lines: u32,
+    tri_cache_lines: u32,
+    assoc: u32,
+    sht: u32,
+) -> Result<(), String> {
+    for (what, lines) in [("BVH", bvh_cache_lines), ("triangle", tri_cache_lines)] {
+        if !lines.is_power_of_two() || !(MIN_CACHE_LINES..=MAX_CACHE_LINES).contains(&lines) {
+            return Err(format!(
+                "{what} cache of {lines} lines: must be a power of two from {MIN_CACHE_LINES} to {MAX_CACHE_LINES}"
+            ));
+        }
+    }
+    if assoc != 1 && assoc != 4 {
+        return Err(format!(
+            "cache associativity {assoc}: must be 1 (direct mapped) or 4"
+        ));
+    }
+    if !(1..=MAX_SHT_CONTEXTS).contains(&sht) {
+        return Err(format!(
+            "{sht} packets in flight (SHT): must be 1 to {MAX_SHT_CONTEXTS}"
+        ));
+    }
+    Ok(())
+}
+
+/// Local-store bytes the kernel carves at `cache_area` for its caches and packet contexts.
+pub fn carved_bytes(bvh_cache_lines: u32, tri_cache_lines: u32, sht: u32) -> u32 {
+    (bvh_cache_lines + tri_cache_lines) * (CACHE_LINE_BYTES + CACHE_TAG_BYTES)
+        + sht * context::BYTES
+}
 
 impl ParamBlock {
     pub fn new(basis: &CameraBasis, width: u32, height: u32) -> Self {
@@ -69,6 +167,8 @@ impl ParamBlock {
             dv: v(basis.dv),
             bvh_cache_log2: 8,
             tri_cache_log2: 8,
+            sht_contexts: 1,
+            cache_assoc: 1,
             ..Default::default()
         }
     }
@@ -93,6 +193,8 @@ impl ParamBlock {
             self.tri_cache_log2,
             self.ea_stats,
             self.flags,
+            self.sht_contexts,
+            self.cache_assoc,
         ]);
         words.extend(self.reserved);
         let mut out = [0u8; 128];
@@ -182,19 +284,42 @@ impl KernelStats {
 pub fn spu_include() -> String {
     let mut out = String::from("# kernel ABI: generated by spu_loader::kernel_abi\n");
     for (name, value) in [
-        ("PARAM_EA_NODES", PARAM_EA_NODES),
-        ("PARAM_WIDTH", PARAM_WIDTH),
-        ("PARAM_ORIGIN", PARAM_ORIGIN),
-        ("PARAM_DIR00", PARAM_DIR00),
-        ("PARAM_DU", PARAM_DU),
-        ("PARAM_DV", PARAM_DV),
-        ("PARAM_BVH_LOG2", PARAM_BVH_LOG2),
-        ("STAT_PACKETS", STAT_PACKETS),
-        ("STAT_M1SUM", STAT_M1SUM),
-        ("STAT_TRIS", STAT_TRIS),
-        ("STAT_BMISS", STAT_BMISS),
-        ("STAT_TLOOK", STAT_TLOOK),
-        ("STAT_BLOOK", STAT_BLOOK),
+        ("PARAM_EA_NODES", PARAM_EA_NODES as i64),
+        ("PARAM_WIDTH", PARAM_WIDTH as i64),
+        ("PARAM_ORIGIN", PARAM_ORIGIN as i64),
+        ("PARAM_DIR00", PARAM_DIR00 as i64),
+        ("PARAM_DU", PARAM_DU as i64),
+        ("PARAM_DV", PARAM_DV as i64),
+        ("PARAM_BVH_LOG2", PARAM_BVH_LOG2 as i64),
+        ("PARAM_SHT", PARAM_SHT as i64),
+        ("CONTEXT_TAG0", CONTEXT_TAG0 as i64),
+        ("STAGE_TRIANGLES", context::STAGE_TRIANGLES as i64),
+        ("CTX_HEADER", context::HEADER as i64),
+        ("CTX_CORNERS", context::CORNERS as i64),
+        ("CTX_NEGTAB", context::NEGTAB as i64),
+        ("CTX_RAY_DX", context::RAY_DX as i64),
+        ("CTX_RAY_RX", context::RAY_RX as i64),
+        ("CTX_RAY_T", context::RAY_T as i64),
+        ("CTX_RAY_ID", context::RAY_ID as i64),
+        ("CTX_RAY_ND", context::RAY_ND as i64),
+        ("CTX_RAY_INVD", context::RAY_INVD as i64),
+        ("CTX_STAGE_TAGS", context::STAGE_TAGS as i64),
+        ("CTX_SAVE", context::SAVE as i64),
+        ("CTX_RESUME", context::RESUME as i64),
+        ("CTX_TILE64", context::TILE64 as i64),
+        ("CTX_PACKET", context::PACKET as i64),
+        ("CTX_NEXT", context::NEXT as i64),
+        ("CTX_TAG", context::TAG as i64),
+        ("CTX_STAGE_PAIR", context::STAGE_PAIR as i64),
+        ("CTX_STAGE_TRIS", context::STAGE_TRIS as i64),
+        ("CTX_STACK", context::STACK as i64),
+        ("CTX_BYTES", context::BYTES as i64),
+        ("STAT_PACKETS", STAT_PACKETS as i64),
+        ("STAT_M1SUM", STAT_M1SUM as i64),
+        ("STAT_TRIS", STAT_TRIS as i64),
+        ("STAT_BMISS", STAT_BMISS as i64),
+        ("STAT_TLOOK", STAT_TLOOK as i64),
+        ("STAT_BLOOK", STAT_BLOOK as i64),
     ] {
         out.push_str(&format!("        .set {name}, {value}\n"));
     }
@@ -268,6 +393,47 @@ mod tests {
             &2.0f32.to_be_bytes()
         );
         assert_eq!(PARAM_BVH_LOG2, 96);
+        assert_eq!(PARAM_SHT, 112);
+        let p = ParamBlock {
+            sht_contexts: 4,
+            cache_assoc: 4,
+            ..Default::default()
+        };
+        let b = p.to_be_bytes();
+        assert_eq!(&b[112..120], &[0, 0, 0, 4, 0, 0, 0, 4]);
+    }
+
+    #[test]
+    fn context_layout_fits_the_kernel() {
+        use context::*;
+        for off in [
+            CORNERS, NEGTAB, STAGE_TAGS, SAVE, RESUME, STAGE_PAIR, STAGE_TRIS, STACK,
+        ] {
+            assert_eq!(off % 16, 0, "{off}");
+        }
+        assert_eq!(BYTES % 128, 0);
+        assert!(HEADER + STACK + STACK_BYTES <= BYTES as i32);
+        assert!(NEGTAB + 48 <= 0 && CORNERS + 48 <= NEGTAB && -HEADER <= CORNERS);
+        assert!(TAG < SAVE + 16 * SAVE_SLOTS);
+        assert!(STACK >= STAGE_TRIS + 64 * STAGE_TRIANGLES as i32 + 16);
+        // the largest configuration leaves room for the code and its data
+        assert!(carved_bytes(MAX_CACHE_LINES, MAX_CACHE_LINES, MAX_SHT_CONTEXTS) < 216 * 1024);
+    }
+
+    #[test]
+    fn kernel_options_are_checked() {
+        assert!(check_kernel_options(256, 256, 1, 1).is_ok());
+        assert!(check_kernel_options(128, 1024, 4, 8).is_ok());
+        for (b, t, a, s) in [
+            (100, 256, 1, 1),
+            (2048, 256, 1, 1),
+            (256, 64, 1, 1),
+            (256, 256, 3, 1),
+            (256, 256, 1, 0),
+            (256, 256, 1, 9),
+        ] {
+            assert!(check_kernel_options(b, t, a, s).is_err(), "{b} {t} {a} {s}");
+        }
     }
 
     #[test]

@@ -389,6 +389,20 @@ impl TriangleRecord {
         (beta >= 0.0 && gamma >= 0.0 && beta + gamma <= 1.0).then_some((t, beta, gamma))
     }
 
+    /// The barycentric weights `(beta, gamma)` of `v1` and `v2` at the point `o + t d`, by
+    /// the same projection and operation order as [`TriangleRecord::intersect`] (shading
+    /// recomputes them from the hit distance alone).
+    #[inline]
+    pub fn barycentrics(&self, o: [f32; 3], d: [f32; 3], t: f32) -> (f32, f32) {
+        let k = self.k as usize;
+        let (u, v) = ((k + 1) % 3, (k + 2) % 3);
+        let hu = o[u] + t * d[u];
+        let hv = o[v] + t * d[v];
+        let beta = (self.b_nu * hu + self.b_nv * hv) + self.b_d;
+        let gamma = (self.c_nu * hu + self.c_nv * hv) + self.c_d;
+        (beta, gamma)
+    }
+
     /// The unnormalized geometric normal `N / N_k` encoded in the record.
     pub fn geometric_normal(&self) -> glam::Vec3 {
         let mut n = [0.0f32; 3];
@@ -563,6 +577,8 @@ pub struct StagedScene {
     /// Host copies of the records, for the reference caster and tests.
     pub nodes: Vec<NodeRecord>,
     pub triangles: Vec<TriangleRecord>,
+    pub vertices: Vec<VertexRecord>,
+    pub materials: Vec<MaterialRecord>,
 }
 
 fn align_up(value: usize, alignment: usize) -> usize {
@@ -629,6 +645,8 @@ impl StagedScene {
             header,
             nodes,
             triangles,
+            vertices,
+            materials,
         })
     }
 
@@ -851,5 +869,56 @@ mod tests {
         assert_eq!(word(first_tri + TRI_ORIGINAL_INDEX), bvh.triangle_order[0]);
         assert_eq!(staged.image.len() % STAGE_ALIGN, 0);
         assert!(StagedScene::new(&scene, &bvh, 0x10_0004).is_err());
+    }
+
+    /// The shading data is real: every triangle record's spare 16 bytes name its scene
+    /// vertices and material, and the vertex and material records carry the scene's smooth
+    /// normals and colours, big-endian in the image.
+    #[test]
+    fn shading_records_carry_the_scene_data() {
+        let scene = crate::procedural::room();
+        let bvh = Bvh::build(&scene, &Default::default());
+        let staged = StagedScene::new(&scene, &bvh, 0x1_0000).unwrap();
+        let word = |offset: usize| {
+            u32::from_be_bytes(staged.image[offset..offset + 4].try_into().unwrap())
+        };
+        let h = staged.header;
+        assert_eq!(h.vertex_count as usize, scene.positions.len());
+        assert_eq!(h.material_count, 9);
+        let mut materials_seen = std::collections::HashSet::new();
+        for (i, record) in staged.triangles.iter().enumerate() {
+            let triangle = scene.triangles[record.original_index as usize];
+            let at = staged.offset_of_address(h.triangle_addr) + i * TRI_SIZE;
+            assert_eq!(
+                [0, 1, 2].map(|c| word(at + TRI_VERTICES + 4 * c)),
+                triangle.v
+            );
+            assert_eq!(word(at + TRI_MATERIAL), triangle.material);
+            materials_seen.insert(triangle.material);
+        }
+        assert_eq!(materials_seen.len(), 9);
+        for (i, normal) in scene.normals.iter().enumerate() {
+            let at = staged.offset_of_address(h.vertex_addr) + i * VERTEX_SIZE;
+            let read = |o: usize| f32::from_bits(word(at + o));
+            assert!((normal.length() - 1.0).abs() < 1e-5);
+            assert_eq!(
+                [
+                    read(VERTEX_NORMAL),
+                    read(VERTEX_NORMAL + 4),
+                    read(VERTEX_NORMAL + 8)
+                ],
+                normal.to_array()
+            );
+            assert_eq!(read(VERTEX_POSITION + 4), scene.positions[i].y);
+        }
+        for (i, material) in scene.materials.iter().enumerate() {
+            let at = staged.offset_of_address(h.material_addr) + i * MATERIAL_SIZE;
+            assert_eq!(
+                f32::from_bits(word(at + MATERIAL_DIFFUSE + 4)),
+                material.diffuse[1]
+            );
+        }
+        assert_eq!(staged.vertices.len(), scene.positions.len());
+        assert_eq!(staged.materials[4].diffuse, scene.materials[4].diffuse);
     }
 }

@@ -8,8 +8,12 @@
 //! - [`bvh`]: the binned-SAH bounding volume hierarchy (paper section 3.2).
 //! - [`layout`]: the big-endian DMA records (32-byte nodes, 64-byte triangle and vertex
 //!   records, paper section 5.1) and the staged main-memory image.
+//! - [`shading`]: the shading model (diffuse, interpolated normals, point lights, shadows)
+//!   the shading kernels and the reference share, and the `--shade` modes.
 //! - [`reference`]: a scalar ray caster over the same records that defines the expected
 //!   kernel output.
+//! - [`stats`]: a frame's statistics as typed JSON (`spu render --stats`).
+//! - [`timeline`]: when each tile and packet was traced, from the SPUs' event logs.
 
 pub mod bvh;
 pub mod camera;
@@ -20,6 +24,7 @@ pub mod ply;
 pub mod procedural;
 pub mod reference;
 pub mod scene;
+pub mod shading;
 
 pub use bvh::{Bvh, BvhConfig, BvhNode};
 pub use camera::{Camera, CameraBasis};
@@ -28,4 +33,7 @@ pub use layout::StagedScene;
 pub use scene::{Material, Scene, Triangle};
 pub mod frame;
 pub mod kernel_abi;
+pub mod kernels;
 pub mod runtime;
+pub mod stats;
+pub mod timeline;

@@ -27,6 +27,7 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
         LoadError::new(path, Some(line), "invalid UTF-8")
     })?;
 
+    check_vertex_positions(path, text)?;
     let usemtl_names = used_material_names(text);
     let directory = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let material_error: RefCell<Option<LoadError>> = RefCell::new(None);
@@ -41,6 +42,7 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
         match found {
             Some(mtl_path) => {
                 let parsed = read_maybe_gzipped(&mtl_path).and_then(|data| {
+                    check_mtl(&mtl_path, &data)?;
                     tobj::load_mtl_buf(&mut &data[..]).map_err(|e| {
                         LoadError::new(&mtl_path, None, format!("material library: {e}"))
                     })
@@ -51,7 +53,16 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
                 })
             }
             None => {
-                // No library: define every used name so groups keep distinct materials.
+                // No library: define every used name so groups keep distinct materials
+                // (as viewers do), saying so, as GNU tools go on after a warning.
+                if mtl != Path::new(MISSING_LIBRARY) && !usemtl_names.is_empty() {
+                    eprintln!(
+                        "warning: {}: material library {} not found; {} materials get default colours",
+                        path.display(),
+                        mtl.display(),
+                        usemtl_names.len()
+                    );
+                }
                 let materials: Vec<tobj::Material> = usemtl_names
                     .iter()
                     .map(|name| {
@@ -193,6 +204,59 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
     Ok(scene)
 }
 
+/// Refuses, naming the line, a `v` line whose position is not finite or too large for the
+/// kernel ([`crate::scene::check_position`]); `tobj` would take `inf` and `nan` as given.
+fn check_vertex_positions(path: &Path, text: &str) -> Result<(), LoadError> {
+    let mut index = 0;
+    for (number, line) in text.lines().enumerate() {
+        let mut words = line.split_ascii_whitespace();
+        if words.next() != Some("v") {
+            continue;
+        }
+        let values: Vec<f32> = words.take(3).map_while(|w| w.parse().ok()).collect();
+        if let [x, y, z] = values[..] {
+            crate::scene::check_position(index, Vec3::new(x, y, z))
+                .map_err(|reason| LoadError::new(path, Some(number + 1), reason))?;
+        }
+        index += 1;
+    }
+    Ok(())
+}
+
+/// Checks the colour and number statements of an MTL library line by line, so that a bad
+/// value is reported with its line (`tobj` reports only that parsing failed) and no
+/// non-finite or negative colour reaches the shaders.
+fn check_mtl(path: &Path, bytes: &[u8]) -> Result<(), LoadError> {
+    let text = std::str::from_utf8(bytes)
+        .map_err(|_| LoadError::new(path, None, "material library is not UTF-8"))?;
+    for (number, line) in text.lines().enumerate() {
+        let mut words = line.split_ascii_whitespace();
+        let (expected, what) = match words.next() {
+            Some("Kd" | "Ka" | "Ks" | "Ke" | "Tf") => (3, "colour needs three numbers >= 0"),
+            Some("Ns" | "Ni" | "d" | "Tr") => (1, "needs one finite number"),
+            _ => continue,
+        };
+        let values: Vec<Option<f32>> = words
+            .take(expected)
+            .map(|w| w.parse::<f32>().ok().filter(|v| v.is_finite()))
+            .collect();
+        let colour = expected == 3;
+        let ok = values.len() == expected
+            && values
+                .iter()
+                .all(|v| v.is_some_and(|v| !colour || v >= 0.0));
+        if !ok {
+            let keyword = line.split_ascii_whitespace().next().unwrap_or("");
+            return Err(LoadError::new(
+                path,
+                Some(number + 1),
+                format!("material library: {keyword}: {what}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Every `usemtl` name, in order of first use.
 fn used_material_names(text: &str) -> Vec<String> {
     let mut seen = HashMap::new();
@@ -321,6 +385,22 @@ mod tests {
     }
 
     #[test]
+    fn non_finite_and_huge_vertices_are_refused_with_the_line() {
+        let err = parse("v 0 0 0\n# c\nv inf 0 0\nv 0 1 0\nf 1 2 3\n").unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "/nowhere/test.obj:3: vertex 1 is not finite (inf, 0, 0)"
+        );
+        let err = parse("v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n").unwrap_err();
+        assert_eq!(err.line, Some(3));
+        let err = parse("v 0 0 0\nv 1 0 0\nv 0 -2e20 0\nf 1 2 3\n").unwrap_err();
+        assert!(
+            err.reason.contains("exceeds the largest coordinate"),
+            "{err}"
+        );
+    }
+
+    #[test]
     fn groups_materials_and_quads() {
         let text = "mtllib missing.mtl\n\
                     v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n\
@@ -422,6 +502,20 @@ mod tests {
         std::fs::write(dir.join("m.mtl"), "newmtl green\nKd 0 x 0\n").unwrap();
         let err = Scene::load(&obj).unwrap_err();
         assert!(err.path.ends_with("m.mtl"), "{err}");
+        assert_eq!(err.line, Some(2), "{err}");
+        for bad in ["Kd 0 1", "Kd 0 nan 1", "Kd 0 -1 0", "Ns inf"] {
+            std::fs::write(dir.join("m.mtl"), format!("# m\nnewmtl green\n{bad}\n")).unwrap();
+            let err = Scene::load(&obj).unwrap_err();
+            assert_eq!(err.line, Some(3), "{bad}: {err}");
+            assert!(
+                err.to_string().contains("m.mtl:3: material library"),
+                "{err}"
+            );
+        }
+        // A missing library is a warning: default colours, one per used name.
+        std::fs::remove_file(dir.join("m.mtl")).unwrap();
+        let scene = Scene::load(&obj).unwrap();
+        assert_eq!(scene.materials[0], Material::default_for_name("green"));
         std::fs::remove_dir_all(&dir).ok();
     }
 }

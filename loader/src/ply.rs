@@ -149,6 +149,7 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
     if !header.elements.iter().any(|e| e.name == "face") {
         return Err(LoadError::new(path, None, "no 'face' element"));
     }
+    check_counts_against_data(path, &header, bytes.len())?;
     let vertex_count = vertex_element.count;
     let mut mesh = Mesh {
         positions: Vec::with_capacity(vertex_count),
@@ -229,6 +230,9 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, LoadError> {
                 let count = count
                     .parse::<usize>()
                     .map_err(|_| error(format!("bad element count '{count}'")))?;
+                if elements.iter().any(|e| e.name == *name) {
+                    return Err(error(format!("element '{name}' declared twice")));
+                }
                 elements.push(Element {
                     name: name.to_string(),
                     count,
@@ -298,6 +302,66 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, LoadError> {
     })
 }
 
+/// The fewest body bytes one instance of `element` can take: its scalars and list counts
+/// in binary (lists may be empty), one character and a separator per property in ASCII.
+fn min_instance_bytes(format: Format, element: &Element) -> usize {
+    element
+        .properties
+        .iter()
+        .map(|p| match (format, p) {
+            (Format::Ascii, _) => 2,
+            (_, Property::Scalar { ty, .. }) => ty.size(),
+            (_, Property::List { count_ty, .. }) => count_ty.size(),
+        })
+        .sum()
+}
+
+/// Rejects element counts the body cannot hold before anything is reserved for them (a
+/// header that declares 4,000,000,000 vertices in a small file fails here, at once).
+fn check_counts_against_data(path: &Path, header: &Header, len: usize) -> Result<(), LoadError> {
+    let body = len.saturating_sub(header.body_start);
+    let mut needed = 0usize;
+    for element in &header.elements {
+        if element.count > 0 && element.properties.is_empty() {
+            return Err(LoadError::new(
+                path,
+                None,
+                format!(
+                    "element '{}' has {} instances but no properties",
+                    element.name, element.count
+                ),
+            ));
+        }
+        if element.name == "vertex" && element.count > u32::MAX as usize {
+            return Err(LoadError::new(
+                path,
+                None,
+                format!(
+                    "{} vertices: more than 32-bit indices can name",
+                    element.count
+                ),
+            ));
+        }
+        let per_instance = min_instance_bytes(header.format, element);
+        needed = needed.saturating_add(element.count.saturating_mul(per_instance));
+        // The last ASCII line needs no newline.
+        if needed.saturating_sub(usize::from(header.format == Format::Ascii)) > body {
+            return Err(LoadError::new(
+                path,
+                None,
+                format!(
+                    "header declares {} '{}' elements but the {} body bytes can hold at most {}",
+                    element.count,
+                    element.name,
+                    body,
+                    (body + 1) / per_instance.max(1)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 struct BodyContext<'a> {
     path: &'a Path,
     slots: &'a [VertexSlot],
@@ -307,9 +371,12 @@ struct BodyContext<'a> {
 }
 
 impl BodyContext<'_> {
-    fn push_vertex(&self, mesh: &mut Mesh, values: &[f32; 8]) {
-        mesh.positions
-            .push(Vec3::new(values[0], values[1], values[2]));
+    /// Adds a vertex; a position that is not finite, or so large that the kernel's products
+    /// of coordinates would overflow, is refused.
+    fn push_vertex(&self, mesh: &mut Mesh, values: &[f32; 8]) -> Result<(), String> {
+        let position = Vec3::new(values[0], values[1], values[2]);
+        crate::scene::check_position(mesh.positions.len(), position)?;
+        mesh.positions.push(position);
         if self.has_normals {
             mesh.normals
                 .push(Vec3::new(values[3], values[4], values[5]));
@@ -317,6 +384,7 @@ impl BodyContext<'_> {
         if self.has_texcoords {
             mesh.texcoords.push(Vec2::new(values[6], values[7]));
         }
+        Ok(())
     }
 
     fn slot_index(slot: VertexSlot) -> Option<usize> {
@@ -427,7 +495,7 @@ fn parse_ascii_body(
                         }
                     }
                 }
-                context.push_vertex(mesh, &values);
+                context.push_vertex(mesh, &values).map_err(error)?;
             } else {
                 for property in &element.properties {
                     match property {
@@ -500,7 +568,8 @@ impl<const BIG: bool> BinaryCursor<'_, BIG> {
     }
 
     fn skip(&mut self, bytes: usize) -> Option<()> {
-        (self.offset + bytes <= self.data.len()).then(|| self.offset += bytes)
+        let end = self.offset.checked_add(bytes)?;
+        (end <= self.data.len()).then(|| self.offset = end)
     }
 }
 
@@ -581,13 +650,17 @@ fn parse_binary_body<const BIG: bool>(
                             }
                             context.push_face(mesh, &corners);
                         } else {
-                            cursor.skip(count * item_ty.size()).ok_or_else(truncated)?;
+                            cursor
+                                .skip(count.saturating_mul(item_ty.size()))
+                                .ok_or_else(truncated)?;
                         }
                     }
                 }
             }
             if element.name == "vertex" {
-                context.push_vertex(mesh, &values);
+                context.push_vertex(mesh, &values).map_err(|reason| {
+                    LoadError::new(path, None, format!("{reason} (byte offset {at})"))
+                })?;
             }
         }
     }
@@ -678,8 +751,63 @@ mod tests {
         let data = binary_square(false);
         for cut in [data.len() - 1, data.len() - 10, data.len() - 60] {
             let err = parse(&data[..cut]).unwrap_err();
-            assert!(err.reason.contains("unexpected end of data"), "{err}");
+            // Cut into the faces' lists: found while reading; cut into the vertices: the
+            // declared counts no longer fit, found before reading.
+            assert!(
+                err.reason.contains("unexpected end of data")
+                    || err.reason.contains("body bytes can hold at most"),
+                "{err}"
+            );
         }
+    }
+
+    #[test]
+    fn huge_declared_counts_fail_before_reserving() {
+        let text = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n\
+            property float x\nproperty float y\nproperty float z\nelement face 1\n\
+            property list uchar int vertex_indices\nend_header\n0123456789";
+        let err = parse(text.as_bytes()).unwrap_err();
+        assert_eq!(
+            err.reason,
+            "header declares 4000000000 'vertex' elements but the 10 body bytes can hold at most 0"
+        );
+        let ascii = ASCII_SQUARE.replace("element face 2", "element face 99999999999");
+        let err = parse(ascii.as_bytes()).unwrap_err();
+        assert!(err.reason.contains("99999999999 'face' elements"), "{err}");
+        let empty = ASCII_SQUARE.replace("element face 2", "element edge 5\nelement face 2");
+        let err = parse(empty.as_bytes()).unwrap_err();
+        assert_eq!(
+            err.reason,
+            "element 'edge' has 5 instances but no properties"
+        );
+    }
+
+    #[test]
+    fn non_finite_and_huge_vertices_are_refused_with_the_line() {
+        let inf = ASCII_SQUARE.replace("1 1 0 255", "1 inf 0 255");
+        let err = parse(inf.as_bytes()).unwrap_err();
+        assert_eq!(err.line, Some(14), "{err}");
+        assert_eq!(err.reason, "vertex 2 is not finite (1, inf, 0)");
+        let nan = ASCII_SQUARE.replace("0 1 0 255", "0 1 NaN 255");
+        assert!(parse(nan.as_bytes())
+            .unwrap_err()
+            .reason
+            .contains("not finite"));
+        let huge = ASCII_SQUARE.replace("0 1 0 255", "0 1e30 0 255");
+        let err = parse(huge.as_bytes()).unwrap_err();
+        assert!(
+            err.reason.contains("exceeds the largest coordinate"),
+            "{err}"
+        );
+        // Binary: a double that overflows single precision.
+        let mut data = binary_square(false);
+        let header_end = data.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+        data[header_end..header_end + 4].copy_from_slice(&f32::INFINITY.to_le_bytes());
+        let err = parse(&data).unwrap_err();
+        assert!(
+            err.reason.starts_with("vertex 0 is not finite (inf, 0, 0)"),
+            "{err}"
+        );
     }
 
     #[test]

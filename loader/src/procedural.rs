@@ -19,6 +19,7 @@ use glam::{Affine3A, Vec2, Vec3};
 
 use crate::camera::Camera;
 use crate::scene::{Material, Scene, Triangle};
+use crate::shading::Light;
 
 /// Accumulates vertices and triangles of primitives placed by a current transform.
 struct MeshBuilder {
@@ -393,7 +394,10 @@ pub fn room() -> Scene {
         Vec3::Y,
         60.0,
     );
-    b.finish(camera)
+    let mut scene = b.finish(camera);
+    // A ceiling light off the room's centre, so the table and chairs cast shadows.
+    scene.lights = vec![Light::white(Vec3::new(-0.6, 2.7, 0.4))];
+    scene
 }
 
 /// A conference chair: curved seat and backrest shells, four legs, two armrests, 9,728
@@ -509,7 +513,9 @@ pub fn conference() -> Scene {
         Vec3::Y,
         60.0,
     );
-    b.finish(camera)
+    let mut scene = b.finish(camera);
+    scene.lights = vec![Light::white(Vec3::new(-3.0, 3.6, 1.5))];
+    scene
 }
 
 /// Segments around the beetle body, along it, and of the wheels (major, minor).
@@ -519,11 +525,12 @@ const WHEEL_MAJOR: usize = 128;
 const WHEEL_MINOR: usize = 48;
 
 /// The beetle: a smooth, closed, rounded car body (a superelliptic body of revolution with
-/// a cabin hump) on four torus wheels; 693,120 triangles, 2 materials.
+/// a glazed cabin hump) on four torus wheels; 693,120 triangles, 3 materials.
 pub fn beetle() -> Scene {
     let mut b = MeshBuilder::new();
     let paint = b.material("paint", [0.2, 0.55, 0.25]);
     let tire = b.material("tire", [0.12, 0.12, 0.12]);
+    let glass = b.material("window glass", [0.35, 0.45, 0.55]);
     let (length, width, height, ground) = (4.0f32, 1.6f32, 1.05f32, 0.42f32);
     let exponent = 2.0 / 2.6; // superellipse: boxier than an ellipse
     let signed_pow = |x: f32, p: f32| x.signum() * x.abs().powf(p);
@@ -551,6 +558,23 @@ pub fn beetle() -> Scene {
             Vec3::new(x, ground + 0.2 + y, z)
         },
     );
+    // The top of the cabin hump is glazed: a third material, so that shading the body
+    // takes more than one pass where windows and paint meet. Chosen by grid position (the
+    // body is the first patch: vertex 0 is the nose pole, then rows of BEETLE_AROUND), not
+    // by coordinates, so the topology stays the same on every platform.
+    let body_vertices = 2 + (BEETLE_ALONG - 1) * BEETLE_AROUND;
+    for triangle in &mut b.triangles {
+        let first = triangle.v.iter().min().copied().unwrap_or(0) as usize;
+        if first == 0 || first >= body_vertices {
+            continue;
+        }
+        let (row, column) = ((first - 1) / BEETLE_AROUND, (first - 1) % BEETLE_AROUND);
+        let along = (BEETLE_ALONG * 45 / 100..BEETLE_ALONG * 62 / 100).contains(&row);
+        let top = (BEETLE_AROUND / 10..BEETLE_AROUND * 4 / 10).contains(&column);
+        if along && top {
+            triangle.material = glass;
+        }
+    }
     for x in [-1.25f32, 1.3] {
         for z in [-0.72f32, 0.72] {
             b.transform = Affine3A::from_translation(Vec3::new(x, 0.33, z))
@@ -564,7 +588,9 @@ pub fn beetle() -> Scene {
         Vec3::Y,
         42.0,
     );
-    b.finish(camera)
+    let mut scene = b.finish(camera);
+    scene.lights = vec![Light::white(Vec3::new(2.5, 6.0, 3.0))];
+    scene
 }
 
 /// The procedural scene called `name` (`room`, `conference` or `beetle`).
@@ -628,7 +654,12 @@ mod tests {
         scene.validate().unwrap();
         assert_eq!(scene.triangle_count(), 693_120);
         assert_eq!(scene.content_hash(), beetle().content_hash());
-        assert_eq!(topology_hash(&scene), 0x88a6_9385_7e31_1af5);
+        assert_eq!(topology_hash(&scene), 0x6d6c_c6ac_f763_bb21);
+        let glass = scene.triangles.iter().filter(|t| t.material == 2).count();
+        assert!(
+            (10_000..100_000).contains(&glass),
+            "{glass} window triangles"
+        );
         // No triangle's screen footprint reaches an 8x8 packet at 1024x1024.
         let (width, height) = (1024u32, 1024u32);
         let (forward, right, up) = scene.camera.frame();

@@ -24,8 +24,12 @@ use glam::Vec3;
 
 use crate::bvh::Bvh;
 use crate::camera::Camera;
-use crate::layout::{node_records, triangle_records, NodeRecord, StagedScene, TriangleRecord};
+use crate::layout::{
+    material_records, node_records, triangle_records, vertex_records, MaterialRecord, NodeRecord,
+    StagedScene, TriangleRecord, VertexRecord,
+};
 use crate::scene::Scene;
+use crate::shading::{self, Light};
 
 /// Triangle index reported for a ray that hits nothing.
 pub const MISS: u32 = u32::MAX;
@@ -55,11 +59,13 @@ impl Hit {
     }
 }
 
-/// The records the caster runs over.
+/// The records the caster runs over (and the shading data: vertices and materials).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Reference {
     pub nodes: Vec<NodeRecord>,
     pub triangles: Vec<TriangleRecord>,
+    pub vertices: Vec<VertexRecord>,
+    pub materials: Vec<MaterialRecord>,
 }
 
 /// The eye-light shade `|N.D| / (|N| |D|)`, clamped to `[0, 1]`, computed in f32 as
@@ -129,6 +135,8 @@ impl Reference {
         Reference {
             nodes: node_records(bvh),
             triangles: triangle_records(scene, bvh),
+            vertices: vertex_records(scene),
+            materials: material_records(scene),
         }
     }
 
@@ -136,15 +144,31 @@ impl Reference {
         Reference {
             nodes: staged.nodes.clone(),
             triangles: staged.triangles.clone(),
+            vertices: staged.vertices.clone(),
+            materials: staged.materials.clone(),
         }
     }
 
     /// The nearest hit of the ray `origin + t * dir` with `T_MIN < t < T_MAX`.
     pub fn trace(&self, origin: Vec3, dir: Vec3) -> Hit {
+        self.trace_within(origin, dir, T_MAX)
+    }
+
+    /// Whether anything lies on `origin + t * dir` with `T_MIN < t < t_max` (the shadow
+    /// rays' occlusion query: the nearest hit exists exactly when any hit does).
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        self.trace_within(origin, dir, t_max).is_hit()
+    }
+
+    /// The nearest hit with `T_MIN < t < t_max` (a miss keeps `t = t_max`).
+    pub fn trace_within(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Hit {
         let o = origin.to_array();
         let d = dir.to_array();
         let inverse = safe_inverse(d);
-        let mut best = Hit::NONE;
+        let mut best = Hit {
+            t: t_max,
+            ..Hit::NONE
+        };
         if self.triangles.is_empty() {
             // The empty scene's root is an inverted box whose slabs, swapped by the ray's
             // direction, would read as a valid one: there is nothing to find.
@@ -252,6 +276,80 @@ impl Reference {
             .collect()
     }
 }
+
+impl Reference {
+    /// The colour of the model in [`crate::shading`] for a primary hit on the ray
+    /// `origin + t * dir` (black for a miss); `shadows` adds the occlusion query per light.
+    pub fn shade(
+        &self,
+        hit: &Hit,
+        origin: Vec3,
+        dir: Vec3,
+        lights: &[Light],
+        shadows: bool,
+    ) -> u32 {
+        if !hit.is_hit() {
+            return MISS_COLOUR;
+        }
+        let record = &self.triangles[hit.record as usize];
+        let (beta, gamma) = record.barycentrics(origin.to_array(), dir.to_array(), hit.t);
+        let normals = record
+            .vertices
+            .map(|v| Vec3::from(self.vertices[v as usize].normal));
+        let normal = shading::shading_normal(normals, beta, gamma, dir);
+        let point = origin + dir * hit.t;
+        let mut irradiance = Vec3::ZERO;
+        for light in lights {
+            let cosine = shading::light_cosine(normal, light.position - point);
+            if cosine > 0.0
+                && !(shadows
+                    && self.occluded(
+                        light.position,
+                        point - light.position,
+                        1.0 - shading::SHADOW_EPSILON,
+                    ))
+            {
+                irradiance += light.colour * cosine;
+            }
+        }
+        shading::pixel_colour(self.materials[record.material as usize].diffuse, irradiance)
+    }
+
+    /// [`Reference::shade`] for every pixel of `hits` from [`Reference::render`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn shade_image(
+        &self,
+        hits: &[Hit],
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        lights: &[Light],
+        shadows: bool,
+        threads: usize,
+    ) -> Vec<u32> {
+        let basis = camera.basis(width, height);
+        let mut colours = vec![MISS_COLOUR; hits.len()];
+        let threads = threads.max(1);
+        let chunk = hits.len().div_ceil(threads).max(1);
+        std::thread::scope(|scope| {
+            for (number, out) in colours.chunks_mut(chunk).enumerate() {
+                let basis = &basis;
+                scope.spawn(move || {
+                    for (i, colour) in out.iter_mut().enumerate() {
+                        let pixel = (number * chunk + i) as u32;
+                        let dir = basis.direction(pixel % width, pixel / width);
+                        *colour =
+                            self.shade(&hits[pixel as usize], basis.origin, dir, lights, shadows);
+                    }
+                });
+            }
+        });
+        colours
+    }
+}
+
+/// The colour of a pixel whose primary ray hits nothing: opaque black.
+pub const MISS_COLOUR: u32 = 0x0000_00ff;
 
 /// Möller–Trumbore in f64 against every triangle: `(triangle, t, beta, gamma)` of the
 /// nearest hit with `t > 0`, for checking [`Reference::trace`]. `slack` widens (positive) or
@@ -399,5 +497,99 @@ mod tests {
             [255, 128, 0]
         );
         assert_eq!(eye_light_gray(Vec3::ZERO, Vec3::Z), 0);
+    }
+
+    /// A floor quad (kd 0.5, 0.25, 1.0) lit from straight above, with a small blocker half
+    /// way up: the colour under the light is shadowed to the ambient term, next to it lit.
+    #[test]
+    fn shading_and_shadows_by_hand() {
+        use crate::scene::{Material, Triangle};
+        let positions = vec![
+            Vec3::new(-2.0, 0.0, -2.0),
+            Vec3::new(2.0, 0.0, -2.0),
+            Vec3::new(2.0, 0.0, 2.0),
+            Vec3::new(-2.0, 0.0, 2.0),
+            Vec3::new(-0.1, 1.0, -0.1),
+            Vec3::new(0.1, 1.0, -0.1),
+            Vec3::new(0.1, 1.0, 0.1),
+            Vec3::new(-0.1, 1.0, 0.1),
+        ];
+        let triangles = [[0, 2, 1], [0, 3, 2], [4, 6, 5], [4, 7, 6]]
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| Triangle {
+                v,
+                material: (i / 2) as u32,
+            })
+            .collect();
+        let materials = vec![
+            Material::new("floor", [0.5, 0.25, 1.0]),
+            Material::new("blocker", [1.0, 1.0, 1.0]),
+        ];
+        let scene = Scene::from_parts(positions, None, Vec::new(), triangles, materials);
+        let bvh = Bvh::build(&scene, &BvhConfig::default());
+        let reference = Reference::new(&scene, &bvh);
+        let light = [Light::white(Vec3::new(0.0, 2.0, 0.0))];
+        let look = |x: f32| {
+            let origin = Vec3::new(x, 3.0, 0.0);
+            // Straight down onto the floor at (x, 0, 0), through the blocker's plane.
+            let dir = Vec3::new(0.0, -1.0, 0.0);
+            (origin, dir)
+        };
+        // Beside the blocker: cos = 1 with the light 2 above (x = 0.5: cos = 2/sqrt(4.25)).
+        let (o, d) = look(0.5);
+        let hit = reference.trace(o, d);
+        assert!(hit.is_hit() && (hit.t - 3.0).abs() < 1e-6);
+        let cosine = 2.0 / 4.25f32.sqrt();
+        let expected = shading::pixel_colour([0.5, 0.25, 1.0], Vec3::splat(cosine));
+        assert_eq!(reference.shade(&hit, o, d, &light, false), expected);
+        assert_eq!(reference.shade(&hit, o, d, &light, true), expected);
+        // Under the blocker, seen from below the blocker's height (from the side).
+        let o = Vec3::new(0.0, 0.5, 1.5);
+        let d = Vec3::new(0.0, -0.5, -1.5);
+        let hit = reference.trace(o, d);
+        assert_eq!(hit.triangle / 2, 0, "the floor");
+        let lit = reference.shade(&hit, o, d, &light, false);
+        assert_eq!(lit, shading::pixel_colour([0.5, 0.25, 1.0], Vec3::ONE));
+        assert_eq!(
+            reference.shade(&hit, o, d, &light, true),
+            shading::pixel_colour([0.5, 0.25, 1.0], Vec3::ZERO),
+            "shadowed: ambient only"
+        );
+        assert_eq!(reference.shade(&Hit::NONE, o, d, &light, true), MISS_COLOUR);
+        // The blocker seen from below faces the eye, but the light is behind it.
+        let o = Vec3::new(0.0, 0.5, 0.0);
+        let d = Vec3::Y;
+        let hit = reference.trace(o, d);
+        assert_eq!(hit.triangle / 2, 1);
+        assert_eq!(
+            reference.shade(&hit, o, d, &light, false),
+            shading::pixel_colour([1.0; 3], Vec3::ZERO)
+        );
+    }
+
+    #[test]
+    fn room_shading_uses_materials_and_shadows_darken() {
+        let scene = crate::procedural::room();
+        let bvh = Bvh::build(&scene, &BvhConfig::default());
+        let reference = Reference::new(&scene, &bvh);
+        let (w, h) = (48, 36);
+        let hits = reference.render(&scene.camera, w, h, 2);
+        let lights = shading::default_lights(&scene);
+        let simple = reference.shade_image(&hits, &scene.camera, w, h, &lights, false, 1);
+        let shadows = reference.shade_image(&hits, &scene.camera, w, h, &lights, true, 3);
+        assert_eq!(
+            simple,
+            reference.shade_image(&hits, &scene.camera, w, h, &lights, false, 4)
+        );
+        let distinct: std::collections::HashSet<u32> = simple.iter().copied().collect();
+        assert!(distinct.len() > 50, "{} colours", distinct.len());
+        let darker = simple.iter().zip(&shadows).filter(|(a, b)| a != b).count();
+        assert!(darker > 20, "{darker} shadowed pixels");
+        for (a, b) in simple.iter().zip(&shadows) {
+            let [ar, ag, ab, _] = a.to_be_bytes();
+            let [br, bg, bb, _] = b.to_be_bytes();
+            assert!(br <= ar && bg <= ag && bb <= ab, "shadows only darken");
+        }
     }
 }

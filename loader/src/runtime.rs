@@ -27,6 +27,42 @@ pub struct FrameRun {
     pub symbols: Vec<(String, u32)>,
     /// The kernel's local-store image (to tell its no-ops apart in the profile).
     pub kernel_image: Vec<u8>,
+    /// Each SPU's MFC commands and channel waits, when [`FrameOptions::event_log`] was on.
+    pub events: Vec<Vec<spu_isa::machine::SpuEvent>>,
+    /// The caches, packets in flight and memory latency the frame ran with.
+    pub config: KernelConfig,
+}
+
+/// What a frame records beyond its image and statistics.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrameOptions {
+    /// Log every SPU's MFC commands and channel waits (for heat maps and timelines).
+    pub event_log: bool,
+}
+
+/// The kernel configuration of a frame, as `--stats` reports it.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct KernelConfig {
+    /// Packets each SPU keeps in flight (software hyperthreading; 1 = blocking misses).
+    pub sht: u32,
+    /// Ways of both caches (1 = direct mapped, 4 = 4-way LRU).
+    pub assoc: u32,
+    pub bvh_cache_lines: u32,
+    pub tri_cache_lines: u32,
+    pub dma_latency_ns: f64,
+}
+
+impl KernelConfig {
+    pub fn new(layout: &FrameLayout, timing: &spu_isa::timing::TimingConfig) -> Self {
+        let p = &layout.params;
+        KernelConfig {
+            sht: p.sht_contexts,
+            assoc: p.cache_assoc,
+            bvh_cache_lines: 1 << p.bvh_cache_log2,
+            tri_cache_lines: 1 << p.tri_cache_log2,
+            dma_latency_ns: timing.dma_latency_ns,
+        }
+    }
 }
 
 impl FrameRun {
@@ -38,155 +74,6 @@ impl FrameRun {
         }
         total
     }
-
-    fn symbol(&self, name: &str) -> Option<u32> {
-        self.symbols
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, a)| *a)
-    }
-
-    /// CPI, instructions, cycles and stalls of the code between two kernel labels.
-    pub fn section_json(&self, from: &str, to: &str) -> String {
-        let (Some(profile), Some(a), Some(b)) = (&self.profile, self.symbol(from), self.symbol(to))
-        else {
-            return "null".into();
-        };
-        let r = profile.range_totals(a, b);
-        // IBM's simulator counts nop, lnop and hints apart: the CPI without them is the
-        // figure to compare, the pairing nops of scheduled code would flatter it
-        let nops: u64 = profile
-            .addresses()
-            .filter(|(pc, _)| (a..b).contains(pc))
-            .filter(|(pc, _)| {
-                let word = self
-                    .kernel_image
-                    .get(*pc as usize..*pc as usize + 4)
-                    .map_or(0, |w| u32::from_be_bytes([w[0], w[1], w[2], w[3]]));
-                let op = spu_isa::codec::decode(word).op;
-                use spu_isa::table::Op;
-                spu_isa::analysis::is_nop(op) || matches!(op, Op::Hbr | Op::Hbra | Op::Hbrr)
-            })
-            .map(|(_, s)| s.executions)
-            .sum();
-        let names = ["dep", "branch", "hint", "dp", "chan", "fetch"];
-        let stalls: Vec<String> = r
-            .stall
-            .iter()
-            .zip(names)
-            .map(|(v, n)| format!("\"{n}\": {v}"))
-            .collect();
-        let real = r.executions - nops.min(r.executions);
-        format!(
-            "{{\"from\": {from:?}, \"to\": {to:?}, \"instructions\": {}, \"instructions_without_nops\": {real}, \"cycles\": {}, \"cpi\": {:.3}, \"cpi_without_nops\": {:.3}, \"dual_issue_pct\": {:.1}, \"stalls\": {{{}}}}}",
-            r.executions,
-            r.cycles,
-            r.cpi(),
-            if real > 0 { r.cycles as f64 / real as f64 } else { 0.0 },
-            // both halves of a pair count a dual issue: the share of cycles that issue two
-            if r.cycles > 0 { 50.0 * r.dual as f64 / r.cycles as f64 } else { 0.0 },
-            stalls.join(", ")
-        )
-    }
-}
-
-impl FrameRun {
-    /// Statistics as JSON for `spu render --stats`.
-    pub fn stats_json(
-        &self,
-        scene: &str,
-        width: u32,
-        height: u32,
-        clock_ghz: f64,
-        mrays_per_sec: f64,
-        validation: Option<(usize, usize)>,
-    ) -> String {
-        let spus: Vec<String> = self
-            .spus
-            .iter()
-            .map(|s| {
-                format!(
-                    "{{\"cycles\": {}, \"instructions\": {}, \"tiles\": {}}}",
-                    s.cycles, s.instructions, s.tiles
-                )
-            })
-            .collect();
-        let validation = match validation {
-            Some((pixels, mismatches)) => {
-                format!(
-                    ",\n  \"validation\": {{\"pixels\": {pixels}, \"mismatches\": {mismatches}}}"
-                )
-            }
-            None => String::new(),
-        };
-        let k = self.kernel_stats();
-        let per = |x: u64| {
-            if k.packets > 0 {
-                x as f64 / k.packets as f64
-            } else {
-                0.0
-            }
-        };
-        let pct = |x: u64, of: u64| {
-            if of > 0 {
-                100.0 * x as f64 / of as f64
-            } else {
-                0.0
-            }
-        };
-        let cycles_per_spu = self.spus.iter().map(|s| s.cycles).max().unwrap_or(0);
-        let per_spu_mrays = if cycles_per_spu > 0 {
-            (width as f64 * height as f64)
-                / self.spus.len().max(1) as f64
-                / (cycles_per_spu as f64 / (clock_ghz * 1e9))
-                / 1e6
-        } else {
-            0.0
-        };
-        let lookups = if k.bvh_lookups > 0 {
-            k.bvh_lookups
-        } else {
-            k.traversal_steps
-        };
-        let table2 = format!(
-            "{{\"traversal_steps_per_packet\": {:.2}, \"pair_steps_per_packet\": {:.2}, \"triangle_tests_per_packet\": {:.2}, \"triangles_culled_per_packet\": {:.2}, \"early_exits_pct\": {:.1}, \"early_hits_pct\": {:.1}, \"bvh_cache_hit_pct\": {:.1}, \"bvh_cache_hit_per_node_pct\": {:.1}, \"triangle_cache_hit_pct\": {:.1}, \"mrays_per_sec_per_spu\": {:.2}}}",
-            per(k.traversal_steps),
-            per(lookups),
-            per(k.triangle_tests),
-            per(k.triangles_culled),
-            pct(k.early_exits, k.traversal_steps),
-            pct(k.early_hits, k.traversal_steps),
-            100.0 - pct(k.bvh_cache_misses, lookups),
-            100.0 - pct(k.bvh_cache_misses, k.traversal_steps),
-            100.0 - pct(k.triangle_cache_misses, k.triangle_lookups),
-            per_spu_mrays
-        );
-        let stalls = self
-            .profile
-            .as_ref()
-            .map_or("null".to_string(), |p| p.totals.json());
-        let traversal = self.section_json("trav", "leaf");
-        let intersection = self.section_json("leaf", "packet_done");
-        let extra = format!(
-            ",\n  \"table2\": {table2},\n  \"traversal\": {traversal},\n  \"intersection\": {intersection},\n  \"totals\": {stalls}"
-        );
-        let validation = validation + &extra;
-        format!(
-            "{{\n  \"scene\": {scene:?},\n  \"width\": {width},\n  \"height\": {height},\n  \"clock_ghz\": {clock_ghz},\n  \"frame_cycles\": {},\n  \"rays\": {},\n  \"mrays_per_sec\": {mrays_per_sec:.3},\n  \"spus\": [{}]{validation}\n}}\n",
-            self.frame_cycles,
-            width as u64 * height as u64,
-            spus.join(", ")
-        )
-    }
-}
-
-/// The kernels' sources, built into the binary so `spu render` needs no files.
-pub const RAYTRACE_SOURCE: &str = include_str!("../../kernels/raytrace.s");
-pub const FILL_SOURCE: &str = include_str!("../../kernels/fill.s");
-
-/// The generated `layout.inc` every kernel includes: record layouts and the kernel ABI.
-pub fn layout_include() -> String {
-    crate::layout::spu_layout_include() + &crate::kernel_abi::spu_include()
 }
 
 /// An assembled SPU program: a flat local-store image and its entry point.
@@ -197,10 +84,10 @@ pub struct Program {
     pub symbols: Vec<(String, u32)>,
 }
 
-/// Assembles a kernel with the generated include.
+/// Assembles a kernel with its includes from memory (`layout.inc`, the kernel modules).
 pub fn assemble_kernel(source: &str, name: &str) -> Result<Program, String> {
     let opts = spu_asm::Options {
-        virtual_files: vec![("layout.inc".to_string(), layout_include())],
+        virtual_files: crate::kernels::include_files(),
         ..Default::default()
     };
     match spu_asm::assemble(source, name, &opts) {
@@ -217,6 +104,49 @@ pub fn assemble_kernel(source: &str, name: &str) -> Result<Program, String> {
     }
 }
 
+/// Local store of one SPU.
+pub const LOCAL_STORE_BYTES: u32 = 256 * 1024;
+
+/// The caches and packet contexts the kernel carves after its `cache_area` must fit in the
+/// local store.
+fn check_local_store(program: &Program, layout: &FrameLayout) -> Result<(), String> {
+    let Some(start) = program
+        .symbols
+        .iter()
+        .find(|(n, _)| n == "cache_area")
+        .map(|(_, a)| *a)
+    else {
+        return Ok(());
+    };
+    let p = &layout.params;
+    let (bvh, tri, sht) = (
+        1u32 << p.bvh_cache_log2,
+        1u32 << p.tri_cache_log2,
+        p.sht_contexts.max(1),
+    );
+    let end = start as u64 + crate::kernel_abi::carved_bytes(bvh, tri, sht) as u64;
+    if end > LOCAL_STORE_BYTES as u64 {
+        return Err(format!(
+            "local store: {bvh} BVH and {tri} triangle cache lines and {sht} packet contexts need {} bytes after the kernel's {start} bytes, {} available",
+            end - start as u64,
+            LOCAL_STORE_BYTES - start.min(LOCAL_STORE_BYTES)
+        ));
+    }
+    Ok(())
+}
+
+/// A leaf's triangles are fetched into a packet context's staging slots, so no leaf may hold
+/// more of them than there are slots.
+fn check_leaves_fit(staged: &StagedScene) -> Result<(), String> {
+    let limit = crate::kernel_abi::context::STAGE_TRIANGLES;
+    match staged.nodes.iter().map(|n| n.triangle_count()).max() {
+        Some(most) if most > limit => Err(format!(
+            "a BVH leaf holds {most} triangles; the kernel fetches at most {limit} per leaf"
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Simulated cycles each SPU runs between two synchronisations of main memory. Writes and
 /// atomic updates become visible to other SPUs at these boundaries, in a fixed order, so a
 /// frame's result does not depend on how the SPUs are spread over host threads.
@@ -224,6 +154,42 @@ pub const QUANTUM_CYCLES: u64 = 10_000;
 
 /// Stop code of a kernel that finished its frame (`stop 0x2000`, exit status 0).
 pub const STOP_DONE: u16 = 0x2000;
+
+/// Why a frame did not complete, in kinds a caller can tell apart (`spu render` gives each
+/// its own exit status).
+#[derive(Debug, Clone, PartialEq)]
+pub enum FrameError {
+    /// The frame could not be set up (the kernel did not assemble, ...).
+    Setup(String),
+    /// The SPUs had not all finished within this many cycles.
+    CycleLimit(u64),
+    /// An SPU stopped abnormally (illegal instruction, DMA error, deadlock, ...).
+    SpuStopped { spu: usize, reason: String },
+}
+
+impl std::fmt::Display for FrameError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FrameError::Setup(message) => f.write_str(message),
+            FrameError::CycleLimit(cycles) => {
+                write!(f, "the frame did not finish within {cycles} cycles")
+            }
+            FrameError::SpuStopped { spu, reason } => write!(f, "SPU {spu} stopped: {reason}"),
+        }
+    }
+}
+
+impl From<String> for FrameError {
+    fn from(message: String) -> FrameError {
+        FrameError::Setup(message)
+    }
+}
+
+impl From<FrameError> for String {
+    fn from(error: FrameError) -> String {
+        error.to_string()
+    }
+}
 
 /// Renders one frame with `spes` SPUs on `threads` host threads; `progress` hears the
 /// number of tiles taken so far.
@@ -237,14 +203,40 @@ pub fn render_frame(
     fill: bool,
     max_cycles: u64,
     progress: &mut dyn FnMut(u32, u32),
-) -> Result<FrameRun, String> {
+) -> Result<FrameRun, FrameError> {
+    render_frame_with(
+        staged,
+        layout,
+        spes,
+        threads,
+        timing,
+        fill,
+        max_cycles,
+        &FrameOptions::default(),
+        progress,
+    )
+}
+
+/// [`render_frame`] with [`FrameOptions`].
+#[allow(clippy::too_many_arguments)]
+pub fn render_frame_with(
+    staged: &StagedScene,
+    layout: &FrameLayout,
+    spes: usize,
+    threads: usize,
+    timing: &spu_isa::timing::TimingConfig,
+    fill: bool,
+    max_cycles: u64,
+    options: &FrameOptions,
+    progress: &mut dyn FnMut(u32, u32),
+) -> Result<FrameRun, FrameError> {
     use spu_isa::machine::{apply_quantum, MainMemory, Spu, StopReason};
-    let (source, name) = if fill {
-        (FILL_SOURCE, "kernels/fill.s")
-    } else {
-        (RAYTRACE_SOURCE, "kernels/raytrace.s")
-    };
+    let (source, name) = crate::kernels::frame_program(fill);
     let program = assemble_kernel(source, name)?;
+    if !fill {
+        check_local_store(&program, layout)?;
+        check_leaves_fit(staged)?;
+    }
     let mut memory = MainMemory::new(layout.memory_image(staged));
     let mut spus: Vec<Spu> = (0..spes)
         .map(|i| {
@@ -256,6 +248,9 @@ pub fn render_frame(
             if std::env::var_os("SPU_NO_TIMING").is_none() {
                 spu.enable_timing(timing.clone());
             }
+            if options.event_log {
+                spu.enable_event_log();
+            }
             spu
         })
         .collect();
@@ -263,11 +258,9 @@ pub fn render_frame(
     let threads = threads.clamp(1, spes);
     let mut until = 0u64;
     while finished.iter().any(|f| f.is_none()) {
-        until += QUANTUM_CYCLES;
+        until = until.saturating_add(QUANTUM_CYCLES);
         if until > max_cycles {
-            return Err(format!(
-                "the frame did not finish within {max_cycles} cycles"
-            ));
+            return Err(FrameError::CycleLimit(max_cycles));
         }
         let memory_view = &memory;
         let mut outcomes: Vec<Option<StopReason>> = vec![None; spes];
@@ -303,12 +296,20 @@ pub fn render_frame(
                 None => {}
                 Some(StopReason::Stop(code)) if code == STOP_DONE => {
                     if spus[i].read_outbound_mailbox() != Some(1) {
-                        return Err(format!("SPU {i} stopped without its end-of-frame message"));
+                        return Err(FrameError::SpuStopped {
+                            spu: i,
+                            reason: "without its end-of-frame message".into(),
+                        });
                     }
                     finished[i] = Some(spus[i].cycles());
                 }
                 Some(StopReason::Blocked { .. }) => {}
-                Some(other) => return Err(format!("SPU {i} stopped: {other:?}")),
+                Some(other) => {
+                    return Err(FrameError::SpuStopped {
+                        spu: i,
+                        reason: other.to_string(),
+                    })
+                }
             }
         }
         let taken = memory
@@ -347,12 +348,15 @@ pub fn render_frame(
             }
         }
     }
+    let events = spus.iter_mut().map(|spu| spu.take_events()).collect();
     Ok(FrameRun {
+        events,
         frame_buffer: memory.bytes()[fb..fb + layout.frame_buffer_len].to_vec(),
         frame_cycles: spus_report.iter().map(|s| s.cycles).max().unwrap_or(0),
         spus: spus_report,
         profile,
         symbols: program.symbols.clone(),
         kernel_image: program.image.clone(),
+        config: KernelConfig::new(layout, timing),
     })
 }

@@ -70,6 +70,9 @@ pub struct Scene {
     pub triangles: Vec<Triangle>,
     pub materials: Vec<Material>,
     pub camera: Camera,
+    /// The scene's own point lights (the procedural scenes place theirs); empty means
+    /// [`crate::shading::default_lights`] derives one from the camera.
+    pub lights: Vec<crate::shading::Light>,
 }
 
 impl Scene {
@@ -90,23 +93,40 @@ impl Scene {
                 .map(|e| e.to_string_lossy().into_owned())
                 .unwrap_or_default()
         };
-        if bytes.starts_with(b"ply") {
-            crate::ply::parse_ply(path, &bytes)
+        let scene = if bytes.starts_with(b"ply") {
+            crate::ply::parse_ply(path, &bytes)?
         } else if stem_extension == "obj" {
-            crate::obj::parse_obj(path, &bytes)
+            crate::obj::parse_obj(path, &bytes)?
         } else if stem_extension == "ply" {
-            Err(LoadError::new(
+            return Err(LoadError::new(
                 path,
                 Some(1),
                 "PLY file does not start with the 'ply' magic",
-            ))
+            ));
         } else {
-            Err(LoadError::new(
+            return Err(LoadError::new(
                 path,
                 None,
                 "unknown scene format (expected .obj or .ply, optionally .gz)",
-            ))
+            ));
+        };
+        scene
+            .check_loaded()
+            .map_err(|e| LoadError::new(path, None, e))?;
+        Ok(scene)
+    }
+
+    /// What every loaded scene must satisfy before it is rendered: the invariants, at least
+    /// one triangle, and positions the kernel can compute with.
+    pub fn check_loaded(&self) -> Result<(), String> {
+        self.validate()?;
+        if self.triangles.is_empty() {
+            return Err("the scene has no triangles".into());
         }
+        for (index, &p) in self.positions.iter().enumerate() {
+            check_position(index, p)?;
+        }
+        Ok(())
     }
 
     /// Builds a scene from raw arrays, computing missing normals and a framing camera.
@@ -127,6 +147,7 @@ impl Scene {
             triangles,
             materials,
             camera: Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 45.0),
+            lights: Vec::new(),
         };
         match normals {
             Some(normals) if normals.len() == scene.positions.len() => scene.normals = normals,
@@ -303,19 +324,70 @@ impl Scene {
     }
 }
 
-/// Reads a file, transparently decompressing it if it starts with the gzip magic.
+/// The largest scene file, and the largest it may decompress to: 1 GiB, several times the
+/// largest real scene (the 871k-triangle dragon is 60 MB of text), so that a file that
+/// never ends or a gzip bomb fails with a message instead of exhausting memory.
+pub const MAX_SCENE_BYTES: u64 = 1 << 30;
+
+/// Reads a file, transparently decompressing it if it starts with the gzip magic; neither
+/// the file nor its decompressed data may exceed [`MAX_SCENE_BYTES`].
 pub fn read_maybe_gzipped(path: &Path) -> Result<Vec<u8>, LoadError> {
-    let raw =
-        std::fs::read(path).map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+    read_maybe_gzipped_limited(path, MAX_SCENE_BYTES)
+}
+
+/// [`read_maybe_gzipped`] with another limit.
+pub fn read_maybe_gzipped_limited(path: &Path, limit: u64) -> Result<Vec<u8>, LoadError> {
+    let file = std::fs::File::open(path)
+        .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+    let too_large = |what: &str| {
+        LoadError::new(
+            path,
+            None,
+            format!("{what} larger than the {limit}-byte limit for a scene"),
+        )
+    };
+    let mut raw = Vec::new();
+    file.take(limit + 1)
+        .read_to_end(&mut raw)
+        .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+    if raw.len() as u64 > limit {
+        return Err(too_large("file"));
+    }
     if raw.starts_with(&[0x1f, 0x8b]) {
-        let mut out = Vec::with_capacity(raw.len() * 4);
+        let mut out = Vec::new();
         flate2::read::MultiGzDecoder::new(&raw[..])
+            .take(limit + 1)
             .read_to_end(&mut out)
             .map_err(|e| LoadError::new(path, None, format!("corrupt gzip data: {e}")))?;
+        if out.len() as u64 > limit {
+            return Err(too_large("decompressed data"));
+        }
         Ok(out)
     } else {
         Ok(raw)
     }
+}
+
+/// The largest coordinate a scene may have: the kernel multiplies coordinates (edge cross
+/// products, distances), and beyond this their products overflow single precision.
+pub const MAX_COORDINATE: f32 = 1e18;
+
+/// Refuses a vertex position that is not finite or exceeds [`MAX_COORDINATE`], which would
+/// otherwise render as a silently black or wrong image.
+pub fn check_position(index: usize, p: Vec3) -> Result<(), String> {
+    if !p.is_finite() {
+        return Err(format!(
+            "vertex {index} is not finite ({}, {}, {})",
+            p.x, p.y, p.z
+        ));
+    }
+    if p.abs().max_element() > MAX_COORDINATE {
+        return Err(format!(
+            "vertex {index} ({}, {}, {}) exceeds the largest coordinate the kernel handles ({MAX_COORDINATE:e})",
+            p.x, p.y, p.z
+        ));
+    }
+    Ok(())
 }
 
 /// Where the shared test scenes live (`<repo>/../shared/scenes`), if present.
@@ -402,6 +474,48 @@ mod tests {
             (ply.as_path(), Some(13)),
             "{err}"
         );
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn inputs_are_read_with_a_limit_gzip_bombs_included() {
+        use std::io::Write;
+        let dir = std::env::temp_dir().join(format!("spu-loader-limit-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut encoder = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+        encoder.write_all(&vec![b' '; 100_000]).unwrap();
+        let bomb = encoder.finish().unwrap();
+        assert!(bomb.len() < 1000);
+        let path = dir.join("bomb.obj.gz");
+        std::fs::write(&path, &bomb).unwrap();
+        let err = read_maybe_gzipped_limited(&path, 10_000).unwrap_err();
+        assert_eq!(
+            err.reason,
+            "decompressed data larger than the 10000-byte limit for a scene"
+        );
+        assert_eq!(
+            read_maybe_gzipped_limited(&path, 100_000).unwrap().len(),
+            100_000
+        );
+        let err = read_maybe_gzipped_limited(&path, 100).unwrap_err();
+        assert_eq!(
+            err.reason,
+            "file larger than the 100-byte limit for a scene"
+        );
+        // A device that never ends is cut off at the limit too.
+        let err = read_maybe_gzipped_limited(Path::new("/dev/zero"), 4096).unwrap_err();
+        assert!(err.reason.starts_with("file larger"), "{err}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn a_loaded_scene_needs_triangles() {
+        let dir = std::env::temp_dir().join(format!("spu-loader-empty-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("points.obj");
+        std::fs::write(&path, "v 0 0 0\nv 1 0 0\n").unwrap();
+        let err = Scene::load(&path).unwrap_err();
+        assert_eq!(err.reason, "the scene has no triangles");
         std::fs::remove_dir_all(&dir).ok();
     }
 

@@ -1,14 +1,52 @@
-//! The kernels assemble with the generated layout include.
+//! The kernels assemble from their modules, with `layout.inc` from its one source; the
+//! checked-in copy of `layout.inc` and the embedded module list match the files.
+
+use spu_loader::kernels;
+
+fn kernels_dir() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../kernels")
+}
 
 #[test]
 fn kernels_assemble() {
-    for (source, name) in [
-        (spu_loader::runtime::RAYTRACE_SOURCE, "raytrace.s"),
-        (spu_loader::runtime::FILL_SOURCE, "fill.s"),
-    ] {
+    for fill in [false, true] {
+        let (source, name) = kernels::frame_program(fill);
         let program =
             spu_loader::runtime::assemble_kernel(source, name).unwrap_or_else(|e| panic!("{e}"));
         assert!(program.image.len() > 256, "{name}");
         assert!(program.symbols.iter().any(|(n, _)| n == "_start"));
     }
+}
+
+/// `kernels/layout.inc` is the generated text. To regenerate it after changing
+/// `loader::layout` or `loader::kernel_abi`: `SPU_BLESS_LAYOUT=1 cargo test -p spu-loader
+/// --test kernels_assemble`.
+#[test]
+fn checked_in_layout_inc_is_the_generated_one() {
+    let path = kernels_dir().join("layout.inc");
+    let generated = kernels::layout_include();
+    if std::env::var_os("SPU_BLESS_LAYOUT").is_some() {
+        std::fs::write(&path, &generated).unwrap();
+    }
+    let on_disk = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        on_disk == generated,
+        "kernels/layout.inc differs from loader::layout and loader::kernel_abi; regenerate it \
+         with SPU_BLESS_LAYOUT=1 cargo test -p spu-loader --test kernels_assemble"
+    );
+}
+
+#[test]
+fn every_module_file_is_embedded() {
+    let mut on_disk: Vec<String> = std::fs::read_dir(kernels_dir().join("modules"))
+        .unwrap()
+        .map(|e| format!("modules/{}", e.unwrap().file_name().to_string_lossy()))
+        .collect();
+    on_disk.sort();
+    let mut embedded: Vec<String> = kernels::MODULES.iter().map(|m| m.0.to_string()).collect();
+    embedded.sort();
+    assert_eq!(
+        on_disk, embedded,
+        "loader::kernels::MODULES lists kernels/modules/"
+    );
 }

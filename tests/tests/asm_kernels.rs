@@ -1,12 +1,12 @@
-//! The project's kernels assemble, with the include the host provides in memory
-//! (`layout.inc`: the frame layout and the kernel ABI), and come back out of their ELF.
+//! The project's kernels assemble, with the includes the host provides in memory
+//! (`layout.inc`: the frame layout and the kernel ABI; the kernel modules), and come back
+//! out of their ELF.
 
 use spu_asm::{assemble, elf::read_elf, Options};
 
 fn options() -> Options {
-    let inc = spu_loader::layout::spu_layout_include() + &spu_loader::kernel_abi::spu_include();
     Options {
-        virtual_files: vec![("layout.inc".into(), inc)],
+        virtual_files: spu_loader::kernels::include_files(),
         ..Default::default()
     }
 }
@@ -72,8 +72,8 @@ fn kernel(name: &str) {
 }
 
 #[test]
-fn raytrace_assembles() {
-    kernel("raytrace.s");
+fn primary_assembles() {
+    kernel("primary.s");
 }
 
 #[test]

@@ -1,5 +1,6 @@
 //! `spu as`: assemble GNU-as SPU assembly into an SPU ELF or a flat local-store image.
 
+use crate::exit::{self, Error, Status};
 use spu_asm::{assemble_file, Options, Severity};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -25,7 +26,17 @@ pub struct Args {
     defsym: Vec<String>,
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> exit::Result<ExitCode> {
+    if args.format != "elf" && args.format != "bin" {
+        return Err(Error::input(format!(
+            "--format {}: expected elf or bin",
+            args.format
+        )));
+    }
+    exit::check_writable(&args.output)?;
+    if let Some(path) = &args.listing {
+        exit::check_writable(path)?;
+    }
     let mut opts = Options {
         include_dirs: args.include.clone(),
         ..Default::default()
@@ -50,16 +61,14 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
             for w in &out.warnings {
                 eprintln!("{w}");
             }
-            let bytes = match args.format.as_str() {
-                "elf" => &out.elf,
-                "bin" => &out.image,
-                other => return Err(format!("--format {other}: expected elf or bin")),
+            let bytes = if args.format == "bin" {
+                &out.image
+            } else {
+                &out.elf
             };
-            std::fs::write(&args.output, bytes)
-                .map_err(|e| format!("{}: {e}", args.output.display()))?;
+            exit::write_file(&args.output, bytes)?;
             if let Some(path) = &args.listing {
-                std::fs::write(path, &out.listing)
-                    .map_err(|e| format!("{}: {e}", path.display()))?;
+                exit::write_file(path, out.listing.as_bytes())?;
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -72,7 +81,7 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
                 eprintln!("{d}");
             }
             eprintln!("{errors} error(s); nothing written");
-            Ok(ExitCode::from(1))
+            Ok(Status::BadInput.into())
         }
     }
 }

@@ -2,6 +2,8 @@
 //! loop (loads, float multiply-adds, shuffles, adds, a hinted branch), with the timing
 //! model off and on, with the interpreter and the block compiler, measured in one run.
 
+use crate::exit::{self, Status};
+use crate::options;
 use spu_isa::jit::Engine;
 use spu_isa::machine::{MainMemory, Spu, StopReason};
 use std::process::ExitCode;
@@ -9,7 +11,7 @@ use std::time::Instant;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Loop iterations (11 instructions each).
+    /// Loop iterations (11 instructions each), at least 1.
     #[arg(long, default_value_t = 10_000_000)]
     iterations: u32,
     /// Measure only this engine (interp or jit); both by default.
@@ -45,12 +47,13 @@ data:   .float  1.5, 2.0, 0.5, 3.0, 0.25, 1.0, 2.0, 4.0
         .space  16
 ";
 
-fn measure(iterations: u32, timing: bool, engine: Engine) -> Result<(u64, u64, f64), String> {
+fn measure(iterations: u32, timing: bool, engine: Engine) -> exit::Result<(u64, u64, f64)> {
     let opts = spu_asm::Options {
         defines: vec![("ITER".into(), iterations as i64)],
         ..Default::default()
     };
-    let program = spu_asm::assemble(LOOP, "bench.s", &opts).map_err(|d| format!("{d:?}"))?;
+    let program = spu_asm::assemble(LOOP, "bench.s", &opts)
+        .map_err(|d| exit::Error::failure(format!("the benchmark loop: {d:?}")))?;
     let mut spu = Spu::new(0);
     spu.load_image(&program.image);
     spu.set_pc(program.entry);
@@ -63,31 +66,35 @@ fn measure(iterations: u32, timing: bool, engine: Engine) -> Result<(u64, u64, f
     let stop = spu.run(&mut memory, u64::MAX);
     let seconds = started.elapsed().as_secs_f64();
     if stop != StopReason::Stop(0x2000) {
-        return Err(format!("benchmark loop stopped with {stop}"));
+        return Err(exit::Error::new(
+            Status::of_stop(&stop),
+            format!("benchmark loop stopped with {stop}"),
+        ));
     }
     Ok((spu.instructions(), spu.cycles(), seconds))
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> exit::Result<ExitCode> {
+    options::count("--iterations", args.iterations, 1..=u32::MAX)?;
     let engines = match args.engine {
         Some(e) => vec![e],
         None if Engine::SUPPORTED => vec![Engine::Interp, Engine::Jit],
         None => vec![Engine::Interp],
     };
-    println!("mixed loop: {} iterations", args.iterations);
+    outln!("mixed loop: {} iterations", args.iterations);
     let mut rates = Vec::new();
     for engine in engines {
         let (n_off, _, s_off) = measure(args.iterations, false, engine)?;
         let (n_on, cycles, s_on) = measure(args.iterations, true, engine)?;
-        let off = n_off as f64 / s_off / 1e6;
-        let on = n_on as f64 / s_on / 1e6;
-        println!("{engine:6} timing off: {off:8.1} M simulated instructions per host second ({n_off} instructions)");
-        println!("{engine:6} timing on:  {on:8.1} M simulated instructions per host second ({cycles} cycles, CPI {:.3})", cycles as f64 / n_on as f64);
-        println!("{engine:6} timing overhead: {:.2}x", off / on);
+        let off = n_off as f64 / s_off.max(1e-9) / 1e6;
+        let on = n_on as f64 / s_on.max(1e-9) / 1e6;
+        outln!("{engine:6} timing off: {off:8.1} M simulated instructions per host second ({n_off} instructions)");
+        outln!("{engine:6} timing on:  {on:8.1} M simulated instructions per host second ({cycles} cycles, CPI {:.3})", cycles as f64 / n_on as f64);
+        outln!("{engine:6} timing overhead: {:.2}x", off / on);
         rates.push((off, on));
     }
     if let [(i_off, i_on), (j_off, j_on)] = rates[..] {
-        println!(
+        outln!(
             "jit / interp: {:.2}x timing off, {:.2}x timing on",
             j_off / i_off,
             j_on / i_on

@@ -14,23 +14,23 @@ pub struct Args {
     raw: bool,
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
-    let bytes = std::fs::read(&args.file).map_err(|e| format!("{}: {e}", args.file.display()))?;
+pub fn run(args: Args) -> crate::exit::Result<ExitCode> {
+    let bytes = crate::options::read_input(&args.file, crate::options::MAX_PROGRAM_BYTES)?;
     let name = args.file.display();
     if !args.raw && bytes.starts_with(b"\x7fELF") {
         let elf = spu_asm::elf::read_elf(&bytes).map_err(|e| format!("{name}: {e}"))?;
         let symbols = SymbolTable::new(elf.symbols.iter().map(|(n, a)| (*a, n.clone())).collect());
-        print!("\n{name}:     file format elf32-spu\n\n");
+        out!("\n{name}:     file format elf32-spu\n\n");
         for (section, addr, data, code) in &elf.sections {
             if *code {
-                print!(
+                out!(
                     "\nDisassembly of section {section}:\n{}",
                     listing(data, *addr, &symbols)
                 );
             }
         }
     } else {
-        print!("\n{name}:     file format binary\n\n\nDisassembly of section .data:\n\n00000000 <.data>:\n{}", listing(&bytes, 0, &SymbolTable::default()));
+        out!("\n{name}:     file format binary\n\n\nDisassembly of section .data:\n\n00000000 <.data>:\n{}", listing(&bytes, 0, &SymbolTable::default()));
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -2,6 +2,8 @@
 //! instruction its executions, cycles and stall cycles by cause, a dual-issue mark, then a
 //! summary per label and the totals IBM's simulator reported.
 
+use crate::exit::{self, Status};
+use crate::options;
 use spu_isa::machine::MainMemory;
 use spu_isa::profile::{annotated_listing, executed_lines, listing_json, ListingOptions};
 use std::path::PathBuf;
@@ -26,19 +28,14 @@ pub struct Args {
     max_cycles: u64,
     /// Main memory in bytes.
     #[arg(long, default_value_t = 1 << 20)]
-    memory: usize,
+    memory: u64,
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> exit::Result<ExitCode> {
     spu_isa::jit::Engine::set_default(args.engine);
+    options::max_cycles(args.max_cycles)?;
+    let memory_bytes = options::memory(args.memory)?;
     let (mut spu, symbols) = crate::cmd_run::load(&args.file)?;
-    spu.enable_timing(Default::default());
-    let mut memory = MainMemory::zeroed(args.memory);
-    let stop = spu.run(&mut memory, args.max_cycles);
-    let profile = spu
-        .timing()
-        .map(|t| t.finish_profile())
-        .ok_or("timing was not enabled")?;
     let address_of = |name: &str| symbols.iter().find(|(n, _)| n == name).map(|(_, a)| *a);
     let range = match &args.range {
         Some(r) => {
@@ -51,6 +48,13 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         }
         None => None,
     };
+    spu.enable_timing(Default::default());
+    let mut memory = MainMemory::zeroed(memory_bytes);
+    let stop = spu.run(&mut memory, args.max_cycles);
+    let profile = spu
+        .timing()
+        .map(|t| t.finish_profile())
+        .ok_or_else(|| exit::Error::failure("timing was not enabled"))?;
     // Every executed address, with its labels and disassembly, in address order.
     let lines = executed_lines(&profile, spu.ls(), &symbols);
     let opts = ListingOptions {
@@ -58,10 +62,15 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         executed_only: true,
     };
     if args.json {
-        println!("{}", listing_json(&profile, &lines, &opts));
+        outln!("{}", listing_json(&profile, &lines, &opts));
     } else {
-        println!("{}: stopped with {stop}", args.file.display());
-        print!("{}", annotated_listing(&profile, &lines, &opts));
+        outln!("{}: stopped with {stop}", args.file.display());
+        out!("{}", annotated_listing(&profile, &lines, &opts));
     }
-    Ok(ExitCode::SUCCESS)
+    // The profile is printed whatever the end; the status says how the program ended.
+    let status = Status::of_stop(&stop);
+    if status != Status::Success {
+        eprintln!("spu: {}: {stop}", args.file.display());
+    }
+    Ok(status.into())
 }

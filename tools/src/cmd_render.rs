@@ -2,10 +2,13 @@
 //! paper's PPE would drive them, and report the image, the statistics and the validation
 //! against the host reference.
 
+use crate::exit::{self, Error, Status};
+use crate::options;
 use spu_loader::camera::Camera;
 use spu_loader::frame::{FrameLayout, SCENE_BASE};
 use spu_loader::kernel_abi::{decode_frame_buffer, PixelResult, MISS};
 use spu_loader::reference::Reference;
+use spu_loader::runtime::FrameError;
 use spu_loader::{procedural, Bvh, BvhConfig, Scene, StagedScene};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -37,11 +40,20 @@ pub struct Args {
     #[arg(long, allow_hyphen_values = true)]
     camera: Option<String>,
     /// Lines in the BVH-node cache (power of two, 128..1024).
-    #[arg(long = "bvh-cache", default_value_t = 256)]
+    #[arg(long = "bvh-cache", default_value_t = 256, value_parser = cache_lines)]
     bvh_cache: u32,
     /// Lines in the triangle cache (power of two, 128..1024).
-    #[arg(long = "tri-cache", default_value_t = 256)]
+    #[arg(long = "tri-cache", default_value_t = 256, value_parser = cache_lines)]
     tri_cache: u32,
+    /// Ways of both caches: 1 (direct mapped) or 4 (set-associative, LRU).
+    #[arg(long, default_value_t = 1, value_parser = associativity)]
+    assoc: u32,
+    /// Packets each SPE keeps in flight (software hyperthreading, 1..8; 1 = blocking misses).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=8))]
+    sht: u32,
+    /// Main-memory latency of a DMA in nanoseconds before its bytes move.
+    #[arg(long = "dma-latency-ns", default_value_t = 100.0, value_parser = latency_ns, allow_hyphen_values = true)]
+    dma_latency_ns: f64,
     /// Run the fill pattern program instead of the ray tracer (tests the runtime).
     #[arg(long)]
     fill: bool,
@@ -61,6 +73,50 @@ pub struct Args {
     /// by cause, dual issue; then per label and totals), merged over all SPEs.
     #[arg(long)]
     profile: Option<PathBuf>,
+    /// Heat map of the simulated cycles per packet (PNG), and beside it (NAME-wait.png)
+    /// the share of them spent waiting on DMA.
+    #[arg(long)]
+    heatmap: Option<PathBuf>,
+    /// Timeline of the frame over simulated time (Chrome/Perfetto trace JSON).
+    #[arg(long)]
+    trace: Option<PathBuf>,
+    /// No progress bar or summary (for `spu paper`, which runs many renders at once).
+    #[arg(long, hide = true)]
+    quiet: bool,
+}
+
+/// `--bvh-cache` / `--tri-cache`: a power of two from 128 to 1024.
+fn cache_lines(text: &str) -> Result<u32, String> {
+    let lines: u32 = text
+        .parse()
+        .map_err(|_| format!("{text:?} is not a number of cache lines"))?;
+    spu_loader::kernel_abi::check_kernel_options(lines, lines, 1, 1)
+        .map_err(|_| format!("{lines} lines: must be a power of two from 128 to 1024"))?;
+    Ok(lines)
+}
+
+/// `--assoc`: 1 or 4 ways.
+fn associativity(text: &str) -> Result<u32, String> {
+    match text {
+        "1" => Ok(1),
+        "4" => Ok(4),
+        _ => Err(format!(
+            "{text:?}: must be 1 (direct mapped) or 4 (4-way, LRU)"
+        )),
+    }
+}
+
+/// `--dma-latency-ns`: finite, not negative, at most a millisecond.
+fn latency_ns(text: &str) -> Result<f64, String> {
+    let ns: f64 = text
+        .parse()
+        .map_err(|_| format!("{text:?} is not a latency in nanoseconds"))?;
+    if !ns.is_finite() || !(0.0..=1e6).contains(&ns) {
+        return Err(format!(
+            "{ns} ns: must be a finite latency from 0 to 1000000 ns"
+        ));
+    }
+    Ok(ns)
 }
 
 /// Loads a built-in scene by name, or a file.
@@ -116,18 +172,53 @@ fn validate(
     (pixels.len(), mismatches)
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+/// Every option checked before the scene is loaded: numbers in range, output paths
+/// writable and in a format the command writes.
+fn check_options(args: &Args) -> exit::Result<Option<Camera>> {
+    options::count("--spes", args.spes, 1..=16)?;
+    options::count("--width", args.width, 1..=8192)?;
+    options::count("--height", args.height, 1..=8192)?;
+    if let Some(threads) = args.threads {
+        options::count("--threads", threads, 1..=1024)?;
+    }
+    options::clock_ghz(args.clock)?;
+    options::max_cycles(args.max_cycles)?;
+    if args.fill && args.validate {
+        return Err(Error::input(
+            "--validate compares the ray tracer's hits; --fill renders none",
+        ));
+    }
+    let camera = match &args.camera {
+        Some(text) => Some(Camera::parse(text).map_err(|e| format!("--camera: {e}"))?),
+        None => None,
+    };
+    let is_png = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !is_png {
+        return Err(Error::input(format!(
+            "-o {}: the image is written as PNG; name it .png",
+            args.output.display()
+        )));
+    }
+    exit::check_writable(&args.output)?;
+    for path in [&args.stats, &args.profile, &args.heatmap, &args.trace]
+        .into_iter()
+        .flatten()
+    {
+        exit::check_writable(path)?;
+    }
+    Ok(camera)
+}
+
+pub fn run(args: Args) -> exit::Result<ExitCode> {
     spu_isa::jit::Engine::set_default(args.engine);
-    if !(1..=16).contains(&args.spes) {
-        return Err(format!("--spes {}: must be 1 to 16", args.spes));
-    }
-    if args.width == 0 || args.height == 0 || args.width > 8192 || args.height > 8192 {
-        return Err("--width and --height must be 1 to 8192".into());
-    }
+    let camera = check_options(&args)?;
     let started = Instant::now();
     let mut scene = load_scene(&args.scene)?;
-    if let Some(text) = &args.camera {
-        scene.camera = Camera::parse(text)?;
+    if let Some(camera) = camera {
+        scene.camera = camera;
     }
     let bvh = Bvh::build(&scene, &BvhConfig::default());
     let staged = StagedScene::new(&scene, &bvh, SCENE_BASE)?;
@@ -140,14 +231,17 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         args.spes,
         args.bvh_cache,
         args.tri_cache,
-    )?;
-    eprintln!(
-        "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
-        args.scene,
-        scene.triangles.len(),
-        staged.nodes.len(),
-        started.elapsed().as_secs_f64()
-    );
+    )?
+    .with_kernel_options(args.assoc, args.sht)?;
+    if !args.quiet {
+        eprintln!(
+            "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
+            args.scene,
+            scene.triangles.len(),
+            staged.nodes.len(),
+            started.elapsed().as_secs_f64()
+        );
+    }
     let threads = args.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
             .map(|n| n.get())
@@ -158,22 +252,33 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         indicatif::ProgressStyle::with_template("{spinner} tiles {pos}/{len} {wide_bar} {elapsed}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
+    if args.quiet {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
     let sim_started = Instant::now();
-    let run = spu_loader::runtime::render_frame(
+    let run = spu_loader::runtime::render_frame_with(
         &staged,
         &layout,
         args.spes,
         threads,
         &spu_isa::timing::TimingConfig {
             clock_ghz: args.clock,
+            dma_latency_ns: args.dma_latency_ns,
             ..Default::default()
         },
         args.fill,
         args.max_cycles,
+        &spu_loader::runtime::FrameOptions {
+            event_log: args.heatmap.is_some() || args.trace.is_some(),
+        },
         &mut |taken, _| bar.set_position(taken as u64),
     );
     bar.finish_and_clear();
-    let run = run?;
+    let run = run.map_err(|e| match e {
+        FrameError::Setup(message) => Error::failure(message),
+        FrameError::CycleLimit(_) => Error::new(Status::CycleLimit, e.to_string()),
+        FrameError::SpuStopped { .. } => Error::new(Status::AbnormalStop, e.to_string()),
+    })?;
     let host_seconds = sim_started.elapsed().as_secs_f64();
     let pixels = decode_frame_buffer(&run.frame_buffer, args.width, args.height);
     write_png(&args.output, &pixels, args.width, args.height)?;
@@ -199,7 +304,8 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         0.0
     };
     let instructions: u64 = run.spus.iter().map(|s| s.instructions).sum();
-    println!(
+    if !args.quiet {
+        outln!(
         "{} SPE(s): {} cycles per frame, {:.2} MRays/s at {} GHz; {} instructions simulated in {:.1} s ({:.0} M/s); wrote {}",
         args.spes,
         run.frame_cycles,
@@ -210,25 +316,46 @@ pub fn run(args: Args) -> Result<ExitCode, String> {
         instructions as f64 / host_seconds / 1e6,
         args.output.display()
     );
+    }
     if let Some((n, bad)) = validation {
-        println!("validation: {bad} of {n} pixels differ from the host reference");
+        outln!("validation: {bad} of {n} pixels differ from the host reference");
     }
     if let Some(path) = &args.stats {
-        let json = run.stats_json(
-            &args.scene,
-            args.width,
-            args.height,
-            args.clock,
-            mrays,
+        let json = spu_loader::stats::FrameStats::new(
+            &run,
+            &spu_loader::stats::FrameSetup {
+                scene: &args.scene,
+                width: args.width,
+                height: args.height,
+                clock_ghz: args.clock,
+            },
             validation,
-        );
-        std::fs::write(path, json).map_err(|e| format!("{}: {e}", path.display()))?;
+        )
+        .to_json();
+        exit::write_file(path, json.as_bytes())?;
+    }
+    if args.heatmap.is_some() || args.trace.is_some() {
+        crate::frame_views::write(
+            &run,
+            &layout,
+            (args.width, args.height, args.spes, args.clock),
+            args.heatmap.as_deref(),
+            args.trace.as_deref(),
+        )?;
     }
     if let Some(path) = &args.profile {
-        let text = kernel_profile(&run, args.fill)?;
-        std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+        let text = kernel_profile(&run, args.fill).map_err(Error::failure)?;
+        exit::write_file(path, text.as_bytes())?;
     }
-    Ok(ExitCode::SUCCESS)
+    Ok(validation_status(validation).into())
+}
+
+/// `--validate` that found differing pixels exits 3 (after writing every output).
+fn validation_status(validation: Option<(usize, usize)>) -> Status {
+    match validation {
+        Some((_, bad)) if bad > 0 => Status::Differences,
+        _ => Status::Success,
+    }
 }
 
 /// The annotated listing of the kernel that ran, from its image and symbols.
@@ -238,11 +365,7 @@ fn kernel_profile(run: &spu_loader::runtime::FrameRun, fill: bool) -> Result<Str
         .profile
         .as_ref()
         .ok_or("no profile: the timing model was off (SPU_NO_TIMING)")?;
-    let (source, name) = if fill {
-        (spu_loader::runtime::FILL_SOURCE, "kernels/fill.s")
-    } else {
-        (spu_loader::runtime::RAYTRACE_SOURCE, "kernels/raytrace.s")
-    };
+    let (source, name) = spu_loader::kernels::frame_program(fill);
     let program = spu_loader::runtime::assemble_kernel(source, name)?;
     let lines = executed_lines(profile, &program.image, &program.symbols);
     let opts = ListingOptions {
@@ -252,17 +375,47 @@ fn kernel_profile(run: &spu_loader::runtime::FrameRun, fill: bool) -> Result<Str
     Ok(annotated_listing(profile, &lines, &opts))
 }
 
-fn write_png(
-    path: &PathBuf,
-    pixels: &[PixelResult],
-    width: u32,
-    height: u32,
-) -> Result<(), String> {
+fn write_png(path: &PathBuf, pixels: &[PixelResult], width: u32, height: u32) -> exit::Result<()> {
+    use image::ImageEncoder as _;
     let mut rgb = Vec::with_capacity(pixels.len() * 3);
     for p in pixels {
         let [r, g, b, _] = p.rgba.to_be_bytes();
         rgb.extend([r, g, b]);
     }
-    image::save_buffer(path, &rgb, width, height, image::ColorType::Rgb8)
-        .map_err(|e| format!("{}: {e}", path.display()))
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(&rgb, width, height, image::ExtendedColorType::Rgb8)
+        .map_err(|e| Error::output(path, e))?;
+    exit::write_file(path, &png)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spu_loader::reference::Hit;
+
+    #[test]
+    fn differing_pixels_make_validation_exit_3() {
+        let pixel = |triangle, t| PixelResult {
+            triangle,
+            t,
+            rgba: 0,
+        };
+        let hit = |triangle, t| Hit {
+            triangle,
+            t,
+            record: 0,
+        };
+        let kernel = [pixel(0, 1.0), pixel(MISS, 0.0), pixel(1, 2.0)];
+        let same = [hit(10, 1.0), Hit::NONE, hit(11, 2.0)];
+        let records = [10, 11];
+        assert_eq!(validate(&kernel, &same, &records, 3), (3, 0));
+        assert_eq!(validation_status(Some((3, 0))), Status::Success);
+        // A miss where the reference hits, and a hit at another distance.
+        let other = [hit(10, 1.0), hit(10, 5.0), hit(11, 2.5)];
+        assert_eq!(validate(&kernel, &other, &records, 3), (3, 2));
+        assert_eq!(validation_status(Some((3, 2))), Status::Differences);
+        assert_eq!(ExitCode::from(Status::Differences), ExitCode::from(3));
+        assert_eq!(validation_status(None), Status::Success);
+    }
 }

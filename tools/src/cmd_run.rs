@@ -1,5 +1,7 @@
 //! `spu run`: run a program on one simulated SPU and report how it stopped.
 
+use crate::exit::{self, Error, Status};
+use crate::options;
 use spu_isa::machine::{MainMemory, Spu, StopReason};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -29,7 +31,7 @@ pub struct Args {
     timing: bool,
     /// Main memory in bytes.
     #[arg(long, default_value_t = 1 << 20)]
-    memory: usize,
+    memory: u64,
     /// Machine-readable output.
     #[arg(long)]
     json: bool,
@@ -37,7 +39,7 @@ pub struct Args {
 
 fn number(text: &str) -> Result<u64, String> {
     let t = text.trim();
-    let v = match t.strip_prefix("0x") {
+    let v = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
         Some(h) => u64::from_str_radix(h, 16),
         None => t.parse(),
     };
@@ -60,7 +62,7 @@ pub fn load(file: &PathBuf) -> Result<(Spu, Vec<(String, u32)>), String> {
         spu.set_pc(out.entry);
         symbols = out.symbols;
     } else {
-        let bytes = std::fs::read(file).map_err(|e| format!("{name}: {e}"))?;
+        let bytes = options::read_input(file, options::MAX_PROGRAM_BYTES)?;
         if bytes.starts_with(b"\x7fELF") {
             let elf = spu_asm::elf::read_elf(&bytes).map_err(|e| format!("{name}: {e}"))?;
             let segments: Vec<(u32, &[u8])> = elf
@@ -83,62 +85,123 @@ pub fn load(file: &PathBuf) -> Result<(Spu, Vec<(String, u32)>), String> {
     Ok((spu, symbols))
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+/// `spu run --json`: how the program stopped and the machine state.
+#[derive(serde::Serialize)]
+struct RunReport {
+    stop: String,
+    /// n for `stop 0x2000|n`, otherwise null.
+    exit_code: Option<u8>,
+    pc: u32,
+    instructions: u64,
+    cycles: u64,
+    outbound_mailbox: Option<u32>,
+    registers: Vec<[u32; 4]>,
+}
+
+/// A `--dump-ls ADDR:LEN` range, checked against the 256 KiB local store.
+fn dump_range(spec: &str) -> exit::Result<std::ops::Range<usize>> {
+    let (a, l) = spec
+        .split_once(':')
+        .ok_or_else(|| format!("--dump-ls {spec}: expected ADDR:LEN"))?;
+    let (addr, len) = (number(a)?, number(l)?);
+    let ls = 256 * 1024u64; // the local store
+    if addr >= ls || len > ls - addr {
+        return Err(Error::input(format!(
+            "--dump-ls {spec}: outside the local store (0..{ls:#x})"
+        )));
+    }
+    Ok(addr as usize..(addr + len) as usize)
+}
+
+pub fn run(args: Args) -> exit::Result<ExitCode> {
     spu_isa::jit::Engine::set_default(args.engine);
-    let (mut spu, _) = load(&args.file)?;
+    options::max_cycles(args.max_cycles)?;
+    let memory_bytes = options::memory(args.memory)?;
+    let dumps = args
+        .dump_ls
+        .iter()
+        .map(|s| dump_range(s))
+        .collect::<exit::Result<Vec<_>>>()?;
+    let mut mailbox = Vec::new();
     for v in &args.mbox_in {
-        if !spu.write_inbound_mailbox(number(v)? as u32) {
-            return Err("the inbound mailbox holds 4 values".into());
+        let value = number(v).map_err(|e| format!("--mbox-in: {e}"))?;
+        let value =
+            u32::try_from(value).map_err(|_| format!("--mbox-in {v}: does not fit in 32 bits"))?;
+        mailbox.push(value);
+    }
+    let (mut spu, _) = load(&args.file)?;
+    for value in mailbox {
+        if !spu.write_inbound_mailbox(value) {
+            return Err(Error::input(
+                "--mbox-in: the inbound mailbox holds 4 values",
+            ));
         }
     }
     if args.timing {
         spu.enable_timing(Default::default());
     }
-    let mut memory = MainMemory::zeroed(args.memory);
+    let mut memory = MainMemory::zeroed(memory_bytes);
     let stop = spu.run(&mut memory, args.max_cycles);
     let out_mbox = spu.read_outbound_mailbox();
     if args.json {
-        let regs: Vec<String> = (0..128).map(|n| format!("{:?}", spu.reg(n))).collect();
-        println!(
-            "{{\"stop\": \"{}\", \"pc\": {}, \"instructions\": {}, \"cycles\": {}, \"outbound_mailbox\": {}, \"registers\": [{}]}}",
-            stop,
-            spu.pc(),
-            spu.instructions(),
-            spu.cycles(),
-            out_mbox.map_or("null".to_string(), |v| v.to_string()),
-            regs.join(", ")
-        );
+        let report = RunReport {
+            stop: stop.to_string(),
+            exit_code: exit::program_exit_code(&stop),
+            pc: spu.pc(),
+            instructions: spu.instructions(),
+            cycles: spu.cycles(),
+            outbound_mailbox: out_mbox,
+            registers: (0..128).map(|n| spu.reg(n)).collect(),
+        };
+        let json = serde_json::to_string(&report)
+            .map_err(|e| exit::Error::failure(format!("JSON: {e}")))?;
+        outln!("{json}");
     } else {
-        println!("stopped: {stop}");
-        println!("pc: {:#x}", spu.pc());
-        println!("instructions: {}", spu.instructions());
-        println!("cycles: {}", spu.cycles());
+        outln!("stopped: {stop}");
+        outln!("pc: {:#x}", spu.pc());
+        outln!("instructions: {}", spu.instructions());
+        outln!("cycles: {}", spu.cycles());
         if let Some(v) = out_mbox {
-            println!("outbound mailbox: {v:#x}");
+            outln!("outbound mailbox: {v:#x}");
         }
         if args.dump_regs {
             for n in 0..128 {
                 let r = spu.reg(n);
-                println!("${n}: {:08x} {:08x} {:08x} {:08x}", r[0], r[1], r[2], r[3]);
+                outln!("${n}: {:08x} {:08x} {:08x} {:08x}", r[0], r[1], r[2], r[3]);
             }
         }
     }
-    for spec in &args.dump_ls {
-        let (a, l) = spec
-            .split_once(':')
-            .ok_or_else(|| format!("--dump-ls {spec}: expected ADDR:LEN"))?;
-        let (addr, len) = (number(a)? as usize, number(l)? as usize);
-        let ls = spu.ls();
-        for row in (addr..(addr + len).min(ls.len())).step_by(16) {
-            let end = (row + 16).min(addr + len).min(ls.len());
+    let ls = spu.ls();
+    for range in dumps {
+        for row in range.clone().step_by(16) {
+            let end = (row + 16).min(range.end);
             let hex: Vec<String> = ls[row..end].iter().map(|b| format!("{b:02x}")).collect();
-            println!("{row:05x}: {}", hex.join(" "));
+            outln!("{row:05x}: {}", hex.join(" "));
         }
     }
-    let ok = matches!(stop, StopReason::Stop(_));
-    Ok(if ok {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::from(2)
-    })
+    Ok(exit_status(&args.file, &stop))
+}
+
+/// `stop 0x2000|n` exits with n, as `elfspe` does; any other end is reported on standard
+/// error with its status.
+fn exit_status(file: &std::path::Path, stop: &StopReason) -> ExitCode {
+    if let Some(n) = exit::program_exit_code(stop) {
+        return ExitCode::from(n);
+    }
+    let name = file.display();
+    let status = match stop {
+        StopReason::Stop(code) => {
+            eprintln!("spu: {name}: stop {code:#x} is not an exit (0x2000..0x20ff)");
+            Status::AbnormalStop
+        }
+        StopReason::CycleLimit => {
+            eprintln!("spu: {name}: cycle limit reached (--max-cycles)");
+            Status::CycleLimit
+        }
+        other => {
+            eprintln!("spu: {name}: SPU stopped abnormally: {other}");
+            Status::of_stop(other)
+        }
+    };
+    status.into()
 }

@@ -1,6 +1,8 @@
 //! `spu timing`: static timing of assembly source per basic block, in the layout of IBM's
 //! `spu_timing` (see `docs/timing.md`).
 
+use crate::exit;
+use crate::options;
 use spu_isa::static_timing::{analyze_source, render_static, static_json};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -23,18 +25,28 @@ pub struct Args {
     output: Option<PathBuf>,
 }
 
-pub fn run(args: Args) -> Result<ExitCode, String> {
+pub fn run(args: Args) -> exit::Result<ExitCode> {
+    if let Some(path) = &args.output {
+        exit::check_writable(path)?;
+    }
+    let bytes = options::read_input(&args.file, options::MAX_SOURCE_BYTES)?;
     let src =
-        std::fs::read_to_string(&args.file).map_err(|e| format!("{}: {e}", args.file.display()))?;
+        String::from_utf8(bytes).map_err(|_| format!("{}: not UTF-8 text", args.file.display()))?;
     let t = analyze_source(&src, args.label.as_deref())?;
+    for (line, word) in t.unknown_statements() {
+        eprintln!(
+            "{}:{line}: warning: `{word}` is not an SPU instruction; not timed",
+            args.file.display()
+        );
+    }
     let text = if args.json {
         static_json(&t)
     } else {
         render_static(&t, args.running_count)
     };
     match &args.output {
-        Some(path) => std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?,
-        None => print!("{text}"),
+        Some(path) => exit::write_file(path, text.as_bytes())?,
+        None => out!("{text}"),
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -2,13 +2,26 @@
 //!
 //! Each subcommand lives in its own module so that the commands can grow independently.
 
+#[macro_use]
+mod exit;
+
 mod cmd_as;
 mod cmd_bench;
 mod cmd_dis;
+mod cmd_paper;
 mod cmd_prof;
 mod cmd_render;
 mod cmd_run;
 mod cmd_timing;
+mod frame_views;
+mod heatmap;
+mod options;
+mod paper_data;
+mod paper_figure;
+mod paper_jobs;
+mod paper_report;
+mod paper_tables;
+mod trace;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -40,6 +53,8 @@ enum Command {
     Render(cmd_render::Args),
     /// Measure simulator speed: simulated instructions per host second.
     Bench(cmd_bench::Args),
+    /// Re-run the paper's experiments and report its numbers next to ours.
+    Paper(cmd_paper::Args),
 }
 
 fn main() -> ExitCode {
@@ -52,12 +67,15 @@ fn main() -> ExitCode {
         Command::Timing(args) => cmd_timing::run(args),
         Command::Render(args) => cmd_render::run(args),
         Command::Bench(args) => cmd_bench::run(args),
+        Command::Paper(args) => cmd_paper::run(args),
     };
     match result {
         Ok(code) => code,
-        Err(message) => {
-            eprintln!("spu: {message}");
-            ExitCode::from(1)
+        Err(error) => {
+            if let Some(message) = &error.message {
+                eprintln!("spu: {message}");
+            }
+            error.status.into()
         }
     }
 }

@@ -337,7 +337,7 @@ impl Spu {
                 self.dec_value = v;
                 self.dec_written_at = now;
                 let tick = self.decrementer_cycles_per_tick.max(1);
-                self.dec_event_at = Some(now + (v as u64 + 1) * tick);
+                self.dec_event_at = Some(now.saturating_add((v as u64 + 1).saturating_mul(tick)));
             }
             WR_SRR0 => self.core.srr0 = v,
             LSA => self.lsa = v,
@@ -360,7 +360,11 @@ impl Spu {
                     let earliest = self.queue.iter().map(|c| c.complete).min().unwrap_or(now);
                     return ChannelOutcome::WaitUntil(earliest);
                 }
-                return self.mfc_command(v & 0xff, now, memory);
+                let outcome = self.mfc_command(v & 0xff, now, memory);
+                if self.events.is_some() {
+                    self.log_mfc_command(v as u8, now, &outcome);
+                }
+                return outcome;
             }
             WR_OUT_MBOX => {
                 if self.out_mbox.is_some() {

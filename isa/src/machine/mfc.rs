@@ -62,9 +62,19 @@ pub(super) struct LoggedWrite {
     pub(super) kind: WriteKind,
 }
 
+/// The longest DMA latency in cycles (about a day at 3.2 GHz).
+const MAX_DMA_LATENCY: u64 = 1 << 48;
+
 impl Spu {
+    /// The DMA latency in cycles. Configurations the tools refuse (an infinite clock, a
+    /// NaN latency) still give a number the cycle arithmetic can saturate on, never wrap.
     pub(super) fn dma_latency(&self) -> u64 {
-        (self.timing_config.dma_latency_ns * self.timing_config.clock_ghz).round() as u64
+        let cycles = self.timing_config.dma_latency_ns * self.timing_config.clock_ghz;
+        if cycles.is_nan() {
+            0
+        } else {
+            cycles.round().clamp(0.0, MAX_DMA_LATENCY as f64) as u64
+        }
     }
 
     pub(super) fn complete_dma(&mut self, now: u64) {
@@ -119,13 +129,19 @@ impl Spu {
     }
 
     pub(super) fn schedule(&mut self, now: u64, bytes: u32) -> u64 {
-        let earliest = now + self.dma_latency();
+        let earliest = now.saturating_add(self.dma_latency());
         let per_cycle = (self.timing_config.spu_bytes_per_cycle.max(1.0)) as u64;
-        let own = earliest.max(self.dma_free_at) + (bytes as u64).div_ceil(per_cycle);
+        let own = earliest
+            .max(self.dma_free_at)
+            .saturating_add((bytes as u64).div_ceil(per_cycle));
         // Behind the traffic the memory interface still has from earlier quanta.
         let chip = self.timing_config.chip_bytes_per_cycle();
         let shared = (earliest.max(self.bus_free_at) as f64 + bytes as f64 / chip).ceil() as u64;
-        let done = own.max(shared);
+        // A clock or bandwidth the tools refuse can make `shared` infinite: a transfer still
+        // ends within the longest latency of a later start, never near the end of u64.
+        let done = own
+            .max(shared)
+            .min(earliest.saturating_add(MAX_DMA_LATENCY));
         self.bus_log.push((earliest, bytes));
         self.dma_free_at = done;
         if let Some(t) = &mut self.timing {
@@ -265,7 +281,7 @@ impl Spu {
                 }
                 self.redecode(lsa, 128);
                 self.reservation = Some(line);
-                let ready = now + self.dma_latency();
+                let ready = now.saturating_add(self.dma_latency());
                 self.atomic_stat = Some((4, ready));
                 ChannelOutcome::Done
             }
@@ -284,7 +300,7 @@ impl Spu {
                 let data: Vec<u8> = (0..128)
                     .map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize])
                     .collect();
-                let cycle = now + self.dma_latency();
+                let cycle = now.saturating_add(self.dma_latency());
                 if cmd == 0xb4 {
                     if self.reservation != Some(line) {
                         self.atomic_stat = Some((1, cycle));

@@ -36,12 +36,14 @@
 
 mod channels;
 mod compiled;
+mod events;
 pub mod exec;
 mod memory;
 mod mfc;
 mod spu;
 
 pub use channels::{ch, event};
+pub use events::SpuEvent;
 pub use memory::{apply_quantum, MainMemory};
 pub use mfc::{
     signal_notify_ea, PROBLEM_STATE_OFFSET, RAW_SPU_BASE, RAW_SPU_STRIDE, SIG_NOTIFY_OFFSETS,

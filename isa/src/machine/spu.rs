@@ -155,6 +155,8 @@ pub struct Spu {
     pub(super) timing_config: TimingConfig,
     /// The command being issued, for a DmaError: (cmd, lsa, ea, size, tag).
     pub(super) dma_ctx: (u8, u32, u64, u32, u32),
+    /// The event log, when on (see `events.rs`).
+    pub(super) events: Option<Vec<super::events::SpuEvent>>,
 }
 
 /// The marker of a stale pre-decoded word: `Unknown` carrying a word that is not unknown
@@ -255,6 +257,7 @@ impl Spu {
             seq: 0,
             timing_config: TimingConfig::default(),
             dma_ctx: (0, 0, 0, 0, 0),
+            events: None,
         }
     }
 
@@ -363,7 +366,7 @@ impl Spu {
     pub fn run(&mut self, memory: &mut MainMemory, max_cycles: u64) -> StopReason {
         const QUANTUM: u64 = 4096;
         loop {
-            let until = (self.cycle + QUANTUM).min(max_cycles);
+            let until = self.cycle.saturating_add(QUANTUM).min(max_cycles);
             let outcome = self.run_quantum(memory, until);
             apply_quantum(std::slice::from_mut(self), memory);
             match outcome {
@@ -466,6 +469,9 @@ impl Spu {
                 Effect::Channel => match self.channel(inst, issue, memory) {
                     ChannelOutcome::Done => self.pc = (pc + 4) & LS_MASK,
                     ChannelOutcome::WaitUntil(when) => {
+                        if self.events.is_some() {
+                            self.log_channel_wait(issue, when, inst.ra);
+                        }
                         // Stall on the channel, then retry the instruction.
                         match &mut self.timing {
                             Some(t) => t.channel_stall(pc, inst.ra, when),
@@ -477,6 +483,9 @@ impl Spu {
                         continue;
                     }
                     ChannelOutcome::WaitBoundary => {
+                        if self.events.is_some() {
+                            self.log_channel_wait(issue, until, inst.ra);
+                        }
                         match &mut self.timing {
                             Some(t) => {
                                 t.channel_stall(pc, inst.ra, until);

@@ -1,0 +1,24 @@
+//! The ELF reader never panics or over-allocates, whatever the bytes, and what it returns
+//! can be loaded into an SPU and disassembled as `spu run` and `spu dis` do.
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    if let Ok(elf) = spu_asm::elf::read_elf(data) {
+        let segments: Vec<(u32, &[u8])> = elf
+            .segments
+            .iter()
+            .map(|(a, d)| (*a, d.as_slice()))
+            .collect();
+        let mut spu = spu_isa::machine::Spu::new(0);
+        spu.load_segments(&segments, elf.entry);
+        let symbols = spu_isa::disasm::SymbolTable::new(
+            elf.symbols.iter().map(|(n, a)| (*a, n.clone())).collect(),
+        );
+        for (_, addr, bytes, code) in &elf.sections {
+            if *code {
+                let _ = spu_isa::disasm::listing(bytes, *addr, &symbols);
+            }
+        }
+    }
+});

@@ -1,0 +1,326 @@
+//! `spu paper`: re-runs every experiment of the paper on the simulator and puts the paper's
+//! numbers and ours side by side (report.md, report.html, report.json, the figures).
+//!
+//! The runs are independent `spu render` jobs: run here on host threads, or listed
+//! (`--list-jobs`) to spread over machines and collected afterwards (`--collect`).
+
+use crate::exit::{self, Error};
+use crate::paper_jobs::{select_scenes, shell_word, Caps, Job};
+use crate::paper_report::{build, Figure, Report, ReportScene};
+use crate::paper_tables::{tables, Measured, Setup, TableSpec};
+use spu_loader::stats::FrameStats;
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Directory for the report, the figures and the jobs' files (jobs/).
+    #[arg(long, default_value = "paper-report")]
+    out: PathBuf,
+    /// Every run at 256x256 instead of the paper's 1024x1024 (a first look, CI).
+    #[arg(long)]
+    quick: bool,
+    /// Jobs run at once (each job simulates its SPEs on one host thread).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Comma-separated scenes: room, conference, beetle (built in), shared-cornell-suzanne,
+    /// shared-conference, shared-dragon (from --shared-scenes). Default: all present.
+    #[arg(long)]
+    scenes: Option<String>,
+    /// Where the shared scene files are.
+    #[arg(long, default_value = "../shared/scenes")]
+    shared_scenes: PathBuf,
+    /// Print one `spu render ... --stats FILE` command per run (files under OUT/jobs) and
+    /// stop.
+    #[arg(long)]
+    list_jobs: bool,
+    /// Build the report from the stats files in this directory instead of running.
+    #[arg(long, conflicts_with = "list_jobs")]
+    collect: Option<PathBuf>,
+    /// Frame size (overrides --quick; small sizes keep tests short).
+    #[arg(long, hide = true)]
+    size: Option<u32>,
+    /// Largest SPE count run (16; smaller keeps tests short).
+    #[arg(long, hide = true, default_value_t = 16)]
+    max_spes: usize,
+}
+
+pub fn run(args: Args) -> exit::Result<ExitCode> {
+    let size = args.size.unwrap_or(if args.quick { 256 } else { 1024 });
+    if !(8..=8192).contains(&size) {
+        return Err(Error::input(format!("--size {size}: must be 8 to 8192")));
+    }
+    if !(1..=16).contains(&args.max_spes) {
+        return Err(Error::input(format!(
+            "--max-spes {}: must be 1 to 16",
+            args.max_spes
+        )));
+    }
+    let threads = match args.threads {
+        Some(0) => return Err(Error::input("--threads 0: must be at least 1")),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let (scenes, mut notes) = select_scenes(args.scenes.as_deref(), &args.shared_scenes)?;
+    let caps = Caps::of_render();
+    let setup = Setup {
+        scenes,
+        size,
+        caps,
+        max_spes: args.max_spes,
+    };
+    let specs = tables(&setup);
+    let jobs = unique_jobs(&specs);
+    let jobs_dir = args.out.join("jobs");
+
+    if args.list_jobs {
+        let exe = std::env::current_exe()
+            .ok()
+            .and_then(|p| p.to_str().map(str::to_string))
+            .unwrap_or_else(|| "spu".into());
+        for job in &jobs {
+            let words: Vec<String> = std::iter::once(exe.clone())
+                .chain(std::iter::once("render".to_string()))
+                .chain(job.render_args(&jobs_dir))
+                .map(|w| shell_word(&w))
+                .collect();
+            println!("{}", words.join(" "));
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+
+    prepare_out(&args.out)?;
+    let stats_dir = match &args.collect {
+        Some(dir) => {
+            if !dir.is_dir() {
+                return Err(Error::input(format!(
+                    "--collect {}: not a directory",
+                    dir.display()
+                )));
+            }
+            dir.clone()
+        }
+        None => {
+            std::fs::create_dir_all(&jobs_dir).map_err(|e| Error::output(&jobs_dir, e))?;
+            run_jobs(&jobs, &jobs_dir, threads);
+            jobs_dir
+        }
+    };
+    let results = collect(&jobs, &stats_dir);
+    let missing: Vec<String> = results
+        .values()
+        .filter_map(|r| r.as_ref().err().cloned())
+        .collect();
+    if !caps.assoc || !caps.sht || !caps.shade {
+        notes.push(format!(
+            "this build's `spu render` lacks {}: those rows say so",
+            [
+                (!caps.assoc).then_some("--assoc"),
+                (!caps.sht).then_some("--sht"),
+                (!caps.shade).then_some("--shade"),
+            ]
+            .into_iter()
+            .flatten()
+            .collect::<Vec<_>>()
+            .join(", ")
+        ));
+    }
+    let tables = build(&specs, &results);
+    let mut report = Report {
+        size,
+        scenes: setup
+            .scenes
+            .iter()
+            .map(|s| ReportScene {
+                id: s.id.clone(),
+                source: s.render_name.clone(),
+                paper: s.paper.name().into(),
+            })
+            .collect(),
+        jobs: jobs.len(),
+        jobs_measured: results.values().filter(|r| r.is_ok()).count(),
+        tables,
+        figures: Vec::new(),
+        missing: missing.clone(),
+        notes,
+    };
+    if let Some(t) = report.tables.iter().find(|t| t.id == "figure2") {
+        let series = crate::paper_figure::series(t);
+        let files = crate::paper_figure::write_figure2(&args.out, "figure2", &series)
+            .map_err(Error::failure)?;
+        report.figures.push(Figure {
+            id: "figure2".into(),
+            title: "Figure 2: speed-up over SPEs".into(),
+            files,
+        });
+    }
+    write(&args.out.join("report.json"), &{
+        let mut s =
+            serde_json::to_string_pretty(&report).map_err(|e| Error::failure(e.to_string()))?;
+        s.push('\n');
+        s
+    })?;
+    write(&args.out.join("report.md"), &report.to_markdown())?;
+    write(&args.out.join("report.html"), &report.to_html())?;
+    eprintln!(
+        "wrote {}/report.md, report.html, report.json and the figures ({} of {} runs measured)",
+        args.out.display(),
+        report.jobs_measured,
+        report.jobs
+    );
+    if missing.is_empty() {
+        Ok(ExitCode::SUCCESS)
+    } else {
+        // stats that a --collect directory lacks are bad input; runs that failed here are
+        // failures
+        let status = if args.collect.is_some() {
+            exit::Status::BadInput
+        } else {
+            exit::Status::Failure
+        };
+        Err(Error::new(
+            status,
+            format!(
+                "{} of {} runs have no statistics (the report says which):\n  {}",
+                missing.len(),
+                jobs.len(),
+                missing.join("\n  ")
+            ),
+        ))
+    }
+}
+
+/// Every job of every row, once, in a stable order.
+pub fn unique_jobs(specs: &[TableSpec]) -> Vec<Job> {
+    let set: BTreeSet<Job> = specs
+        .iter()
+        .flat_map(|t| &t.rows)
+        .filter_map(|r| r.jobs.as_ref().ok())
+        .flatten()
+        .cloned()
+        .collect();
+    set.into_iter().collect()
+}
+
+/// Makes the output directory and checks that files can be written into it, before any
+/// work starts.
+fn prepare_out(out: &Path) -> exit::Result<()> {
+    std::fs::create_dir_all(out)
+        .map_err(|e| Error::input(format!("--out {}: {e}", out.display())))?;
+    exit::check_writable(&out.join("report.json"))
+        .map_err(|e| Error::input(format!("--out: {}", e.message.unwrap_or_default())))
+}
+
+fn write(path: &Path, text: &str) -> exit::Result<()> {
+    exit::write_file(path, text.as_bytes())
+}
+
+#[derive(clap::Parser)]
+#[command(name = "render", no_binary_name = true)]
+struct RenderCli {
+    #[command(flatten)]
+    args: crate::cmd_render::Args,
+}
+
+/// Runs the jobs on `threads` host threads, one bar over all of them; a job that fails
+/// leaves no stats file and the report names it.
+fn run_jobs(jobs: &[Job], dir: &Path, threads: usize) {
+    // the heaviest scenes first, so that no long job starts last
+    let mut order: Vec<&Job> = jobs.iter().collect();
+    order.sort_by_key(|j| std::cmp::Reverse(weight(j)));
+    let bar = indicatif::ProgressBar::new(jobs.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} runs {pos}/{len} {bar:30} {elapsed_precise} (eta {eta}) {wide_msg}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let next = AtomicUsize::new(0);
+    let running: Mutex<BTreeSet<String>> = Mutex::new(BTreeSet::new());
+    let failures: Mutex<Vec<String>> = Mutex::new(Vec::new());
+    let show = |running: &BTreeSet<String>| {
+        bar.set_message(running.iter().cloned().collect::<Vec<_>>().join(", "));
+    };
+    std::thread::scope(|scope| {
+        for _ in 0..threads.min(jobs.len()).max(1) {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some(job) = order.get(i) else { break };
+                let name = job.name();
+                if let Ok(mut r) = running.lock() {
+                    r.insert(name.clone());
+                    show(&r);
+                }
+                if let Err(e) = run_job(job, dir) {
+                    if let Ok(mut f) = failures.lock() {
+                        f.push(format!("{name}: {e}"));
+                    }
+                }
+                if let Ok(mut r) = running.lock() {
+                    r.remove(&name);
+                    show(&r);
+                }
+                bar.inc(1);
+            });
+        }
+    });
+    bar.finish_and_clear();
+    for f in failures.into_inner().unwrap_or_default() {
+        eprintln!("spu paper: run failed: {f}");
+    }
+}
+
+/// A rough cost for ordering: rays times the scene's heaviness.
+fn weight(job: &Job) -> u64 {
+    let scene = match job.scene_id.as_str() {
+        "room" | "shared-cornell-suzanne" => 1,
+        _ => 10,
+    };
+    scene * job.size as u64 * job.size as u64
+}
+
+/// One job in this process, through `spu render` itself so that every option it has
+/// applies; its stats file is removed first so that a failed run leaves none.
+fn run_job(job: &Job, dir: &Path) -> Result<(), String> {
+    let stats = job.stats_path(dir);
+    let _ = std::fs::remove_file(&stats);
+    let mut words = job.render_args(dir);
+    words.extend(["--threads".into(), "1".into(), "--quiet".into()]);
+    let cli = <RenderCli as clap::Parser>::try_parse_from(&words).map_err(|e| e.to_string())?;
+    crate::cmd_render::run(cli.args).map_err(|e| e.message.unwrap_or_default())?;
+    Ok(())
+}
+
+/// Reads every job's stats file from `dir`: the statistics, or why there are none.
+pub fn collect(jobs: &[Job], dir: &Path) -> BTreeMap<String, Result<Measured, String>> {
+    jobs.iter()
+        .map(|job| {
+            let path = job.stats_path(dir);
+            let result = match std::fs::read_to_string(&path) {
+                Err(e) => Err(format!("{}: {e}", path.display())),
+                Ok(text) => read_stats(&text, job).map_err(|e| format!("{}: {e}", path.display())),
+            };
+            (job.name(), result)
+        })
+        .collect()
+}
+
+fn read_stats(text: &str, job: &Job) -> Result<Measured, String> {
+    let stats = FrameStats::from_json(text)?;
+    let raw: serde_json::Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
+    if stats.width != job.size || stats.height != job.size || stats.spus.len() != job.spes {
+        return Err(format!(
+            "holds a {}x{} frame on {} SPEs, not the job's {}x{} on {}",
+            stats.width,
+            stats.height,
+            stats.spus.len(),
+            job.size,
+            job.size,
+            job.spes
+        ));
+    }
+    Ok(Measured { stats, raw })
+}

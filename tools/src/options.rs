@@ -1,0 +1,79 @@
+//! Checks of numeric options and inputs made before any work starts, shared by the
+//! commands, so that every limit is stated once and every message says what is allowed.
+
+use crate::exit::{self, Error};
+use std::io::Read;
+use std::path::Path;
+
+/// Largest program file `spu run`/`spu prof`/`spu dis` read (an ELF with symbols and debug
+/// sections can be far larger than the 256 KiB it loads).
+pub const MAX_PROGRAM_BYTES: u64 = 64 << 20;
+
+/// Largest assembly source `spu timing` reads.
+pub const MAX_SOURCE_BYTES: u64 = 64 << 20;
+
+/// Largest simulated main memory: 4 GiB, more than any Cell blade gave one process.
+pub const MAX_MEMORY_BYTES: u64 = 4 << 30;
+
+/// Reads a whole input file, refusing one larger than `limit` bytes (checked while reading
+/// too, so that a file that grows or a device that never ends cannot exhaust memory).
+pub fn read_input(path: &Path, limit: u64) -> Result<Vec<u8>, String> {
+    let name = path.display();
+    let file = std::fs::File::open(path).map_err(|e| format!("{name}: {e}"))?;
+    let mut bytes = Vec::new();
+    file.take(limit + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("{name}: {e}"))?;
+    if bytes.len() as u64 > limit {
+        return Err(format!(
+            "{name}: larger than the {limit}-byte limit for this input"
+        ));
+    }
+    Ok(bytes)
+}
+
+/// `--max-cycles`: at least 1.
+pub fn max_cycles(cycles: u64) -> exit::Result<()> {
+    if cycles == 0 {
+        return Err(Error::input("--max-cycles 0: must be at least 1"));
+    }
+    Ok(())
+}
+
+/// `--memory`: 16 bytes to 4 GiB, a multiple of 16 (DMA moves quadwords); returned as the
+/// host size.
+pub fn memory(bytes: u64) -> exit::Result<usize> {
+    if !(16..=MAX_MEMORY_BYTES).contains(&bytes) || bytes % 16 != 0 {
+        return Err(Error::input(format!(
+            "--memory {bytes}: must be a multiple of 16 from 16 to {MAX_MEMORY_BYTES} (4 GiB)"
+        )));
+    }
+    usize::try_from(bytes)
+        .map_err(|_| Error::input(format!("--memory {bytes}: too large for this host")))
+}
+
+/// `--clock` in GHz: finite, 0.01 to 100 (the Cell ran at 2.4 to 3.2).
+pub fn clock_ghz(ghz: f64) -> exit::Result<()> {
+    if !(ghz.is_finite() && (0.01..=100.0).contains(&ghz)) {
+        return Err(Error::input(format!(
+            "--clock {ghz}: must be a number of GHz from 0.01 to 100"
+        )));
+    }
+    Ok(())
+}
+
+/// A count option that must lie in `range`.
+pub fn count<T: PartialOrd + std::fmt::Display + Copy>(
+    name: &str,
+    value: T,
+    range: std::ops::RangeInclusive<T>,
+) -> exit::Result<()> {
+    if !range.contains(&value) {
+        return Err(Error::input(format!(
+            "{name} {value}: must be {} to {}",
+            range.start(),
+            range.end()
+        )));
+    }
+    Ok(())
+}

@@ -1,0 +1,287 @@
+//! The report of `spu paper`: the tables' rows filled in from the jobs' statistics, as
+//! typed data (report.json) and as Markdown and HTML pages.
+
+use crate::paper_jobs::Job;
+use crate::paper_tables::{value, Measured, TableSpec};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::fmt::Write;
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Report {
+    /// Width and height of every frame.
+    pub size: u32,
+    pub scenes: Vec<ReportScene>,
+    pub tables: Vec<Table>,
+    pub figures: Vec<Figure>,
+    /// Jobs planned, and how many of them have statistics.
+    pub jobs: usize,
+    pub jobs_measured: usize,
+    /// Stats files that were missing or unreadable, with the reason.
+    pub missing: Vec<String>,
+    pub notes: Vec<String>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ReportScene {
+    pub id: String,
+    pub source: String,
+    /// The paper's scene it stands in for.
+    pub paper: String,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Table {
+    pub id: String,
+    pub title: String,
+    pub unit: String,
+    pub note: String,
+    pub rows: Vec<Row>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Row {
+    pub label: String,
+    pub scene: String,
+    pub paper_scene: String,
+    pub paper: Option<f64>,
+    pub ours: Option<f64>,
+    /// Ours over the paper's.
+    pub ratio: Option<f64>,
+    /// The runs our number comes from.
+    pub config: String,
+    /// Why there is no number of ours.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub missing: Option<String>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Figure {
+    pub id: String,
+    pub title: String,
+    /// Files next to the report.
+    pub files: Vec<String>,
+}
+
+/// Fills the tables in from the statistics by job name (`Err`: why a job has none).
+pub fn build(
+    specs: &[TableSpec],
+    results: &BTreeMap<String, Result<Measured, String>>,
+) -> Vec<Table> {
+    specs
+        .iter()
+        .map(|spec| Table {
+            id: spec.id.into(),
+            title: spec.title.into(),
+            unit: spec.unit.into(),
+            note: spec.note.clone(),
+            rows: spec
+                .rows
+                .iter()
+                .map(|row| {
+                    let (ours, config, missing) = match &row.jobs {
+                        Err(why) => (None, String::new(), Some(why.clone())),
+                        Ok(jobs) => {
+                            let config = describe_jobs(jobs);
+                            let found: Result<Vec<&Measured>, String> = jobs
+                                .iter()
+                                .map(|j| match results.get(&j.name()) {
+                                    Some(Ok(m)) => Ok(m),
+                                    Some(Err(e)) => Err(e.clone()),
+                                    None => Err(format!("{}: not run", j.name())),
+                                })
+                                .collect();
+                            match found.and_then(|m| value(row.metric, &m)) {
+                                Ok(v) if v.is_finite() => (Some(v), config, None),
+                                Ok(_) => (None, config, Some("not a number".into())),
+                                Err(e) => (None, config, Some(e)),
+                            }
+                        }
+                    };
+                    let ratio = match (ours, row.paper) {
+                        (Some(o), Some(p)) if p != 0.0 => Some(o / p),
+                        _ => None,
+                    };
+                    Row {
+                        label: row.label.clone(),
+                        scene: row.scene.id.clone(),
+                        paper_scene: row.scene.paper.name().into(),
+                        paper: row.paper,
+                        ours,
+                        ratio,
+                        config,
+                        missing,
+                    }
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+fn describe_jobs(jobs: &[Job]) -> String {
+    match jobs {
+        [one] => one.describe(),
+        [a, b] => format!("{} vs {}", a.describe(), b.describe()),
+        _ => jobs.iter().map(Job::name).collect::<Vec<_>>().join(", "),
+    }
+}
+
+/// A number as the tables print it: up to three significant decimals.
+pub fn fmt_num(x: Option<f64>) -> String {
+    match x {
+        None => "–".into(),
+        Some(v) if v.abs() >= 100.0 => format!("{v:.1}"),
+        Some(v) if v.abs() >= 10.0 => format!("{v:.2}"),
+        Some(v) => format!("{v:.3}"),
+    }
+}
+
+fn fmt_ratio(x: Option<f64>) -> String {
+    x.map_or("–".into(), |r| format!("{r:.2}"))
+}
+
+impl Report {
+    pub fn to_markdown(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "# Ray Tracing on the Cell Processor (Benthin et al. 2006): the paper's numbers and ours\n"
+        );
+        let _ = writeln!(
+            s,
+            "Measured by `spu paper` on the simulator at {0}x{0} pixels; {1} of {2} runs measured.\n",
+            self.size, self.jobs_measured, self.jobs
+        );
+        let _ = writeln!(s, "| scene | source | stands in for |\n|---|---|---|");
+        for sc in &self.scenes {
+            let _ = writeln!(s, "| {} | {} | {} |", sc.id, sc.source, sc.paper);
+        }
+        if !self.notes.is_empty() || !self.missing.is_empty() {
+            let _ = writeln!(s);
+            for n in &self.notes {
+                let _ = writeln!(s, "- {n}");
+            }
+            for m in &self.missing {
+                let _ = writeln!(s, "- missing: {m}");
+            }
+        }
+        for t in &self.tables {
+            let _ = writeln!(s, "\n## {}\n\n{}", t.title, t.note);
+            if !t.unit.is_empty() {
+                let _ = writeln!(s, "Unit: {}.", t.unit);
+            }
+            if let Some(f) = self.figures.iter().find(|f| f.id == t.id) {
+                for file in f.files.iter().filter(|f| f.ends_with(".svg")) {
+                    let _ = writeln!(s, "\n![{}]({file})", f.title);
+                }
+            }
+            let _ = writeln!(
+                s,
+                "\n| row | scene (paper's) | paper | ours | ours/paper | configuration |\n|---|---|---:|---:|---:|---|"
+            );
+            for r in &t.rows {
+                let config = match &r.missing {
+                    Some(why) => format!("**not measured**: {why}"),
+                    None => r.config.clone(),
+                };
+                let _ = writeln!(
+                    s,
+                    "| {} | {} ({}) | {} | {} | {} | {} |",
+                    r.label,
+                    r.scene,
+                    r.paper_scene,
+                    fmt_num(r.paper),
+                    fmt_num(r.ours),
+                    fmt_ratio(r.ratio),
+                    config.replace('|', "\\|")
+                );
+            }
+        }
+        s
+    }
+
+    pub fn to_html(&self) -> String {
+        let e = html_escape;
+        let mut s = String::from(
+            "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>spu paper report</title>\n<style>body{font-family:sans-serif;max-width:75em;margin:auto}table{border-collapse:collapse;margin-bottom:1em}td,th{border:1px solid #bbb;padding:2px 6px}td.n{text-align:right}tr.missing td{color:#888}</style></head><body>\n",
+        );
+        let _ = writeln!(
+            s,
+            "<h1>Ray Tracing on the Cell Processor (Benthin et al. 2006): the paper's numbers and ours</h1>\n<p>Measured by <code>spu paper</code> on the simulator at {0}x{0} pixels; {1} of {2} runs measured.</p>",
+            self.size, self.jobs_measured, self.jobs
+        );
+        let _ = writeln!(
+            s,
+            "<table><tr><th>scene</th><th>source</th><th>stands in for</th></tr>"
+        );
+        for sc in &self.scenes {
+            let _ = writeln!(
+                s,
+                "<tr><td>{}</td><td>{}</td><td>{}</td></tr>",
+                e(&sc.id),
+                e(&sc.source),
+                e(&sc.paper)
+            );
+        }
+        s.push_str("</table>\n<ul>\n");
+        for n in &self.notes {
+            let _ = writeln!(s, "<li>{}</li>", e(n));
+        }
+        for m in &self.missing {
+            let _ = writeln!(s, "<li>missing: {}</li>", e(m));
+        }
+        s.push_str("</ul>\n");
+        for t in &self.tables {
+            let _ = writeln!(
+                s,
+                "<h2 id=\"{}\">{}</h2>\n<p>{}{}</p>",
+                e(&t.id),
+                e(&t.title),
+                e(&t.note),
+                if t.unit.is_empty() {
+                    String::new()
+                } else {
+                    format!(" Unit: {}.", e(&t.unit))
+                }
+            );
+            if let Some(f) = self.figures.iter().find(|f| f.id == t.id) {
+                for file in f.files.iter().filter(|f| f.ends_with(".svg")) {
+                    let _ = writeln!(
+                        s,
+                        "<p><img src=\"{}\" alt=\"{}\"></p>",
+                        e(file),
+                        e(&f.title)
+                    );
+                }
+            }
+            s.push_str("<table><tr><th>row</th><th>scene (paper's)</th><th>paper</th><th>ours</th><th>ours/paper</th><th>configuration</th></tr>\n");
+            for r in &t.rows {
+                let (class, config) = match &r.missing {
+                    Some(why) => (" class=\"missing\"", format!("not measured: {why}")),
+                    None => ("", r.config.clone()),
+                };
+                let _ = writeln!(
+                    s,
+                    "<tr{class}><td>{}</td><td>{} ({})</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td>{}</td></tr>",
+                    e(&r.label),
+                    e(&r.scene),
+                    e(&r.paper_scene),
+                    fmt_num(r.paper),
+                    fmt_num(r.ours),
+                    fmt_ratio(r.ratio),
+                    e(&config)
+                );
+            }
+            s.push_str("</table>\n");
+        }
+        s.push_str("</body></html>\n");
+        s
+    }
+}
+
+fn html_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}

@@ -1,0 +1,426 @@
+//! Every table and figure of the paper as rows: for each, the paper's number, the jobs that
+//! measure ours and how to read our number from their statistics. The job list of
+//! `spu paper` is exactly the union of the rows' jobs.
+
+use crate::paper_data::{self as paper, Cache, PAPER_SIZE};
+use crate::paper_jobs::{Caps, Job, SceneSpec, Want, SHT_ON};
+use spu_loader::stats::FrameStats;
+
+/// A finished job's statistics: typed, and as raw JSON for keys other kernels add.
+#[derive(Clone, Debug)]
+pub struct Measured {
+    pub stats: FrameStats,
+    pub raw: serde_json::Value,
+}
+
+/// How a row's number comes out of its jobs' statistics.
+#[derive(Clone, Copy, Debug)]
+pub enum Metric {
+    BvhHitPct,
+    TriangleHitPct,
+    TraversalSteps,
+    TriangleTests,
+    EarlyExitsPct,
+    EarlyHitsPct,
+    MraysPerSpu,
+    /// Frames per second, scaled to a 1024x1024 frame (cycles grow with the pixels).
+    Fps1024,
+    /// Gain of the second job over the first, in %.
+    GainPct,
+    /// Frame cycles of the first job over the second's.
+    Speedup,
+    /// A number under `table4` in the stats (added by the shading kernel).
+    Table4(&'static str),
+    /// Kilobytes read per frame from a main-memory region under `table6`, scaled to
+    /// 1024x1024 (row index of [`paper::TABLE6_KB`]).
+    Table6(usize),
+}
+
+/// One row of a table.
+#[derive(Clone, Debug)]
+pub struct RowSpec {
+    pub label: String,
+    pub scene: SceneSpec,
+    pub paper: Option<f64>,
+    /// The jobs whose statistics give our number, or why there is none.
+    pub jobs: Result<Vec<Job>, String>,
+    pub metric: Metric,
+}
+
+#[derive(Clone, Debug)]
+pub struct TableSpec {
+    pub id: &'static str,
+    pub title: &'static str,
+    pub unit: &'static str,
+    pub note: String,
+    pub rows: Vec<RowSpec>,
+}
+
+/// What the tables are built for.
+#[derive(Clone, Debug)]
+pub struct Setup {
+    pub scenes: Vec<SceneSpec>,
+    pub size: u32,
+    pub caps: Caps,
+    /// Largest SPE count to run (16; smaller only to keep tests short).
+    pub max_spes: usize,
+}
+
+impl Setup {
+    fn job(&self, scene: &SceneSpec, want: Want) -> Result<Job, String> {
+        if want.spes > self.max_spes {
+            return Err(format!("{} SPEs: above --max-spes", want.spes));
+        }
+        Job::new(scene, self.size, want, self.caps)
+    }
+
+    /// The paper's best ray caster: SHT where it exists.
+    fn best(&self) -> Want {
+        Want {
+            sht: if self.caps.sht { SHT_ON } else { 1 },
+            ..Want::default()
+        }
+    }
+
+    fn row(
+        &self,
+        label: impl Into<String>,
+        scene: &SceneSpec,
+        paper: Option<f64>,
+        wants: &[Want],
+        metric: Metric,
+    ) -> RowSpec {
+        RowSpec {
+            label: label.into(),
+            scene: scene.clone(),
+            paper,
+            jobs: wants.iter().map(|w| self.job(scene, *w)).collect(),
+            metric,
+        }
+    }
+}
+
+/// Every table of the paper, then Figure 2 as a table of speed-ups.
+pub fn tables(setup: &Setup) -> Vec<TableSpec> {
+    vec![
+        table1(setup),
+        table2(setup),
+        table3(setup),
+        table4(setup),
+        table5(setup),
+        table6(setup),
+        figure2(setup),
+    ]
+}
+
+fn table1(s: &Setup) -> TableSpec {
+    let mut rows = Vec::new();
+    for (cache, name, metric) in [
+        (Cache::Bvh, "BC", Metric::BvhHitPct),
+        (Cache::Triangle, "TC", Metric::TriangleHitPct),
+    ] {
+        for lines in paper::CACHE_SIZES {
+            for assoc in [4, 1] {
+                for scene in &s.scenes {
+                    let want = Want {
+                        cache: lines,
+                        assoc,
+                        ..Want::default()
+                    };
+                    let kind = if assoc == 4 { "4-way" } else { "DM" };
+                    rows.push(s.row(
+                        format!("{name} ({lines}) {kind}"),
+                        scene,
+                        paper::table1(cache, lines, assoc, scene.paper),
+                        &[want],
+                        metric,
+                    ));
+                }
+            }
+        }
+    }
+    TableSpec {
+        id: "table1",
+        title: "Table 1: cache hit rates, 4-way vs direct mapped (DM), BVH node cache (BC) and triangle cache (TC)",
+        unit: "%",
+        note: "One SPE, primary rays, both caches of the size in the row, blocking DMA.".into(),
+        rows,
+    }
+}
+
+fn table2(s: &Setup) -> TableSpec {
+    let metrics = [
+        Metric::TraversalSteps,
+        Metric::TriangleTests,
+        Metric::EarlyExitsPct,
+        Metric::EarlyHitsPct,
+        Metric::MraysPerSpu,
+    ];
+    let mut rows = Vec::new();
+    for ((label, values), metric) in paper::TABLE2.iter().zip(metrics) {
+        for scene in &s.scenes {
+            rows.push(s.row(
+                *label,
+                scene,
+                Some(values[paper::col(scene.paper)]),
+                &[Want::default()],
+                metric,
+            ));
+        }
+    }
+    TableSpec {
+        id: "table2",
+        title: "Table 2: per-SPE traversal and intersection figures",
+        unit: "",
+        note: "One 2.4 GHz SPE, 256-line direct-mapped caches, blocking DMA, no shading. Our traversal steps count node visits (box tests); the pair kernel tests both children of a node in one step.".into(),
+        rows,
+    }
+}
+
+fn table3(s: &Setup) -> TableSpec {
+    let without = Want::default();
+    let with = Want {
+        sht: SHT_ON,
+        ..Want::default()
+    };
+    let mut rows = Vec::new();
+    for scene in &s.scenes {
+        let c = paper::col(scene.paper);
+        rows.push(s.row(
+            "without SHT (MRays/s)",
+            scene,
+            Some(paper::TABLE3_WITHOUT[c]),
+            &[without],
+            Metric::MraysPerSpu,
+        ));
+        rows.push(s.row(
+            format!("with SHT {SHT_ON} (MRays/s)"),
+            scene,
+            Some(paper::TABLE3_WITH[c]),
+            &[with],
+            Metric::MraysPerSpu,
+        ));
+        rows.push(s.row(
+            "speed-up (%)",
+            scene,
+            Some(paper::TABLE3_SPEEDUP_PCT[c]),
+            &[without, with],
+            Metric::GainPct,
+        ));
+    }
+    TableSpec {
+        id: "table3",
+        title: "Table 3: software hyperthreading (SHT) on one SPE",
+        unit: "",
+        note: "One 2.4 GHz SPE, 256-line direct-mapped caches, no shading.".into(),
+        rows,
+    }
+}
+
+fn table4(s: &Setup) -> TableSpec {
+    let keys = [
+        "same_triangle_pct",
+        "passes_per_packet",
+        "vertex_cache_hit_pct",
+        "material_cache_hit_pct",
+    ];
+    let want = Want {
+        shade: "simple",
+        ..s.best()
+    };
+    let mut rows = Vec::new();
+    for ((label, values), key) in paper::TABLE4.iter().zip(keys) {
+        for scene in &s.scenes {
+            rows.push(s.row(
+                *label,
+                scene,
+                Some(values[paper::col(scene.paper)]),
+                &[want],
+                Metric::Table4(key),
+            ));
+        }
+    }
+    TableSpec {
+        id: "table4",
+        title: "Table 4: shading coherence and the vertex and material caches",
+        unit: "",
+        note: "One 2.4 GHz SPE, simple shading, primary rays.".into(),
+        rows,
+    }
+}
+
+fn table5(s: &Setup) -> TableSpec {
+    let mut rows = Vec::new();
+    for (m, mode) in paper::SHADE_MODES.iter().enumerate() {
+        for (k, machine) in paper::MACHINES.iter().enumerate() {
+            for scene in &s.scenes {
+                let want = Want {
+                    spes: machine.spes,
+                    clock_ghz: machine.clock_ghz,
+                    shade: mode,
+                    ..s.best()
+                };
+                rows.push(s.row(
+                    format!("{mode}: {}", machine.name),
+                    scene,
+                    Some(paper::TABLE5_FPS[m][k][paper::col(scene.paper)]),
+                    &[want],
+                    Metric::Fps1024,
+                ));
+            }
+        }
+    }
+    TableSpec {
+        id: "table5",
+        title: "Table 5: frames per second by shading mode and machine",
+        unit: "fps at 1024x1024",
+        note: format!(
+            "Ray casting without shading, simple shading, shading with shadows; SHT where built. Our fps are for a {PAPER_SIZE}x{PAPER_SIZE} frame: at a smaller size the frame's cycles are scaled by the pixel count. The paper's PS3 row is its extrapolation; ours is simulated at 3.2 GHz. The paper's baseline, a 2.4 GHz Opteron, ran at {} fps (ERW6, Conference, VW Beetle by mode).",
+            paper::TABLE5_X86_FPS
+                .iter()
+                .zip(paper::SHADE_MODES)
+                .map(|(v, m)| format!("{m} {} / {} / {}", v[0], v[1], v[2]))
+                .collect::<Vec<_>>()
+                .join("; ")
+        ),
+        rows,
+    }
+}
+
+fn table6(s: &Setup) -> TableSpec {
+    let want = Want {
+        shade: "simple",
+        ..s.best()
+    };
+    let mut rows = Vec::new();
+    for (i, (label, values)) in paper::TABLE6_KB.iter().enumerate() {
+        for scene in &s.scenes {
+            rows.push(s.row(
+                *label,
+                scene,
+                Some(values[paper::col(scene.paper)]),
+                &[want],
+                Metric::Table6(i),
+            ));
+        }
+    }
+    TableSpec {
+        id: "table6",
+        title: "Table 6: main-memory traffic per frame by kind of scene data",
+        unit: "KB per 1024x1024 frame",
+        note: "Simple shading, 256-line caches. At a smaller size the KB are scaled by the pixel count (an approximation: cache reuse changes with the packet footprint).".into(),
+        rows,
+    }
+}
+
+fn figure2(s: &Setup) -> TableSpec {
+    let mut rows = Vec::new();
+    for scene in &s.scenes {
+        for spes in 1..=s.max_spes.min(16) {
+            let one = s.best();
+            let many = Want { spes, ..s.best() };
+            rows.push(s.row(
+                format!("{spes} SPEs"),
+                scene,
+                paper::figure2_speedup(spes, scene.paper),
+                &[one, many],
+                Metric::Speedup,
+            ));
+        }
+    }
+    TableSpec {
+        id: "figure2",
+        title: "Figure 2: speed-up over 1 to 16 SPEs (dynamic tile load balancing)",
+        unit: "x over 1 SPE",
+        note: "2.4 GHz SPEs, 256-line caches, SHT where built, no shading, 64x64-pixel tiles. The paper prints no numbers for Figure 2; its 8- and 16-SPE points are Table 5's Single- and Dual-Cell over one SPE. Ideal is the SPE count.".into(),
+        rows,
+    }
+}
+
+/// Our number for a row from its jobs' statistics (in the row's job order).
+pub fn value(metric: Metric, measured: &[&Measured]) -> Result<f64, String> {
+    let first = measured.first().ok_or("no job")?;
+    let t2 = &first.stats.table2;
+    let v = match metric {
+        Metric::BvhHitPct => t2.bvh_cache_hit_pct,
+        Metric::TriangleHitPct => t2.triangle_cache_hit_pct,
+        Metric::TraversalSteps => t2.traversal_steps_per_packet,
+        Metric::TriangleTests => t2.triangle_tests_per_packet,
+        Metric::EarlyExitsPct => t2.early_exits_pct,
+        Metric::EarlyHitsPct => t2.early_hits_pct,
+        Metric::MraysPerSpu => t2.mrays_per_sec_per_spu,
+        Metric::Fps1024 => {
+            let s = &first.stats;
+            if s.frame_cycles == 0 {
+                return Err("no cycles".into());
+            }
+            let scale = s.rays as f64 / (PAPER_SIZE as f64 * PAPER_SIZE as f64);
+            s.clock_ghz * 1e9 / s.frame_cycles as f64 * scale
+        }
+        Metric::GainPct => {
+            let b = measured.get(1).ok_or("no second job")?;
+            let (a, b) = (
+                first.stats.table2.mrays_per_sec_per_spu,
+                b.stats.table2.mrays_per_sec_per_spu,
+            );
+            if a <= 0.0 {
+                return Err("no rays".into());
+            }
+            100.0 * (b / a - 1.0)
+        }
+        Metric::Speedup => {
+            let b = measured.get(1).ok_or("no second job")?;
+            if b.stats.frame_cycles == 0 {
+                return Err("no cycles".into());
+            }
+            first.stats.frame_cycles as f64 / b.stats.frame_cycles as f64
+        }
+        Metric::Table4(key) => first
+            .raw
+            .get("table4")
+            .and_then(|t| t.get(key))
+            .and_then(|v| v.as_f64())
+            .ok_or_else(|| format!("the stats have no table4.{key}"))?,
+        Metric::Table6(row) => table6_kb(first, row)?,
+    };
+    Ok(v)
+}
+
+/// Words that name a Table 6 row among the keys of the stats' `table6` object.
+const TABLE6_WORDS: [&[&str]; 4] = [
+    &["bvh", "node"],
+    &["tri"],
+    &["vertex", "vert"],
+    &["shader", "material"],
+];
+
+fn table6_kb(m: &Measured, row: usize) -> Result<f64, String> {
+    let t6 = m
+        .raw
+        .get("table6")
+        .and_then(|t| t.as_object())
+        .ok_or("the stats have no table6")?;
+    let scale = (PAPER_SIZE as f64 * PAPER_SIZE as f64) / m.stats.rays.max(1) as f64;
+    let find = |words: &[&str]| {
+        t6.iter()
+            .find(|(k, v)| {
+                let k = k.to_ascii_lowercase();
+                v.is_number()
+                    && !k.contains("frame_buffer")
+                    && !k.contains("written")
+                    && words.iter().any(|w| k.contains(w))
+            })
+            .and_then(|(_, v)| v.as_f64())
+    };
+    let kb = if row < TABLE6_WORDS.len() {
+        find(TABLE6_WORDS[row])
+            .ok_or_else(|| format!("the stats' table6 has no key for {:?}", TABLE6_WORDS[row]))?
+    } else {
+        TABLE6_WORDS
+            .iter()
+            .map(|w| find(w))
+            .sum::<Option<f64>>()
+            .ok_or("the stats' table6 lacks a kind")?
+    };
+    Ok(kb * scale)
+}

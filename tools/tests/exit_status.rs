@@ -1,0 +1,494 @@
+//! Bad input, runaway programs and failed outputs, run through the built `spu` binary: each
+//! case asserts the message and the documented exit status (README, "Exit status"), for
+//! each class of failure: what used to abort the host, what used to hang it, and what used
+//! to pass silently.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+struct Outcome {
+    status: i32,
+    stdout: String,
+    stderr: String,
+}
+
+fn spu(args: &[&str]) -> Outcome {
+    let out = Command::new(env!("CARGO_BIN_EXE_spu"))
+        .args(args)
+        .output()
+        .unwrap();
+    let outcome = Outcome {
+        status: out.status.code().expect("exited, not killed by a signal"),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    };
+    assert!(
+        !outcome.stderr.contains("panicked"),
+        "spu {args:?} panicked: {}",
+        outcome.stderr
+    );
+    outcome
+}
+
+/// A fresh directory for one test.
+fn dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("spu-exit-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn write(dir: &Path, name: &str, contents: impl AsRef<[u8]>) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, contents).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+fn program(dir: &Path, name: &str, body: &str) -> String {
+    write(
+        dir,
+        name,
+        format!("        .text\n        .global _start\n_start:\n{body}"),
+    )
+}
+
+/// Files left in `dir` besides the inputs (outputs and temporaries).
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn run_exits_with_the_programs_exit_code() {
+    let d = dir("run-codes");
+    for (code, status) in [("0x2000", 0), ("0x2005", 5), ("0x20ff", 255)] {
+        let src = program(&d, "exit.s", &format!("        stop {code}\n"));
+        let out = spu(&["run", &src]);
+        assert_eq!(out.status, status, "stop {code}: {}", out.stderr);
+        assert!(out.stdout.starts_with(&format!("stopped: stop {code}")));
+        assert_eq!(out.stderr, "", "a program's exit is not an error");
+    }
+    let src = program(&d, "other.s", "        stop 0x1234\n");
+    let out = spu(&["run", &src]);
+    assert_eq!(out.status, 134);
+    assert!(
+        out.stderr
+            .contains("stop 0x1234 is not an exit (0x2000..0x20ff)"),
+        "{}",
+        out.stderr
+    );
+}
+
+#[test]
+fn abnormal_stops_exit_134_with_the_reason() {
+    let d = dir("abnormal");
+    let illegal = program(&d, "illegal.s", "        .word 0x60000000\n");
+    let out = spu(&["run", &illegal]);
+    assert_eq!(out.status, 134);
+    assert!(
+        out.stderr
+            .contains("SPU stopped abnormally: illegal instruction 0x60000000 at 0x0"),
+        "{}",
+        out.stderr
+    );
+    let deadlock = program(
+        &d,
+        "deadlock.s",
+        "        rdch $3, $SPU_RdInMbox\n        stop 0x2000\n",
+    );
+    let out = spu(&["run", &deadlock]);
+    assert_eq!(out.status, 134);
+    assert!(
+        out.stderr.contains("deadlock at 0x0 on channel 29"),
+        "{}",
+        out.stderr
+    );
+
+    // `spu prof` still prints the profile, then says how the program ended.
+    for (file, reason) in [
+        (&illegal, "illegal instruction 0x60000000"),
+        (&deadlock, "deadlock at 0x0"),
+    ] {
+        let out = spu(&["prof", file]);
+        assert_eq!(out.status, 134, "{file}");
+        assert!(out.stdout.contains("Total Cycle count"), "{}", out.stdout);
+        assert!(out.stderr.contains(reason), "{}", out.stderr);
+    }
+    let fine = program(&d, "fine.s", "        stop 0x2003\n");
+    assert_eq!(
+        spu(&["prof", &fine]).status,
+        0,
+        "prof: any stop is a normal end"
+    );
+}
+
+#[test]
+fn cycle_limits_exit_124() {
+    let d = dir("cycles");
+    let spin = program(&d, "spin.s", "        br _start\n");
+    for command in ["run", "prof"] {
+        let out = spu(&[command, &spin, "--max-cycles", "5000"]);
+        assert_eq!(out.status, 124, "{command}: {}", out.stderr);
+        assert!(out.stderr.contains("cycle limit"), "{}", out.stderr);
+    }
+    let out = spu(&["run", &spin, "--timing", "--max-cycles", "5000"]);
+    assert_eq!(out.status, 124);
+    let cycles: u64 = out
+        .stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("cycles: "))
+        .and_then(|n| n.parse().ok())
+        .expect("cycles");
+    // The limit is checked between the blocks the timing model replays whole.
+    assert!((5000..5100).contains(&cycles), "{cycles}");
+}
+
+#[test]
+fn numeric_options_are_checked_before_any_work() {
+    let d = dir("options");
+    let src = program(&d, "p.s", "        stop 0x2000\n");
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["render", "--clock", "0"],
+            "--clock 0: must be a number of GHz",
+        ),
+        (&["render", "--clock", "nan"], "--clock NaN: must be"),
+        (&["render", "--clock", "inf"], "--clock inf: must be"),
+        (
+            &["render", "--clock", "1e20"],
+            "--clock 100000000000000000000: must be",
+        ),
+        (&["render", "--spes", "0"], "--spes 0: must be 1 to 16"),
+        (&["render", "--spes", "17"], "--spes 17: must be 1 to 16"),
+        (&["render", "--width", "0"], "--width 0: must be 1 to 8192"),
+        (
+            &["render", "--height", "100000"],
+            "--height 100000: must be 1 to 8192",
+        ),
+        (
+            &["render", "--threads", "0"],
+            "--threads 0: must be 1 to 1024",
+        ),
+        (
+            &["render", "--max-cycles", "0"],
+            "--max-cycles 0: must be at least 1",
+        ),
+        (
+            &["render", "--bvh-cache", "200"],
+            "'--bvh-cache <BVH_CACHE>': 200 lines: must be a power of two from 128 to 1024",
+        ),
+        (
+            &["render", "--tri-cache", "2048"],
+            "'--tri-cache <TRI_CACHE>': 2048 lines: must be a power of two from 128 to 1024",
+        ),
+        (
+            &["render", "--camera=0,0,0,0,0,-1,0,1,0,inf"],
+            "--camera: camera: non-finite value",
+        ),
+        (
+            &["render", "--camera=0,0,0,0,0,0,0,1,0,60"],
+            "eye and target coincide",
+        ),
+        (
+            &["bench", "--iterations", "0"],
+            "--iterations 0: must be 1 to",
+        ),
+        (
+            &["run", &src, "--max-cycles", "0"],
+            "--max-cycles 0: must be at least 1",
+        ),
+        (
+            &["run", &src, "--memory", "1000000000000000"],
+            "--memory 1000000000000000: must be a multiple of 16 from 16 to 4294967296",
+        ),
+        (&["prof", &src, "--memory", "0"], "--memory 0: must be"),
+        (
+            &["run", &src, "--mbox-in", "0x100000000"],
+            "does not fit in 32 bits",
+        ),
+        (
+            &["run", &src, "--dump-ls", "0x3fff0:0x100"],
+            "--dump-ls 0x3fff0:0x100: outside the local store",
+        ),
+        (
+            &["as", &src, "--format", "hex"],
+            "--format hex: expected elf or bin",
+        ),
+    ];
+    for (args, message) in cases {
+        let out = spu(args);
+        assert_eq!(out.status, 2, "spu {args:?}: {}", out.stderr);
+        assert!(
+            out.stderr.contains(message),
+            "spu {args:?}: expected `{message}` in: {}",
+            out.stderr
+        );
+        assert_eq!(out.stdout, "", "spu {args:?} did work before refusing");
+    }
+    // clap's own usage errors are 2 as well.
+    assert_eq!(spu(&["render", "--clock", "fast"]).status, 2);
+    assert_eq!(spu(&["frobnicate"]).status, 2);
+}
+
+#[test]
+fn outputs_are_checked_up_front_and_never_left_partial() {
+    let d = dir("outputs");
+    // A JPEG name fails at once, before the scene is even loaded, and writes nothing.
+    let jpg = d.join("x.jpg");
+    let out = spu(&[
+        "render",
+        "--scene",
+        "nonexistent.obj",
+        "-o",
+        jpg.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status, 2);
+    assert!(
+        out.stderr
+            .contains("the image is written as PNG; name it .png"),
+        "{}",
+        out.stderr
+    );
+    let missing = d.join("no/such/dir/out.png");
+    let out = spu(&["render", "-o", missing.to_str().unwrap()]);
+    assert_eq!(out.status, 2);
+    assert!(out.stderr.contains("cannot write"), "{}", out.stderr);
+    let out = spu(&["render", "--stats", d.to_str().unwrap()]);
+    assert_eq!(out.status, 2);
+    assert!(out.stderr.contains("is a directory"), "{}", out.stderr);
+
+    let src = program(&d, "p.s", "        stop 0x2000\n");
+    let out = spu(&["as", &src, "-o", missing.to_str().unwrap()]);
+    assert_eq!(out.status, 2);
+    assert!(out.stderr.contains("cannot write"), "{}", out.stderr);
+    // A write that fails part-way (a full device) is a failure, status 1.
+    if Path::new("/dev/full").exists() {
+        let out = spu(&["as", &src, "-o", "/dev/full"]);
+        assert_eq!(out.status, 1, "{}", out.stderr);
+        assert!(
+            out.stderr.contains("/dev/full: No space left"),
+            "{}",
+            out.stderr
+        );
+    }
+    // Assembler errors: bad input, and no output or temporary file left behind.
+    let bad = write(&d, "bad.s", "        frob $1\n");
+    let elf = d.join("bad.elf");
+    let out = spu(&["as", &bad, "-o", elf.to_str().unwrap()]);
+    assert_eq!(out.status, 2);
+    assert!(out.stderr.contains("bad.s:1:"), "{}", out.stderr);
+    assert_eq!(files_in(&d), ["bad.s", "p.s"]);
+    // Success leaves the output only.
+    let good = d.join("p.elf");
+    assert_eq!(spu(&["as", &src, "-o", good.to_str().unwrap()]).status, 0);
+    assert_eq!(files_in(&d), ["bad.s", "p.elf", "p.s"]);
+}
+
+#[test]
+fn bad_scenes_are_refused_with_the_reason() {
+    let d = dir("scenes");
+    let png = d.join("out.png");
+    let png = png.to_str().unwrap();
+    let render = |scene: &str| {
+        spu(&[
+            "render", "--scene", scene, "--width", "8", "--height", "8", "-o", png,
+        ])
+    };
+    // A header that declares four billion vertices fails at once, before any allocation.
+    let huge = write(
+        &d,
+        "huge.ply",
+        "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n\
+         property float x\nproperty float y\nproperty float z\nelement face 1\n\
+         property list uchar int vertex_indices\nend_header\n0123456789",
+    );
+    let out = render(&huge);
+    assert_eq!(out.status, 2);
+    assert!(
+        out.stderr
+            .contains("header declares 4000000000 'vertex' elements but the 10 body bytes"),
+        "{}",
+        out.stderr
+    );
+    // Infinite vertices: refused naming the line, not rendered black.
+    let inf = write(&d, "inf.obj", "v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n");
+    let out = render(&inf);
+    assert_eq!(out.status, 2);
+    assert!(
+        out.stderr
+            .contains("inf.obj:2: vertex 1 is not finite (inf, 0, 0)"),
+        "{}",
+        out.stderr
+    );
+    let empty = write(&d, "empty.obj", "v 0 0 0\n");
+    let out = render(&empty);
+    assert_eq!(out.status, 2);
+    assert!(
+        out.stderr.contains("the scene has no triangles"),
+        "{}",
+        out.stderr
+    );
+    let missing = d.join("missing.obj");
+    let out = render(missing.to_str().unwrap());
+    assert_eq!(out.status, 2);
+    assert!(
+        out.stderr.contains("missing.obj: cannot read"),
+        "{}",
+        out.stderr
+    );
+    assert!(
+        !Path::new(png).exists(),
+        "no image is written for a refused scene"
+    );
+}
+
+#[test]
+fn malformed_programs_are_bad_input() {
+    let d = dir("programs");
+    let elf = write(
+        &d,
+        "trunc.elf",
+        b"\x7fELF\x01\x02\x01\0\0\0\0\0\0\0\0\0\0\x02",
+    );
+    for command in ["run", "prof", "dis"] {
+        let out = spu(&[command, &elf]);
+        assert_eq!(out.status, 2, "{command}: {}", out.stderr);
+        assert!(out.stderr.contains("trunc.elf: "), "{}", out.stderr);
+    }
+    let big = write(&d, "big.bin", vec![0u8; 300 * 1024]);
+    let out = spu(&["run", &big]);
+    assert_eq!(out.status, 2);
+    assert!(
+        out.stderr
+            .contains("307200 bytes do not fit the 256 KiB local store"),
+        "{}",
+        out.stderr
+    );
+    let out = spu(&["run", d.join("absent.elf").to_str().unwrap()]);
+    assert_eq!(out.status, 2);
+    assert!(
+        out.stderr.contains("absent.elf: No such file"),
+        "{}",
+        out.stderr
+    );
+}
+
+#[test]
+fn timing_reports_statements_it_does_not_time() {
+    let d = dir("timing");
+    let src = write(
+        &d,
+        "t.s",
+        "        .text\nfoo:    il $3, 1\n        frob $1, $2\n        ai $3, $3, 1\n",
+    );
+    let out = spu(&["timing", &src]);
+    assert_eq!(out.status, 0);
+    assert!(
+        out.stderr
+            .contains("t.s:3: warning: `frob` is not an SPU instruction; not timed"),
+        "{}",
+        out.stderr
+    );
+}
+
+#[test]
+fn json_outputs_are_well_formed() {
+    let d = dir("json");
+    let src = program(
+        &d,
+        "p.s",
+        "        il $3, 7\n        wrch $SPU_WrOutMbox, $3\n        stop 0x2007\n",
+    );
+    let out = spu(&["run", &src, "--json"]);
+    assert_eq!(out.status, 7);
+    let run: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    assert_eq!(run["exit_code"], 7);
+    assert_eq!(run["outbound_mailbox"], 7);
+    assert_eq!(run["registers"][3][0], 7);
+    assert_eq!(run["stop"], "stop 0x2007");
+
+    let out = spu(&["prof", &src, "--json"]);
+    assert_eq!(out.status, 0);
+    let prof: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    assert_eq!(prof["totals"]["instructions"], 3);
+    assert_eq!(prof["instructions"][0]["text"], "il $3,7");
+
+    // No instructions at all: the CPI is null, and the JSON still parses.
+    let empty = write(&d, "empty.s", "        .text\n");
+    let out = spu(&["timing", &empty, "--json"]);
+    assert_eq!(out.status, 0);
+    let timing: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    assert_eq!(timing["instructions"], serde_json::json!([]));
+}
+
+/// A reader that goes away (`spu dis x | head`) ends the command quietly with status 1,
+/// never a panic.
+#[test]
+fn a_closed_pipe_ends_quietly() {
+    let d = dir("pipe");
+    // 256 KiB of code disassembles to far more than a pipe buffers.
+    let image = write(&d, "image.bin", vec![0x40u8; 256 * 1024]);
+    let spin = program(&d, "spin.s", "        br _start\n");
+    let dump = ["run", &spin, "--max-cycles", "10", "--dump-ls", "0:0x40000"];
+    for args in [&["dis", "--raw", &image][..], &dump[..]] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_spu"))
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut stdout = child.stdout.take().unwrap();
+        let mut first = [0u8; 16];
+        stdout.read_exact(&mut first).unwrap();
+        drop(stdout);
+        let mut stderr = String::new();
+        child
+            .stderr
+            .take()
+            .unwrap()
+            .read_to_string(&mut stderr)
+            .unwrap();
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(1), "spu {args:?}: {stderr}");
+        assert_eq!(stderr, "", "spu {args:?}");
+    }
+}
+
+/// A render that validates cleanly exits 0; one whose statistics cannot be written exits 1
+/// after writing the image whole.
+#[test]
+fn render_statuses() {
+    let d = dir("render");
+    let png = d.join("room.png");
+    let png = png.to_str().unwrap();
+    let small = ["render", "--width", "16", "--height", "16", "-o", png];
+    let out = spu(&[&small[..], &["--validate"]].concat());
+    assert_eq!(out.status, 0, "{}", out.stderr);
+    assert!(
+        out.stdout
+            .contains("validation: 0 of 256 pixels differ from the host reference"),
+        "{}",
+        out.stdout
+    );
+    if Path::new("/dev/full").exists() {
+        std::fs::remove_file(png).unwrap();
+        let out = spu(&[&small[..], &["--stats", "/dev/full"]].concat());
+        assert_eq!(out.status, 1, "{}", out.stderr);
+        assert!(
+            out.stderr.contains("/dev/full: No space left"),
+            "{}",
+            out.stderr
+        );
+        assert!(image_is_complete(png));
+    }
+    assert_eq!(files_in(&d), ["room.png"], "no temporary file is left");
+}
+
+fn image_is_complete(path: &str) -> bool {
+    let bytes = std::fs::read(path).unwrap();
+    bytes.starts_with(b"\x89PNG") && bytes.ends_with(b"IEND\xae\x42\x60\x82")
+}

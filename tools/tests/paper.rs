@@ -1,0 +1,263 @@
+//! `spu paper`: the report holds every table with numbers and the figures, read back as
+//! JSON; `--list-jobs` and `--collect` agree with the in-process run; bad input is named.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn spu(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_spu"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("spu-paper-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn report(dir: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.join("report.json")).unwrap();
+    serde_json::from_str(&text).expect("report.json parses")
+}
+
+fn table<'a>(report: &'a serde_json::Value, id: &str) -> &'a serde_json::Value {
+    report["tables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["id"] == id)
+        .unwrap_or_else(|| panic!("no table {id}"))
+}
+
+fn ours(t: &serde_json::Value) -> Vec<f64> {
+    t["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|r| r["ours"].as_f64())
+        .collect()
+}
+
+/// The quick report on the built-in scenes (at a smaller size, to keep CI short).
+#[test]
+fn quick_report_has_every_table_and_the_figure() {
+    let dir = temp_dir("quick");
+    let out = dir.to_str().unwrap();
+    let common = [
+        "paper",
+        "--quick",
+        "--size",
+        "128",
+        "--max-spes",
+        "2",
+        "--scenes",
+        "room,conference,beetle",
+        "--out",
+        out,
+    ];
+    let run = spu(&[&common[..], &["--threads", "2"]].concat());
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let r = report(&dir);
+    assert_eq!(r["size"], 128);
+    let ids: Vec<&str> = r["tables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t["id"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        ids,
+        ["table1", "table2", "table3", "table4", "table5", "table6", "figure2"]
+    );
+    for t in r["tables"].as_array().unwrap() {
+        let rows = t["rows"].as_array().unwrap();
+        assert!(!rows.is_empty(), "{}", t["id"]);
+        for row in rows {
+            // every row has a number of ours or says why not; the ratio follows
+            match (row["ours"].as_f64(), row["paper"].as_f64()) {
+                (Some(o), Some(p)) => {
+                    let ratio = row["ratio"].as_f64().unwrap();
+                    assert!((ratio - o / p).abs() < 1e-9, "{row}");
+                }
+                (None, _) => assert!(row["missing"].is_string(), "{row}"),
+                (Some(_), None) => assert!(row["ratio"].is_null(), "{row}"),
+            }
+        }
+    }
+    // what the direct-mapped blocking ray caster measures is there for every scene
+    for id in ["table1", "table2", "table3", "table5", "figure2"] {
+        let t = table(&r, id);
+        let n = ours(t).len();
+        assert!(n >= 3, "{id}: {n} numbers");
+    }
+    let t2 = table(&r, "table2");
+    assert_eq!(ours(t2).len(), 15, "five rows per scene");
+    assert!(ours(t2).iter().all(|v| *v >= 0.0));
+    let hit_rates = ours(table(&r, "table1"));
+    assert!(hit_rates.iter().all(|v| (0.0..=100.0).contains(v)));
+    // Figure 2: one SPE is the baseline, and more SPEs are faster
+    let f2 = table(&r, "figure2");
+    let room: Vec<f64> = f2["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|row| row["scene"] == "room")
+        .map(|row| row["ours"].as_f64().unwrap())
+        .collect();
+    assert_eq!(room.len(), 2);
+    assert_eq!(room[0], 1.0);
+    assert!(room[1] > 1.5, "{room:?}");
+    assert_eq!(r["jobs"], r["jobs_measured"]);
+    assert_eq!(r["missing"].as_array().unwrap().len(), 0);
+
+    let files: Vec<&str> = r["figures"][0]["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_str().unwrap())
+        .collect();
+    assert_eq!(files, ["figure2.png", "figure2.svg"]);
+    let png = std::fs::read(dir.join("figure2.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let svg = std::fs::read_to_string(dir.join("figure2.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("ideal"), "{svg}");
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    for t in r["tables"].as_array().unwrap() {
+        let title = t["title"].as_str().unwrap();
+        assert!(md.contains(title), "{title} in report.md");
+        assert!(
+            html.contains(&title.replace('&', "&amp;")),
+            "{title} in report.html"
+        );
+    }
+
+    // --list-jobs prints one render per job, writing where the run wrote
+    let listed = spu(&[&common[..], &["--list-jobs"]].concat());
+    assert!(listed.status.success());
+    let listed = String::from_utf8(listed.stdout).unwrap();
+    let lines: Vec<&str> = listed.lines().collect();
+    assert_eq!(Some(lines.len() as u64), r["jobs"].as_u64());
+    for line in &lines {
+        let stats = line
+            .split_whitespace()
+            .skip_while(|w| *w != "--stats")
+            .nth(1)
+            .expect("--stats FILE");
+        assert!(Path::new(stats).is_file(), "{stats}");
+        assert!(line.contains(" render ") && line.contains("--width 128"));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn collect_names_missing_and_corrupt_stats_and_reports_the_rest() {
+    let dir = temp_dir("collect");
+    let out = dir.join("run");
+    let small = [
+        "paper",
+        "--size",
+        "64",
+        "--max-spes",
+        "2",
+        "--scenes",
+        "room",
+    ];
+    let run = spu(&[&small[..], &["--out", out.to_str().unwrap()]].concat());
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let full = report(&out);
+    let jobs = out.join("jobs");
+    let mut stats: Vec<PathBuf> = std::fs::read_dir(&jobs)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    stats.sort();
+    assert_eq!(Some(stats.len() as u64), full["jobs"].as_u64());
+    std::fs::remove_file(&stats[0]).unwrap();
+    std::fs::write(&stats[1], "{\"scene\": \"room\", \"width\": ").unwrap();
+
+    let again = dir.join("again");
+    let collected = spu(&[
+        &small[..],
+        &[
+            "--collect",
+            jobs.to_str().unwrap(),
+            "--out",
+            again.to_str().unwrap(),
+        ],
+    ]
+    .concat());
+    assert!(!collected.status.success());
+    let err = String::from_utf8_lossy(&collected.stderr);
+    for gone in &stats[..2] {
+        let name = gone.file_name().unwrap().to_str().unwrap();
+        assert!(err.contains(name), "{name} in {err}");
+    }
+    let partial = report(&again);
+    assert_eq!(partial["missing"].as_array().unwrap().len(), 2);
+    assert_eq!(
+        partial["jobs_measured"].as_u64().unwrap() + 2,
+        full["jobs"].as_u64().unwrap()
+    );
+    let md = std::fs::read_to_string(again.join("report.md")).unwrap();
+    assert!(md.contains("missing:"), "{md}");
+    // the rest is reported as before
+    assert_eq!(
+        table(&partial, "table2")["rows"],
+        table(&full, "table2")["rows"]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_scenes_and_output_are_named_before_any_work() {
+    let dir = temp_dir("bad");
+    let out = spu(&[
+        "paper",
+        "--scenes",
+        "room,teapot",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("unknown scene \"teapot\""), "{err}");
+
+    let file = dir.join("a-file");
+    std::fs::write(&file, "").unwrap();
+    let under_file = file.join("report");
+    let out = spu(&[
+        "paper",
+        "--scenes",
+        "room",
+        "--out",
+        under_file.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--out"), "{err}");
+    assert!(!dir.join("jobs").exists());
+
+    let out = spu(&[
+        "paper",
+        "--collect",
+        dir.join("nowhere").to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nowhere"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

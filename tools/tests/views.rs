@@ -1,0 +1,130 @@
+//! `spu render --heatmap` and `--trace`: the pictures cover every packet, the trace is
+//! well-formed Trace Event Format JSON with properly nested slices, and logging the events
+//! changes neither the cycles nor the image.
+
+use std::process::Command;
+
+fn spu(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_spu"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn heatmap_and_trace_of_a_small_frame() {
+    let dir = std::env::temp_dir().join(format!("spu-views-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let base = [
+        "render", "--scene", "room", "--width", "128", "--height", "128", "--spes", "2",
+    ];
+    let plain = spu(&[&base[..], &["-o", &p("a.png"), "--stats", &p("a.json")]].concat());
+    assert!(plain.status.success());
+    let viewed = spu(&[
+        &base[..],
+        &[
+            "-o",
+            &p("b.png"),
+            "--stats",
+            &p("b.json"),
+            "--heatmap",
+            &p("heat.png"),
+            "--trace",
+            &p("trace.json"),
+        ],
+    ]
+    .concat());
+    assert!(
+        viewed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&viewed.stderr)
+    );
+    // the event log is only watched: same cycles, same image
+    let cycles = |f: &str| {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(p(f)).unwrap()).unwrap();
+        v["frame_cycles"].as_u64().unwrap()
+    };
+    assert_eq!(cycles("a.json"), cycles("b.json"));
+    assert_eq!(
+        std::fs::read(p("a.png")).unwrap(),
+        std::fs::read(p("b.png")).unwrap()
+    );
+
+    for map in ["heat.png", "heat-wait.png"] {
+        let img = image::open(p(map)).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (128 + 110, 160), "{map}");
+        // every pixel of the frame belongs to a packet (none left in the no-packet grey)
+        let grey = image::Rgb([40u8, 40, 40]);
+        assert!((0..128).all(|y| (0..128).all(|x| *img.get_pixel(x, y) != grey)));
+    }
+    let heat = image::open(p("heat.png")).unwrap().to_rgb8();
+    let distinct: std::collections::BTreeSet<[u8; 3]> = (0..128)
+        .flat_map(|y| (0..128).map(move |x| (x, y)))
+        .map(|(x, y)| heat.get_pixel(x, y).0)
+        .collect();
+    assert!(distinct.len() > 4, "cycles vary over the frame");
+
+    let trace: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p("trace.json")).unwrap()).unwrap();
+    let events = trace["traceEvents"].as_array().unwrap();
+    let of = |cat: &str| -> Vec<&serde_json::Value> {
+        events.iter().filter(|e| e["cat"] == cat).collect()
+    };
+    let (tiles, packets) = (of("tile"), of("packet"));
+    assert_eq!(tiles.len(), 4);
+    assert_eq!(packets.len(), 256);
+    assert!(!of("dma-wait").is_empty());
+    for e in events {
+        let ph = e["ph"].as_str().unwrap();
+        assert!(["X", "C", "M"].contains(&ph), "{e}");
+        assert!(e["ts"].as_f64().unwrap() >= 0.0 && e["pid"].is_u64() && e["name"].is_string());
+        if ph == "X" {
+            assert!(e["dur"].as_f64().unwrap() >= 0.0, "{e}");
+        }
+    }
+    // packets nest in their SPU's tiles
+    for pk in &packets {
+        let (ts, end) = (
+            pk["ts"].as_f64().unwrap(),
+            pk["ts"].as_f64().unwrap() + pk["dur"].as_f64().unwrap(),
+        );
+        let tile = pk["name"].as_str().unwrap()[7..].split('.').next().unwrap();
+        let t = tiles
+            .iter()
+            .find(|t| t["name"] == format!("tile {tile}") && t["tid"] == pk["tid"])
+            .unwrap_or_else(|| panic!("no tile for {pk}"));
+        let (a, b) = (
+            t["ts"].as_f64().unwrap(),
+            t["ts"].as_f64().unwrap() + t["dur"].as_f64().unwrap(),
+        );
+        assert!(a <= ts + 1e-9 && end <= b + 1e-9, "{pk} in {t}");
+    }
+    let names: Vec<&str> = events
+        .iter()
+        .filter(|e| e["ph"] == "M" && e["name"] == "thread_name")
+        .map(|e| e["args"]["name"].as_str().unwrap())
+        .collect();
+    assert!(names.contains(&"SPU 0") && names.contains(&"SPU 1 DMA waits"));
+    assert!(events
+        .iter()
+        .any(|e| e["ph"] == "C" && e["name"] == "memory interface"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_unwritable_heatmap_or_trace_is_refused_before_rendering() {
+    let out = spu(&[
+        "render",
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "--trace",
+        "/nonexistent-dir/t.json",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent-dir/t.json"));
+}
