@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use cranelift_codegen::ir::condcodes::IntCC;
-use cranelift_codegen::ir::types::{I32, I32X4, I64, I8, I8X16};
+use cranelift_codegen::ir::types::{F32X4, I32, I32X4, I64, I8, I8X16};
 use cranelift_codegen::ir::{
     AbiParam, Block as IrBlock, ConstantData, Endianness, InstBuilder, MemFlagsData, Signature,
     UserFuncName, Value,
@@ -262,6 +262,18 @@ struct Translator<'a> {
     hook_sig: cranelift_codegen::ir::SigRef,
     hook: StoreHook,
     scratch: &'a mut Core,
+}
+
+/// Whether the host has fused multiply-add (Cranelift's `fma` is one instruction there).
+fn host_fma() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::is_x86_feature_detected!("fma")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
 }
 
 /// Host byte position of each big-endian byte of a register (words are host-order).
@@ -522,6 +534,8 @@ impl Translator<'_> {
                 let v = self.shuffle(a, zero, mask);
                 self.set(inst.rt, v)
             }
+            Fa | Fs | Fm if cfg!(target_arch = "x86_64") => self.single_precision(inst, p),
+            Fma | Fms | Fnms if host_fma() => self.single_precision(inst, p),
             Lqd | Lqx | Lqa | Lqr => {
                 let addr = self.address(inst, p);
                 let (_, at) = self.ls_address(addr);
@@ -543,6 +557,104 @@ impl Translator<'_> {
                 self.call_helper(inst, p);
             }
         }
+    }
+
+    /// The single-precision arithmetic (`fa`, `fs`, `fm`, `fma`, `fms`, `fnms`): the host's
+    /// vector operation (the block runs with the host's floating point truncating, as the
+    /// interpreter's fast loops do) where the interpreter's fast path takes it, with that
+    /// path's criteria lane for lane (`exec::sp4_truncating`: every operand normal or
+    /// zero, the result normal and not the largest magnitude, or a zero that cannot be an
+    /// underflow); otherwise a call to the interpreter's semantics for the instruction,
+    /// which gives the exact result and flags.
+    fn single_precision(&mut self, inst: &Inst, p: u32) {
+        use Op::*;
+        let three = matches!(inst.op, Fma | Fms | Fnms);
+        let (a, b) = (self.get(inst.ra), self.get(inst.rb));
+        let c = if three { Some(self.get(inst.rc)) } else { None };
+        let exp = self.splat(0x7f80_0000);
+        let step = self.splat(0x0080_0000);
+        let below = self.splat(0x00ff_ffff);
+        let abs = self.splat(0x7fff_ffff);
+        let zero = self.splat(0);
+        let normal_or_zero = |t: &mut Self, v: Value| {
+            let e = t.b.ins().band(v, exp);
+            let e = t.b.ins().iadd(e, step);
+            let normal = t.b.ins().icmp(IntCC::SignedGreaterThan, e, below);
+            let m = t.b.ins().band(v, abs);
+            let is_zero = t.b.ins().icmp(IntCC::Equal, m, zero);
+            (t.b.ins().bor(normal, is_zero), is_zero)
+        };
+        let (ok_a, zero_a) = normal_or_zero(self, a);
+        let (ok_b, zero_b) = normal_or_zero(self, b);
+        let mut ok = self.b.ins().band(ok_a, ok_b);
+        if let Some(c) = c {
+            let (ok_c, _) = normal_or_zero(self, c);
+            ok = self.b.ins().band(ok, ok_c);
+        }
+        let le = MemFlagsData::new().with_endianness(Endianness::Little);
+        let f = |t: &mut Self, v: Value| t.b.ins().bitcast(F32X4, le, v);
+        let (fa, fb) = (f(self, a), f(self, b));
+        let r = match inst.op {
+            Fa => self.b.ins().fadd(fa, fb),
+            Fs => self.b.ins().fsub(fa, fb),
+            Fm => self.b.ins().fmul(fa, fb),
+            _ => {
+                let fc = f(self, c.expect("three operands"));
+                match inst.op {
+                    Fma => self.b.ins().fma(fa, fb, fc),
+                    Fms => {
+                        let nc = self.b.ins().fneg(fc);
+                        self.b.ins().fma(fa, fb, nc)
+                    }
+                    _ => {
+                        let na = self.b.ins().fneg(fa);
+                        self.b.ins().fma(na, fb, fc)
+                    }
+                }
+            }
+        };
+        let v = self.b.ins().bitcast(I32X4, le, r);
+        let mag = self.b.ins().band(v, abs);
+        let result_zero = self.b.ins().icmp(IntCC::Equal, mag, zero);
+        let smallest = self.splat(0x007f_ffff);
+        let largest = self.splat(0x7f7f_ffff);
+        let above = self.b.ins().icmp(IntCC::SignedGreaterThan, mag, smallest);
+        let under = self.b.ins().icmp(IntCC::SignedLessThan, mag, largest);
+        let normal = self.b.ins().band(above, under);
+        let zero_ok = if matches!(inst.op, Fa | Fs) {
+            result_zero
+        } else {
+            let factor = self.b.ins().bor(zero_a, zero_b);
+            self.b.ins().band(result_zero, factor)
+        };
+        let good = self.b.ins().bor(normal, zero_ok);
+        let good = self.b.ins().band(good, ok);
+        let all = self.b.ins().vall_true(good);
+        let result = self.b.ins().band_not(v, result_zero);
+        let fast = self.b.create_block();
+        let exact = self.b.create_block();
+        let cont = self.b.create_block();
+        self.b.ins().brif(all, fast, &[], exact, &[]);
+        let saved = self.cache;
+        self.b.switch_to_block(fast);
+        self.set(inst.rt, result);
+        self.b.ins().jump(cont, &[]);
+        self.b.switch_to_block(exact);
+        let helper = helper_for(inst.op);
+        let callee = self.b.ins().iconst(I64, helper as usize as i64);
+        let ip = self
+            .b
+            .ins()
+            .iconst(I64, inst as *const Inst as usize as i64);
+        let pc = self.b.ins().iconst(I32, p as i64);
+        self.b
+            .ins()
+            .call_indirect(self.helper_sig, callee, &[self.core, ip, pc]);
+        self.b.ins().jump(cont, &[]);
+        self.b.switch_to_block(cont);
+        // Both paths wrote the result to memory; every other register is as before.
+        self.cache = saved;
+        self.cache[inst.rt as usize & 127] = None;
     }
 
     /// `shli`, `rotmi`, `rotmai`, `roti` by a constant count, as the interpreter counts.
