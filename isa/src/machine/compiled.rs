@@ -63,8 +63,10 @@ mod host {
     use crate::table::Op;
     use crate::timing::ends_block;
 
-    /// A block is compiled the second time it starts without compiled code.
-    const HOT: u8 = 2;
+    /// A block is compiled when it has started this often without compiled code: blocks
+    /// entered only now and then (the rest of a block cut by a quantum's end, by a store
+    /// into it) stay interpreted rather than compiled again and again.
+    const HOT: u8 = 16;
     /// A slot whose block the compiler declined: interpreted from then on.
     const DECLINED: u32 = u32::MAX;
 
@@ -119,8 +121,9 @@ mod host {
         }
 
         /// The compiled block starting at `pc` (with `n` instructions, when given),
-        /// compiling it if it is hot; `None`: interpret it.
-        fn compiled_block(&mut self, pc: u32, n: Option<usize>) -> Option<usize> {
+        /// compiling it if it is hot and `whole` (not the rest of a cut block); `None`:
+        /// interpret it.
+        fn compiled_block(&mut self, pc: u32, n: Option<usize>, whole: bool) -> Option<usize> {
             let w = (pc as usize >> 2) & (LS_SIZE / 4 - 1);
             let blocks = self.compiled.get_or_insert_with(|| Box::new(Blocks::new()));
             let slot = blocks.slots[w];
@@ -144,12 +147,14 @@ mod host {
                 self.compiled.as_mut().expect("blocks").slots[w] = 0;
             }
             let blocks = self.compiled.as_mut().expect("blocks");
-            if n.is_none() {
-                blocks.heat[w] = blocks.heat[w].saturating_add(1);
-                if blocks.heat[w] < HOT {
-                    return None;
-                }
+            if !whole {
+                return None;
             }
+            blocks.heat[w] = blocks.heat[w].saturating_add(1);
+            if blocks.heat[w] < HOT {
+                return None;
+            }
+            blocks.heat[w] = 0;
             let mut insts = Vec::new();
             match n {
                 Some(n) => {
@@ -210,10 +215,14 @@ mod host {
             while self.cycle < until && !self.core.interrupts_enabled {
                 let pc = self.pc;
                 let budget = until - self.cycle;
-                if let Some(id) = self.compiled_block(pc, None) {
+                // Where the last block was cut short (by the quantum's end or a store into
+                // it), this is the rest of a block, which is not made a block of its own.
+                let whole = !std::mem::take(&mut self.block_cut);
+                if let Some(id) = self.compiled_block(pc, None, whole) {
                     let n = self.compiled.as_ref().expect("blocks").blocks[id].n as u64;
                     if n <= budget {
                         let (r, _) = self.call_block(id);
+                        self.block_cut = r & RESULT_PARTIAL != 0;
                         let done = (r >> 32) & 0xffff;
                         self.pc = r as u32;
                         self.instructions += done;
@@ -226,6 +235,7 @@ mod host {
                 if n == 0 {
                     break;
                 }
+                self.block_cut = n > budget;
                 let stop = self.cycle + n.min(budget);
                 self.run_fast(stop);
                 if self.cycle < stop {
@@ -244,7 +254,7 @@ mod host {
             n: usize,
             memo: usize,
         ) -> bool {
-            let Some(id) = self.compiled_block(pc, Some(n)) else {
+            let Some(id) = self.compiled_block(pc, Some(n), true) else {
                 return false;
             };
             // Blocks hold no `bisled`, the one reader of the pending-event flag.

@@ -108,6 +108,8 @@ pub struct Spu {
     pub(super) compiled: Option<Box<CompiledBlocks>>,
     /// Instructions executed by compiled code.
     pub(super) compiled_instructions: u64,
+    /// The last block ran only in part (timing off, compiled engine).
+    pub(super) block_cut: bool,
     pub(super) pc: u32,
     pub(super) instructions: u64,
     pub(super) cycle: u64,
@@ -217,6 +219,7 @@ impl Spu {
             engine: Engine::default(),
             compiled: None,
             compiled_instructions: 0,
+            block_cut: false,
             decoded: vec![decode(0); LS_SIZE / 4]
                 .into_boxed_slice()
                 .try_into()
