@@ -8,7 +8,9 @@
 # The program is composed of the kernel modules in kernels/modules/, one job each. The
 # order of the code modules is the program's layout: the frame driver falls into ray
 # generation, which falls into traversal, and the hot blocks keep their even/odd pairing
-# and instruction-fetch lines.
+# and instruction-fetch lines. The hot blocks are `.sched` blocks: written in logical order
+# with virtual registers, laid out in even/odd dual-issue pairs by the assembler
+# (docs/sched.md).
 #
 # Main-memory layouts (node: min.xyz, link | max.xyz, count<<2|axis; sibling pairs share a
 # 64-byte line; triangle: Wald's projection record) and the kernel ABI come from

@@ -16,6 +16,7 @@ fn be32(v: u32) -> [u8; 4] {
 pub fn write_elf(
     image: &[u8],
     sections: &[(String, u32, u32, bool)],
+    nobits: &[bool],
     symbols: &[(String, u32)],
     globals: &[String],
     entry: u32,
@@ -105,7 +106,9 @@ pub fn write_elf(
     out.extend(be32(0));
     let file_size = sections
         .iter()
-        .filter(|s| s.0 != ".bss")
+        .enumerate()
+        .filter(|(k, s)| !nobits.get(*k).copied().unwrap_or(s.0 == ".bss"))
+        .map(|(_, s)| s)
         .map(|s| s.1 + s.2)
         .max()
         .unwrap_or(0);
@@ -132,8 +135,8 @@ pub fn write_elf(
         }
     };
     sh(&mut out, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0);
-    for ((name, addr, size, code), n) in sections.iter().zip(&names) {
-        let (ty, flags) = if name == ".bss" {
+    for (k, ((name, addr, size, code), n)) in sections.iter().zip(&names).enumerate() {
+        let (ty, flags) = if nobits.get(k).copied().unwrap_or(name == ".bss") {
             (8, 3)
         } else if *code {
             (1, 6)
@@ -204,7 +207,18 @@ pub struct LoadedElf {
     /// (name, address, bytes, is code)
     pub sections: Vec<(String, u32, Vec<u8>, bool)>,
     pub symbols: Vec<(String, u32)>,
+    /// The same symbols with what objdump weighs when it names an address: whether the
+    /// symbol is global (or weak) and whether it is absolute (not in any section).
+    pub symbol_kinds: Vec<SymbolKind>,
     pub entry: u32,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SymbolKind {
+    pub name: String,
+    pub addr: u32,
+    pub global: bool,
+    pub absolute: bool,
 }
 
 /// Reads an SPU ELF executable; never panics on malformed input.
@@ -307,11 +321,18 @@ pub fn read_elf(bytes: &[u8]) -> Result<LoadedElf, String> {
                     let n = u32::from_be_bytes([sym[0], sym[1], sym[2], sym[3]]);
                     let v = u32::from_be_bytes([sym[4], sym[5], sym[6], sym[7]]);
                     let info = sym[12];
-                    if info & 0xf == 3 || info & 0xf == 4 {
-                        continue; // section and file symbols
+                    let shndx = u16::from_be_bytes([sym[14], sym[15]]);
+                    if info & 0xf == 3 || info & 0xf == 4 || shndx == 0 {
+                        continue; // section, file and undefined symbols
                     }
                     let s = name(strtab, n);
                     if !s.is_empty() {
+                        out.symbol_kinds.push(SymbolKind {
+                            name: s.clone(),
+                            addr: v,
+                            global: info >> 4 != 0,
+                            absolute: shndx == 0xfff1,
+                        });
                         out.symbols.push((s, v));
                     }
                 }
@@ -332,6 +353,7 @@ mod tests {
         let elf = write_elf(
             &image,
             &sections,
+            &[false],
             &[("_start".into(), 0), ("x".into(), 4)],
             &["_start".into()],
             0,
@@ -347,7 +369,14 @@ mod tests {
     fn malformed_input_is_an_error() {
         assert!(read_elf(b"\x7fELF").is_err());
         assert!(read_elf(&[]).is_err());
-        let mut elf = write_elf(&[0; 4], &[(".text".into(), 0, 4, true)], &[], &[], 0);
+        let mut elf = write_elf(
+            &[0; 4],
+            &[(".text".into(), 0, 4, true)],
+            &[false],
+            &[],
+            &[],
+            0,
+        );
         elf.truncate(60);
         assert!(read_elf(&elf).is_err());
     }
@@ -357,6 +386,7 @@ mod tests {
         let mut elf = write_elf(
             &[0; 4],
             &[(".text".into(), 0, 4, true)],
+            &[false],
             &[("_start".into(), 0)],
             &["_start".into()],
             0,

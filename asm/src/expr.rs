@@ -1,4 +1,5 @@
-//! GNU as expressions: a nom grammar that builds a small tree, and its evaluation.
+//! GNU as expressions: an iterative (shunting-yard) parser into postfix form, and a stack
+//! evaluation, so that neither nesting nor length can exhaust the host stack.
 //!
 //! Precedence and results follow gas's `expr.c` (non-MRI): unary `- ~ ! +` bind tightest;
 //! then `* / % << >>`; then `| ! ^ &` (binary `!` is or-not); then `+ -`; then the
@@ -6,43 +7,66 @@
 //! then `||` (both give 1 or 0). `>>` is a logical (unsigned) shift, and division by zero
 //! warns and divides by one. A value remembers whether it depends on an address (a label
 //! or `.`): such "relocatable" operands of branches are made PC-relative, while plain
-//! constants are taken as the offset itself, as gas does.
+//! constants are taken as the offset itself, as gas does. It also remembers what a
+//! relocation would be against (a section, or a global or undefined symbol), for objects.
 
-use nom::branch::alt;
-use nom::bytes::complete::{tag, take_while, take_while1};
-use nom::character::complete::{char as ch, multispace0};
-use nom::combinator::recognize;
-use nom::sequence::{delimited, pair, preceded};
-use nom::{IResult, Parser};
+use std::rc::Rc;
 
-/// An expression tree; `usize` fields are byte offsets into the parsed text (for errors).
+/// One element of an expression in postfix order; `usize` fields are byte offsets into
+/// the parsed text (for errors).
 #[derive(Clone, Debug, PartialEq)]
-pub enum Ast {
+pub enum Node {
     Num(i64),
     Sym(String, usize),
     Dot,
     /// Numeric local label reference: `1b` (false) / `1f` (true).
     Local(u32, bool, usize),
-    Unary(char, Box<Ast>),
-    Bin(&'static str, Box<Ast>, Box<Ast>),
+    Unary(char),
+    Bin(&'static str),
     /// A malformed number.
     BadNum(String, usize),
 }
 
-/// An expression's value: the number and whether it depends on an address.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// A parsed expression, in postfix order (no tree, so no recursion to build or drop it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Ast(pub Vec<Node>);
+
+/// An expression's value: the number, whether it depends on an address, and what a
+/// relocation for it would name.
+#[derive(Clone, Debug, PartialEq, Eq, Default)]
 pub struct Val {
     pub v: i64,
     pub reloc: bool,
+    /// The section (index of its definition) the value is an address in, if any.
+    pub sect: Option<usize>,
+    /// A global, weak or undefined symbol a relocation must name, with its value (the
+    /// addend is `v - sym value`).
+    pub sym: Option<(Rc<str>, i64)>,
+    /// Depends on addresses in a way no relocation can express (a difference across
+    /// sections): fine in an executable, an error in an object.
+    pub cross: bool,
+}
+
+impl Val {
+    pub fn abs(v: i64) -> Val {
+        Val {
+            v,
+            ..Default::default()
+        }
+    }
 }
 
 /// What evaluation needs from the assembler.
 pub trait Env {
     fn symbol(&self, name: &str) -> Option<Val>;
-    fn dot(&self) -> i64;
-    fn local(&self, n: u32, forward: bool) -> Option<i64>;
+    fn dot(&self) -> Val;
+    fn local(&self, n: u32, forward: bool) -> Option<Val>;
     /// Pass 1: unknown symbols read as 0 instead of failing.
     fn lenient(&self) -> bool;
+    /// An unknown symbol is an external reference (relocatable objects) rather than an error.
+    fn external(&self, _name: &str) -> Option<Val> {
+        None
+    }
 }
 
 pub fn is_ident_start(c: char) -> bool {
@@ -52,138 +76,167 @@ pub fn is_ident(c: char) -> bool {
     c.is_ascii_alphanumeric() || c == '_' || c == '.' || c == '$'
 }
 
-type R<'a, T> = IResult<&'a str, T>;
+const OPS: &[(&str, u8)] = &[
+    ("||", 2),
+    ("&&", 3),
+    ("==", 4),
+    ("!=", 4),
+    ("<>", 4),
+    ("<=", 4),
+    (">=", 4),
+    ("<<", 8),
+    (">>", 8),
+    ("<", 4),
+    (">", 4),
+    ("+", 5),
+    ("-", 5),
+    ("|", 7),
+    ("!", 7),
+    ("^", 7),
+    ("&", 7),
+    ("*", 8),
+    ("/", 8),
+    ("%", 8),
+];
 
-/// Offset of `rest` within `all` (both slices of one string).
-fn off(all: &str, rest: &str) -> usize {
-    all.len() - rest.len()
+/// Rank of a prefix operator: above every binary operator.
+const UNARY_RANK: u8 = 9;
+
+enum Pending {
+    /// An opening `(` or `[` (gas takes square brackets as parentheses on targets
+    /// without an index operator, SPU among them).
+    Open(char),
+    Unary(char),
+    Bin(&'static str, u8),
 }
 
-struct P<'s> {
-    all: &'s str,
+fn skip_ws(s: &str) -> &str {
+    s.trim_start_matches([' ', '\t', '\n', '\r', '\x0b', '\x0c'])
 }
 
-impl<'s> P<'s> {
-    fn ws(&self, i: &'s str) -> &'s str {
-        multispace0::<&str, nom::error::Error<&str>>(i)
-            .map(|r| r.0)
-            .unwrap_or(i)
+/// An operand at the start of `i` (no operators): its node and the rest.
+fn operand(i: &str, at: usize) -> Option<(Node, &str)> {
+    // Character constant: 'c (an optional closing quote is tolerated), with escapes.
+    if let Some(rest) = i.strip_prefix('\'') {
+        let mut chars = rest.chars();
+        let (v, used) = match chars.next() {
+            Some('\\') => match chars.next() {
+                Some('n') => (10, 2),
+                Some('t') => (9, 2),
+                Some('r') => (13, 2),
+                Some('0') => (0, 2),
+                Some(c) => (c as i64, 1 + c.len_utf8()),
+                None => (b'\\' as i64, 1),
+            },
+            Some(c) => (c as i64, c.len_utf8()),
+            None => return Some((Node::BadNum("'".into(), at), rest)),
+        };
+        let rest = &rest[used..];
+        let rest = rest.strip_prefix('\'').unwrap_or(rest);
+        return Some((Node::Num(v), rest));
     }
+    if i.starts_with(|c: char| c.is_ascii_digit()) {
+        let len = i
+            .find(|c: char| !c.is_ascii_alphanumeric())
+            .unwrap_or(i.len());
+        return Some((number(&i[..len], at), &i[len..]));
+    }
+    if i.starts_with(is_ident_start) {
+        let len = i.find(|c: char| !is_ident(c)).unwrap_or(i.len());
+        let name = &i[..len];
+        let node = if name == "." {
+            Node::Dot
+        } else {
+            Node::Sym(name.to_string(), at)
+        };
+        return Some((node, &i[len..]));
+    }
+    None
+}
 
-    fn primary(&self, i: &'s str) -> R<'s, Ast> {
-        let i = self.ws(i);
-        let at = off(self.all, i);
-        // Unary operators bind to the operand that follows.
-        if let Ok((rest, op)) = alt((
-            ch::<&str, nom::error::Error<&str>>('-'),
-            ch('~'),
-            ch('!'),
-            ch('+'),
-        ))
-        .parse(i)
-        {
-            let (rest, e) = self.primary(rest)?;
-            return Ok((rest, Ast::Unary(op, Box::new(e))));
+/// Moves pending operators of rank at least `min` (stopping at an open parenthesis) to
+/// the output.
+fn reduce(ops: &mut Vec<Pending>, out: &mut Vec<Node>, min: u8) {
+    while let Some(top) = ops.last() {
+        match *top {
+            Pending::Unary(c) if UNARY_RANK >= min => out.push(Node::Unary(c)),
+            Pending::Bin(o, r) if r >= min => out.push(Node::Bin(o)),
+            _ => break,
         }
-        if let Ok((rest, e)) =
-            delimited(ch('('), |x| self.expr(x, 0), preceded(multispace0, ch(')'))).parse(i)
-        {
-            return Ok((rest, e));
-        }
-        // Character constant: 'c (an optional closing quote is tolerated), with escapes.
-        if let Some(rest) = i.strip_prefix('\'') {
-            let mut chars = rest.chars();
-            let (v, used) = match chars.next() {
-                Some('\\') => match chars.next() {
-                    Some('n') => (10, 2),
-                    Some('t') => (9, 2),
-                    Some('r') => (13, 2),
-                    Some('0') => (0, 2),
-                    Some(c) => (c as i64, 1 + c.len_utf8()),
-                    None => (b'\\' as i64, 1),
-                },
-                Some(c) => (c as i64, c.len_utf8()),
-                None => return Ok((rest, Ast::BadNum("'".into(), at))),
-            };
-            let rest = &rest[used..];
-            let rest = rest.strip_prefix('\'').unwrap_or(rest);
-            return Ok((rest, Ast::Num(v)));
-        }
-        if i.starts_with(|c: char| c.is_ascii_digit()) {
-            let (rest, text) = take_while1(|c: char| c.is_ascii_alphanumeric()).parse(i)?;
-            return Ok((rest, number(text, at)));
-        }
-        if let Ok((rest, name)) = recognize(pair(
-            take_while1::<_, &str, nom::error::Error<&str>>(is_ident_start),
-            take_while(is_ident),
-        ))
-        .parse(i)
-        {
-            if name == "." {
-                return Ok((rest, Ast::Dot));
+        ops.pop();
+    }
+}
+
+/// Parses one expression at the start of `text`; returns it and the unparsed rest
+/// (which starts where the expression's last operand or parenthesis ended).
+pub fn parse(text: &str) -> Option<(Ast, &str)> {
+    let mut out = Vec::new();
+    let mut ops: Vec<Pending> = Vec::new();
+    let mut open = 0usize;
+    let mut i = text;
+    loop {
+        // An operand, after any prefix operators and opening parentheses.
+        loop {
+            i = skip_ws(i);
+            let at = text.len() - i.len();
+            match i.chars().next() {
+                Some(c @ ('-' | '~' | '!' | '+')) => {
+                    ops.push(Pending::Unary(c));
+                    i = &i[1..];
+                }
+                Some(c @ ('(' | '[')) => {
+                    ops.push(Pending::Open(if c == '(' { ')' } else { ']' }));
+                    open += 1;
+                    i = &i[1..];
+                }
+                _ => {
+                    let (node, rest) = operand(i, at)?;
+                    out.push(node);
+                    i = rest;
+                    break;
+                }
             }
-            return Ok((rest, Ast::Sym(name.to_string(), at)));
         }
-        Err(nom::Err::Error(nom::error::Error::new(
-            i,
-            nom::error::ErrorKind::Alt,
-        )))
-    }
-
-    fn binop(&self, i: &'s str) -> Option<(&'s str, &'static str, u8)> {
-        let i = self.ws(i);
-        const OPS: &[(&str, u8)] = &[
-            ("||", 2),
-            ("&&", 3),
-            ("==", 4),
-            ("!=", 4),
-            ("<>", 4),
-            ("<=", 4),
-            (">=", 4),
-            ("<<", 8),
-            (">>", 8),
-            ("<", 4),
-            (">", 4),
-            ("+", 5),
-            ("-", 5),
-            ("|", 7),
-            ("!", 7),
-            ("^", 7),
-            ("&", 7),
-            ("*", 8),
-            ("/", 8),
-            ("%", 8),
-        ];
-        OPS.iter().find_map(|(o, p)| {
-            tag::<&str, &str, nom::error::Error<&str>>(*o)
-                .parse(i)
-                .ok()
-                .map(|(rest, _)| (rest, *o, *p))
-        })
-    }
-
-    /// Precedence climbing: operators of rank above `min` (left associative).
-    fn expr(&self, i: &'s str, min: u8) -> R<'s, Ast> {
-        let (mut rest, mut lhs) = self.primary(i)?;
-        while let Some((after, op, rank)) = self.binop(rest) {
-            if rank <= min {
-                break;
+        // Closing parentheses, then a binary operator or the end.
+        loop {
+            let j = skip_ws(i);
+            if open > 0 && j.starts_with([')', ']']) {
+                reduce(&mut ops, &mut out, 0);
+                match ops.pop() {
+                    Some(Pending::Open(c)) if j.starts_with(c) => {}
+                    _ => return None, // `(...]` or `[...)`
+                }
+                open -= 1;
+                i = &j[1..];
+                continue;
             }
-            let (r, rhs) = self.expr(after, rank)?;
-            lhs = Ast::Bin(op, Box::new(lhs), Box::new(rhs));
-            rest = r;
+            break;
         }
-        Ok((rest, lhs))
+        let j = skip_ws(i);
+        match OPS.iter().find(|(o, _)| j.starts_with(o)) {
+            Some(&(op, rank)) => {
+                reduce(&mut ops, &mut out, rank);
+                ops.push(Pending::Bin(op, rank));
+                i = &j[op.len()..];
+            }
+            None => {
+                if open > 0 {
+                    return None; // an unclosed parenthesis
+                }
+                reduce(&mut ops, &mut out, 0);
+                return Some((Ast(out), i));
+            }
+        }
     }
 }
 
-fn number(text: &str, at: usize) -> Ast {
+fn number(text: &str, at: usize) -> Node {
     let lower = text.to_ascii_lowercase();
     // Numeric local label references: 1b, 12f (but 0b1 is binary).
     if let Some(stem) = lower.strip_suffix('b').or_else(|| lower.strip_suffix('f')) {
         if !stem.is_empty() && stem.bytes().all(|b| b.is_ascii_digit()) {
             if let Ok(n) = stem.parse::<u32>() {
-                return Ast::Local(n, lower.ends_with('f'), at);
+                return Node::Local(n, lower.ends_with('f'), at);
             }
         }
     }
@@ -197,16 +250,9 @@ fn number(text: &str, at: usize) -> Ast {
         lower.parse::<u64>().ok()
     };
     match parsed {
-        Some(v) => Ast::Num(v as i64),
-        None => Ast::BadNum(text.to_string(), at),
+        Some(v) => Node::Num(v as i64),
+        None => Node::BadNum(text.to_string(), at),
     }
-}
-
-/// Parses one expression at the start of `text`; returns it and the unparsed rest.
-pub fn parse(text: &str) -> Option<(Ast, &str)> {
-    let p = P { all: text };
-    let (rest, ast) = p.expr(text, 0).ok()?;
-    Some((ast, rest))
 }
 
 /// Evaluation failure: byte offset in the expression text and message.
@@ -220,28 +266,32 @@ pub struct Eval<'e> {
 }
 
 impl Eval<'_> {
-    pub fn eval(&mut self, e: &Ast) -> Result<Val, EvalErr> {
-        let c = |v: i64| Val { v, reloc: false };
-        Ok(match e {
-            Ast::Num(v) => c(*v),
-            Ast::BadNum(t, at) => return Err((*at, format!("bad number `{t}`"))),
-            Ast::Dot => Val {
-                v: self.env.dot(),
-                reloc: true,
-            },
-            Ast::Sym(name, at) => match self.env.symbol(name) {
+    fn leaf(&mut self, node: &Node) -> Result<Val, EvalErr> {
+        let unknown = Val {
+            v: 0,
+            reloc: true,
+            ..Default::default()
+        };
+        Ok(match node {
+            Node::Num(v) => Val::abs(*v),
+            Node::BadNum(t, at) => return Err((*at, format!("bad number `{t}`"))),
+            Node::Dot => self.env.dot(),
+            Node::Sym(name, at) => match self.env.symbol(name) {
                 Some(v) => v,
                 None if self.env.lenient() => {
                     self.undefined = true;
-                    Val { v: 0, reloc: true }
+                    unknown
                 }
-                None => return Err((*at, format!("undefined symbol `{name}`"))),
+                None => match self.env.external(name) {
+                    Some(v) => v,
+                    None => return Err((*at, format!("undefined symbol `{name}`"))),
+                },
             },
-            Ast::Local(n, fwd, at) => match self.env.local(*n, *fwd) {
-                Some(v) => Val { v, reloc: true },
+            Node::Local(n, fwd, at) => match self.env.local(*n, *fwd) {
+                Some(v) => v,
                 None if self.env.lenient() => {
                     self.undefined = true;
-                    Val { v: 0, reloc: true }
+                    unknown
                 }
                 None => {
                     return Err((
@@ -253,83 +303,118 @@ impl Eval<'_> {
                     ))
                 }
             },
-            Ast::Unary(op, a) => {
-                let a = self.eval(a)?;
-                let v = match op {
-                    '-' => a.v.wrapping_neg(),
-                    '~' => !a.v,
-                    '!' => (a.v == 0) as i64,
-                    _ => a.v,
-                };
-                Val {
-                    v,
-                    reloc: a.reloc && *op == '+',
+            Node::Unary(_) | Node::Bin(_) => unreachable!("operators are not leaves"),
+        })
+    }
+
+    pub fn eval(&mut self, e: &Ast) -> Result<Val, EvalErr> {
+        let mut stack: Vec<Val> = Vec::new();
+        for node in &e.0 {
+            match node {
+                Node::Unary(op) => {
+                    let a = stack.pop().unwrap_or_default();
+                    let v = match op {
+                        '-' => a.v.wrapping_neg(),
+                        '~' => !a.v,
+                        '!' => (a.v == 0) as i64,
+                        _ => a.v,
+                    };
+                    stack.push(if *op == '+' { a } else { Val::abs(v) });
+                }
+                Node::Bin(op) => {
+                    let b = stack.pop().unwrap_or_default();
+                    let a = stack.pop().unwrap_or_default();
+                    let v = self.binary(op, &a, &b);
+                    stack.push(v);
+                }
+                leaf => {
+                    let v = self.leaf(leaf)?;
+                    stack.push(v);
                 }
             }
-            Ast::Bin(op, a, b) => {
-                let a = self.eval(a)?;
-                let b = self.eval(b)?;
-                let (x, y) = (a.v, b.v);
-                let t = |b: bool| if b { -1 } else { 0 };
-                let v = match *op {
-                    "||" => ((x != 0) || (y != 0)) as i64,
-                    "&&" => ((x != 0) && (y != 0)) as i64,
-                    "==" => t(x == y),
-                    "!=" | "<>" => t(x != y),
-                    "<" => t(x < y),
-                    "<=" => t(x <= y),
-                    ">" => t(x > y),
-                    ">=" => t(x >= y),
-                    "<<" => {
-                        if !(0..64).contains(&y) {
-                            self.warnings.push(format!(
-                                "shift count out of range ({y} is not between 0 and 63)"
-                            ));
-                            0
-                        } else {
-                            x.wrapping_shl(y as u32)
-                        }
-                    }
-                    ">>" => {
-                        if !(0..64).contains(&y) {
-                            self.warnings.push(format!(
-                                "shift count out of range ({y} is not between 0 and 63)"
-                            ));
-                            0
-                        } else {
-                            ((x as u64) >> y) as i64
-                        }
-                    }
-                    "|" => x | y,
-                    "!" => x | !y,
-                    "^" => x ^ y,
-                    "&" => x & y,
-                    "+" => x.wrapping_add(y),
-                    "-" => x.wrapping_sub(y),
-                    "*" => x.wrapping_mul(y),
-                    "/" | "%" => {
-                        let y = if y == 0 {
-                            self.warnings.push("division by zero".into());
-                            1
-                        } else {
-                            y
-                        };
-                        if *op == "/" {
-                            x.wrapping_div(y)
-                        } else {
-                            x.wrapping_rem(y)
-                        }
-                    }
-                    _ => 0,
-                };
-                let reloc = match *op {
-                    "-" => a.reloc != b.reloc && a.reloc,
-                    "+" => a.reloc || b.reloc,
-                    _ => a.reloc || b.reloc,
-                };
-                Val { v, reloc }
+        }
+        Ok(stack.pop().unwrap_or_default())
+    }
+
+    fn binary(&mut self, op: &str, a: &Val, b: &Val) -> Val {
+        let (x, y) = (a.v, b.v);
+        let t = |b: bool| if b { -1 } else { 0 };
+        let v = match op {
+            "||" => ((x != 0) || (y != 0)) as i64,
+            "&&" => ((x != 0) && (y != 0)) as i64,
+            "==" => t(x == y),
+            "!=" | "<>" => t(x != y),
+            "<" => t(x < y),
+            "<=" => t(x <= y),
+            ">" => t(x > y),
+            ">=" => t(x >= y),
+            "<<" | ">>" if !(0..64).contains(&y) => {
+                self.warnings.push(format!(
+                    "shift count out of range ({y} is not between 0 and 63)"
+                ));
+                0
             }
-        })
+            "<<" => x.wrapping_shl(y as u32),
+            ">>" => ((x as u64) >> y) as i64,
+            "|" => x | y,
+            "!" => x | !y,
+            "^" => x ^ y,
+            "&" => x & y,
+            "+" => x.wrapping_add(y),
+            "-" => x.wrapping_sub(y),
+            "*" => x.wrapping_mul(y),
+            "/" | "%" => {
+                let y = if y == 0 {
+                    self.warnings.push("division by zero".into());
+                    1
+                } else {
+                    y
+                };
+                if op == "/" {
+                    x.wrapping_div(y)
+                } else {
+                    x.wrapping_rem(y)
+                }
+            }
+            _ => 0,
+        };
+        let cross = a.cross || b.cross;
+        match op {
+            // An address plus or minus a constant stays an address in its section.
+            "+" if a.reloc != b.reloc => {
+                let r = if a.reloc { a } else { b };
+                Val {
+                    v,
+                    cross,
+                    ..r.clone()
+                }
+            }
+            "-" if a.reloc && !b.reloc => Val {
+                v,
+                cross,
+                ..a.clone()
+            },
+            // The difference of two addresses is a constant; a relocation can express it
+            // only when both are in one section (or are one symbol).
+            "-" if a.reloc && b.reloc => {
+                let same = (a.sect.is_some() && a.sect == b.sect)
+                    || (a.sym.is_some()
+                        && a.sym.as_ref().map(|s| &s.0) == b.sym.as_ref().map(|s| &s.0));
+                Val {
+                    v,
+                    cross: cross || !same,
+                    ..Default::default()
+                }
+            }
+            // Anything else that involves an address can only be resolved once addresses
+            // are known (an executable), not by a relocation.
+            _ => Val {
+                v,
+                reloc: a.reloc || b.reloc,
+                cross,
+                ..Default::default()
+            },
+        }
     }
 }
 
@@ -343,12 +428,19 @@ mod tests {
             (name == "L").then_some(Val {
                 v: 0x40,
                 reloc: true,
+                sect: Some(0),
+                ..Default::default()
             })
         }
-        fn dot(&self) -> i64 {
-            8
+        fn dot(&self) -> Val {
+            Val {
+                v: 8,
+                reloc: true,
+                sect: Some(0),
+                ..Default::default()
+            }
         }
-        fn local(&self, _: u32, _: bool) -> Option<i64> {
+        fn local(&self, _: u32, _: bool) -> Option<Val> {
             None
         }
         fn lenient(&self) -> bool {
@@ -389,5 +481,32 @@ mod tests {
         assert_eq!(ev("L - ."), (0x38, false, String::new()));
         assert_eq!(ev("16($3)"), (16, false, "($3)".to_string()));
         assert_eq!(ev("L@h"), (0x40, true, "@h".to_string()));
+    }
+
+    #[test]
+    fn long_and_deep_expressions_do_not_use_the_host_stack() {
+        let n = 100_000;
+        let flat = vec!["1"; n].join("+");
+        assert_eq!(ev(&flat).0, n as i64);
+        let nested = format!("{}1{}", "(".repeat(n), ")".repeat(n));
+        assert_eq!(ev(&nested).0, 1);
+        let unary = format!("{}5", "-".repeat(n + 1));
+        assert_eq!(ev(&unary).0, -5);
+        assert!(parse(&"(".repeat(n)).is_none());
+    }
+
+    #[test]
+    fn square_brackets_group_like_parentheses() {
+        assert_eq!(ev("[1+2]*3").0, 9);
+        assert_eq!(ev("([1+2]*[3])").0, 9);
+        assert!(parse("(1+2]").is_none());
+    }
+
+    #[test]
+    fn parenthesised_operands_end_where_gas_stops() {
+        assert_eq!(ev("(1+2)*3").0, 9);
+        assert_eq!(ev("4 ( $3)"), (4, false, " ( $3)".to_string()));
+        assert!(parse("(1+").is_none());
+        assert!(parse("1 +").is_none());
     }
 }

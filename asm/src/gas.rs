@@ -108,11 +108,48 @@ pub struct Output {
     pub sections: Vec<(String, u32, u32, bool)>,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-enum Sect {
-    Text,
-    Data,
-    Bss,
+/// A chunk: one subsection of one section (an index into `Assembler::chunks`). A section
+/// is the concatenation of its chunks in subsection order.
+type Sect = usize;
+
+/// ELF section types and flags the assembler sets.
+pub const SHT_PROGBITS: u32 = 1;
+pub const SHT_NOBITS: u32 = 8;
+pub const SHF_WRITE: u64 = 1;
+pub const SHF_ALLOC: u64 = 2;
+pub const SHF_EXECINSTR: u64 = 4;
+
+/// A section as `.section` declared it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SectionDef {
+    pub name: String,
+    pub ty: u32,
+    pub flags: u64,
+    pub entsize: u64,
+}
+
+impl SectionDef {
+    /// GNU as's defaults for a section named without flags (`obj-elf.c` special sections).
+    fn named(name: &str) -> SectionDef {
+        let has = |p: &str| name == p || name.starts_with(&format!("{p}."));
+        let (ty, flags) = if has(".text") || has(".init") || has(".fini") {
+            (SHT_PROGBITS, SHF_ALLOC | SHF_EXECINSTR)
+        } else if has(".bss") || has(".sbss") || has(".tbss") {
+            (SHT_NOBITS, SHF_ALLOC | SHF_WRITE)
+        } else if has(".data") || has(".sdata") || has(".tdata") || has(".ctors") || has(".dtors") {
+            (SHT_PROGBITS, SHF_ALLOC | SHF_WRITE)
+        } else if has(".rodata") {
+            (SHT_PROGBITS, SHF_ALLOC)
+        } else {
+            (SHT_PROGBITS, 0)
+        };
+        SectionDef {
+            name: name.to_string(),
+            ty,
+            flags,
+            entsize: 0,
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -128,26 +165,80 @@ struct Macro {
     body: Vec<Line>,
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 enum SymVal {
-    /// A value from `.set`/`=`, and whether it is an address.
-    Abs(i64, bool),
+    /// A value from `.set`/`=` (which may be an address).
+    Abs(Val),
     Label(Sect, u32),
+    /// `.comm name, size, align` in an object: allocated by the linker.
+    Common(u32, u32),
+}
+
+/// A relocation the assembler leaves for the linker (objects only).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Reloc {
+    /// Offset in its section.
+    pub offset: u32,
+    /// An `R_SPU_*` number.
+    pub kind: u32,
+    pub target: RelocTarget,
+    pub addend: i64,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RelocTarget {
+    /// A section of this object (by index into the section list).
+    Section(usize),
+    Symbol(String),
+}
+
+/// Symbol attributes set by directives.
+#[derive(Clone, Debug, Default)]
+struct SymAttrs {
+    global: bool,
+    weak: bool,
+    hidden: bool,
+    /// STT_* from `.type` (1 object, 2 function).
+    kind: u8,
+    size: Option<i64>,
 }
 
 struct Assembler<'o> {
     opts: &'o Options,
     pass: u8,
     sect: Sect,
+    /// `.previous` and the `.pushsection` stack.
+    prev_sect: Sect,
+    sect_stack: Vec<(Sect, Sect)>,
+    defs: Vec<SectionDef>,
+    /// Each chunk's section definition and subsection number.
+    chunks: Vec<(usize, i64)>,
+    /// Writing a relocatable object: addresses are section offsets and references that
+    /// depend on them become relocations.
+    object: bool,
+    relocs: Vec<(usize, Reloc, Location, String)>,
+    attrs: HashMap<String, SymAttrs>,
+    /// Total statements expanded from macros and repetitions (bounded).
+    expanded: usize,
+    /// Diagnostics already reported (constant-time deduplication) and the count dropped.
+    seen_diags: std::collections::HashSet<(String, usize, usize, String)>,
+    dropped_diags: usize,
+    /// The value of the operand whose relocation `instruction` is about to record.
+    pending: Option<Val>,
+    /// Labels defined so far in this walk.
+    defined: std::collections::HashSet<String>,
+    /// Bytes other than zero were stored in a NOBITS section (reported once per statement).
+    nonzero_in_nobits: bool,
     offsets: HashMap<Sect, u32>,
     align: HashMap<Sect, u32>,
     bases: HashMap<Sect, u32>,
     symbols: HashMap<String, SymVal>,
     /// The symbols as pass 1 left them (for forward references in pass 2).
     pass1_symbols: HashMap<String, SymVal>,
-    globals: Vec<String>,
     /// Numeric local label definitions: label -> list of (statement number, section, offset).
     numeric: HashMap<u32, Vec<(usize, Sect, u32)>>,
+    /// The same, being collected by the current layout walk.
+    numeric_next: HashMap<u32, Vec<(usize, Sect, u32)>>,
     stmt: usize,
     bytes: HashMap<Sect, Vec<u8>>,
     diags: Vec<Diagnostic>,
@@ -221,11 +312,11 @@ fn split_top(s: &str, sep: char) -> Vec<String> {
                 in_str = true;
                 cur.push(c)
             }
-            '(' => {
+            '(' | '[' => {
                 depth += 1;
                 cur.push(c)
             }
-            ')' => {
+            ')' | ']' => {
                 depth -= 1;
                 cur.push(c)
             }
@@ -237,7 +328,8 @@ fn split_top(s: &str, sep: char) -> Vec<String> {
     parts
 }
 
-const CHANNELS: &[(&str, u32)] = &[
+/// SPU channel names (`$SPU_RdInMbox`) and their numbers, as gas's `ch_reg_name`.
+pub const CHANNELS: &[(&str, u32)] = &[
     ("SPU_RdEventStat", 0),
     ("SPU_WrEventMask", 1),
     ("SPU_WrEventAck", 2),
@@ -269,6 +361,13 @@ const CHANNELS: &[(&str, u32)] = &[
 ];
 
 type Res<T> = Result<T, (usize, String)>;
+
+/// Diagnostics reported in full; more are counted ("and N more").
+const MAX_DIAGNOSTICS: usize = 100;
+
+/// Statements that macros, `.rept` and `.irp` may expand to in all: a bound on work, so
+/// nested repetitions cannot run for ever.
+const MAX_EXPANDED: usize = 1_000_000;
 
 /// Bytes of SPU local store: the most a program can occupy.
 const LOCAL_STORE: usize = 256 * 1024;
@@ -334,6 +433,8 @@ enum CalcErr {
     /// The operands do not have this form's shape (0-based operand index).
     Syntax(usize),
     Hard(usize, String),
+    /// A register number outside its field: an error unless another form fits.
+    Range(usize, String),
 }
 
 /// gas `insn_fmt_string`: `lqd\treg,imm(reg)` with the failing operand in capitals.
@@ -360,40 +461,130 @@ fn insn_fmt_string(form: &FormInfo, failing: usize) -> String {
 
 impl Env for Assembler<'_> {
     fn symbol(&self, name: &str) -> Option<Val> {
-        if !self.symbols.contains_key(name) && self.pass == 2 {
+        if !self.symbols.contains_key(name) && (self.pass == 2 || !self.pass1_symbols.is_empty()) {
             // A `.set`/`.equ` symbol used before its definition: its final value.
-            let reloc = matches!(self.pass1_symbols.get(name), Some(SymVal::Abs(_, true)));
-            return self.pass1_value(name).map(|v| Val { v, reloc });
+            return match self.pass1_symbols.get(name)? {
+                SymVal::Abs(v) => Some(v.clone()),
+                _ => None,
+            };
         }
-        let reloc = match self.symbols.get(name)? {
-            SymVal::Abs(_, r) => *r,
-            SymVal::Label(..) => true,
-        };
-        Some(Val {
-            v: Assembler::symbol(self, name)?,
-            reloc,
-        })
+        Some(self.value_of(name, self.symbols.get(name)?))
     }
-    fn dot(&self) -> i64 {
-        self.here() as i64
+    fn dot(&self) -> Val {
+        Val {
+            v: self.here() as i64,
+            reloc: true,
+            sect: Some(self.chunks[self.sect].0),
+            ..Default::default()
+        }
     }
-    fn local(&self, n: u32, forward: bool) -> Option<i64> {
+    fn local(&self, n: u32, forward: bool) -> Option<Val> {
         self.numeric_ref(n, forward)
     }
     fn lenient(&self) -> bool {
         self.pass == 1
     }
+    fn external(&self, name: &str) -> Option<Val> {
+        // In an object, a symbol defined nowhere is an external reference for the linker.
+        (self.object && !name.starts_with(".L")).then(|| Val {
+            v: 0,
+            reloc: true,
+            sym: Some((name.into(), 0)),
+            ..Default::default()
+        })
+    }
 }
 
 impl<'o> Assembler<'o> {
+    /// A defined symbol's address or value (executables).
+    fn symbol_address(&self, name: &str) -> Option<i64> {
+        self.symbols.get(name).map(|s| self.value_of(name, s).v)
+    }
+
+    fn value_of(&self, name: &str, sv: &SymVal) -> Val {
+        match sv {
+            // A local name for an address in a section (`alias = later`) is that address:
+            // gas resolves a branch to it like one to a local label.
+            SymVal::Abs(v)
+                if v.sect.is_some()
+                    && !self.attrs.get(name).is_some_and(|a| a.global || a.weak) =>
+            {
+                Val {
+                    sym: None,
+                    ..v.clone()
+                }
+            }
+            SymVal::Abs(v) => v.clone(),
+            SymVal::Label(s, off) => {
+                let v = (self.bases.get(s).copied().unwrap_or(0) + off) as i64;
+                let a = self.attrs.get(name);
+                let visible = a.is_some_and(|a| a.global || a.weak);
+                Val {
+                    v,
+                    reloc: true,
+                    sect: Some(self.chunks[*s].0),
+                    sym: (self.object && visible).then(|| (name.into(), v)),
+                    cross: false,
+                }
+            }
+            SymVal::Common(..) => Val {
+                v: 0,
+                reloc: true,
+                sym: Some((name.into(), 0)),
+                ..Default::default()
+            },
+        }
+    }
+
+    /// The chunk for a section and subsection, created on first use.
+    fn chunk(&mut self, def: SectionDef, sub: i64) -> Sect {
+        let d = match self.defs.iter().position(|x| x.name == def.name) {
+            Some(d) => d,
+            None => {
+                self.defs.push(def);
+                self.defs.len() - 1
+            }
+        };
+        match self.chunks.iter().position(|c| *c == (d, sub)) {
+            Some(c) => c,
+            None => {
+                self.chunks.push((d, sub));
+                self.chunks.len() - 1
+            }
+        }
+    }
+
+    fn switch_to(&mut self, chunk: Sect) {
+        if chunk != self.sect {
+            self.prev_sect = self.sect;
+            self.sect = chunk;
+        }
+    }
+
+    fn is_nobits(&self, s: Sect) -> bool {
+        self.defs[self.chunks[s].0].ty == SHT_NOBITS
+    }
+
+    fn is_code(&self, s: Sect) -> bool {
+        self.defs[self.chunks[s].0].flags & SHF_EXECINSTR != 0
+    }
+
     /// gas pads the end of each section to the largest alignment requested in it
     /// (`SUB_SEGMENT_ALIGN` with `HANDLE_ALIGN`): code with nop/lnop, data with zeros.
     fn finish_sections(&mut self) {
         let current = self.sect;
-        for s in [Sect::Text, Sect::Data, Sect::Bss] {
-            let boundary = self.align.get(&s).copied().unwrap_or(1);
-            if boundary > 1 {
-                self.sect = s;
+        for d in 0..self.defs.len() {
+            let mine: Vec<Sect> = (0..self.chunks.len())
+                .filter(|&c| self.chunks[c].0 == d)
+                .collect();
+            let boundary = mine
+                .iter()
+                .map(|c| self.align.get(c).copied().unwrap_or(1))
+                .max()
+                .unwrap_or(1);
+            let last = mine.iter().max_by_key(|&&c| self.chunks[c].1);
+            if let (Some(&last), true) = (last, boundary > 1) {
+                self.sect = last;
                 self.align_to(boundary, None);
             }
         }
@@ -405,30 +596,26 @@ impl<'o> Assembler<'o> {
             + self.offsets.get(&self.sect).copied().unwrap_or(0)
     }
 
-    fn symbol(&self, name: &str) -> Option<i64> {
-        match self.symbols.get(name)? {
-            SymVal::Abs(v, _) => Some(*v),
-            SymVal::Label(s, off) => Some((self.bases.get(s).copied().unwrap_or(0) + off) as i64),
-        }
-    }
-
-    /// The value a symbol had at the end of pass 1: what a forward reference to a symbol
-    /// defined later by `.set`/`.equ` resolves to in pass 2.
-    fn pass1_value(&self, name: &str) -> Option<i64> {
-        match self.pass1_symbols.get(name)? {
-            SymVal::Abs(v, _) => Some(*v),
-            SymVal::Label(..) => None,
-        }
-    }
-
-    fn numeric_ref(&self, n: u32, forward: bool) -> Option<i64> {
-        let defs = self.numeric.get(&n)?;
+    fn numeric_ref(&self, n: u32, forward: bool) -> Option<Val> {
+        // Backward references in a layout walk see this walk's definitions so far;
+        // forward ones (and every reference in the final walk) the previous walk's.
+        let table = if self.pass == 1 && !forward {
+            &self.numeric_next
+        } else {
+            &self.numeric
+        };
+        let defs = table.get(&n)?;
         let pick = if forward {
             defs.iter().find(|d| d.0 > self.stmt)
         } else {
             defs.iter().rev().find(|d| d.0 < self.stmt)
         }?;
-        Some((self.bases.get(&pick.1).copied().unwrap_or(0) + pick.2) as i64)
+        Some(Val {
+            v: (self.bases.get(&pick.1).copied().unwrap_or(0) + pick.2) as i64,
+            reloc: true,
+            sect: Some(self.chunks[pick.1].0),
+            ..Default::default()
+        })
     }
 
     /// Evaluates a whole expression: its value (and whether it is an address) and any
@@ -475,22 +662,37 @@ impl<'o> Assembler<'o> {
                     column: column.max(1),
                 },
                 message: message.into(),
-                source_line: line.text.clone(),
+                source_line: display_text(&line.text),
             };
-            if !self.diags.contains(&d) {
-                self.diags.push(d);
+            let key = (
+                d.location.file.clone(),
+                d.location.line,
+                d.location.column,
+                d.message.clone(),
+            );
+            if self.seen_diags.insert(key) {
+                if self.diags.len() < MAX_DIAGNOSTICS {
+                    self.diags.push(d);
+                } else {
+                    self.dropped_diags += 1;
+                }
             }
         }
     }
 
     fn emit(&mut self, data: &[u8]) {
+        let nobits = self.is_nobits(self.sect);
         let off = self.offsets.entry(self.sect).or_insert(0);
         // Past the local store nothing can load: stop growing (the size check reports it).
         if *off as usize + data.len() > 2 * LOCAL_STORE {
             *off = (2 * LOCAL_STORE) as u32;
             return;
         }
-        if self.pass == 2 && self.sect != Sect::Bss {
+        if nobits {
+            if self.pass == 2 && data.iter().any(|&b| b != 0) {
+                self.nonzero_in_nobits = true;
+            }
+        } else if self.pass == 2 {
             let buf = self.bytes.entry(self.sect).or_default();
             let at = *off as usize;
             if buf.len() < at + data.len() {
@@ -507,9 +709,11 @@ impl<'o> Assembler<'o> {
         }
         let a = self.align.entry(self.sect).or_insert(1);
         *a = (*a).max(boundary);
-        let off = self.offsets.get(&self.sect).copied().unwrap_or(0);
+        // Padding is to an address (sections start at their alignment), so subsections
+        // align as gas aligns them once they are joined.
+        let off = self.here();
         let pad = (boundary - off % boundary) % boundary;
-        if self.sect == Sect::Text && fill.is_none() {
+        if self.is_code(self.sect) && fill.is_none() {
             // tc-spu.c spu_handle_align: zero bytes to a word, then lnop in an odd slot,
             // then nop/lnop pairs.
             let mut bytes = Vec::new();
@@ -538,18 +742,21 @@ impl<'o> Assembler<'o> {
 
     fn read_include(&self, name: &str) -> Option<String> {
         if let Some((_, text)) = self.opts.virtual_files.iter().find(|(n, _)| n == name) {
-            return Some(text.clone());
+            return Some(bytes_as_text(text.as_bytes()));
         }
         for dir in &self.opts.include_dirs {
-            if let Ok(t) = std::fs::read_to_string(dir.join(name)) {
+            if let Ok(t) = read_source(&dir.join(name)) {
                 return Some(t);
             }
         }
-        std::fs::read_to_string(name).ok()
+        read_source(std::path::Path::new(name)).ok()
     }
 
     /// Processes a list of lines (one file, a macro body or a repetition).
     fn run_lines(&mut self, lines: &[Line]) {
+        if self.expanded > MAX_EXPANDED {
+            return;
+        }
         self.depth += 1;
         if self.depth > 64 {
             if let Some(l) = lines.first() {
@@ -567,19 +774,32 @@ impl<'o> Assembler<'o> {
         let mut cond: Vec<(bool, bool)> = Vec::new(); // (active, any branch taken)
         while i < lines.len() {
             let line = &lines[i];
+            self.expanded += 1;
+            if self.expanded > MAX_EXPANDED {
+                self.diag(
+                    Severity::Error,
+                    line,
+                    1,
+                    format!(
+                        "more than {MAX_EXPANDED} statements after expanding macros, .rept and .irp: stopped"
+                    ),
+                );
+                break;
+            }
             let text = strip_comment(&line.text);
             let trimmed = text.trim();
-            let first_word = trimmed
+            let word = trimmed
                 .split(|c: char| c.is_whitespace() || c == ',')
                 .next()
-                .unwrap_or("")
-                .to_ascii_lowercase();
+                .unwrap_or("");
+            let rest_of_line = &trimmed[word.len()..];
+            let first_word = block_word(word, &self.macros);
             let active = cond.iter().all(|c| c.0);
             // Conditionals are tracked even while inactive.
             match first_word.as_str() {
                 ".if" | ".ifdef" | ".ifndef" | ".ifeq" | ".ifne" | ".ifc" | ".ifnc" => {
                     let value = if active {
-                        self.condition(&first_word, trimmed[first_word.len()..].trim(), line)
+                        self.condition(&first_word, rest_of_line.trim(), line)
                     } else {
                         false
                     };
@@ -591,7 +811,7 @@ impl<'o> Assembler<'o> {
                     let outer = cond.len() < 2 || cond[..cond.len() - 1].iter().all(|c| c.0);
                     if let Some(top) = cond.last_mut() {
                         let taken = top.1;
-                        let v = !taken && outer && self.condition(".if", trimmed[7..].trim(), line);
+                        let v = !taken && outer && self.condition(".if", rest_of_line.trim(), line);
                         *top = (v, taken || v);
                     }
                     i += 1;
@@ -632,6 +852,19 @@ impl<'o> Assembler<'o> {
             if self.exitm {
                 break;
             }
+            // A list-scheduled block (crate::sched) up to its `.endsched`.
+            if first_word == ".sched" {
+                let end = lines[i + 1..]
+                    .iter()
+                    .position(|l| first_word_of(&l.text) == ".endsched");
+                let Some(k) = end else {
+                    self.diag(Severity::Error, line, 1, "missing .endsched");
+                    break;
+                };
+                self.sched_block(trimmed[6..].trim(), &lines[i + 1..i + 1 + k], line);
+                i += k + 2;
+                continue;
+            }
             // Block directives that swallow lines up to their end.
             if matches!(first_word.as_str(), ".macro" | ".rept" | ".irp" | ".irpc") {
                 let (body, next) = collect_block(lines, i + 1);
@@ -643,7 +876,7 @@ impl<'o> Assembler<'o> {
                         format!("missing end of {first_word}"),
                     );
                 }
-                let args = trimmed[first_word.len()..].trim().to_string();
+                let args = rest_of_line.trim().to_string();
                 self.block(&first_word, &args, body, line);
                 i = next;
                 continue;
@@ -657,6 +890,44 @@ impl<'o> Assembler<'o> {
             }
         }
         self.depth -= 1;
+    }
+
+    /// `.sched OPTIONS` ... `.endsched`: the block list-scheduled into dual-issue pairs,
+    /// then assembled line by line, each scheduled line keeping its source location.
+    fn sched_block(&mut self, args: &str, body: &[Line], line: &Line) {
+        let opts = match crate::sched::parse_options(args) {
+            Ok(opts) => opts,
+            Err(message) => return self.diag(Severity::Error, line, 1, message),
+        };
+        let texts: Vec<&str> = body.iter().map(|l| l.text.as_str()).collect();
+        let resolve = |text: &str| {
+            self.get_reg(text, OperandKind::Ra, true)
+                .filter(|(_, rest)| rest.trim().is_empty())
+                .and_then(|(v, _)| u8::try_from(v).ok())
+        };
+        let here = self.offsets.get(&self.sect).copied().unwrap_or(0);
+        let start = (here + 7) & !7;
+        match crate::sched::schedule(&texts, &opts, Some(start), &resolve) {
+            Ok(scheduled) => {
+                let lines: Vec<Line> = scheduled
+                    .lines
+                    .into_iter()
+                    .map(|(text, origin)| {
+                        let at = origin.and_then(|k| body.get(k)).unwrap_or(line);
+                        Line {
+                            text,
+                            file: at.file.clone(),
+                            line: at.line,
+                        }
+                    })
+                    .collect();
+                self.run_lines(&lines);
+            }
+            Err(e) => {
+                let at = body.get(e.line).unwrap_or(line);
+                self.diag(Severity::Error, at, e.column, e.message);
+            }
+        }
     }
 
     fn condition(&mut self, kind: &str, args: &str, line: &Line) -> bool {
@@ -686,8 +957,17 @@ impl<'o> Assembler<'o> {
         match kind {
             ".rept" => match self.eval(args) {
                 Ok((n, _)) => {
-                    for _ in 0..n.clamp(0, 1 << 20) {
-                        if self.exitm {
+                    if n > 1 << 20 {
+                        self.diag(
+                            Severity::Error,
+                            line,
+                            1,
+                            format!(".rept count {n} is more than {}", 1 << 20),
+                        );
+                        return;
+                    }
+                    for _ in 0..n.max(0) {
+                        if self.exitm || self.expanded > MAX_EXPANDED {
                             break;
                         }
                         self.run_lines(&body);
@@ -702,7 +982,10 @@ impl<'o> Assembler<'o> {
                     .map(|s| s.trim().to_string())
                     .unwrap_or_default();
                 let values: Vec<String> = if kind == ".irp" {
-                    parts[1..].iter().map(|s| s.trim().to_string()).collect()
+                    parts[1..]
+                        .iter()
+                        .map(|s| macro_argument(s.trim()))
+                        .collect()
                 } else {
                     parts
                         .get(1)
@@ -710,7 +993,7 @@ impl<'o> Assembler<'o> {
                         .unwrap_or_default()
                 };
                 for v in values {
-                    if self.exitm {
+                    if self.exitm || self.expanded > MAX_EXPANDED {
                         break;
                     }
                     let expanded: Vec<Line> = body
@@ -773,8 +1056,19 @@ impl<'o> Assembler<'o> {
             );
             if let Some(m) = self.macros.get(&lw).cloned() {
                 self.expand_macro(&m, &args, line);
+            } else if args.starts_with('=') && !args.starts_with("==") {
+                let v = args[1..].trim().to_string();
+                self.set_symbol(&word, &v, line);
             } else if lw.starts_with('.') {
                 self.directive(&lw, &args, line, col);
+            } else if !args.starts_with('=')
+                && lw != "set"
+                && forms_named(&lw).next().is_none()
+                && is_directive(&format!(".{lw}"))
+            {
+                // A pseudo-op written without its dot (`GLOBL`), as gas's NO_PSEUDO_DOT
+                // targets and MRI mode read it.
+                self.directive(&format!(".{lw}"), &args, line, col);
             } else if args.starts_with('=') {
                 let v = args[1..].trim().to_string();
                 self.set_symbol(&word, &v, line);
@@ -818,15 +1112,16 @@ impl<'o> Assembler<'o> {
         let off = self.offsets.get(&self.sect).copied().unwrap_or(0);
         if let Ok(n) = name.parse::<u32>() {
             if self.pass == 1 {
-                self.numeric
+                self.numeric_next
                     .entry(n)
                     .or_default()
                     .push((self.stmt, self.sect, off));
             }
             return;
         }
+        let first = self.defined.insert(name.to_string());
         if self.pass == 1 {
-            if let Some(SymVal::Label(..)) = self.symbols.get(name) {
+            if !first || matches!(self.symbols.get(name), Some(SymVal::Common(..))) {
                 self.diag(
                     Severity::Error,
                     line,
@@ -840,10 +1135,14 @@ impl<'o> Assembler<'o> {
     }
 
     fn set_symbol(&mut self, name: &str, expr: &str, line: &Line) {
+        if name == "." {
+            let col = line.text.find('=').map_or(1, |c| c + 2);
+            self.org(expr, 0, line, col);
+            return;
+        }
         match self.eval_val(expr) {
             Ok((v, _, _)) => {
-                self.symbols
-                    .insert(name.to_string(), SymVal::Abs(v.v, v.reloc));
+                self.symbols.insert(name.to_string(), SymVal::Abs(v));
             }
             Err((c, m)) => self.diag(Severity::Error, line, c + 1, m),
         }
@@ -858,7 +1157,7 @@ impl<'o> Assembler<'o> {
         } else {
             split_top(args, ',')
                 .iter()
-                .map(|s| s.trim().to_string())
+                .map(|s| macro_argument(s.trim()))
                 .collect()
         };
         let mut subst = Vec::new();
@@ -906,26 +1205,539 @@ impl<'o> Assembler<'o> {
         out
     }
 
+    /// The subsection number after `.text`, `.data`, `.bss`, `.subsection` (0 if none).
+    fn subsection(&mut self, args: &str, line: &Line, col: usize) -> i64 {
+        if args.trim().is_empty() {
+            return 0;
+        }
+        match self.eval(args.trim()) {
+            Ok((v, _)) => v,
+            Err((c, m)) => {
+                self.diag(Severity::Error, line, col + c, m);
+                0
+            }
+        }
+    }
+
+    /// `.section NAME[, "FLAGS"[, @TYPE[, ENTSIZE]]]` (also `%type`), or `NAME, SUBSECTION`.
+    fn section_args(&mut self, args: &str, line: &Line, col: usize) -> Option<(SectionDef, i64)> {
+        let parts = split_top(args, ',');
+        let name = parts[0].trim().trim_matches('"').to_string();
+        if name.is_empty() {
+            self.diag(Severity::Error, line, col, "missing name");
+            return None;
+        }
+        let mut def = SectionDef::named(&name);
+        let mut sub = 0;
+        if let Some(flags) = parts.get(1).map(|f| f.trim()) {
+            if let Some(letters) = flags.strip_prefix('"').and_then(|f| f.strip_suffix('"')) {
+                let mut f = 0;
+                for c in letters.chars() {
+                    match c {
+                        'a' => f |= SHF_ALLOC,
+                        'w' => f |= SHF_WRITE,
+                        'x' => f |= SHF_EXECINSTR,
+                        'M' => f |= 0x10,
+                        'S' => f |= 0x20,
+                        'G' => f |= 0x200,
+                        'T' => f |= 0x400,
+                        'o' => f |= 0x80,
+                        'e' | 'R' | 'd' | '?' => {}
+                        other => {
+                            self.diag(
+                                Severity::Error,
+                                line,
+                                col,
+                                format!("unknown section attribute `{other}'"),
+                            );
+                            return None;
+                        }
+                    }
+                }
+                def.flags = f;
+            } else if !flags.is_empty() && !flags.starts_with(['#', '@', '%']) {
+                // `.section NAME, SUBSECTION` (the non-ELF form gas also takes).
+                sub = self.subsection(flags, line, col);
+            }
+        }
+        if let Some(ty) = parts.get(2).map(|t| t.trim()) {
+            match ty.trim_start_matches(['@', '%']) {
+                "progbits" => def.ty = SHT_PROGBITS,
+                "nobits" => def.ty = SHT_NOBITS,
+                "note" => def.ty = 7,
+                "init_array" => def.ty = 14,
+                "fini_array" => def.ty = 15,
+                "preinit_array" => def.ty = 16,
+                other => {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("unrecognized section type `{other}'"),
+                    );
+                    return None;
+                }
+            }
+        }
+        if let Some(e) = parts.get(3) {
+            if def.flags & 0x10 != 0 {
+                def.entsize = self.eval(e.trim()).map(|v| v.0 as u64).unwrap_or(0);
+            }
+        }
+        if let Some(existing) = self.defs.iter().find(|d| d.name == name).cloned() {
+            // Re-entering a section keeps what it was declared with.
+            if parts.len() > 1 && existing != def && self.pass == 1 {
+                self.diag(
+                    Severity::Warning,
+                    line,
+                    col,
+                    format!("ignoring changed section attributes for {name}"),
+                );
+            }
+            def = existing;
+        }
+        Some((def, sub))
+    }
+
+    /// `.lcomm NAME, SIZE[, ALIGN]` reserves space in `.bss`; `.comm` does too in an
+    /// executable, and leaves a common symbol for the linker in an object.
+    fn common(&mut self, d: &str, args: &str, line: &Line, col: usize) {
+        let parts = split_top(args, ',');
+        let name = parts[0].trim().to_string();
+        if name.is_empty() || parts.len() < 2 {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("expected NAME, SIZE after {d}"),
+            );
+            return;
+        }
+        if d == ".lcomm" && parts.len() > 2 {
+            // spu-elf-as 2.40's .lcomm takes no alignment.
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                "junk at end of line, first unrecognized character is `,'",
+            );
+            return;
+        }
+        let size = self
+            .data_values(&parts[1], line, col)
+            .first()
+            .copied()
+            .unwrap_or(0);
+        if !(0..=LOCAL_STORE as i64).contains(&size) {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("{d} length ({size}) out of range"),
+            );
+            return;
+        }
+        // gas TC_IMPLICIT_LCOMM_ALIGNMENT: the largest of 8, 4, 2 that the size reaches.
+        let implicit = match size {
+            8.. => 8,
+            4..=7 => 4,
+            2..=3 => 2,
+            _ => 1,
+        };
+        let align = match parts.get(2) {
+            Some(a) => self.data_values(a, line, col).first().copied().unwrap_or(1),
+            None => implicit,
+        };
+        if align <= 0 || align & (align - 1) != 0 || align > 1 << 15 {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("alignment {align} is not a power of 2"),
+            );
+            return;
+        }
+        if d == ".comm" {
+            self.attrs.entry(name.clone()).or_default().global = true;
+            if self.object {
+                if matches!(self.symbols.get(&name), Some(SymVal::Label(..))) {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("symbol `{name}' is already defined"),
+                    );
+                    return;
+                }
+                self.symbols
+                    .insert(name, SymVal::Common(size as u32, align as u32));
+                return;
+            }
+        }
+        let here = self.sect;
+        let bss = self.chunk(SectionDef::named(".bss"), 0);
+        self.sect = bss;
+        self.align_to(align as u32, Some(0));
+        self.define_label(&name, line);
+        self.emit(&vec![0; size as usize]);
+        self.sect = here;
+    }
+
+    /// `.org EXPR` and `. = EXPR`: move forward to an offset in the current section.
+    fn org(&mut self, expr: &str, fill: u8, line: &Line, col: usize) {
+        let (v, _, _) = match self.eval_val(expr) {
+            Ok(v) => v,
+            Err((c, m)) => {
+                self.diag(Severity::Error, line, col + c, m);
+                return;
+            }
+        };
+        let base = self.bases.get(&self.sect).copied().unwrap_or(0) as i64;
+        let target = if v.reloc {
+            if v.sect != Some(self.chunks[self.sect].0) && self.pass == 2 {
+                self.diag(
+                    Severity::Error,
+                    line,
+                    col,
+                    "attempt to move .org into another section",
+                );
+                return;
+            }
+            v.v - base
+        } else {
+            // An absolute .org is an offset from the start of the section.
+            v.v - (base - self.section_start(self.sect))
+        };
+        let off = self.offsets.get(&self.sect).copied().unwrap_or(0) as i64;
+        if target < off {
+            if self.pass == 2 {
+                self.diag(Severity::Error, line, col, "attempt to move .org backwards");
+            }
+            return;
+        }
+        if target - off > 2 * LOCAL_STORE as i64 {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!(".org to {target:#x} is past the local store"),
+            );
+            return;
+        }
+        self.emit(&vec![fill; (target - off) as usize]);
+    }
+
+    /// Where the section of chunk `c` starts (its first chunk's base).
+    fn section_start(&self, c: Sect) -> i64 {
+        let d = self.chunks[c].0;
+        (0..self.chunks.len())
+            .filter(|&k| self.chunks[k].0 == d)
+            .map(|k| self.bases.get(&k).copied().unwrap_or(0))
+            .min()
+            .unwrap_or(0) as i64
+    }
+
+    /// `.balignw/.balignl/.p2alignw/.p2alignl BOUNDARY[, PATTERN[, MAX]]`: padding filled
+    /// with a 2- or 4-byte big-endian pattern; the padding must be a multiple of it.
+    fn align_pattern(&mut self, d: &str, args: &str, line: &Line, col: usize) {
+        let parts = split_top(args, ',');
+        let v = self
+            .data_values(&parts[0], line, col)
+            .first()
+            .copied()
+            .unwrap_or(0);
+        let boundary = if d.starts_with(".p2") {
+            if !(0..=15).contains(&v) {
+                self.diag(
+                    Severity::Error,
+                    line,
+                    col,
+                    format!("alignment too large: {v}"),
+                );
+                return;
+            }
+            1i64 << v
+        } else {
+            v
+        };
+        if boundary <= 0 || boundary & (boundary - 1) != 0 || boundary > 1 << 15 {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("alignment not a power of 2: {boundary}"),
+            );
+            return;
+        }
+        let size = if d.ends_with('w') { 2 } else { 4 };
+        let pattern = match parts.get(1).map(|p| p.trim()).filter(|p| !p.is_empty()) {
+            Some(p) => Some(self.data_values(p, line, col).first().copied().unwrap_or(0)),
+            None => None,
+        };
+        let max = match parts.get(2) {
+            Some(m) => self.data_values(m, line, col).first().copied(),
+            None => None,
+        };
+        let off = self.here() as i64;
+        let pad = (boundary - off % boundary) % boundary;
+        if max.is_some_and(|m| pad > m) {
+            return;
+        }
+        let Some(pattern) = pattern else {
+            self.align_to(boundary as u32, None);
+            return;
+        };
+        if pad % size != 0 {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("alignment padding ({pad} bytes) not a multiple of {size}"),
+            );
+            return;
+        }
+        let a = self.align.entry(self.sect).or_insert(1);
+        *a = (*a).max(boundary as u32);
+        let word = pattern.to_be_bytes();
+        let mut bytes = Vec::with_capacity(pad as usize);
+        for _ in 0..pad / size {
+            bytes.extend_from_slice(&word[8 - size as usize..]);
+        }
+        self.emit(&bytes);
+    }
+
+    /// `.reloc OFFSET, TYPE[, EXPR]`: an explicit relocation (objects), applied at once in
+    /// an executable.
+    fn reloc_directive(&mut self, args: &str, line: &Line, col: usize) {
+        let parts = split_top(args, ',');
+        if parts.len() < 2 {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                "expected OFFSET, TYPE[, EXPR] after .reloc",
+            );
+            return;
+        }
+        let ty = parts[1].trim();
+        let kind = crate::reloc::by_name(ty).or_else(|| self.eval(ty).ok().map(|v| v.0 as u32));
+        let Some(kind) = kind.filter(|k| crate::reloc::name(*k).is_some()) else {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("unrecognized reloc type `{ty}'"),
+            );
+            return;
+        };
+        let offset = match self.eval_val(parts[0].trim()) {
+            Ok((v, _, _)) => v,
+            Err((c, m)) => {
+                self.diag(Severity::Error, line, col + c, m);
+                return;
+            }
+        };
+        let value = match parts.get(2) {
+            Some(e) => match self.eval_val(e.trim()) {
+                Ok((v, _, _)) => v,
+                Err((c, m)) => {
+                    self.diag(Severity::Error, line, col + c, m);
+                    return;
+                }
+            },
+            None => Val::abs(0),
+        };
+        if self.pass != 2 {
+            return;
+        }
+        let sect = self.sect;
+        let offset = if offset.reloc {
+            offset.v - self.section_start(sect)
+        } else {
+            offset.v
+        } as u32;
+        self.add_reloc(sect, offset, kind, &value, line, col);
+    }
+
+    /// Records a relocation at `offset` in the section of chunk `sect` (pass 2): in an
+    /// object for the linker, in an executable to be applied once all bytes are there.
+    fn add_reloc(&mut self, sect: Sect, offset: u32, kind: u32, v: &Val, line: &Line, col: usize) {
+        let def = self.chunks[sect].0;
+        let (target, addend) = if let Some((name, value)) = &v.sym {
+            (RelocTarget::Symbol(name.to_string()), v.v - value)
+        } else if let Some(s) = v.sect {
+            (
+                RelocTarget::Section(s),
+                v.v - if self.object { 0 } else { self.def_start(s) },
+            )
+        } else if v.reloc || v.cross {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                "expression too complex for a relocation",
+            );
+            return;
+        } else {
+            (RelocTarget::Section(usize::MAX), v.v)
+        };
+        let location = Location {
+            file: line.file.clone(),
+            line: line.line,
+            column: col.max(1),
+        };
+        self.relocs.push((
+            def,
+            Reloc {
+                offset,
+                kind,
+                target,
+                addend,
+            },
+            location,
+            line.text.clone(),
+        ));
+    }
+
+    /// Where section definition `d` starts (executables).
+    fn def_start(&self, d: usize) -> i64 {
+        (0..self.chunks.len())
+            .filter(|&k| self.chunks[k].0 == d)
+            .map(|k| self.bases.get(&k).copied().unwrap_or(0))
+            .min()
+            .unwrap_or(0) as i64
+    }
+
     fn directive(&mut self, d: &str, args: &str, line: &Line, col: usize) {
         match d {
-            ".text" => self.sect = Sect::Text,
-            ".data" | ".rodata" => self.sect = Sect::Data,
-            ".bss" => self.sect = Sect::Bss,
-            ".section" => {
-                let name = args
-                    .split(',')
-                    .next()
-                    .unwrap_or("")
-                    .trim()
-                    .trim_matches('"');
-                self.sect = if name.starts_with(".text") {
-                    Sect::Text
-                } else if name.starts_with(".bss") {
-                    Sect::Bss
-                } else {
-                    Sect::Data
-                };
+            ".text" | ".data" | ".bss" | ".rodata" => {
+                let sub = self.subsection(args, line, col);
+                let c = self.chunk(SectionDef::named(d), sub);
+                self.switch_to(c);
             }
+            ".subsection" => {
+                let sub = self.subsection(args, line, col);
+                let def = self.defs[self.chunks[self.sect].0].clone();
+                let c = self.chunk(def, sub);
+                self.switch_to(c);
+            }
+            ".section" | ".pushsection" => {
+                let Some((def, sub)) = self.section_args(args, line, col) else {
+                    return;
+                };
+                if d == ".pushsection" {
+                    self.sect_stack.push((self.sect, self.prev_sect));
+                }
+                let c = self.chunk(def, sub);
+                self.switch_to(c);
+            }
+            ".popsection" => match self.sect_stack.pop() {
+                Some((s, p)) => {
+                    self.sect = s;
+                    self.prev_sect = p;
+                }
+                None => self.diag(
+                    Severity::Warning,
+                    line,
+                    col,
+                    ".popsection without corresponding .pushsection; ignored",
+                ),
+            },
+            ".previous" => {
+                std::mem::swap(&mut self.sect, &mut self.prev_sect);
+            }
+            ".lcomm" | ".comm" => self.common(d, args, line, col),
+            ".org" => {
+                let parts = split_top(args, ',');
+                let fill = match parts.get(1) {
+                    Some(f) => self.data_values(f, line, col).first().copied().unwrap_or(0),
+                    None => 0,
+                };
+                self.org(parts[0].trim(), fill as u8, line, col);
+            }
+            ".uleb128" | ".sleb128" => {
+                for v in self.data_values(args, line, col) {
+                    let bytes = leb128(v, d == ".sleb128");
+                    self.emit(&bytes);
+                }
+            }
+            ".balignw" | ".balignl" | ".p2alignw" | ".p2alignl" => {
+                self.align_pattern(d, args, line, col)
+            }
+            ".weak" | ".hidden" | ".internal" | ".protected" | ".global" | ".globl" => {
+                for n in split_top(args, ',') {
+                    let n = n.trim();
+                    if n.is_empty() {
+                        continue;
+                    }
+                    let a = self.attrs.entry(n.to_string()).or_default();
+                    match d {
+                        ".weak" => a.weak = true,
+                        ".global" | ".globl" => a.global = true,
+                        _ => a.hidden = true,
+                    }
+                }
+            }
+            ".type" => {
+                let parts = split_top(args, ',');
+                let name = parts[0].trim().to_string();
+                let kind = parts.get(1).map(|k| {
+                    k.trim()
+                        .trim_start_matches(['@', '%', '#'])
+                        .to_ascii_lowercase()
+                });
+                let kind = match kind.as_deref() {
+                    Some("function" | "stt_func") => 2,
+                    Some("object" | "stt_object") => 1,
+                    Some("notype" | "stt_notype") => 0,
+                    Some("tls_object" | "stt_tls") => 6,
+                    Some("common" | "stt_common") => 5,
+                    _ => {
+                        self.diag(
+                            Severity::Error,
+                            line,
+                            col,
+                            format!(
+                                "unrecognized symbol type \"{}\"",
+                                parts.get(1).map_or("", |s| s.trim())
+                            ),
+                        );
+                        return;
+                    }
+                };
+                self.attrs.entry(name).or_default().kind = kind;
+            }
+            ".size" => {
+                let parts = split_top(args, ',');
+                if parts.len() < 2 {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        "expected comma after name in .size",
+                    );
+                    return;
+                }
+                let name = parts[0].trim().to_string();
+                match self.eval_val(parts[1..].join(",").trim()) {
+                    Ok((v, _, _)) if !v.reloc || self.pass == 1 => {
+                        self.attrs.entry(name).or_default().size = Some(v.v)
+                    }
+                    Ok(_) => {} // a size that depends on an address: gas keeps an expression; we drop it
+                    Err((c, m)) => self.diag(Severity::Error, line, col + c, m),
+                }
+            }
+            ".reloc" => self.reloc_directive(args, line, col),
+            ".extern" | ".file" | ".ident" | ".loc" | ".loc_mark_labels" | ".local" | ".brinfo"
+            | ".end" | ".nolist" | ".list" | ".eject" | ".psize" | ".title" | ".sbttl"
+            | ".version" | ".gnu_attribute" | ".lflags" => {}
+            // spu-elf-as 2.40 has no CFI support and says so.
+            c if c.starts_with(".cfi_") => self.diag(
+                Severity::Error,
+                line,
+                col,
+                "CFI is not supported for this target",
+            ),
             ".align" | ".p2align" | ".balign" => {
                 // `boundary[, [fill][, max]]`: an empty fill is the default, and the
                 // alignment is skipped when it needs more than `max` bytes.
@@ -974,7 +1786,7 @@ impl<'o> Assembler<'o> {
                     return;
                 }
                 let fill = vals.get(1).copied().flatten().map(|f| f as u8);
-                let here = self.offsets.get(&self.sect).copied().unwrap_or(0) as i64;
+                let here = self.here() as i64;
                 let pad = (boundary - here % boundary) % boundary;
                 if max_skip.is_some_and(|m| pad > m) {
                     return;
@@ -989,8 +1801,37 @@ impl<'o> Assembler<'o> {
                     ".quad" | ".8byte" => 8,
                     _ => 4,
                 };
-                for v in self.data_values(args, line, col) {
-                    let b = v.to_be_bytes();
+                if args.trim().is_empty() {
+                    return;
+                }
+                for part in split_top(args, ',') {
+                    let (v, c) = match self.eval_val(part.trim()) {
+                        Ok((v, _, _)) => (v, col),
+                        Err((c, m)) => {
+                            self.diag(Severity::Error, line, col + c, m);
+                            (Val::abs(0), col)
+                        }
+                    };
+                    if self.object && self.pass == 2 && (v.reloc || v.cross) {
+                        // In an object an address is left to the linker: R_SPU_ADDR32 (or
+                        // R_SPU_REL32 for `sym - .`); other sizes have no SPU relocation.
+                        let at = self.offsets.get(&self.sect).copied().unwrap_or(0)
+                            + self.bases.get(&self.sect).copied().unwrap_or(0);
+                        if size != 4 {
+                            self.diag(
+                                Severity::Error,
+                                line,
+                                c,
+                                format!("cannot represent a {size}-byte relocation for SPU"),
+                            );
+                        } else {
+                            let sect = self.sect;
+                            self.add_reloc(sect, at, crate::reloc::R_SPU_ADDR32, &v, line, c);
+                        }
+                        self.emit(&vec![0; size]);
+                        continue;
+                    }
+                    let b = v.v.to_be_bytes();
                     self.emit(&b[8 - size..]);
                 }
             }
@@ -1053,15 +1894,7 @@ impl<'o> Assembler<'o> {
                     self.emit(&word);
                 }
             }
-            ".global" | ".globl" => {
-                for n in args.split(',') {
-                    let n = n.trim().to_string();
-                    if !n.is_empty() && !self.globals.contains(&n) {
-                        self.globals.push(n);
-                    }
-                }
-            }
-            ".set" | ".equ" | ".eqv" => {
+            ".set" | ".equ" | ".eqv" | ".equiv" => {
                 let parts = split_top(args, ',');
                 if parts.len() < 2 {
                     self.diag(
@@ -1091,10 +1924,7 @@ impl<'o> Assembler<'o> {
                     ),
                 }
             }
-            ".local" | ".type" | ".size" | ".file" | ".ident" | ".loc" | ".cfi_startproc"
-            | ".cfi_endproc" | ".brinfo" | ".weak" | ".hidden" => {}
-            ".end" => {}
-            ".endm" | ".endr" => self.diag(
+            ".endm" | ".endr" | ".endsched" => self.diag(
                 Severity::Error,
                 line,
                 col,
@@ -1145,8 +1975,9 @@ impl<'o> Assembler<'o> {
         }
         let digits = q.bytes().take_while(u8::is_ascii_digit).count();
         if digits > 0 {
-            let n: u64 = q[..digits].parse().unwrap_or(u64::MAX);
-            return (n < 128).then_some((n as i64, &q[digits..]));
+            // Any number is a register here; one past 127 is reported as out of range.
+            let n: i64 = q[..digits].parse().unwrap_or(i64::MAX);
+            return Some((n, &q[digits..]));
         }
         let names: &[(&str, u32)] = match kind {
             OperandKind::Ch => CHANNELS,
@@ -1193,6 +2024,12 @@ impl<'o> Assembler<'o> {
                 let (v, rest) = self
                     .get_reg(p, OperandKind::Ra, true)
                     .ok_or(CalcErr::Syntax(i))?;
+                if !(0..128).contains(&v) {
+                    return Err(CalcErr::Range(
+                        at(p),
+                        format!("register number {v} out of range [0, 127]"),
+                    ));
+                }
                 p = rest
                     .trim_start()
                     .strip_prefix(')')
@@ -1200,6 +2037,19 @@ impl<'o> Assembler<'o> {
                 out.push(Operand::Reg(kind, v));
             } else if kind.is_register() {
                 let (v, rest) = self.get_reg(p, kind, true).ok_or(CalcErr::Syntax(i))?;
+                // gas ORs an expression's value in unmasked; a value outside the 7-bit
+                // field would silently change other fields, so it is an error here.
+                if !(0..128).contains(&v) {
+                    let what = match kind {
+                        OperandKind::Ch => "channel",
+                        OperandKind::Spr => "special-purpose register",
+                        _ => "register",
+                    };
+                    return Err(CalcErr::Range(
+                        col,
+                        format!("{what} number {v} out of range [0, 127]"),
+                    ));
+                }
                 p = rest;
                 out.push(Operand::Reg(kind, v));
             } else {
@@ -1278,6 +2128,13 @@ impl<'o> Assembler<'o> {
 
     fn instruction(&mut self, mnemonic: &str, args: &str, line: &Line, col: usize) {
         let pc = self.here();
+        if mnemonic == "nop" && !split_top(args, ',').iter().skip(1).any(|_| true) {
+            // GNU as for SPU reads pseudo-ops without their dot, and `nop` is gas's `.nop`:
+            // the target's no-op word whatever the operand (`nop $41` is 0x40200000, as
+            // spu-elf-as 2.40 writes it).
+            self.emit(&0x4020_0000u32.to_be_bytes());
+            return;
+        }
         let forms: Vec<&'static FormInfo> = forms_named(mnemonic).collect();
         if forms.is_empty() {
             self.diag(
@@ -1297,6 +2154,7 @@ impl<'o> Assembler<'o> {
             .unwrap_or(col);
         let param = args.trim();
         let mut failure = (forms[0], 0);
+        let mut range_failure: Option<(usize, String)> = None;
         let mut parsed = None;
         for form in &forms {
             match self.calcop(form, param) {
@@ -1305,6 +2163,11 @@ impl<'o> Assembler<'o> {
                     break;
                 }
                 Err(CalcErr::Syntax(arg)) => failure = (form, arg),
+                // Another form may take this operand as something else (`hgti $3,-16`
+                // is the two-operand form); reported only if no form fits.
+                Err(CalcErr::Range(c, m)) => {
+                    range_failure.get_or_insert((c, m));
+                }
                 Err(CalcErr::Hard(c, m)) => {
                     self.diag(Severity::Error, line, arg_col + c, m);
                     self.emit(&[0; 4]);
@@ -1313,6 +2176,11 @@ impl<'o> Assembler<'o> {
             }
         }
         let Some((form, ops)) = parsed else {
+            if let Some((c, m)) = range_failure {
+                self.diag(Severity::Error, line, arg_col + c, m);
+                self.emit(&[0; 4]);
+                return;
+            }
             let (form, arg) = failure;
             self.diag(
                 Severity::Error,
@@ -1352,6 +2220,29 @@ impl<'o> Assembler<'o> {
                             self.diag(Severity::Warning, line, arg_col + c, w);
                         }
                     }
+                    if self.object && self.pass == 2 && (val.reloc || val.cross) {
+                        match self.object_immediate(form.format, kind, val, high, low, pc) {
+                            Ok(Some(bits)) => word |= bits,
+                            Ok(None) => {
+                                let sect = self.sect;
+                                let at = pc - self.section_start(sect) as u32;
+                                let rk = reloc_kind(kind, form.format, high, low);
+                                match (rk, self.pending.take()) {
+                                    (Some(rk), Some(v)) => {
+                                        self.add_reloc(sect, at, rk, &v, line, arg_col + c)
+                                    }
+                                    _ => self.diag(
+                                        Severity::Error,
+                                        line,
+                                        arg_col + c,
+                                        "no SPU relocation for this operand",
+                                    ),
+                                }
+                            }
+                            Err(m) => self.diag(Severity::Error, line, arg_col + c, m),
+                        }
+                        continue;
+                    }
                     match self.immediate(form.format, kind, val, high, low, pc) {
                         Ok((bits, warning)) => {
                             word |= bits;
@@ -1365,6 +2256,39 @@ impl<'o> Assembler<'o> {
             }
         }
         self.emit(&word.to_be_bytes());
+    }
+
+    /// An operand that depends on an address, in an object: a PC-relative reference to a
+    /// local label of this very section is resolved now (as gas's `fixup_segment` does);
+    /// anything else is left in `pending` for a relocation.
+    fn object_immediate(
+        &mut self,
+        format: Format,
+        kind: OperandKind,
+        val: Val,
+        high: bool,
+        low: bool,
+        pc: u32,
+    ) -> Result<Option<u32>, String> {
+        let pcrel = matches!(kind, OperandKind::Rel18 | OperandKind::BrInst);
+        let here = self.chunks[self.sect].0;
+        let weak = val
+            .sym
+            .as_ref()
+            .is_some_and(|(n, _)| self.attrs.get(&**n).is_some_and(|a| a.weak));
+        if val.cross || (val.sect.is_none() && val.sym.is_none()) {
+            return Err("expression too complex for a relocation".into());
+        }
+        // Only references to local labels are resolved: gas leaves a relocation for a
+        // global or weak symbol even in the same section (checked with spu-elf-as 2.40).
+        if pcrel && val.sect == Some(here) && val.sym.is_none() && !weak && !high && !low {
+            let local = Val { sym: None, ..val };
+            return self
+                .immediate(format, kind, local, false, false, pc)
+                .map(|(bits, _)| Some(bits));
+        }
+        self.pending = Some(val);
+        Ok(None)
     }
 
     /// The bits an immediate operand contributes, as gas's `get_imm` (constants) and
@@ -1447,14 +2371,189 @@ impl<'o> Assembler<'o> {
     }
 }
 
+/// Directives `directive` handles (block directives and conditionals are handled before).
+const DIRECTIVES: &[&str] = &[
+    ".2byte",
+    ".4byte",
+    ".8byte",
+    ".quad",
+    ".align",
+    ".ascii",
+    ".asciz",
+    ".balign",
+    ".balignl",
+    ".balignw",
+    ".bss",
+    ".byte",
+    ".comm",
+    ".data",
+    ".dfloat",
+    ".double",
+    ".equ",
+    ".eqv",
+    ".equiv",
+    ".err",
+    ".error",
+    ".extern",
+    ".ffloat",
+    ".file",
+    ".fill",
+    ".float",
+    ".global",
+    ".globl",
+    ".half",
+    ".hidden",
+    ".hword",
+    ".ident",
+    ".include",
+    ".int",
+    ".internal",
+    ".lcomm",
+    ".loc",
+    ".loc_mark_labels",
+    ".local",
+    ".long",
+    ".org",
+    ".p2align",
+    ".p2alignl",
+    ".p2alignw",
+    ".popsection",
+    ".previous",
+    ".protected",
+    ".pushsection",
+    ".reloc",
+    ".rodata",
+    ".section",
+    ".set",
+    ".short",
+    ".single",
+    ".size",
+    ".skip",
+    ".sleb128",
+    ".space",
+    ".string",
+    ".subsection",
+    ".text",
+    ".type",
+    ".uleb128",
+    ".warning",
+    ".weak",
+    ".word",
+    ".zero",
+    ".brinfo",
+    ".end",
+    ".nolist",
+    ".list",
+    ".eject",
+    ".psize",
+    ".title",
+    ".sbttl",
+    ".version",
+    ".gnu_attribute",
+    ".lflags",
+];
+
+fn is_directive(name: &str) -> bool {
+    DIRECTIVES.contains(&name)
+        || name.starts_with(".cfi_")
+        || matches!(
+            name,
+            ".macro"
+                | ".endm"
+                | ".rept"
+                | ".endr"
+                | ".irp"
+                | ".irpc"
+                | ".if"
+                | ".ifdef"
+                | ".ifndef"
+                | ".ifeq"
+                | ".ifne"
+                | ".ifc"
+                | ".ifnc"
+                | ".elseif"
+                | ".else"
+                | ".endif"
+                | ".exitm"
+        )
+}
+
+/// A macro or `.irp` argument as gas's `get_any_string` takes it: a double-quoted
+/// argument is its text without the quotes (so it may hold commas and spaces).
+fn macro_argument(arg: &str) -> String {
+    let quoted = arg.len() >= 2 && arg.starts_with('"') && arg.ends_with('"');
+    if quoted && !arg[1..arg.len() - 1].contains('"') {
+        return arg[1..arg.len() - 1].to_string();
+    }
+    // `name="value"` for a keyword argument.
+    if let Some((name, value)) = arg.split_once('=') {
+        let v = value.trim();
+        if v.len() >= 2
+            && v.starts_with('"')
+            && v.ends_with('"')
+            && !v[1..v.len() - 1].contains('"')
+        {
+            return format!("{name}={}", &v[1..v.len() - 1]);
+        }
+    }
+    arg.to_string()
+}
+
+/// LEB128 bytes of `v` (signed or unsigned), as `.sleb128`/`.uleb128` write them.
+fn leb128(mut v: i64, signed: bool) -> Vec<u8> {
+    let mut out = Vec::new();
+    loop {
+        let byte = (v & 0x7f) as u8;
+        v = if signed {
+            v >> 7
+        } else {
+            ((v as u64) >> 7) as i64
+        };
+        let done = if signed {
+            (v == 0 && byte & 0x40 == 0) || (v == -1 && byte & 0x40 != 0)
+        } else {
+            v == 0
+        };
+        if done {
+            out.push(byte);
+            return out;
+        }
+        out.push(byte | 0x80);
+    }
+}
+
+/// The SPU relocation gas's `arg_encode` table gives an immediate operand.
+fn reloc_kind(kind: OperandKind, format: Format, high: bool, low: bool) -> Option<u32> {
+    use crate::reloc::*;
+    use OperandKind::*;
+    if high {
+        return Some(R_SPU_ADDR16_HI);
+    }
+    if low {
+        return Some(R_SPU_ADDR16_LO);
+    }
+    Some(match kind {
+        S3 | S6 | S7 | S7n | U3 | U5 | U6 | U7 => R_SPU_ADDR7,
+        S10b | S10 => R_SPU_ADDR10I,
+        Off14 => R_SPU_ADDR10,
+        S16 | X16 => R_SPU_ADDR16I,
+        Abs18 => R_SPU_ADDR16,
+        Rel18 => R_SPU_REL16,
+        U18 => R_SPU_ADDR18,
+        BrInst if format == Format::LBTI => R_SPU_REL9I,
+        BrInst => R_SPU_REL9,
+        _ => return None,
+    })
+}
+
 fn unquote(s: &str) -> Option<Vec<u8>> {
     let inner = s.strip_prefix('"')?.strip_suffix('"')?;
     let mut out = Vec::new();
     let mut chars = inner.chars().peekable();
     while let Some(c) = chars.next() {
         if c != '\\' {
-            let mut buf = [0u8; 4];
-            out.extend(c.encode_utf8(&mut buf).as_bytes());
+            // Source characters are bytes (see `bytes_as_text`).
+            out.push(c as u32 as u8);
             continue;
         }
         match chars.next()? {
@@ -1530,16 +2629,40 @@ fn substitute(text: &str, vars: &[(String, String)], counter: Option<&str>) -> S
     out
 }
 
+fn first_word_of(text: &str) -> String {
+    strip_comment(text)
+        .split_whitespace()
+        .next()
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
+/// The directive a line's first word names for block and conditional handling: itself
+/// lower-cased, with the dot added when written without one (`rept`, `endr`, `if`), as gas
+/// for SPU reads pseudo-ops, unless it is a macro or an instruction.
+fn block_word(word: &str, macros: &HashMap<String, Macro>) -> String {
+    let lw = word.to_ascii_lowercase();
+    if lw.starts_with('.') || macros.contains_key(&lw) || forms_named(&lw).next().is_some() {
+        return lw;
+    }
+    let dotted = format!(".{lw}");
+    if is_directive(&dotted) && lw != "set" {
+        dotted
+    } else {
+        lw
+    }
+}
+
 fn collect_block(lines: &[Line], start: usize) -> (Vec<Line>, usize) {
     let mut depth = 1;
     let mut i = start;
+    let no_macros = HashMap::new();
     while i < lines.len() {
-        let w = strip_comment(&lines[i].text)
-            .trim()
-            .split_whitespace()
-            .next()
-            .unwrap_or("")
-            .to_ascii_lowercase();
+        let text = strip_comment(&lines[i].text);
+        let w = block_word(
+            text.trim().split_whitespace().next().unwrap_or(""),
+            &no_macros,
+        );
         match w.as_str() {
             ".macro" | ".rept" | ".irp" | ".irpc" => depth += 1,
             ".endm" | ".endr" => {
@@ -1624,104 +2747,338 @@ fn to_lines(text: &str, file: &str) -> Vec<Line> {
         .collect()
 }
 
-/// Assembles `source` (named `file_name` in diagnostics).
-pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output, Vec<Diagnostic>> {
-    let lines = to_lines(source, file_name);
-    let mut asm = Assembler {
-        opts,
-        pass: 1,
-        sect: Sect::Text,
-        offsets: HashMap::new(),
-        align: HashMap::new(),
-        bases: HashMap::new(),
-        symbols: HashMap::new(),
-        pass1_symbols: HashMap::new(),
-        globals: Vec::new(),
-        numeric: HashMap::new(),
-        stmt: 0,
-        bytes: HashMap::new(),
-        diags: Vec::new(),
-        macros: HashMap::new(),
-        macro_counter: 0,
-        listing: String::new(),
-        depth: 0,
-        macro_depth: 0,
-        exitm: false,
-    };
-    let predefine = |asm: &mut Assembler| {
-        for (n, v) in &opts.defines {
-            asm.symbols.insert(n.clone(), SymVal::Abs(*v, false));
-        }
-    };
-    predefine(&mut asm);
-    asm.run_lines(&lines);
-    asm.finish_sections();
-    // Lay the sections out: text at 0, data and bss after, each at its alignment.
-    let size = |s: Sect, a: &Assembler| a.offsets.get(&s).copied().unwrap_or(0);
-    let align = |s: Sect, a: &Assembler| a.align.get(&s).copied().unwrap_or(16).max(16);
-    let text_size = size(Sect::Text, &asm);
-    let data_base = text_size.div_ceil(align(Sect::Data, &asm)) * align(Sect::Data, &asm);
-    let data_size = size(Sect::Data, &asm);
-    let bss_base =
-        (data_base + data_size).div_ceil(align(Sect::Bss, &asm)) * align(Sect::Bss, &asm);
-    let bss_size = size(Sect::Bss, &asm);
-    asm.bases = HashMap::from([
-        (Sect::Text, 0),
-        (Sect::Data, data_base),
-        (Sect::Bss, bss_base),
-    ]);
-    // Pass 2.
-    asm.pass = 2;
-    asm.sect = Sect::Text;
-    asm.offsets.clear();
-    asm.stmt = 0;
-    asm.macros.clear();
-    asm.macro_counter = 0;
-    let labels: HashMap<String, SymVal> = asm
-        .symbols
-        .iter()
-        .filter(|(_, v)| matches!(v, SymVal::Label(..)))
-        .map(|(k, v)| (k.clone(), *v))
-        .collect();
-    asm.pass1_symbols = std::mem::take(&mut asm.symbols);
-    asm.symbols = labels;
-    predefine(&mut asm);
-    asm.run_lines(&lines);
-    asm.finish_sections();
-    let (errors, warnings): (Vec<_>, Vec<_>) = asm
-        .diags
-        .into_iter()
-        .partition(|d| d.severity == Severity::Error);
-    if !errors.is_empty() {
-        let mut all = errors;
-        all.extend(warnings);
-        all.sort_by(|a, b| {
-            (&a.location.file, a.location.line, a.location.column).cmp(&(
-                &b.location.file,
-                b.location.line,
-                b.location.column,
-            ))
-        });
-        return Err(all);
+/// Source text as gas reads it: bytes, each one character (so Latin-1 and UTF-8 text in
+/// comments and strings pass through byte for byte).
+fn bytes_as_text(bytes: &[u8]) -> String {
+    bytes.iter().map(|&b| b as char).collect()
+}
+
+/// A line of byte-characters back as text for a diagnostic (UTF-8 if it is, else Latin-1).
+fn display_text(text: &str) -> String {
+    let bytes: Vec<u8> = text.chars().map(|c| c as u32 as u8).collect();
+    String::from_utf8(bytes).unwrap_or_else(|_| text.to_string())
+}
+
+/// The most bytes a source or included file may have.
+pub const MAX_SOURCE: u64 = 64 << 20;
+
+/// Reads a source file with a size limit.
+pub(crate) fn read_source(path: &std::path::Path) -> Result<String, String> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let mut bytes = Vec::new();
+    file.take(MAX_SOURCE + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| e.to_string())?;
+    if bytes.len() as u64 > MAX_SOURCE {
+        return Err(format!("larger than {} MiB", MAX_SOURCE >> 20));
     }
-    let end = bss_base + bss_size;
-    if end as usize > 256 * 1024 {
-        return Err(vec![Diagnostic {
+    Ok(bytes_as_text(&bytes))
+}
+
+impl<'o> Assembler<'o> {
+    fn new(opts: &'o Options, object: bool) -> Assembler<'o> {
+        let mut asm = Assembler {
+            opts,
+            pass: 1,
+            sect: 0,
+            prev_sect: 0,
+            sect_stack: Vec::new(),
+            defs: Vec::new(),
+            chunks: Vec::new(),
+            object,
+            relocs: Vec::new(),
+            attrs: HashMap::new(),
+            expanded: 0,
+            seen_diags: Default::default(),
+            dropped_diags: 0,
+            pending: None,
+            defined: Default::default(),
+            nonzero_in_nobits: false,
+            offsets: HashMap::new(),
+            align: HashMap::new(),
+            bases: HashMap::new(),
+            symbols: HashMap::new(),
+            pass1_symbols: HashMap::new(),
+            numeric: HashMap::new(),
+            numeric_next: HashMap::new(),
+            stmt: 0,
+            bytes: HashMap::new(),
+            diags: Vec::new(),
+            macros: HashMap::new(),
+            macro_counter: 0,
+            listing: String::new(),
+            depth: 0,
+            macro_depth: 0,
+            exitm: false,
+        };
+        // gas always has .text, .data and .bss, in that order.
+        for name in [".text", ".data", ".bss"] {
+            asm.chunk(SectionDef::named(name), 0);
+        }
+        asm
+    }
+
+    /// One walk over the source: `pass` 1 lays out (unknown symbols read as 0), pass 2
+    /// emits with every address known.
+    fn run_pass(&mut self, lines: &[Line], pass: u8) {
+        self.pass = pass;
+        self.sect = 0;
+        self.prev_sect = 0;
+        self.sect_stack.clear();
+        self.offsets.clear();
+        self.stmt = 0;
+        self.macros.clear();
+        self.macro_counter = 0;
+        self.expanded = 0;
+        self.exitm = false;
+        self.defined.clear();
+        if pass == 2 {
+            self.bytes.clear();
+            self.relocs.clear();
+            self.listing.clear();
+        }
+        // Labels keep the values of the previous walk (forward references); `.set`
+        // symbols are defined again in order, earlier ones read from the previous walk.
+        let labels: HashMap<String, SymVal> = self
+            .symbols
+            .iter()
+            .filter(|(_, v)| matches!(v, SymVal::Label(..)))
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect();
+        if !self.symbols.is_empty() {
+            self.pass1_symbols = std::mem::replace(&mut self.symbols, labels);
+        }
+        for (n, v) in &self.opts.defines {
+            self.symbols.insert(n.clone(), SymVal::Abs(Val::abs(*v)));
+        }
+        self.run_lines(lines);
+        self.finish_sections();
+        if pass == 1 {
+            self.numeric = std::mem::take(&mut self.numeric_next);
+        }
+    }
+
+    /// Gives every chunk its address: in an executable, code sections from 0, then
+    /// read-only data, data and bss, each section at its alignment (at least 16) and its
+    /// subsections in order; in an object, offsets within each section.
+    fn lay_out(&mut self) {
+        let class = |d: &SectionDef| crate::link::placement(&d.name, d.ty, d.flags).0;
+        let mut order: Vec<usize> = (0..self.defs.len()).collect();
+        order.sort_by_key(|&d| {
+            let def = &self.defs[d];
+            (crate::link::placement(&def.name, def.ty, def.flags), d)
+        });
+        let mut addr = 0u32;
+        self.bases.clear();
+        for d in order {
+            let mut chunks: Vec<Sect> = (0..self.chunks.len())
+                .filter(|&c| self.chunks[c].0 == d)
+                .collect();
+            chunks.sort_by_key(|&c| self.chunks[c].1);
+            let align = chunks
+                .iter()
+                .map(|c| self.align.get(c).copied().unwrap_or(1))
+                .max()
+                .unwrap_or(1);
+            let mut at = if self.object || class(&self.defs[d]) == 4 {
+                0
+            } else {
+                addr.div_ceil(align.max(16)) * align.max(16)
+            };
+            // Subsections follow one another directly (their padding is to addresses).
+            for c in chunks {
+                self.bases.insert(c, at);
+                at = at.saturating_add(self.offsets.get(&c).copied().unwrap_or(0));
+            }
+            if !self.object && class(&self.defs[d]) != 4 {
+                addr = at;
+            }
+        }
+    }
+
+    /// Label addresses, for checking that layout has settled.
+    fn label_values(&self) -> Vec<(String, i64)> {
+        let mut v: Vec<(String, i64)> = self
+            .symbols
+            .iter()
+            .filter(|(_, s)| matches!(s, SymVal::Label(..)))
+            .map(|(n, s)| (n.clone(), self.value_of(n, s).v))
+            .collect();
+        v.sort();
+        v
+    }
+
+    /// Lays out until addresses stop changing (sizes can depend on later symbols:
+    /// `.org`, `.uleb128`, `.space`), then emits.
+    fn assemble_lines(&mut self, lines: &[Line]) {
+        let mut previous = None;
+        for _ in 0..6 {
+            self.run_pass(lines, 1);
+            self.lay_out();
+            let now = (
+                self.label_values(),
+                self.bases.clone(),
+                self.offsets.clone(),
+            );
+            if previous.as_ref() == Some(&now) {
+                break;
+            }
+            previous = Some(now);
+            if self.diags.iter().any(|d| d.severity == Severity::Error) {
+                break;
+            }
+        }
+        if self.expanded > MAX_EXPANDED {
+            return; // reported by the layout walk; a second walk would only repeat it
+        }
+        self.run_pass(lines, 2);
+        if self.nonzero_in_nobits {
+            self.diags.push(Diagnostic {
+                severity: Severity::Error,
+                location: Location {
+                    file: lines.first().map(|l| l.file.clone()).unwrap_or_default(),
+                    line: 0,
+                    column: 0,
+                },
+                message: "attempt to store non-zero value in a NOBITS section (.bss)".into(),
+                source_line: String::new(),
+            });
+        }
+    }
+
+    /// Errors (and warnings) sorted by place, with the count of those left out.
+    fn take_diagnostics(&mut self) -> (Vec<Diagnostic>, Vec<Diagnostic>) {
+        let diags = std::mem::take(&mut self.diags);
+        let (mut errors, warnings): (Vec<_>, Vec<_>) = diags
+            .into_iter()
+            .partition(|d| d.severity == Severity::Error);
+        if !errors.is_empty() {
+            errors.extend(warnings.iter().cloned());
+            errors.sort_by(|a, b| {
+                (&a.location.file, a.location.line, a.location.column).cmp(&(
+                    &b.location.file,
+                    b.location.line,
+                    b.location.column,
+                ))
+            });
+        }
+        if self.dropped_diags > 0 {
+            let last = errors
+                .last()
+                .or(warnings.last())
+                .map(|d| d.location.clone());
+            let note = Diagnostic {
+                severity: if errors.is_empty() {
+                    Severity::Warning
+                } else {
+                    Severity::Error
+                },
+                location: last.unwrap_or(Location {
+                    file: String::new(),
+                    line: 0,
+                    column: 0,
+                }),
+                message: format!("and {} more diagnostics", self.dropped_diags),
+                source_line: String::new(),
+            };
+            errors.push(note);
+            if errors.iter().all(|d| d.severity == Severity::Warning) {
+                let w = errors;
+                return (Vec::new(), w);
+            }
+        }
+        (errors, warnings)
+    }
+}
+
+/// Assembles `source` (named `file_name` in diagnostics) into an executable image at 0.
+pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output, Vec<Diagnostic>> {
+    assemble_chars(&bytes_as_text(source.as_bytes()), file_name, opts)
+}
+
+/// `assemble` of a source whose characters are its bytes (`bytes_as_text`).
+pub(crate) fn assemble_chars(
+    source: &str,
+    file_name: &str,
+    opts: &Options,
+) -> Result<Output, Vec<Diagnostic>> {
+    let lines = to_lines(source, file_name);
+    let mut asm = Assembler::new(opts, false);
+    asm.assemble_lines(&lines);
+    let (errors, warnings) = asm.take_diagnostics();
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    let fail = |message: String| {
+        vec![Diagnostic {
             severity: Severity::Error,
             location: Location {
                 file: file_name.into(),
                 line: 1,
                 column: 1,
             },
-            message: format!("program of {end} bytes does not fit the 256 KiB local store"),
-            source_line: lines.first().map(|l| l.text.clone()).unwrap_or_default(),
-        }]);
+            message,
+            source_line: lines
+                .first()
+                .map(|l| display_text(&l.text))
+                .unwrap_or_default(),
+        }]
+    };
+    // Sections in address order: (definition, address, size).
+    let mut placed: Vec<(usize, u32, u32)> = Vec::new();
+    for d in 0..asm.defs.len() {
+        if asm.defs[d].flags & SHF_ALLOC == 0 {
+            continue;
+        }
+        let chunks: Vec<Sect> = (0..asm.chunks.len())
+            .filter(|&c| asm.chunks[c].0 == d)
+            .collect();
+        let start = chunks.iter().map(|c| asm.bases[c]).min().unwrap_or(0);
+        let end = chunks
+            .iter()
+            .map(|c| asm.bases[c] + asm.offsets.get(c).copied().unwrap_or(0))
+            .max()
+            .unwrap_or(0);
+        placed.push((d, start, end - start));
+    }
+    placed.sort_by_key(|p| (p.1, p.0));
+    let end = placed.iter().map(|p| p.1 + p.2).max().unwrap_or(0);
+    if end as usize > LOCAL_STORE {
+        return Err(fail(format!(
+            "program of {end} bytes does not fit the 256 KiB local store"
+        )));
     }
     let mut image = vec![0u8; end as usize];
-    for (s, base) in [(Sect::Text, 0u32), (Sect::Data, data_base)] {
-        if let Some(b) = asm.bytes.get(&s) {
-            image[base as usize..base as usize + b.len()].copy_from_slice(b);
+    for c in 0..asm.chunks.len() {
+        if let Some(b) = asm.bytes.get(&c) {
+            let at = asm.bases[&c] as usize;
+            if asm.defs[asm.chunks[c].0].flags & SHF_ALLOC != 0 {
+                image[at..at + b.len()].copy_from_slice(b);
+            }
         }
+    }
+    // `.reloc` in an executable: applied now that every address is known.
+    let mut reloc_errors = Vec::new();
+    for (def, r, loc, text) in &asm.relocs {
+        let start = placed.iter().find(|p| p.0 == *def).map_or(0, |p| p.1);
+        let s = match &r.target {
+            RelocTarget::Section(usize::MAX) => 0,
+            RelocTarget::Section(t) => placed.iter().find(|p| p.0 == *t).map_or(0, |p| p.1) as i64,
+            RelocTarget::Symbol(n) => asm.symbol_address(n).unwrap_or(0),
+        };
+        let at = start + r.offset;
+        if let Err(m) = crate::reloc::apply(r.kind, &mut image, at, s + r.addend) {
+            reloc_errors.push(Diagnostic {
+                severity: Severity::Error,
+                location: loc.clone(),
+                message: m,
+                source_line: display_text(text),
+            });
+        }
+    }
+    if !reloc_errors.is_empty() {
+        return Err(reloc_errors);
     }
     let mut symbols: Vec<(String, u32)> = asm
         .symbols
@@ -1737,12 +3094,24 @@ pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output,
         .find(|(n, _)| n == "_start")
         .map(|s| s.1)
         .unwrap_or(0);
-    let sections = vec![
-        (".text".to_string(), 0, text_size, true),
-        (".data".to_string(), data_base, data_size, false),
-        (".bss".to_string(), bss_base, bss_size, false),
-    ];
-    let elf = crate::elf::write_elf(&image, &sections, &symbols, &asm.globals, entry);
+    let sections: Vec<(String, u32, u32, bool)> = placed
+        .iter()
+        .map(|&(d, a, size)| {
+            let def = &asm.defs[d];
+            (def.name.clone(), a, size, def.flags & SHF_EXECINSTR != 0)
+        })
+        .collect();
+    let globals: Vec<String> = asm
+        .attrs
+        .iter()
+        .filter(|(_, a)| a.global)
+        .map(|(n, _)| n.clone())
+        .collect();
+    let nobits: Vec<bool> = placed
+        .iter()
+        .map(|p| asm.defs[p.0].ty == SHT_NOBITS)
+        .collect();
+    let elf = crate::elf::write_elf(&image, &sections, &nobits, &symbols, &globals, entry);
     Ok(Output {
         image,
         elf,
@@ -1752,6 +3121,149 @@ pub fn assemble(source: &str, file_name: &str, opts: &Options) -> Result<Output,
         warnings,
         sections,
     })
+}
+
+/// Assembles `source` into a relocatable object: every section at offset 0, references
+/// to addresses left as SPU relocations, undefined symbols external.
+pub fn assemble_object(
+    source: &str,
+    file_name: &str,
+    opts: &Options,
+) -> Result<(crate::object::Object, Vec<Diagnostic>), Vec<Diagnostic>> {
+    assemble_object_chars(&bytes_as_text(source.as_bytes()), file_name, opts)
+}
+
+/// `assemble_object` of a source whose characters are its bytes.
+pub(crate) fn assemble_object_chars(
+    source: &str,
+    file_name: &str,
+    opts: &Options,
+) -> Result<(crate::object::Object, Vec<Diagnostic>), Vec<Diagnostic>> {
+    use crate::object::{ObjSection, ObjSymbol, SymSection};
+    let lines = to_lines(source, file_name);
+    let mut asm = Assembler::new(opts, true);
+    asm.assemble_lines(&lines);
+    let (errors, warnings) = asm.take_diagnostics();
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    let mut obj = crate::object::Object {
+        name: file_name.to_string(),
+        ..Default::default()
+    };
+    for (d, def) in asm.defs.iter().enumerate() {
+        let mut chunks: Vec<Sect> = (0..asm.chunks.len())
+            .filter(|&c| asm.chunks[c].0 == d)
+            .collect();
+        chunks.sort_by_key(|&c| asm.chunks[c].1);
+        let size = chunks
+            .iter()
+            .map(|c| asm.bases[c] + asm.offsets.get(c).copied().unwrap_or(0))
+            .max()
+            .unwrap_or(0);
+        let mut data = Vec::new();
+        if def.ty != SHT_NOBITS {
+            data = vec![0u8; size as usize];
+            for c in &chunks {
+                if let Some(b) = asm.bytes.get(c) {
+                    let at = asm.bases[c] as usize;
+                    data[at..at + b.len()].copy_from_slice(b);
+                }
+            }
+        }
+        let align = chunks
+            .iter()
+            .map(|c| asm.align.get(c).copied().unwrap_or(1))
+            .max()
+            .unwrap_or(1);
+        obj.sections.push(ObjSection {
+            name: def.name.clone(),
+            ty: def.ty,
+            flags: def.flags,
+            entsize: def.entsize,
+            align,
+            size,
+            data,
+            relocs: Vec::new(),
+        });
+    }
+    for (d, r, _, _) in &asm.relocs {
+        let mut r = r.clone();
+        if r.target == RelocTarget::Section(usize::MAX) {
+            // An absolute value: against no symbol.
+            r.target = RelocTarget::Symbol(String::new());
+        }
+        obj.sections[*d].relocs.push(r);
+    }
+    let mut names: Vec<&String> = asm.symbols.keys().collect();
+    names.sort();
+    let mut referenced: std::collections::BTreeSet<String> = Default::default();
+    for s in &obj.sections {
+        for r in &s.relocs {
+            if let RelocTarget::Symbol(n) = &r.target {
+                if !n.is_empty() {
+                    referenced.insert(n.clone());
+                }
+            }
+        }
+    }
+    for name in names {
+        let attrs = asm.attrs.get(name).cloned().unwrap_or_default();
+        let (section, value) = match &asm.symbols[name] {
+            SymVal::Label(c, off) => (
+                SymSection::Section(asm.chunks[*c].0),
+                (asm.bases[c] + off) as u64,
+            ),
+            SymVal::Common(size, align) => {
+                obj.symbols.push(ObjSymbol {
+                    name: name.clone(),
+                    value: *align as u64,
+                    size: *size as u64,
+                    section: SymSection::Common,
+                    global: true,
+                    weak: false,
+                    hidden: attrs.hidden,
+                    kind: 1,
+                });
+                continue;
+            }
+            SymVal::Abs(v) if v.sect.is_some() && v.sym.is_none() => {
+                (SymSection::Section(v.sect.unwrap_or(0)), v.v as u64)
+            }
+            SymVal::Abs(v) if !v.reloc && !v.cross => (SymSection::Absolute, v.v as u64),
+            SymVal::Abs(_) => continue,
+        };
+        // Local labels named `.L` stay out of the symbol table, as in gas.
+        if name.starts_with(".L") && !attrs.global {
+            continue;
+        }
+        obj.symbols.push(ObjSymbol {
+            name: name.clone(),
+            value,
+            size: attrs.size.unwrap_or(0) as u64,
+            section,
+            global: attrs.global || attrs.weak,
+            weak: attrs.weak,
+            hidden: attrs.hidden,
+            kind: attrs.kind,
+        });
+    }
+    for name in referenced {
+        if !asm.symbols.contains_key(&name) {
+            let attrs = asm.attrs.get(&name).cloned().unwrap_or_default();
+            obj.symbols.push(ObjSymbol {
+                name,
+                value: 0,
+                size: 0,
+                section: SymSection::Undefined,
+                global: true,
+                weak: attrs.weak,
+                hidden: attrs.hidden,
+                kind: attrs.kind,
+            });
+        }
+    }
+    Ok((obj, warnings))
 }
 
 #[cfg(test)]

@@ -110,6 +110,12 @@ fn mutated_sources_never_panic() {
         }
         let source = lines.join("\n");
         let _ = spu_asm::assemble(&source, "mutated.s", &opts);
+        // The same source as a relocatable object, written, read back and linked.
+        if let Ok((obj, _)) = spu_asm::assemble_object(&source, "mutated.s", &opts) {
+            let elf = obj.to_elf().expect("an assembled object writes");
+            let back = spu_asm::object::Object::from_elf("mutated.o", &elf).expect("reads back");
+            let _ = spu_asm::link::link(&[back], &Default::default());
+        }
     }
 }
 

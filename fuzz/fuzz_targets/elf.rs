@@ -3,6 +3,11 @@
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 
+thread_local! {
+    static SPU: std::cell::RefCell<spu_isa::machine::Spu> =
+        std::cell::RefCell::new(spu_isa::machine::Spu::new(0));
+}
+
 fuzz_target!(|data: &[u8]| {
     if let Ok(elf) = spu_asm::elf::read_elf(data) {
         let segments: Vec<(u32, &[u8])> = elf
@@ -10,8 +15,8 @@ fuzz_target!(|data: &[u8]| {
             .iter()
             .map(|(a, d)| (*a, d.as_slice()))
             .collect();
-        let mut spu = spu_isa::machine::Spu::new(0);
-        spu.load_segments(&segments, elf.entry);
+        // One SPU for every input: building one per input costs more than the rest.
+        SPU.with(|spu| spu.borrow_mut().load_segments(&segments, elf.entry));
         let symbols = spu_isa::disasm::SymbolTable::new(
             elf.symbols.iter().map(|(n, a)| (*a, n.clone())).collect(),
         );

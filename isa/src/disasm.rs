@@ -18,6 +18,11 @@ pub trait Symbolizer {
     fn symbol_for(&self, addr: u32) -> Option<(&str, u32)>;
     /// Whether a symbol is defined exactly at `addr`.
     fn has_symbol_at(&self, addr: u32) -> bool;
+    /// What precedes a bare address: objdump writes `0x38` when the file has no
+    /// symbols at all (a raw image), `38` otherwise.
+    fn address_prefix(&self) -> &'static str {
+        ""
+    }
 }
 
 /// No symbols: addresses print as bare hex.
@@ -39,10 +44,23 @@ pub struct SymbolTable {
 }
 
 impl SymbolTable {
-    pub fn new(mut symbols: Vec<(u32, String)>) -> Self {
-        symbols.sort_by(|a, b| a.0.cmp(&b.0).then_with(|| a.1.cmp(&b.1)));
+    pub fn new(symbols: Vec<(u32, String)>) -> Self {
+        Self::ranked(symbols.into_iter().map(|(a, n)| (a, n, 0)).collect())
+    }
+
+    /// Symbols with a preference: where several share an address, the lowest rank names
+    /// it (objdump prefers a section's global symbol to local labels), then the first
+    /// name in order.
+    pub fn ranked(mut symbols: Vec<(u32, String, u8)>) -> Self {
+        symbols.sort_by(|a, b| {
+            a.0.cmp(&b.0)
+                .then_with(|| a.2.cmp(&b.2))
+                .then_with(|| a.1.cmp(&b.1))
+        });
         symbols.dedup_by(|later, earlier| later.0 == earlier.0);
-        SymbolTable { symbols }
+        SymbolTable {
+            symbols: symbols.into_iter().map(|(a, n, _)| (a, n)).collect(),
+        }
     }
 
     /// Symbols defined exactly at `addr`.
@@ -71,12 +89,19 @@ impl Symbolizer for SymbolTable {
     fn has_symbol_at(&self, addr: u32) -> bool {
         self.symbols.binary_search_by(|s| s.0.cmp(&addr)).is_ok()
     }
+    fn address_prefix(&self) -> &'static str {
+        if self.symbols.is_empty() {
+            "0x"
+        } else {
+            ""
+        }
+    }
 }
 
 /// An address as objdump prints it: hex without `0x`, then `<sym>` or `<sym+0xoff>`.
 pub fn format_address(addr: u32, symbols: &dyn Symbolizer) -> String {
     match symbols.symbol_for(addr) {
-        None => format!("{addr:x}"),
+        None => format!("{}{addr:x}", symbols.address_prefix()),
         Some((name, at)) if at == addr => format!("{addr:x} <{name}>"),
         Some((name, at)) if at < addr => format!("{addr:x} <{name}+0x{:x}>", addr - at),
         Some((name, at)) => format!("{addr:x} <{name}-0x{:x}>", at - addr),

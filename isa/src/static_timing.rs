@@ -364,6 +364,9 @@ pub fn analyze_source(src: &str, label: Option<&str>) -> Result<StaticTiming, St
     let mut blocks: Vec<StaticBlock> = Vec::new();
     let mut block_line: Vec<usize> = Vec::new();
     let mut pending_label: Option<(String, usize)> = None;
+    // Every label at a block's address (labels may share one), for `--label`.
+    let mut pending_all: Vec<String> = Vec::new();
+    let mut block_labels: Vec<Vec<String>> = Vec::new();
     let mut after_branch = true;
     for (li, line) in lines.iter().enumerate() {
         if let Some(l) = line.labels.first() {
@@ -371,6 +374,7 @@ pub fn analyze_source(src: &str, label: Option<&str>) -> Result<StaticTiming, St
                 pending_label = Some((l.clone(), li));
             }
         }
+        pending_all.extend(line.labels.iter().cloned());
         for (ii, si) in line.insts.iter().enumerate() {
             if pending_label.is_some() || after_branch || blocks.is_empty() {
                 let (label, at) = match pending_label.take() {
@@ -386,7 +390,9 @@ pub fn analyze_source(src: &str, label: Option<&str>) -> Result<StaticTiming, St
                     stall: 0,
                 });
                 block_line.push(at);
+                block_labels.push(std::mem::take(&mut pending_all));
             }
+            pending_all.clear();
             after_branch = crate::analysis::is_branch(si.inst.op);
             order.push((li, ii));
             block_of.push(blocks.len() - 1);
@@ -395,9 +401,9 @@ pub fn analyze_source(src: &str, label: Option<&str>) -> Result<StaticTiming, St
     let (selected, shown) = match label {
         None => (None, 0..lines.len()),
         Some(name) => {
-            let b = blocks
+            let b = block_labels
                 .iter()
-                .position(|b| b.label.as_deref() == Some(name))
+                .position(|l| l.iter().any(|l| l == name))
                 .ok_or_else(|| format!("no block starts at label `{name}`"))?;
             let end = block_line.get(b + 1).copied().unwrap_or(lines.len());
             // Stop the shown lines after the block's last instruction's line.

@@ -1,12 +1,16 @@
 # frame.s — the frame driver: start-up and the tile loop.
 #
 # Host protocol (loader::runtime): $3 = SPU index, $4 = effective address of the 128-byte
-# parameter block (PARAM_*). `_start` fetches the parameters, sets the frame constants and
-# carves the caches; `next_tile` takes 64x64 tiles from a shared counter with an atomic
-# getllar/putllc increment and falls into ray generation (modules/raygen.s) for the tile's
-# 64 packets of 8x8 rays; packet output (modules/output.s) comes back here for the next
-# tile. The end of the frame, `frame_done`, is in modules/frame_done.s: it stays the last
-# block of the program so the hot code keeps its addresses.
+# parameter block (PARAM_*). `_start` fetches the parameters, sets the frame constants,
+# carves the caches (direct mapped or 4-way, modules/bvh_cache.s) and the packet contexts
+# (loader::kernel_abi::context; one per packet in flight, modules/sht.s), and picks the
+# miss handlers for the configuration. `packet_start` gives the current context the next
+# packet of the tile (`next_tile` takes 64x64 tiles from a shared counter with an atomic
+# getllar/putllc increment) and falls into ray generation (modules/raygen.s); packet output
+# (modules/output.s) comes back here for the context's next packet; a context without a
+# packet, once no tile is left, goes to sched_next. The end of the frame, `frame_done`, is
+# in modules/frame_done.s: it stays the last block of the program so the hot code keeps
+# its addresses.
 
         .text
         .global _start

@@ -24,149 +24,96 @@
 # $68/$70/$71: the pair's x/y/z planes, $73: (link', meta) of both children, $76: near
 # child's table offset, $77: the entry a pop takes, $112: first-ray miss mask
 # (lanes child 0, 0, 1, 1), $118: the children's first active rays.
-        .align  3                             # pairs: even pipe at 8k, odd pipe at 8k+4
+        .sched  scratch=66-127
 trav:
-        and     $66, CUR, BMASK64   # the pair's cache line
-        hbrr    .Lloop_br, trav
-        nop
-        rotqbyi $67, CUR, 4   # meta << 4
-        rotmi   $72, $66, -2   # its tag's offset
-        lqx     $68, BDATA, $66   # x planes (min0, max0, min1, max1)
-        nop
-        lqx     $70, BDATA16, $66   # y
-        nop
-        lqx     $71, BDATA32, $66   # z
-        andi    $69, $67, 0x30   # split axis * 16
-        lqd     $74, CTX_RAY_T(FT_ADDR)   # the first ray's t
-        rotmi   $97, $67, -6   # triangle count: a leaf
-        lqx     $73, BDATA48, $66   # (link', meta) of both children
-        nop
+      ! hbrr    .Lloop_br, trav
+        and     $66, CUR, BMASK64             # the pair's cache line
+        rotqbyi $67, CUR, 4                   # meta << 4
+        rotmi   $72, $66, -2                  # its tag's offset
+        lqx     $68, BDATA, $66               # x planes (min0, max0, min1, max1)
+        lqx     $70, BDATA16, $66             # y
+        lqx     $71, BDATA32, $66             # z
+        lqx     $73, BDATA48, $66             # (link', meta) of both children
         lqx     $75, BTAGS, $72
-        nop
-        lqx     $76, NEGTAB, $69   # all ones: child 1 is the near one
-        nop
-        lqd     $77, -16(STK)   # the entry a pop takes
-        nop
+        andi    $69, $67, 0x30                # split axis * 16
+        lqx     $76, NEGTAB, $69              # all ones: child 1 is the near one
+        lqd     $74, CTX_RAY_T(FT_ADDR)               # the first ray's t
+        lqd     $77, -16(STK)                 # the entry a pop takes
         lqa     $78, k_pc0
-        nop
         lqa     $79, k_pc1
-        nop
-        shufb   $95, CUR, CUR, PAT2   # this node's first active ray: changed?
-        ceq     $115, $75, CUR   # the line holds this pair
-        shufb   $80, $68, $68, PERMX   # planes in (near, far) order for the first ray
-        nop
-        shufb   $81, $70, $70, PERMY
-        nop
-        shufb   $82, $71, $71, PERMZ
+        shufb   $95, CUR, CUR, PAT2           # this node's first active ray: changed?
         ceq     $95, $95, FIRST
-        shufb   $83, $74, $74, FT_PAT   # (0, t, 0, t)
-        fms     $84, $80, RX1, OR1X   # first ray: (entry, -exit) per child and axis
-        lnop
-        fms     $85, $81, RY1, OR1Y
-        brz     $95, first_changed
-        fms     $86, $82, RZ1, OR1Z
-        brnz    $97, leaf
-        xor     $83, $83, NEGODD   # (0, -t, 0, -t)
-        lnop
-        fma     $87, $80, PAX, OAX   # packet: both bounds, the smaller taken
-        lnop
-        fma     $88, $80, PBX, OBX
-        lnop
-        fma     $89, $81, PAY, OAY
-        lnop
-        fma     $90, $81, PBY, OBY
-        lnop
-        fma     $91, $82, PAZ, OAZ
-        lnop
-        fma     $92, $82, PBZ, OBZ
-        lnop
-        fcgt    $93, $84, $85
-        lnop
-        fcgt    $95, $86, $83
-        lnop
-        selb    $94, $85, $84, $93   # max(x, y)
-        lnop
-        selb    $96, $83, $86, $95   # max(z, t)
-        lnop
-        fcgt    $99, $87, $88
-        lnop
-        fcgt    $97, $94, $96
-        lnop
-        fcgt    $101, $89, $90
-        lnop
-        fcgt    $103, $91, $92
-        lnop
-        selb    $98, $96, $94, $97   # first ray: (entry, -exit) over the axes
-        lnop
-        selb    $100, $87, $88, $99
-        lnop
-        selb    $102, $89, $90, $101
-        shufb   $111, $98, $98, SWAP
-        selb    $104, $91, $92, $103
-        lnop
-        fcgt    $105, $100, $102
-        lnop
-        fcgt    $107, $104, F2
-        lnop
-        selb    $106, $102, $100, $105
-        lnop
-        selb    $108, F2, $104, $107
-        lnop
-        xor     $111, $111, SIGNS   # (exit, -entry)
-        lnop
-        fcgt    $109, $106, $108
-        lnop
-        fcgt    $112, $98, $111   # the first ray misses (lanes child 0, 0, 1, 1)
-        lnop
-        selb    $110, $108, $106, $109   # packet: (entry, -exit) over the axes
-        lnop
+        rotmi   $97, $67, -6                  # triangle count: a leaf
+      ! brz     $95, first_changed
+      ! brnz    $97, leaf
         ai      S_STEPS, S_STEPS, 1
-        shufb   $116, $112, $112, PAT0   # child 0 missed, every lane
-        ceq     $93, STK, STKBASE
+        shufb   $80, $68, $68, PERMX          # planes in (near, far) order for the first ray
+        shufb   $81, $70, $70, PERMY
+        shufb   $82, $71, $71, PERMZ
+        shufb   $83, $74, $74, FT_PAT         # (0, t, 0, t)
+        xor     $83, $83, NEGODD              # (0, -t, 0, -t)
+        fms     $84, $80, RX1, OR1X           # first ray: (entry, -exit) per child and axis
+        fms     $85, $81, RY1, OR1Y
+        fms     $86, $82, RZ1, OR1Z
+        fma     $87, $80, PAX, OAX            # packet: both bounds, the smaller taken
+        fma     $88, $80, PBX, OBX
+        fma     $89, $81, PAY, OAY
+        fma     $90, $81, PBY, OBY
+        fma     $91, $82, PAZ, OAZ
+        fma     $92, $82, PBZ, OBZ
+        fcgt    $93, $84, $85
+        selb    $94, $85, $84, $93            # max(x, y)
+        fcgt    $95, $86, $83
+        selb    $96, $83, $86, $95            # max(z, t)
+        fcgt    $97, $94, $96
+        selb    $98, $96, $94, $97            # first ray: (entry, -exit) over the axes
+        fcgt    $99, $87, $88
+        selb    $100, $87, $88, $99
+        fcgt    $101, $89, $90
+        selb    $102, $89, $90, $101
+        fcgt    $103, $91, $92
+        selb    $104, $91, $92, $103
+        fcgt    $105, $100, $102
+        selb    $106, $102, $100, $105
+        fcgt    $107, $104, F2
+        selb    $108, F2, $104, $107
+        fcgt    $109, $106, $108
+        selb    $110, $108, $106, $109        # packet: (entry, -exit) over the axes
+        shufb   $111, $98, $98, SWAP
+        xor     $111, $111, SIGNS             # (exit, -entry)
+        fcgt    $112, $98, $111               # the first ray misses (lanes child 0, 0, 1, 1)
         shufb   $113, $110, $110, SWAP
-        nop
-        shufb   $117, $112, $112, PAT2   # child 1 missed
-        or      $118, $116, $76
-        lnop
         xor     $113, $113, SIGNS
-        lnop
-        andc    $118, $118, $117   # go to child 1
-        lnop
-        fcgt    $114, $110, $113   # the frustum misses
-        lnop
-        selb    $119, $78, $79, $118   # next state's pattern
-        biz     $115, BMISSH
-        selb    $120, $79, $78, $118   # pushed state's pattern
-        lnop
-        a       $124, $116, $117
+        fcgt    $114, $110, $113              # the frustum misses
+        ceq     $115, $75, CUR                # the line holds this pair
+      ! biz     $115, BMISSH
+        shufb   $116, $112, $112, PAT0        # child 0 missed, every lane
+        shufb   $117, $112, $112, PAT2        # child 1 missed
+        or      $118, $116, $76
+        andc    $118, $118, $117              # go to child 1
+        selb    $119, $78, $79, $118          # next state's pattern
+        selb    $120, $79, $78, $118          # pushed state's pattern
+        and     $121, $116, $117              # neither: pop
         shufb   $122, $73, FIRST, $119
-        andc    $125, $112, $114   # undecided: the first ray misses, the frustum not
         shufb   $123, $73, FIRST, $120
-        shli    $124, $124, 4   # -32, -16, 0: stack delta - 16
-        lnop
-        and     $127, $112, $114   # early exits
+        a       $124, $116, $117
+        shli    $124, $124, 4                 # -32, -16, 0: stack delta - 16
+        andc    $125, $112, $114              # undecided: the first ray misses, the frustum not
         gb      $126, $125
-        and     $121, $116, $117   # neither: pop
-        lnop
         a       M1V, M1V, $112
-        lnop
+        and     $127, $112, $114              # early exits
         a       EEV, EEV, $127
-        lnop
-        and     $93, $93, $121   # popping an empty stack: the packet is done
-        brnz    $126, slow   # the third case: the only one that branches
+      ! brnz    $126, slow                    # the third case: the only one that branches
+        ceq     $93, STK, STKBASE
+        and     $93, $93, $121                # popping an empty stack: the packet is done
         selb    CUR, $122, $77, $121
-        lnop
-        nop
-        stqd    $123, 0(STK)   # stored either way; kept when both children go
-        nop
-        brnz    $93, packet_done
+      ! stqd    $123, 0(STK)                  # stored either way; kept when both children go
+      ! brnz    $93, packet_done
         a       STK, STK, $124
-        lnop
         ai      STK, STK, 16
-        lnop
-        nop
 .Lloop_br:
-        br      trav
+      ! br      trav
+        .endsched
 
 # a new state from a pop or a changed first ray: the step's own checks sort it out
         .set    .Lnewcur, trav
@@ -257,160 +204,64 @@ find_first:
         ila     $88, CTX_RAY_RX
         a       $88, $88, RAYS
         # two vectors per pass (scheduled into even/odd pairs)
-        .align  3
+        .sched  pool=91-96,98-102,105-111,116,118-124,127,87 scratch=66-127
 1:
         a       $90, $88, $86
-        lnop
-        cgt     $91, $117, $89
-        lnop
-        ai      $92, $117, 4
-        lqd     $93, 0($90)
+        lqd     %rx0, 0($90)
+        lqd     %ry0, 256($90)
+        lqd     %rz0, 512($90)
+        lqd     %t0, 768($90)
+        lqd     %rx1, 16($90)
+        lqd     %ry1, 272($90)
+        lqd     %rz1, 528($90)
+        lqd     %t1, 784($90)
+        .irp    V, 0, 1
+        fm      %ax\V, $80, %rx\V
+        fm      %bx\V, $81, %rx\V
+        fm      %ay\V, $82, %ry\V
+        fm      %by\V, $83, %ry\V
+        fm      %az\V, $84, %rz\V
+        fm      %bz\V, $85, %rz\V
+        fcgt    %mx\V, %ax\V, %bx\V
+        fcgt    %my\V, %ay\V, %by\V
+        fcgt    %mz\V, %az\V, %bz\V
+        selb    %lx\V, %ax\V, %bx\V, %mx\V
+        selb    %hx\V, %bx\V, %ax\V, %mx\V
+        selb    %ly\V, %ay\V, %by\V, %my\V
+        selb    %hy\V, %by\V, %ay\V, %my\V
+        selb    %lz\V, %az\V, %bz\V, %mz\V
+        selb    %hz\V, %bz\V, %az\V, %mz\V
+        fcgt    %m1\V, %lx\V, %ly\V
+        selb    %e1\V, %ly\V, %lx\V, %m1\V
+        fcgt    %m2\V, %lz\V, ZERO
+        selb    %e2\V, ZERO, %lz\V, %m2\V
+        fcgt    %m3\V, %e1\V, %e2\V
+        selb    %en\V, %e2\V, %e1\V, %m3\V
+        fcgt    %m4\V, %hx\V, %hy\V
+        selb    %x1\V, %hx\V, %hy\V, %m4\V
+        fcgt    %m5\V, %hz\V, %t\V
+        selb    %x2\V, %hz\V, %t\V, %m5\V
+        fcgt    %m6\V, %x1\V, %x2\V
+        selb    %ex\V, %x1\V, %x2\V, %m6\V
+        fm      %enw\V, %en\V, $113
+        fm      %exw\V, %ex\V, $114
+        fcgt    %miss\V, %enw\V, %exw\V
+        .endr
+        ai      %idx1, $117, 4
+        cgt     %act0, $117, $89
+        cgt     %act1, %idx1, $89
+        andc    %hit0, %act0, %miss0
+        andc    %hit1, %act1, %miss1
+        gb      %g0, %hit0
+        gb      %g1, %hit1
+        shli    %g0s, %g0, 4
+        or      $103, %g0s, %g1
         ai      $86, $86, 32
-        lqd     $94, 256($90)
-        cgt     $95, $92, $89
-        lqd     $96, 512($90)
         ai      $117, $117, 8
-        lqd     $98, 16($90)
         ceqi    $104, $86, 256
-        lqd     $99, 272($90)
-        nop
-        lqd     $100, 528($90)
-        fm      $101, $80, $93
-        lqd     $102, 768($90)
-        fm      $105, $81, $93
-        lqd     $106, 784($90)
-        fm      $107, $82, $94
-        lnop
-        fm      $108, $83, $94
-        lnop
-        fm      $109, $84, $96
-        lnop
-        fm      $110, $85, $96
-        lnop
-        fm      $111, $80, $98
-        lnop
-        fm      $116, $81, $98
-        lnop
-        fm      $118, $82, $99
-        lnop
-        fm      $119, $83, $99
-        lnop
-        fm      $120, $84, $100
-        lnop
-        fm      $121, $85, $100
-        lnop
-        fcgt    $122, $101, $105
-        lnop
-        fcgt    $123, $107, $108
-        lnop
-        fcgt    $124, $109, $110
-        lnop
-        selb    $127, $101, $105, $122
-        lnop
-        selb    $87, $105, $101, $122
-        lnop
-        selb    $92, $107, $108, $123
-        lnop
-        selb    $93, $108, $107, $123
-        lnop
-        selb    $94, $109, $110, $124
-        lnop
-        selb    $96, $110, $109, $124
-        lnop
-        fcgt    $98, $127, $92
-        lnop
-        fcgt    $99, $94, ZERO
-        lnop
-        fcgt    $100, $87, $93
-        lnop
-        fcgt    $122, $96, $102
-        lnop
-        fcgt    $101, $111, $116
-        lnop
-        fcgt    $105, $118, $119
-        lnop
-        fcgt    $108, $120, $121
-        lnop
-        selb    $123, $92, $127, $98
-        lnop
-        selb    $107, ZERO, $94, $99
-        lnop
-        selb    $109, $87, $93, $100
-        lnop
-        selb    $124, $96, $102, $122
-        lnop
-        selb    $110, $111, $116, $101
-        lnop
-        selb    $98, $116, $111, $101
-        lnop
-        selb    $127, $118, $119, $105
-        lnop
-        selb    $92, $119, $118, $105
-        lnop
-        selb    $99, $120, $121, $108
-        lnop
-        selb    $94, $121, $120, $108
-        lnop
-        fcgt    $87, $123, $107
-        lnop
-        fcgt    $93, $109, $124
-        lnop
-        fcgt    $100, $110, $127
-        lnop
-        fcgt    $102, $99, ZERO
-        lnop
-        fcgt    $122, $98, $92
-        lnop
-        fcgt    $96, $94, $106
-        lnop
-        selb    $116, $107, $123, $87
-        lnop
-        selb    $111, $109, $124, $93
-        lnop
-        selb    $101, $127, $110, $100
-        lnop
-        selb    $119, ZERO, $99, $102
-        lnop
-        selb    $105, $98, $92, $122
-        lnop
-        selb    $118, $94, $106, $96
-        lnop
-        fm      $108, $116, $113
-        lnop
-        fm      $121, $111, $114
-        lnop
-        fcgt    $120, $101, $119
-        lnop
-        fcgt    $87, $105, $118
-        lnop
-        selb    $123, $119, $101, $120
-        lnop
-        selb    $107, $105, $118, $87
-        lnop
-        fm      $124, $123, $113
-        lnop
-        fm      $93, $107, $114
-        lnop
-        fcgt    $109, $108, $121
-        lnop
-        andc    $127, $91, $109
-        lnop
-        nop
-        gb      $100, $127
-        fcgt    $110, $124, $93
-        lnop
-        andc    $99, $95, $110
-        lnop
-        shli    $102, $100, 4
-        lnop
-        nop
-        gb      $98, $99
-        or      $103, $102, $98
-        lnop
-        nop
-        brnz    $103, 2f
-        nop
-        brz     $104, 1b
+      ! brnz    $103, 2f
+      ! brz     $104, 1b
+        .endsched
 
         il      $97, -1
         bi      $0

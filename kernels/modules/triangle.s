@@ -60,137 +60,94 @@ tri_loop:
         brz     $85, tri_miss                 # hits fall through
         # (scheduled into even/odd pairs: the record's splats, the corner-ray frustum cull
         # of the triangle, the first active group's offset)
-        .align  3
+        .sched  scratch=66-127
 .Ltri_hit:
-        ila     $90, k_axoff
-        lqd     $86, TRI_N_U($84)   # (n_u, n_v, n_d, k)
-        ori     $97, RAYS, 0
-        lqd     $87, TRI_B_NU($84)   # (b_nu, b_nv, b_d, -)
-        rotmi   $119, FIRST, -4
-        lqd     $88, TRI_C_NU($84)   # (c_nu, c_nv, c_d, -)
-        nop
-        shufb   $124, $66, $66, PAT0   # triangle index
-        shli    $119, $119, 6   # byte offset of the first group
-        rotqbyi $89, $86, 12   # k
-        nop
-        shufb   $68, $86, $86, PAT0   # n_u
-        nop
-        shufb   $69, $86, $86, PAT1   # n_v
-        nop
-        shufb   $93, $86, $86, PAT2   # n_d
+        lqd     $86, TRI_N_U($84)              # (n_u, n_v, n_d, k)
+        lqd     $87, TRI_B_NU($84)             # (b_nu, b_nv, b_d, -)
+        lqd     $88, TRI_C_NU($84)             # (c_nu, c_nv, c_d, -)
+        rotqbyi $89, $86, 12                  # k
         shli    $89, $89, 4
-        shufb   $71, $87, $87, PAT0   # b_nu
-        fm      $95, $68, $68
-        shufb   $73, $87, $87, PAT2   # b_d
-        nop
-        shufb   $74, $88, $88, PAT0   # c_nu
-        nop
-        shufb   $120, $88, $88, PAT2   # c_d
-        nop
-        lqx     $91, $90, $89   # (k, u, v) array offsets
+        ila     $90, k_axoff
+        lqx     $91, $90, $89                 # (k, u, v) array offsets
         ila     $90, k_kuv
-        shufb   $72, $87, $87, PAT1   # b_nv
-        nop
-        shufb   $75, $88, $88, PAT1   # c_nv
-        fma     $95, $69, $69, $95
         lqx     $92, $90, $89
-        a       $125, $97, $91   # base of d_k
-        rotqbyi $98, $91, 4
-        rotmi   $100, $91, -4
-        rotqbyi $99, $91, 8
-        fa      $95, $95, ONE
-        shufb   $92, ORIG, ORIG, $92   # origin in (k, u, v) order
-        a       $126, $97, $98   # d_u
-        lnop
-        a       $127, $97, $99   # d_v
-        lnop
-        rotmi   $101, $98, -4
-        lnop
-        ai      $97, RAYS, CTX_CORNERS
-        shufb   $94, $92, $92, PAT0   # o_k
-        rotmi   $102, $99, -4
-        shufb   $121, $92, $92, PAT1   # o_u
-        nop
-        lqx     $103, $97, $100   # corner d_k
-        nop
-        lqx     $104, $97, $101   # corner d_u
+        shufb   $92, ORIG, ORIG, $92          # origin in (k, u, v) order
+        # per-triangle splats, live through the ray loop
+        shufb   $68, $86, $86, PAT0            # n_u
+        shufb   $69, $86, $86, PAT1            # n_v
+        shufb   $93, $86, $86, PAT2           # n_d
+        shufb   $71, $87, $87, PAT0            # b_nu
+        shufb   $72, $87, $87, PAT1            # b_nv
+        shufb   $73, $87, $87, PAT2            # b_d
+        shufb   $74, $88, $88, PAT0            # c_nu
+        shufb   $75, $88, $88, PAT1            # c_nv
+        shufb   $120, $88, $88, PAT2          # c_d
+        shufb   $94, $92, $92, PAT0           # o_k
+        shufb   $121, $92, $92, PAT1          # o_u
+        shufb   $122, $92, $92, PAT2          # o_v
         fs      $70, $93, $94
-        shufb   $122, $92, $92, PAT2   # o_v
-        nop
-        lqx     $105, $97, $102   # corner d_v
-        nop
-        frsqest $96, $95
-        fma     $106, $68, $104, $103
-        lnop
         fnms    $70, $68, $121, $70
-        lnop
-        fi      $123, $95, $96   # 1/|n|, n = (1, n_u, n_v) in (k, u, v)
-        lnop
-        fma     $106, $69, $105, $106   # den = n.d
-        lnop
-        fnms    $70, $69, $122, $70   # num = n_d - o_k - n_u o_u - n_v o_v
-        lnop
-        nop
+        fnms    $70, $69, $122, $70              # num = n_d - o_k - n_u o_u - n_v o_v
+        fm      $95, $68, $68
+        fma     $95, $69, $69, $95
+        fa      $95, $95, ONE
+        frsqest $96, $95
+        fi      $123, $95, $96                # 1/|n|, n = (1, n_u, n_v) in (k, u, v)
+        shufb   $124, $66, $66, PAT0          # triangle index
+        ori     $97, RAYS, 0
+        rotqbyi $98, $91, 4
+        rotqbyi $99, $91, 8
+        a       $125, $97, $91                # base of d_k
+        a       $126, $97, $98                # d_u
+        a       $127, $97, $99                # d_v
+        # frustum culling with the packet's corner rays (0, 7, 56, 63)
+        ai      $97, RAYS, CTX_CORNERS
+        rotmi   $100, $91, -4
+        rotmi   $101, $98, -4
+        rotmi   $102, $99, -4
+        lqx     $103, $97, $100               # corner d_k
+        lqx     $104, $97, $101               # corner d_u
+        lqx     $105, $97, $102               # corner d_v
+        fma     $106, $68, $104, $103
+        fma     $106, $69, $105, $106          # den = n.d
         frest   $107, $106
         fi      $107, $106, $107
-        lnop
         fnms    $108, $106, $107, ONE
-        lnop
         fma     $107, $108, $107, $107
-        lnop
-        fm      $107, $70, $107   # t
-        lnop
-        fma     $108, $107, $104, $121   # hit u
-        lnop
-        fma     $109, $107, $105, $122   # hit v
-        lnop
-        fcgt    $113, $107, ZERO   # in front
-        lnop
+        fm      $107, $70, $107                # t
+        fma     $108, $107, $104, $121        # hit u
+        fma     $109, $107, $105, $122        # hit v
         fma     $110, $71, $108, $73
-        lnop
+        fma     $110, $72, $109, $110          # beta
         fma     $111, $74, $108, $120
-        lnop
-        fma     $110, $72, $109, $110   # beta
-        lnop
-        fma     $111, $75, $109, $111   # gamma
-        lnop
-        fcgt    $114, ZERO, $110
-        lnop
+        fma     $111, $75, $109, $111          # gamma
         fa      $112, $110, $111
-        lnop
+        fcgt    $113, $107, ZERO              # in front
+        fcgt    $114, ZERO, $110
         fcgt    $115, ZERO, $111
-        lnop
-        and     $114, $114, $113
-        lnop
-        and     $115, $115, $113
-        lnop
-        nop
-        gb      $114, $114
-        nop
-        gb      $115, $115
         fcgt    $116, $112, ONE
-        lnop
+        and     $114, $114, $113
+        and     $115, $115, $113
         and     $116, $116, $113
-        lnop
-        ceqi    $114, $114, 15   # every corner outside one edge
         gb      $113, $113
-        ceqi    $115, $115, 15
+        gb      $114, $114
+        gb      $115, $115
         gb      $116, $116
-        ceqi    $113, $113, 0   # every corner behind
-        lnop
+        ceqi    $113, $113, 0                 # every corner behind
+        ceqi    $114, $114, 15                # every corner outside one edge
+        ceqi    $115, $115, 15
         ceqi    $116, $116, 15
-        lnop
         or      $113, $113, $114
-        lnop
         or      $115, $115, $116
-        lnop
         or      $113, $113, $115
-        lnop
-        sf      S_CULLED, $113, S_CULLED   # +1 when culled
-        lnop
-        nop
-        brnz    $113, tri_next
+        sf      S_CULLED, $113, S_CULLED      # +1 when culled
+      ! brnz    $113, tri_next
         ai      S_TRIS, S_TRIS, 1
+
+        # the active rays, four vectors (16 rays) per pass, from FIRST's group on
+        rotmi   $119, FIRST, -4
+        shli    $119, $119, 6                 # byte offset of the first group
+        .endsched
 
         # the inside test admits barycentrics down to -2^-20 (and a sum up to 1 + 2^-20),
         # so a ray through the shared edge of two triangles hits one of them whatever
@@ -199,261 +156,163 @@ tri_loop:
         lqa     $77, k_onetol
         # (scheduled into even/odd pairs from the 4-vector test: loads, den = n.d, t,
         # barycentrics, hit = t in (0, t_old) and inside, selb updates of t, id, n.d/|n|)
-        .align  3
+        .align  6                     # early in a fetch line: the loop refills no line while it runs
+        .sched  pool=59,65,78-111,113-118 scratch=66-127
 ray_loop:
-        nop
-        lqx     $65, $125, $119
-        nop
-        lqx     $79, $126, $119
-        nop
-        lqx     $81, $127, $119
-        a       $82, RAYS, $119
-        lnop
-        nop
-        lnop
-        nop
-        lqd     $85, CTX_RAY_T+0($82)
-        ai      $119, $119, 16
-        lqd     $86, CTX_RAY_T+16($82)
-        fma     $87, $68, $79, $65
-        lqd     $88, CTX_RAY_T+32($82)
-        nop
-        lqx     $89, $125, $119
-        nop
-        lqx     $90, $126, $119
-        nop
-        lqx     $91, $127, $119
-        ai      $119, $119, 16
-        lqd     $92, CTX_RAY_T+48($82)
-        nop
-        lqd     $93, CTX_RAY_ID+0($82)
-        fma     $87, $69, $81, $87
-        lqx     $94, $125, $119
-        nop
-        lqx     $95, $126, $119
-        fma     $96, $68, $90, $89
-        lqx     $97, $127, $119
-        ai      $119, $119, 16
-        lqd     $98, CTX_RAY_ND+0($82)
-        nop
-        lqd     $99, CTX_RAY_ID+16($82)
-        nop
-        lqx     $100, $125, $119
-        fm      $101, $87, $123
-        lqx     $102, $126, $119
-        fma     $103, $68, $95, $94
-        lqx     $104, $127, $119
-        fma     $96, $69, $91, $96
-        frest   $105, $87
-        ai      $119, $119, 16
-        lqd     $106, CTX_RAY_ND+16($82)
-        nop
-        lqd     $107, CTX_RAY_ID+32($82)
-        ceqi    $112, $119, 256
-        lqd     $108, CTX_RAY_ND+32($82)
-        fma     $109, $68, $102, $100
-        lqd     $110, CTX_RAY_ID+48($82)
-        fma     $103, $69, $97, $103
-        lqd     $111, CTX_RAY_ND+48($82)
-        fi      $105, $87, $105
-        frest   $113, $96
-        fm      $114, $96, $123
-        lnop
-        fma     $109, $69, $104, $109
-        lnop
-        fi      $113, $96, $113
-        frest   $115, $103
-        fm      $116, $103, $123
-        lnop
-        fnms    $117, $87, $105, ONE
-        lnop
-        fi      $115, $103, $115
-        lnop
-        fm      $118, $109, $123
-        frest   $59, $109
-        fnms    $78, $96, $113, ONE
-        lnop
-        fma     $117, $117, $105, $105
-        lnop
-        fi      $59, $109, $59
-        lnop
-        fnms    $80, $103, $115, ONE
-        lnop
-        fma     $78, $78, $113, $113
-        lnop
-        fm      $65, $70, $117
-        lnop
-        fnms    $89, $109, $59, ONE
-        lnop
-        fma     $80, $80, $115, $115
-        lnop
-        fm      $94, $70, $78
-        lnop
-        fma     $79, $65, $79, $121
-        lnop
-        fma     $81, $65, $81, $122
-        lnop
-        fma     $89, $89, $59, $59
-        lnop
-        fm      $100, $70, $80
-        lnop
-        fcgt    $87, $85, $65
-        lnop
-        fma     $90, $94, $90, $121
-        lnop
-        fma     $96, $71, $79, $73
-        lnop
-        fma     $105, $74, $79, $120
-        lnop
-        fm      $103, $70, $89
-        lnop
-        fma     $95, $100, $95, $121
-        lnop
-        fma     $91, $94, $91, $122
-        lnop
-        fma     $113, $71, $90, $73
-        lnop
-        fma     $117, $74, $90, $120
-        lnop
-        fma     $97, $100, $97, $122
-        lnop
-        fma     $102, $103, $102, $121
-        lnop
-        fma     $109, $71, $95, $73
-        lnop
-        fma     $115, $74, $95, $120
-        lnop
-        fma     $104, $103, $104, $122
-        lnop
-        fma     $96, $72, $81, $96
-        lnop
-        fma     $105, $75, $81, $105
-        lnop
-        fma     $78, $71, $102, $73
-        lnop
-        fma     $59, $74, $102, $120
-        lnop
-        fma     $113, $72, $91, $113
-        lnop
-        fma     $117, $75, $91, $117
-        lnop
-        fma     $109, $72, $97, $109
-        lnop
-        fma     $115, $75, $97, $115
-        lnop
-        fma     $78, $72, $104, $78
-        lnop
-        fma     $59, $75, $104, $59
-        lnop
-        fa      $80, $96, $105
-        lnop
-        fa      $79, $113, $117
-        lnop
-        fcgt    $89, $76, $96
-        lnop
-        fa      $90, $109, $115
-        lnop
-        fcgt    $95, $76, $105
-        lnop
-        fa      $81, $78, $59
-        lnop
-        fcgt    $102, $76, $113
-        lnop
-        fcgt    $91, $76, $117
-        lnop
-        fcgt    $97, $76, $109
-        lnop
-        fcgt    $104, $76, $115
-        lnop
-        fcgt    $96, $76, $78
-        lnop
-        fcgt    $105, $76, $59
-        lnop
-        fcgt    $113, $80, $77
-        lnop
-        fcgt    $117, $65, ZERO
-        lnop
-        or      $89, $89, $95
-        lnop
-        fcgt    $109, $79, $77
-        lnop
-        fcgt    $115, $86, $94
-        lnop
-        fcgt    $78, $94, ZERO
-        lnop
-        or      $102, $102, $91
-        lnop
-        fcgt    $59, $90, $77
-        lnop
-        fcgt    $80, $88, $100
-        lnop
-        fcgt    $95, $100, ZERO
-        lnop
-        or      $97, $97, $104
-        lnop
-        fcgt    $79, $81, $77
-        lnop
-        fcgt    $91, $92, $103
-        lnop
-        fcgt    $90, $103, ZERO
-        lnop
-        or      $96, $96, $105
-        lnop
-        and     $87, $87, $117
-        lnop
-        or      $89, $89, $113
-        lnop
-        and     $115, $115, $78
-        lnop
-        or      $102, $102, $109
-        lnop
-        and     $80, $80, $95
-        lnop
-        or      $97, $97, $59
         hbrr    .Lray_br, ray_loop
-        and     $91, $91, $90
-        lnop
-        or      $96, $96, $79
-        lnop
-        andc    $104, $87, $89
-        lnop
-        andc    $81, $115, $102
-        lnop
-        andc    $105, $80, $97
-        lnop
-        andc    $117, $91, $96
-        lnop
-        selb    $85, $85, $65, $104
-        lnop
-        selb    $93, $93, $124, $104
-        lnop
-        selb    $98, $98, $101, $104
-        stqd    $85, CTX_RAY_T+0($82)
-        selb    $86, $86, $94, $81
-        stqd    $93, CTX_RAY_ID+0($82)
-        selb    $99, $99, $124, $81
-        stqd    $98, CTX_RAY_ND+0($82)
-        selb    $106, $106, $114, $81
-        stqd    $86, CTX_RAY_T+16($82)
-        selb    $88, $88, $100, $105
-        stqd    $99, CTX_RAY_ID+16($82)
-        selb    $107, $107, $124, $105
-        stqd    $106, CTX_RAY_ND+16($82)
-        selb    $108, $108, $116, $105
-        stqd    $88, CTX_RAY_T+32($82)
-        selb    $92, $92, $103, $117
-        stqd    $107, CTX_RAY_ID+32($82)
-        selb    $110, $110, $124, $117
-        stqd    $108, CTX_RAY_ND+32($82)
-        selb    $111, $111, $118, $117
-        stqd    $92, CTX_RAY_T+48($82)
-        nop
-        stqd    $110, CTX_RAY_ID+48($82)
-        nop
-        stqd    $111, CTX_RAY_ND+48($82)
-        nop
+        a       %tp, RAYS, $119
+        lqx     %dk0, $125, $119
+        lqx     %du0, $126, $119
+        lqx     %dv0, $127, $119
+        ai      $119, $119, 16
+        fma     %den0, $68, %du0, %dk0
+        fma     %den0, $69, %dv0, %den0
+        frest   %y0, %den0
+        fi      %y0, %den0, %y0
+        fnms    %e0, %den0, %y0, ONE
+        fma     %e0, %e0, %y0, %y0
+        fm      %t0, $70, %e0
+        fma     %du0, %t0, %du0, $121
+        fma     %dv0, %t0, %dv0, $122
+        fma     %be0, $71, %du0, $73
+        fma     %ga0, $74, %du0, $120
+        fma     %be0, $72, %dv0, %be0
+        fma     %ga0, $75, %dv0, %ga0
+        lqd     %to0, CTX_RAY_T+0(%tp)
+        fa      %bg0, %be0, %ga0
+        fcgt    %o10, $76, %be0
+        fcgt    %o20, $76, %ga0
+        fcgt    %o30, %bg0, $77
+        fcgt    %cl0, %to0, %t0
+        fcgt    %cl20, %t0, ZERO
+        or      %o10, %o10, %o20
+        and     %cl0, %cl0, %cl20
+        or      %o10, %o10, %o30
+        andc    %hit0, %cl0, %o10
+        lqd     %io0, CTX_RAY_ID+0(%tp)
+        lqd     %no0, CTX_RAY_ND+0(%tp)
+        fm      %nd0, %den0, $123
+        selb    %to0, %to0, %t0, %hit0
+        selb    %io0, %io0, $124, %hit0
+        selb    %no0, %no0, %nd0, %hit0
+      ~ stqd    %to0, CTX_RAY_T+0(%tp)
+      ~ stqd    %io0, CTX_RAY_ID+0(%tp)
+      ~ stqd    %no0, CTX_RAY_ND+0(%tp)
+        lqx     %dk1, $125, $119
+        lqx     %du1, $126, $119
+        lqx     %dv1, $127, $119
+        ai      $119, $119, 16
+        fma     %den1, $68, %du1, %dk1
+        fma     %den1, $69, %dv1, %den1
+        frest   %y1, %den1
+        fi      %y1, %den1, %y1
+        fnms    %e1, %den1, %y1, ONE
+        fma     %e1, %e1, %y1, %y1
+        fm      %t1, $70, %e1
+        fma     %du1, %t1, %du1, $121
+        fma     %dv1, %t1, %dv1, $122
+        fma     %be1, $71, %du1, $73
+        fma     %ga1, $74, %du1, $120
+        fma     %be1, $72, %dv1, %be1
+        fma     %ga1, $75, %dv1, %ga1
+        lqd     %to1, CTX_RAY_T+16(%tp)
+        fa      %bg1, %be1, %ga1
+        fcgt    %o11, $76, %be1
+        fcgt    %o21, $76, %ga1
+        fcgt    %o31, %bg1, $77
+        fcgt    %cl1, %to1, %t1
+        fcgt    %cl21, %t1, ZERO
+        or      %o11, %o11, %o21
+        and     %cl1, %cl1, %cl21
+        or      %o11, %o11, %o31
+        andc    %hit1, %cl1, %o11
+        lqd     %io1, CTX_RAY_ID+16(%tp)
+        lqd     %no1, CTX_RAY_ND+16(%tp)
+        fm      %nd1, %den1, $123
+        selb    %to1, %to1, %t1, %hit1
+        selb    %io1, %io1, $124, %hit1
+        selb    %no1, %no1, %nd1, %hit1
+      ~ stqd    %to1, CTX_RAY_T+16(%tp)
+      ~ stqd    %io1, CTX_RAY_ID+16(%tp)
+      ~ stqd    %no1, CTX_RAY_ND+16(%tp)
+        lqx     %dk2, $125, $119
+        lqx     %du2, $126, $119
+        lqx     %dv2, $127, $119
+        ai      $119, $119, 16
+        fma     %den2, $68, %du2, %dk2
+        fma     %den2, $69, %dv2, %den2
+        frest   %y2, %den2
+        fi      %y2, %den2, %y2
+        fnms    %e2, %den2, %y2, ONE
+        fma     %e2, %e2, %y2, %y2
+        fm      %t2, $70, %e2
+        fma     %du2, %t2, %du2, $121
+        fma     %dv2, %t2, %dv2, $122
+        fma     %be2, $71, %du2, $73
+        fma     %ga2, $74, %du2, $120
+        fma     %be2, $72, %dv2, %be2
+        fma     %ga2, $75, %dv2, %ga2
+        lqd     %to2, CTX_RAY_T+32(%tp)
+        fa      %bg2, %be2, %ga2
+        fcgt    %o12, $76, %be2
+        fcgt    %o22, $76, %ga2
+        fcgt    %o32, %bg2, $77
+        fcgt    %cl2, %to2, %t2
+        fcgt    %cl22, %t2, ZERO
+        or      %o12, %o12, %o22
+        and     %cl2, %cl2, %cl22
+        or      %o12, %o12, %o32
+        andc    %hit2, %cl2, %o12
+        lqd     %io2, CTX_RAY_ID+32(%tp)
+        lqd     %no2, CTX_RAY_ND+32(%tp)
+        fm      %nd2, %den2, $123
+        selb    %to2, %to2, %t2, %hit2
+        selb    %io2, %io2, $124, %hit2
+        selb    %no2, %no2, %nd2, %hit2
+      ~ stqd    %to2, CTX_RAY_T+32(%tp)
+      ~ stqd    %io2, CTX_RAY_ID+32(%tp)
+      ~ stqd    %no2, CTX_RAY_ND+32(%tp)
+        lqx     %dk3, $125, $119
+        lqx     %du3, $126, $119
+        lqx     %dv3, $127, $119
+        ai      $119, $119, 16
+        fma     %den3, $68, %du3, %dk3
+        fma     %den3, $69, %dv3, %den3
+        frest   %y3, %den3
+        fi      %y3, %den3, %y3
+        fnms    %e3, %den3, %y3, ONE
+        fma     %e3, %e3, %y3, %y3
+        fm      %t3, $70, %e3
+        fma     %du3, %t3, %du3, $121
+        fma     %dv3, %t3, %dv3, $122
+        fma     %be3, $71, %du3, $73
+        fma     %ga3, $74, %du3, $120
+        fma     %be3, $72, %dv3, %be3
+        fma     %ga3, $75, %dv3, %ga3
+        lqd     %to3, CTX_RAY_T+48(%tp)
+        fa      %bg3, %be3, %ga3
+        fcgt    %o13, $76, %be3
+        fcgt    %o23, $76, %ga3
+        fcgt    %o33, %bg3, $77
+        fcgt    %cl3, %to3, %t3
+        fcgt    %cl23, %t3, ZERO
+        or      %o13, %o13, %o23
+        and     %cl3, %cl3, %cl23
+        or      %o13, %o13, %o33
+        andc    %hit3, %cl3, %o13
+        lqd     %io3, CTX_RAY_ID+48(%tp)
+        lqd     %no3, CTX_RAY_ND+48(%tp)
+        fm      %nd3, %den3, $123
+        selb    %to3, %to3, %t3, %hit3
+        selb    %io3, %io3, $124, %hit3
+        selb    %no3, %no3, %nd3, %hit3
+      ~ stqd    %to3, CTX_RAY_T+48(%tp)
+      ~ stqd    %io3, CTX_RAY_ID+48(%tp)
+      ~ stqd    %no3, CTX_RAY_ND+48(%tp)
+        ceqi    $112, $119, 256
 .Lray_br:
-        brz     $112, ray_loop
+      ! brz     $112, ray_loop
+        .endsched
 
 
 tri_next:

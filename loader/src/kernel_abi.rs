@@ -113,6 +113,14 @@ pub mod context {
     pub const STACK_BYTES: i32 = 2048;
     /// Bytes of one context (a multiple of 128).
     pub const BYTES: u32 = ((HEADER + STACK + STACK_BYTES) as u32).div_ceil(128) * 128;
+
+    // the header fits below the context pointer, the saved state in its slots, the stack
+    // after the staging lines
+    const _: () = assert!(NEGTAB + 48 <= 0 && CORNERS + 48 <= NEGTAB && -HEADER <= CORNERS);
+    const _: () = assert!(TAG < SAVE + 16 * SAVE_SLOTS && STAGE_PAIR == SAVE + 16 * SAVE_SLOTS);
+    const _: () = assert!(STACK >= STAGE_TRIS + 64 * STAGE_TRIANGLES as i32 + 16);
+    const _: () =
+        assert!(HEADER + STACK + STACK_BYTES <= BYTES as i32 && BYTES.is_multiple_of(128));
 }
 
 /// The context's DMA tag: `CONTEXT_TAG0 + context index`.
@@ -411,11 +419,6 @@ mod tests {
         ] {
             assert_eq!(off % 16, 0, "{off}");
         }
-        assert_eq!(BYTES % 128, 0);
-        assert!(HEADER + STACK + STACK_BYTES <= BYTES as i32);
-        assert!(NEGTAB + 48 <= 0 && CORNERS + 48 <= NEGTAB && -HEADER <= CORNERS);
-        assert!(TAG < SAVE + 16 * SAVE_SLOTS);
-        assert!(STACK >= STAGE_TRIS + 64 * STAGE_TRIANGLES as i32 + 16);
         // the largest configuration leaves room for the code and its data
         assert!(carved_bytes(MAX_CACHE_LINES, MAX_CACHE_LINES, MAX_SHT_CONTEXTS) < 216 * 1024);
     }

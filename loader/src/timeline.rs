@@ -2,12 +2,16 @@
 //! without help from the kernel: an SPU puts each packet's 1 KiB result block to the frame
 //! buffer (the address names the tile and packet) and takes each tile with an atomic
 //! update of the shared counter. A packet's cycles run from the SPU's previous packet put
-//! (or, for a tile's first packet, from the tile's atomic update) to its own put.
+//! (or, for a tile's first packet, from the moment the tile's atomic update is known to
+//! have succeeded) to its own put. A tile's
+//! span runs from its take to the SPU's next take (or last put); with software
+//! hyperthreading the last packets of the previous tile finish inside it, and the span is
+//! named after the newest tile it completes packets of.
 
 use crate::frame::FrameLayout;
 use crate::kernel_abi::{PACKETS_PER_TILE, PACKET_BLOCK_BYTES, PACKET_SIZE, TILE_SIZE};
 use crate::runtime::FrameRun;
-use spu_isa::machine::SpuEvent;
+use spu_isa::machine::{ch, SpuEvent};
 
 /// The MFC's put command (and its fenced and barrier forms).
 const PUTS: [u8; 3] = [0x20, 0x21, 0x22];
@@ -75,8 +79,9 @@ impl Timeline {
         };
         for (spu, events) in run.events.iter().enumerate() {
             let mut mark = 0u64;
-            let mut tile_taken = 0u64;
             let mut waited = 0u64;
+            // the open tile span, and whether a packet completed in it
+            let mut open: Option<(TileSpan, bool)> = None;
             for event in events {
                 match *event {
                     SpuEvent::ChannelWait {
@@ -84,7 +89,14 @@ impl Timeline {
                         until,
                         channel,
                     } => {
-                        waited += until.saturating_sub(cycle);
+                        if channel == ch::RD_ATOMIC_STAT {
+                            // the tile counter's update is known: the tile is taken now,
+                            // and the next packet starts from here
+                            mark = mark.max(until);
+                            waited = 0;
+                        } else {
+                            waited += until.saturating_sub(cycle);
+                        }
                         t.waits.push(Wait {
                             spu,
                             start: cycle,
@@ -108,13 +120,24 @@ impl Timeline {
                                 bytes: size,
                             });
                         }
-                        if ATOMICS.contains(&cmd) && ea & !127 == counter_line {
-                            tile_taken = cycle;
-                            if cmd == 0xd0 {
-                                // the wait for the next tile belongs to no packet
-                                mark = cycle;
-                                waited = 0;
+                        if cmd == 0xd0 && ea & !127 == counter_line {
+                            // taking a tile: the wait for it belongs to no packet; a span
+                            // that completed packets closes (retries keep an empty one)
+                            mark = cycle;
+                            waited = 0;
+                            if let Some((span, true)) = open {
+                                t.tiles.push(span);
+                                open = None;
                             }
+                            open.get_or_insert((
+                                TileSpan {
+                                    spu,
+                                    tile: 0,
+                                    start: cycle,
+                                    end: cycle,
+                                },
+                                false,
+                            ));
                         } else if PUTS.contains(&cmd) && (fb..fb_end).contains(&ea) {
                             let block = ((ea - fb) / PACKET_BLOCK_BYTES as u64) as u32;
                             let (tile, packet) =
@@ -127,22 +150,26 @@ impl Timeline {
                                 end: cycle,
                                 wait: waited,
                             });
-                            match t.tiles.last_mut() {
-                                Some(last) if last.spu == spu && last.tile == tile => {
-                                    last.end = cycle
-                                }
-                                _ => t.tiles.push(TileSpan {
+                            let (span, any) = open.get_or_insert((
+                                TileSpan {
                                     spu,
                                     tile,
-                                    start: tile_taken.min(mark),
+                                    start: mark,
                                     end: cycle,
-                                }),
-                            }
+                                },
+                                false,
+                            ));
+                            span.tile = if *any { span.tile.max(tile) } else { tile };
+                            span.end = cycle;
+                            *any = true;
                             mark = cycle;
                             waited = 0;
                         }
                     }
                 }
+            }
+            if let Some((span, true)) = open {
+                t.tiles.push(span);
             }
         }
         t

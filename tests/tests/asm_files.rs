@@ -152,4 +152,6 @@ asm_files! {
     expressions => "expr.s",
     include => "include.s",
     errors => "errors.s",
+    gnu_directives => "gnu_directives.s",
+    bad_input => "bad_input.s",
 }

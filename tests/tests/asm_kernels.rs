@@ -69,6 +69,24 @@ fn kernel(name: &str) {
     // Assembling is deterministic.
     let again = assemble(&src, name, &options()).unwrap();
     assert_eq!(again.elf, out.elf);
+    // As a relocatable object, written to ELF, read back and linked, the kernel is the
+    // same program: every relocation reproduces what the assembler resolved itself.
+    let (obj, _) = spu_asm::assemble_object(&src, name, &options()).unwrap_or_else(|d| {
+        let text: Vec<String> = d.iter().map(|x| x.to_string()).collect();
+        panic!("{name} as an object:\n{}", text.join("\n"))
+    });
+    let bytes = obj.to_elf().unwrap();
+    let back = spu_asm::object::Object::from_elf(name, &bytes).unwrap();
+    assert_eq!(
+        back.sections, obj.sections,
+        "{name}: object sections round trip"
+    );
+    let linked = spu_asm::link::link(&[back], &Default::default()).unwrap();
+    assert_eq!(linked.entry, out.entry, "{name}: linked entry");
+    assert!(
+        linked.image == out.image,
+        "{name}: the linked image differs"
+    );
 }
 
 #[test]

@@ -188,7 +188,7 @@ fn frames_are_identical_for_every_sht_count_and_associativity() {
         .iter()
         .zip(&reference)
         .filter(|(p, r)| {
-            (p.triangle == MISS) != !r.is_hit()
+            (p.triangle == MISS) == r.is_hit()
                 || (r.is_hit() && (p.t - r.t).abs() > 1e-4 * r.t.abs())
         })
         .count();

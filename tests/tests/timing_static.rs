@@ -78,3 +78,24 @@ f:\n\
     );
     insta::assert_snapshot!(render_static(&t, true));
 }
+
+/// `--label` finds a block by any label at its address, not only the first one.
+#[test]
+fn label_shared_with_another_finds_the_block() {
+    let src = "\
+\tila\t$3,1\n\
+\tbrz\t$3,.L18\n\
+.L18:\n\
+.L19:\tfa\t$4,$3,$3\n\
+\tfm\t$5,$4,$4\n";
+    let by_first = analyze_source(src, Some(".L18")).unwrap();
+    let by_second = analyze_source(src, Some(".L19")).unwrap();
+    assert_eq!(by_first.rows.len(), 2);
+    let cycles = |t: &spu_isa::static_timing::StaticTiming| {
+        t.rows.iter().map(|r| r.cycle).collect::<Vec<_>>()
+    };
+    assert_eq!(cycles(&by_first), cycles(&by_second));
+    assert!(analyze_source(src, Some(".L20"))
+        .unwrap_err()
+        .contains("no block starts at label `.L20`"));
+}

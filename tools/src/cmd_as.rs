@@ -1,17 +1,23 @@
-//! `spu as`: assemble GNU-as SPU assembly into an SPU ELF or a flat local-store image.
+//! `spu as`: assemble GNU-as SPU assembly into an SPU ELF executable, a flat local-store
+//! image, or (`-c`) a relocatable object; several sources are assembled and linked.
 
 use crate::exit::{self, Error, Status};
-use spu_asm::{assemble_file, Options, Severity};
+use spu_asm::link::{link, LinkOptions};
+use spu_asm::{assemble_file, assemble_object_file, Diagnostic, Options, Severity};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Assembly source.
-    input: PathBuf,
+    /// Assembly sources (several are assembled separately and linked).
+    #[arg(required = true)]
+    input: Vec<PathBuf>,
     /// Output file.
     #[arg(short = 'o', long, default_value = "a.out")]
     output: PathBuf,
+    /// Write a relocatable object (ELF ET_REL) instead of an executable.
+    #[arg(short = 'c')]
+    object: bool,
     /// `elf` (an SPU ELF executable) or `bin` (the flat image loaded at address 0).
     #[arg(long, default_value = "elf")]
     format: String,
@@ -56,7 +62,10 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             v.map_err(|_| format!("--defsym {d}: bad value"))?,
         ));
     }
-    match assemble_file(&args.input, &opts) {
+    if args.object || args.input.len() > 1 {
+        return objects(&args, &opts);
+    }
+    match assemble_file(&args.input[0], &opts) {
         Ok(out) => {
             for w in &out.warnings {
                 eprintln!("{w}");
@@ -72,16 +81,64 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             }
             Ok(ExitCode::SUCCESS)
         }
-        Err(diagnostics) => {
-            let errors = diagnostics
-                .iter()
-                .filter(|d| d.severity == Severity::Error)
-                .count();
-            for d in &diagnostics {
-                eprintln!("{d}");
+        Err(diagnostics) => Ok(report(&diagnostics)),
+    }
+}
+
+/// Prints diagnostics; the exit status for a failed assembly.
+fn report(diagnostics: &[Diagnostic]) -> ExitCode {
+    let errors = diagnostics
+        .iter()
+        .filter(|d| d.severity == Severity::Error)
+        .count();
+    for d in diagnostics {
+        eprintln!("{d}");
+    }
+    eprintln!("{errors} error(s); nothing written");
+    Status::BadInput.into()
+}
+
+/// `-c` (one object) or several sources (assembled to objects, then linked).
+fn objects(args: &Args, opts: &Options) -> exit::Result<ExitCode> {
+    if args.object && args.input.len() > 1 {
+        return Err(Error::input("-c takes one source (one object per source)"));
+    }
+    if args.listing.is_some() {
+        return Err(Error::input(
+            "--listing is for one source assembled to an executable",
+        ));
+    }
+    let mut objects = Vec::new();
+    for input in &args.input {
+        match assemble_object_file(input, opts) {
+            Ok((obj, warnings)) => {
+                for w in &warnings {
+                    eprintln!("{w}");
+                }
+                objects.push(obj);
             }
-            eprintln!("{errors} error(s); nothing written");
-            Ok(Status::BadInput.into())
+            Err(d) => return Ok(report(&d)),
         }
     }
+    if args.object {
+        let bytes = objects[0].to_elf().map_err(Error::failure)?;
+        exit::write_file(&args.output, &bytes)?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    let linked = match link(&objects, &LinkOptions::default()) {
+        Ok(l) => l,
+        Err(errors) => {
+            for e in &errors {
+                eprintln!("spu ld: {e}");
+            }
+            return Ok(Status::BadInput.into());
+        }
+    };
+    let bytes = if args.format == "bin" {
+        &linked.image
+    } else {
+        &linked.elf
+    };
+    exit::write_file(&args.output, bytes)?;
+    Ok(ExitCode::SUCCESS)
 }

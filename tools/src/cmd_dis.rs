@@ -19,7 +19,15 @@ pub fn run(args: Args) -> crate::exit::Result<ExitCode> {
     let name = args.file.display();
     if !args.raw && bytes.starts_with(b"\x7fELF") {
         let elf = spu_asm::elf::read_elf(&bytes).map_err(|e| format!("{name}: {e}"))?;
-        let symbols = SymbolTable::new(elf.symbols.iter().map(|(n, a)| (*a, n.clone())).collect());
+        // objdump names an address after a symbol of its section, a global one before
+        // local labels; absolute symbols name nothing.
+        let symbols = SymbolTable::ranked(
+            elf.symbol_kinds
+                .iter()
+                .filter(|s| !s.absolute)
+                .map(|s| (s.addr, s.name.clone(), if s.global { 0 } else { 1 }))
+                .collect(),
+        );
         out!("\n{name}:     file format elf32-spu\n\n");
         for (section, addr, data, code) in &elf.sections {
             if *code {

@@ -6,7 +6,7 @@
 
 use crate::exit::{self, Error};
 use crate::paper_jobs::{select_scenes, shell_word, Caps, Job};
-use crate::paper_report::{build, Figure, Report, ReportScene};
+use crate::paper_report::{build, Figure, HeatMaps, Report, ReportScene};
 use crate::paper_tables::{tables, Measured, Setup, TableSpec};
 use spu_loader::stats::FrameStats;
 use std::collections::{BTreeMap, BTreeSet};
@@ -87,7 +87,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
                 .chain(job.render_args(&jobs_dir))
                 .map(|w| shell_word(&w))
                 .collect();
-            println!("{}", words.join(" "));
+            outln!("{}", words.join(" "));
         }
         return Ok(ExitCode::SUCCESS);
     }
@@ -145,6 +145,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         tables,
         figures: Vec::new(),
         missing: missing.clone(),
+        heatmaps: heatmaps(&jobs, &stats_dir, &args.out),
         notes,
     };
     if let Some(t) = report.tables.iter().find(|t| t.id == "figure2") {
@@ -191,6 +192,23 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             ),
         ))
     }
+}
+
+/// The heat maps the jobs drew, where they exist, as paths relative to the report.
+fn heatmaps(jobs: &[Job], dir: &Path, out: &Path) -> Vec<HeatMaps> {
+    let relative = |p: &Path| p.strip_prefix(out).unwrap_or(p).display().to_string();
+    jobs.iter()
+        .filter(|j| j.draws_heatmap())
+        .filter_map(|j| {
+            let (cycles, wait) = crate::heatmap::paths(&j.heatmap_path(dir));
+            (cycles.is_file() && wait.is_file()).then(|| HeatMaps {
+                scene: j.scene_id.clone(),
+                config: j.describe(),
+                cycles: relative(&cycles),
+                wait: relative(&wait),
+            })
+        })
+        .collect()
 }
 
 /// Every job of every row, once, in a stable order.
@@ -320,6 +338,19 @@ fn read_stats(text: &str, job: &Job) -> Result<Measured, String> {
             job.size,
             job.size,
             job.spes
+        ));
+    }
+    let c = &stats.config;
+    // files written before the configuration was recorded have none (sht 0)
+    if c.sht != 0
+        && (c.sht != job.sht.unwrap_or(1)
+            || c.assoc != job.assoc.unwrap_or(1)
+            || c.bvh_cache_lines != job.cache
+            || c.tri_cache_lines != job.cache)
+    {
+        return Err(format!(
+            "holds a run with SHT {}, {}-way {}/{}-line caches, not the job's",
+            c.sht, c.assoc, c.bvh_cache_lines, c.tri_cache_lines
         ));
     }
     Ok(Measured { stats, raw })

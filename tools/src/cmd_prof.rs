@@ -44,6 +44,11 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
                 .ok_or_else(|| format!("--range {r}: expected LABEL..LABEL"))?;
             let start = address_of(a).ok_or_else(|| format!("--range: no label `{a}`"))?;
             let end = address_of(b).ok_or_else(|| format!("--range: no label `{b}`"))?;
+            if end <= start {
+                return Err(exit::Error::input(format!(
+                    "--range {r}: `{b}` ({end:#x}) does not come after `{a}` ({start:#x})"
+                )));
+            }
             Some((start, end))
         }
         None => None,

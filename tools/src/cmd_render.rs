@@ -192,17 +192,28 @@ fn check_options(args: &Args) -> exit::Result<Option<Camera>> {
         Some(text) => Some(Camera::parse(text).map_err(|e| format!("--camera: {e}"))?),
         None => None,
     };
-    let is_png = args
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    if !is_png {
-        return Err(Error::input(format!(
-            "-o {}: the image is written as PNG; name it .png",
-            args.output.display()
-        )));
+    let is_png = |path: &std::path::Path| {
+        path.extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+    };
+    let heatmaps = args.heatmap.as_deref().map(crate::heatmap::paths);
+    let images = std::iter::once(("-o", args.output.as_path())).chain(
+        heatmaps
+            .iter()
+            .map(|(cycles, _)| ("--heatmap", cycles.as_path())),
+    );
+    for (option, path) in images {
+        if !is_png(path) {
+            return Err(Error::input(format!(
+                "{option} {}: the image is written as PNG; name it .png",
+                path.display()
+            )));
+        }
     }
     exit::check_writable(&args.output)?;
+    if let Some((_, wait)) = &heatmaps {
+        exit::check_writable(wait)?;
+    }
     for path in [&args.stats, &args.profile, &args.heatmap, &args.trace]
         .into_iter()
         .flatten()

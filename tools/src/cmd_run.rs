@@ -2,6 +2,7 @@
 
 use crate::exit::{self, Error, Status};
 use crate::options;
+use spu_isa::disasm::{instruction_text, SymbolTable};
 use spu_isa::machine::{MainMemory, Spu, StopReason};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -27,8 +28,12 @@ pub struct Args {
     #[arg(long = "mbox-in")]
     mbox_in: Vec<String>,
     /// Run with the cycle-level timing model (otherwise one cycle per instruction).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "trace")]
     timing: bool,
+    /// Print every executed instruction: address, text and the registers it wrote (like
+    /// IBM systemsim's instruction trace).
+    #[arg(long)]
+    trace: bool,
     /// Main memory in bytes.
     #[arg(long, default_value_t = 1 << 20)]
     memory: u64,
@@ -129,7 +134,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             u32::try_from(value).map_err(|_| format!("--mbox-in {v}: does not fit in 32 bits"))?;
         mailbox.push(value);
     }
-    let (mut spu, _) = load(&args.file)?;
+    let (mut spu, symbols) = load(&args.file)?;
     for value in mailbox {
         if !spu.write_inbound_mailbox(value) {
             return Err(Error::input(
@@ -141,11 +146,16 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         spu.enable_timing(Default::default());
     }
     let mut memory = MainMemory::zeroed(memory_bytes);
-    let stop = spu.run(&mut memory, args.max_cycles);
+    let stop = if args.trace {
+        let symbols = SymbolTable::new(symbols.iter().map(|(n, a)| (*a, n.clone())).collect());
+        trace(&mut spu, &mut memory, args.max_cycles, &symbols)?
+    } else {
+        spu.run(&mut memory, args.max_cycles)
+    };
     let out_mbox = spu.read_outbound_mailbox();
     if args.json {
         let report = RunReport {
-            stop: stop.to_string(),
+            stop: describe(&stop),
             exit_code: exit::program_exit_code(&stop),
             pc: spu.pc(),
             instructions: spu.instructions(),
@@ -157,7 +167,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             .map_err(|e| exit::Error::failure(format!("JSON: {e}")))?;
         outln!("{json}");
     } else {
-        outln!("stopped: {stop}");
+        outln!("stopped: {}", describe(&stop));
         outln!("pc: {:#x}", spu.pc());
         outln!("instructions: {}", spu.instructions());
         outln!("cycles: {}", spu.cycles());
@@ -199,9 +209,76 @@ fn exit_status(file: &std::path::Path, stop: &StopReason) -> ExitCode {
             Status::CycleLimit
         }
         other => {
-            eprintln!("spu: {name}: SPU stopped abnormally: {other}");
+            eprintln!("spu: {name}: SPU stopped abnormally: {}", describe(other));
             Status::of_stop(other)
         }
     };
     status.into()
+}
+
+/// A channel's name (`SPU_RdInMbox`), with its number.
+fn channel_name(channel: u8) -> String {
+    match spu_asm::CHANNELS.iter().find(|c| c.1 == channel as u32) {
+        Some((name, n)) => format!("{name} ({n})"),
+        None => format!("{channel}"),
+    }
+}
+
+/// How a program stopped, with channels named and what a stop code means to the Cell
+/// SDK's loader (`stop 0x2000|n` is exit with status n).
+pub fn describe(stop: &StopReason) -> String {
+    match stop {
+        StopReason::Stop(code) if (0x2000..=0x20ff).contains(code) => {
+            format!("stop {code:#x} (exit status {})", code & 0xff)
+        }
+        StopReason::Stop(0x3fff) => "stop 0x3fff (debugger breakpoint)".to_string(),
+        StopReason::InvalidChannel { pc, channel } => {
+            format!("invalid channel {} at {pc:#x}", channel_name(*channel))
+        }
+        StopReason::Deadlock { pc, channel } => {
+            format!("deadlock at {pc:#x} on channel {}", channel_name(*channel))
+        }
+        StopReason::Blocked { channel } => {
+            format!("blocked on channel {}", channel_name(*channel))
+        }
+        other => other.to_string(),
+    }
+}
+
+/// Runs one instruction at a time (no timing model: one cycle each), printing each one's
+/// address, text and the registers it changed.
+fn trace(
+    spu: &mut Spu,
+    memory: &mut MainMemory,
+    max_cycles: u64,
+    symbols: &SymbolTable,
+) -> exit::Result<StopReason> {
+    loop {
+        if spu.cycles() >= max_cycles {
+            return Ok(StopReason::CycleLimit);
+        }
+        let pc = spu.pc();
+        let at = pc as usize & (256 * 1024 - 4);
+        let ls = spu.ls();
+        let word = u32::from_be_bytes([ls[at], ls[at + 1], ls[at + 2], ls[at + 3]]);
+        let before: Vec<_> = (0..128).map(|n| spu.reg(n)).collect();
+        let stop = spu.run(memory, spu.cycles() + 1);
+        let mut line = format!(
+            "{pc:05x}: {word:08x}  {}",
+            instruction_text(word, pc, symbols)
+        );
+        for (n, old) in before.iter().enumerate() {
+            let r = spu.reg(n);
+            if r != *old {
+                line.push_str(&format!(
+                    "\t${n} <- {:08x} {:08x} {:08x} {:08x}",
+                    r[0], r[1], r[2], r[3]
+                ));
+            }
+        }
+        outln!("{line}");
+        if stop != StopReason::CycleLimit {
+            return Ok(stop);
+        }
+    }
 }

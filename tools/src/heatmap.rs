@@ -68,7 +68,8 @@ pub fn write(path: &Path, timeline: &Timeline) -> Result<(), String> {
         &wait_path,
         timeline,
         &wait,
-        (0.0, 100.0),
+        // from none to the most any packet waited (at least 1%), so small waits show
+        (0.0, wait.iter().flatten().fold(1.0f64, |a, &b| a.max(b))),
         "% waiting on DMA",
     )
 }
@@ -113,8 +114,13 @@ fn draw(
         (lo, hi),
         title,
     )?;
-    image::save_buffer(path, &rgb, full_w, scale_h, image::ColorType::Rgb8)
-        .map_err(|e| format!("{}: {e}", path.display()))
+    // Encoded in memory and written whole: a failed write leaves no partial image.
+    use image::ImageEncoder as _;
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(&rgb, full_w, scale_h, image::ExtendedColorType::Rgb8)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    crate::exit::write_file(path, &png).map_err(|e| e.message.unwrap_or_default())
 }
 
 fn label(

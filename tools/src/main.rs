@@ -8,10 +8,12 @@ mod exit;
 mod cmd_as;
 mod cmd_bench;
 mod cmd_dis;
+mod cmd_ld;
 mod cmd_paper;
 mod cmd_prof;
 mod cmd_render;
 mod cmd_run;
+mod cmd_sched;
 mod cmd_timing;
 mod frame_views;
 mod heatmap;
@@ -43,6 +45,8 @@ enum Command {
     As(cmd_as::Args),
     /// Disassemble an SPU ELF or a raw image, in GNU objdump's format.
     Dis(cmd_dis::Args),
+    /// Link relocatable SPU objects into an executable.
+    Ld(cmd_ld::Args),
     /// Run a program on one simulated SPU and print how it stopped.
     Run(cmd_run::Args),
     /// Run a program with the timing model and print an annotated profile.
@@ -51,6 +55,8 @@ enum Command {
     Timing(cmd_timing::Args),
     /// Ray-trace a scene on 1 to 16 simulated SPEs.
     Render(cmd_render::Args),
+    /// List-schedule straight-line code into dual-issue pairs (`.sched` blocks).
+    Sched(cmd_sched::Args),
     /// Measure simulator speed: simulated instructions per host second.
     Bench(cmd_bench::Args),
     /// Re-run the paper's experiments and report its numbers next to ours.
@@ -62,11 +68,13 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::As(args) => cmd_as::run(args),
         Command::Dis(args) => cmd_dis::run(args),
+        Command::Ld(args) => cmd_ld::run(args),
         Command::Run(args) => cmd_run::run(args),
         Command::Prof(args) => cmd_prof::run(args),
         Command::Timing(args) => cmd_timing::run(args),
         Command::Render(args) => cmd_render::run(args),
         Command::Bench(args) => cmd_bench::run(args),
+        Command::Sched(args) => cmd_sched::run(args),
         Command::Paper(args) => cmd_paper::run(args),
     };
     match result {

@@ -112,6 +112,8 @@ where
     chart
         .configure_mesh()
         .x_desc("SPEs")
+        .x_labels(max_spes + 2)
+        .x_label_formatter(&|x| format!("{}", x.round() as i64))
         .y_desc("speed-up over 1 SPE")
         .label_style(("sans-serif", 14))
         .draw()?;

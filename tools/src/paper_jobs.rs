@@ -282,6 +282,12 @@ impl Job {
         if let Some(m) = self.shade {
             args.extend(["--shade".into(), m.to_string()]);
         }
+        if self.draws_heatmap() {
+            args.extend([
+                "--heatmap".into(),
+                self.heatmap_path(dir).display().to_string(),
+            ]);
+        }
         args.extend([
             "--stats".into(),
             self.stats_path(dir).display().to_string(),
@@ -289,6 +295,22 @@ impl Job {
             self.image_path(dir).display().to_string(),
         ]);
         args
+    }
+
+    /// Whether this run also draws the scene's heat maps: the paper's base configuration
+    /// (one 2.4 GHz SPE, 256-line direct-mapped caches, blocking DMA, no shading).
+    pub fn draws_heatmap(&self) -> bool {
+        self.spes == 1
+            && self.clock_mhz == 2400
+            && self.cache == 256
+            && self.assoc.unwrap_or(1) == 1
+            && self.sht.unwrap_or(1) == 1
+            && self.shade.unwrap_or("none") == "none"
+    }
+
+    /// The cycles heat map (`--heatmap` writes the DMA-wait map beside it).
+    pub fn heatmap_path(&self, dir: &Path) -> PathBuf {
+        dir.join(format!("{}-heat.png", self.name()))
     }
 
     pub fn stats_path(&self, dir: &Path) -> PathBuf {

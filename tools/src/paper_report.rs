@@ -19,7 +19,18 @@ pub struct Report {
     pub jobs_measured: usize,
     /// Stats files that were missing or unreadable, with the reason.
     pub missing: Vec<String>,
+    /// Per scene: its cycles and DMA-wait heat maps (paths relative to the report).
+    #[serde(default)]
+    pub heatmaps: Vec<HeatMaps>,
     pub notes: Vec<String>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct HeatMaps {
+    pub scene: String,
+    pub config: String,
+    pub cycles: String,
+    pub wait: String,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -121,7 +132,17 @@ pub fn build(
 fn describe_jobs(jobs: &[Job]) -> String {
     match jobs {
         [one] => one.describe(),
-        [a, b] => format!("{} vs {}", a.describe(), b.describe()),
+        [a, b] => {
+            // the second run as it differs from the first
+            let first = a.describe();
+            let second = b.describe();
+            let shared: Vec<&str> = first.split(", ").collect();
+            let differs: Vec<&str> = second
+                .split(", ")
+                .filter(|part| !shared.contains(part))
+                .collect();
+            format!("{first} vs {}", differs.join(", "))
+        }
         _ => jobs.iter().map(Job::name).collect::<Vec<_>>().join(", "),
     }
 }
@@ -163,6 +184,19 @@ impl Report {
             }
             for m in &self.missing {
                 let _ = writeln!(s, "- missing: {m}");
+            }
+        }
+        if !self.heatmaps.is_empty() {
+            let _ = writeln!(
+                s,
+                "\n## Heat maps\n\nSimulated cycles per 8x8 packet, and the share of them spent waiting on DMA."
+            );
+            for h in &self.heatmaps {
+                let _ = writeln!(
+                    s,
+                    "\n{} ({}):\n\n![{} cycles]({}) ![{} DMA waits]({})",
+                    h.scene, h.config, h.scene, h.cycles, h.scene, h.wait
+                );
             }
         }
         for t in &self.tables {
@@ -273,6 +307,19 @@ impl Report {
                 );
             }
             s.push_str("</table>\n");
+        }
+        if !self.heatmaps.is_empty() {
+            s.push_str("<h2 id=\"heatmaps\">Heat maps</h2>\n<p>Simulated cycles per 8x8 packet, and the share of them spent waiting on DMA.</p>\n");
+            for h in &self.heatmaps {
+                let _ = writeln!(
+                    s,
+                    "<p>{} ({})<br><img src=\"{}\" alt=\"cycles\"> <img src=\"{}\" alt=\"DMA waits\"></p>",
+                    e(&h.scene),
+                    e(&h.config),
+                    e(&h.cycles),
+                    e(&h.wait)
+                );
+            }
         }
         s.push_str("</body></html>\n");
         s

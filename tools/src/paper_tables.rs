@@ -342,8 +342,15 @@ pub fn value(metric: Metric, measured: &[&Measured]) -> Result<f64, String> {
     let first = measured.first().ok_or("no job")?;
     let t2 = &first.stats.table2;
     let v = match metric {
-        Metric::BvhHitPct => t2.bvh_cache_hit_pct,
-        Metric::TriangleHitPct => t2.triangle_cache_hit_pct,
+        // per lookup, where the stats have it (older files: Table 2's figure)
+        Metric::BvhHitPct => match &first.stats.caches {
+            c if c.bvh_lookups > 0 => c.bvh_hit_pct,
+            _ => t2.bvh_cache_hit_pct,
+        },
+        Metric::TriangleHitPct => match &first.stats.caches {
+            c if c.triangle_lookups > 0 => c.triangle_hit_pct,
+            _ => t2.triangle_cache_hit_pct,
+        },
         Metric::TraversalSteps => t2.traversal_steps_per_packet,
         Metric::TriangleTests => t2.triangle_tests_per_packet,
         Metric::EarlyExitsPct => t2.early_exits_pct,
@@ -358,15 +365,12 @@ pub fn value(metric: Metric, measured: &[&Measured]) -> Result<f64, String> {
             s.clock_ghz * 1e9 / s.frame_cycles as f64 * scale
         }
         Metric::GainPct => {
+            // the same frame, so the gain in rays per second is the cycles' ratio
             let b = measured.get(1).ok_or("no second job")?;
-            let (a, b) = (
-                first.stats.table2.mrays_per_sec_per_spu,
-                b.stats.table2.mrays_per_sec_per_spu,
-            );
-            if a <= 0.0 {
-                return Err("no rays".into());
+            if b.stats.frame_cycles == 0 {
+                return Err("no cycles".into());
             }
-            100.0 * (b / a - 1.0)
+            100.0 * (first.stats.frame_cycles as f64 / b.stats.frame_cycles as f64 - 1.0)
         }
         Metric::Speedup => {
             let b = measured.get(1).ok_or("no second job")?;
@@ -386,41 +390,82 @@ pub fn value(metric: Metric, measured: &[&Measured]) -> Result<f64, String> {
     Ok(v)
 }
 
-/// Words that name a Table 6 row among the keys of the stats' `table6` object.
-const TABLE6_WORDS: [&[&str]; 4] = [
-    &["bvh", "node"],
-    &["tri"],
-    &["vertex", "vert"],
-    &["shader", "material"],
+/// The keys of the stats' `table6` object (kilobytes read per frame by main-memory
+/// region, counted by the MFCs), in the order of the paper's rows.
+const TABLE6_KEYS: [&str; 5] = [
+    "bvh_nodes_kb",
+    "triangle_records_kb",
+    "vertex_data_kb",
+    "shader_data_kb",
+    "total_read_kb",
 ];
 
 fn table6_kb(m: &Measured, row: usize) -> Result<f64, String> {
-    let t6 = m
+    let key = TABLE6_KEYS[row];
+    let kb = m
         .raw
         .get("table6")
-        .and_then(|t| t.as_object())
-        .ok_or("the stats have no table6")?;
+        .and_then(|t| t.get(key))
+        .and_then(|v| v.as_f64())
+        .ok_or_else(|| format!("the stats have no table6.{key}"))?;
     let scale = (PAPER_SIZE as f64 * PAPER_SIZE as f64) / m.stats.rays.max(1) as f64;
-    let find = |words: &[&str]| {
-        t6.iter()
-            .find(|(k, v)| {
-                let k = k.to_ascii_lowercase();
-                v.is_number()
-                    && !k.contains("frame_buffer")
-                    && !k.contains("written")
-                    && words.iter().any(|w| k.contains(w))
-            })
-            .and_then(|(_, v)| v.as_f64())
-    };
-    let kb = if row < TABLE6_WORDS.len() {
-        find(TABLE6_WORDS[row])
-            .ok_or_else(|| format!("the stats' table6 has no key for {:?}", TABLE6_WORDS[row]))?
-    } else {
-        TABLE6_WORDS
-            .iter()
-            .map(|w| find(w))
-            .sum::<Option<f64>>()
-            .ok_or("the stats' table6 lacks a kind")?
-    };
     Ok(kb * scale)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stats file of a `size`-square frame on one 2.4 GHz SPE, with extra keys.
+    fn measured(size: u32, frame_cycles: u64, mrays: f64, extra: &str) -> Measured {
+        let text = format!(
+            r#"{{"scene": "room", "width": {size}, "height": {size}, "clock_ghz": 2.4,
+            "frame_cycles": {frame_cycles}, "rays": {}, "mrays_per_sec": {mrays},
+            "spus": [{{"cycles": {frame_cycles}, "instructions": 1, "tiles": 1}}],
+            "table2": {{"traversal_steps_per_packet": 40.5, "pair_steps_per_packet": 20,
+              "triangle_tests_per_packet": 1.5, "triangles_culled_per_packet": 0,
+              "early_exits_pct": 44, "early_hits_pct": 52, "bvh_cache_hit_pct": 97.5,
+              "bvh_cache_hit_per_node_pct": 99, "triangle_cache_hit_pct": 96.25,
+              "mrays_per_sec_per_spu": {mrays}}},
+            "traversal": null, "intersection": null, "totals": null{extra}}}"#,
+            size * size
+        );
+        Measured {
+            stats: FrameStats::from_json(&text).unwrap(),
+            raw: serde_json::from_str(&text).unwrap(),
+        }
+    }
+
+    #[test]
+    fn our_numbers_come_from_the_right_keys() {
+        let a = measured(256, 24_000_000, 30.0, "");
+        let b = measured(256, 20_000_000, 36.0, "");
+        let c = measured(256, 6_000_000, 120.0, "");
+        assert_eq!(value(Metric::BvhHitPct, &[&a]), Ok(97.5));
+        assert_eq!(value(Metric::TriangleHitPct, &[&a]), Ok(96.25));
+        assert_eq!(value(Metric::TraversalSteps, &[&a]), Ok(40.5));
+        // 2.4e9 / 24e6 = 100 fps at 256x256, a sixteenth of that at 1024x1024
+        assert!((value(Metric::Fps1024, &[&a]).unwrap() - 100.0 / 16.0).abs() < 1e-9);
+        assert!((value(Metric::GainPct, &[&a, &b]).unwrap() - 20.0).abs() < 1e-9);
+        assert_eq!(value(Metric::Speedup, &[&a, &c]), Ok(4.0));
+        assert!(value(Metric::Table4("same_triangle_pct"), &[&a])
+            .unwrap_err()
+            .contains("table4"));
+        let shaded = measured(
+            512,
+            1,
+            1.0,
+            r#", "table4": {"same_triangle_pct": 97.5}, "table6": {"bvh_nodes_kb": 6,
+              "triangle_records_kb": 10, "vertex_data_kb": 30, "shader_data_kb": 0.5,
+              "total_read_kb": 46.5, "frame_buffer_written_kb": 1024}"#,
+        );
+        assert_eq!(
+            value(Metric::Table4("same_triangle_pct"), &[&shaded]),
+            Ok(97.5)
+        );
+        // kilobytes of a 512x512 frame scale by 4 to 1024x1024
+        assert_eq!(value(Metric::Table6(0), &[&shaded]), Ok(24.0));
+        assert_eq!(value(Metric::Table6(4), &[&shaded]), Ok(186.0));
+        assert!(value(Metric::Speedup, &[&a]).is_err());
+    }
 }

@@ -1,7 +1,7 @@
 //! `spu render --trace FILE.json`: the frame over simulated time in the Trace Event Format
-//! (the JSON that Perfetto and chrome://tracing open as is): one track per SPU with its
-//! tiles and, nested in them, its packets; one track per SPU with its channel (DMA)
-//! waits; per-SPU counters of waiting; and a counter of the shared memory interface's load.
+//! (the JSON that Perfetto and chrome://tracing open as is): per SPU a track of its tiles,
+//! one of its packets and one of its channel (DMA) waits; per-SPU counters of the share of
+//! time waiting; and a counter of the shared memory interface's load.
 
 use serde::Serialize;
 use spu_loader::timeline::Timeline;
@@ -31,8 +31,11 @@ pub struct Trace {
     pub display_time_unit: &'static str,
 }
 
-/// Track ids: SPU `i`'s slices on `i`, its waits on `WAIT_TRACKS + i`.
+/// Track ids: SPU `i`'s packets on `i`, its tiles on `TILE_TRACKS + i` (with software
+/// hyperthreading a tile's packets straddle the next tile's take), its waits on
+/// `WAIT_TRACKS + i`.
 const WAIT_TRACKS: u32 = 100;
+const TILE_TRACKS: u32 = 200;
 /// Cycles per sample of the memory interface counter.
 const LOAD_BUCKET: u64 = 10_000;
 
@@ -64,11 +67,12 @@ pub fn trace(timeline: &Timeline, spes: usize, clock_ghz: f64) -> Trace {
     ));
     for spu in 0..spes as u32 {
         for (tid, name, order) in [
-            (spu, format!("SPU {spu}"), 2 * spu),
+            (TILE_TRACKS + spu, format!("SPU {spu} tiles"), 3 * spu),
+            (spu, format!("SPU {spu} packets"), 3 * spu + 1),
             (
                 WAIT_TRACKS + spu,
                 format!("SPU {spu} DMA waits"),
-                2 * spu + 1,
+                3 * spu + 2,
             ),
         ] {
             ev.push(meta("thread_name", tid, args(&[("name", name.into())])));
@@ -89,11 +93,19 @@ pub fn trace(timeline: &Timeline, spes: usize, clock_ghz: f64) -> Trace {
         tid,
         args: a,
     };
+    let mut newest: BTreeMap<usize, u32> = BTreeMap::new();
     for t in &timeline.tiles {
+        // with SHT, the span after an SPU's last take only finishes earlier tiles
+        let finishing = newest.get(&t.spu).is_some_and(|&n| t.tile <= n);
+        newest.insert(t.spu, t.tile);
         ev.push(slice(
-            format!("tile {}", t.tile),
+            if finishing {
+                format!("finishing tile {}", t.tile)
+            } else {
+                format!("tile {}", t.tile)
+            },
             "tile",
-            t.spu as u32,
+            TILE_TRACKS + t.spu as u32,
             t.start,
             t.end,
             args(&[("cycles", (t.end - t.start).into())]),

@@ -155,3 +155,168 @@ fn render_writes_profile_and_stats() {
         text
     );
 }
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("spu-cli-link-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn write(name: &str, text: &str) -> String {
+    let p = scratch(name);
+    std::fs::write(&p, text).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
+/// Runs `spu`; its exit status and standard error.
+fn spu_status(args: &[&str]) -> (Option<i32>, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_spu"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+const MAIN_S: &str = "
+        .text
+        .global _start
+_start: il      $3, 10
+        brsl    $lr, add3
+        ila     $5, counter
+        lqa     $6, table
+        wrch    $SPU_WrOutMbox, $4
+        stop    0x2000
+        .data
+        .align  4
+table:  .long   add3, 7, 0, 0
+        .comm   counter, 16, 16
+";
+
+const ADD3_S: &str = "
+        .text
+        .global add3
+        .type   add3, @function
+add3:   ai      $4, $3, 3
+        bi      $lr
+        .size   add3, .-add3
+";
+
+/// Objects from `spu as -c` linked by `spu ld` give the same executable as assembling
+/// both sources at once; the relocations resolve across the objects.
+#[test]
+fn objects_link_like_assembling_together() {
+    let (a, b) = (write("main.s", MAIN_S), write("add3.s", ADD3_S));
+    let (ao, bo) = (scratch("main.o"), scratch("add3.o"));
+    let (ao, bo) = (ao.to_str().unwrap(), bo.to_str().unwrap());
+    spu(&["as", "-c", &a, "-o", ao]);
+    spu(&["as", "-c", &b, "-o", bo]);
+    let linked = scratch("linked.elf");
+    spu(&["ld", ao, bo, "-o", linked.to_str().unwrap()]);
+    let together = scratch("together.elf");
+    spu(&["as", &a, &b, "-o", together.to_str().unwrap()]);
+    assert_eq!(
+        std::fs::read(&linked).unwrap(),
+        std::fs::read(&together).unwrap()
+    );
+    let text = spu(&["dis", linked.to_str().unwrap()]);
+    // brsl at 4 to add3 at 0x18; ila of the common (0x30, after .data at 0x20).
+    assert!(text.contains("33 00 02 80 \tbrsl\t$0,18 <add3>"), "{text}");
+    assert!(
+        text.contains("42 00 18 05 \tila\t$5,30 <counter>"),
+        "{text}"
+    );
+    assert!(text.contains("30 80 04 06 \tlqa\t$6,20 <table>"), "{text}");
+    let run = spu(&["run", linked.to_str().unwrap()]);
+    assert!(run.contains("outbound mailbox: 0xd"), "{run}");
+}
+
+#[test]
+fn link_errors_name_object_and_symbol() {
+    let a = write("main2.s", MAIN_S);
+    let ao = scratch("main2.o");
+    let ao = ao.to_str().unwrap();
+    spu(&["as", "-c", &a, "-o", ao]);
+    let out = scratch("x.elf");
+    let out = out.to_str().unwrap();
+    let (code, err) = spu_status(&["ld", ao, "-o", out]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("main2.o: undefined reference to `add3' (.text+0x4)"),
+        "{err}"
+    );
+    let b = write("add3b.s", ADD3_S);
+    let bo = scratch("add3b.o");
+    let bo = bo.to_str().unwrap();
+    spu(&["as", "-c", &b, "-o", bo]);
+    let (code, err) = spu_status(&["ld", ao, bo, bo, "-o", out]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("multiple definition of `add3'"), "{err}");
+    let far = write("far.s", ".text\n.global _start\n_start: ai $3, $3, away\n");
+    let faro = scratch("far.o");
+    spu(&["as", "-c", &far, "-o", faro.to_str().unwrap()]);
+    let away = write(
+        "away.s",
+        ".data\n.space 0x800\n.global away\naway: .long 0\n",
+    );
+    let awayo = scratch("away.o");
+    spu(&["as", "-c", &away, "-o", awayo.to_str().unwrap()]);
+    let (code, err) = spu_status(&[
+        "ld",
+        faro.to_str().unwrap(),
+        awayo.to_str().unwrap(),
+        "-o",
+        out,
+    ]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("far.o: .text+0x0: relocation truncated to fit: R_SPU_ADDR10I")
+            && err.contains("against `away'"),
+        "{err}"
+    );
+    let big = write("big.s", ".text\n.space 0x30000\n");
+    let bigo = scratch("big.o");
+    spu(&["as", "-c", &big, "-o", bigo.to_str().unwrap()]);
+    let bigo = bigo.to_str().unwrap();
+    let (code, err) = spu_status(&["ld", bigo, bigo, "-o", out]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("does not fit the 256 KiB local store"),
+        "{err}"
+    );
+    // An object for another machine (this test binary is a host ELF, or not ELF at all).
+    let host = std::env::current_exe().unwrap();
+    let (code, err) = spu_status(&["ld", host.to_str().unwrap(), "-o", out]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("not SPU") || err.contains("ELF32 MSB"),
+        "{err}"
+    );
+}
+
+/// A raw image has no symbols: objdump writes branch targets as `0x38`.
+#[test]
+fn raw_image_targets_print_with_0x() {
+    let src = write("raw.s", "il $3,1\n1: ai $3,$3,-1\nbrnz $3,1b\n");
+    let bin = scratch("raw.bin");
+    spu(&["as", &src, "--format", "bin", "-o", bin.to_str().unwrap()]);
+    let text = spu(&["dis", bin.to_str().unwrap()]);
+    assert!(text.contains("brnz\t$3,0x4"), "{text}");
+}
+
+/// Where a local label, an absolute symbol and a global share an address, objdump names
+/// it after the global.
+#[test]
+fn dis_prefers_the_global_symbol() {
+    let src = write(
+        "names.s",
+        "\t.text\n\t.global main\n\t.set ABS, 4\n.Lx:\nloc:\nmain:\til $3,1\n\tbr main\n",
+    );
+    let elf = scratch("names.elf");
+    spu(&["as", &src, "-o", elf.to_str().unwrap()]);
+    let text = spu(&["dis", elf.to_str().unwrap()]);
+    assert!(text.contains("00000000 <main>:"), "{text}");
+    assert!(text.contains("br\t0 <main>"), "{text}");
+}

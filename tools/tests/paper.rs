@@ -128,8 +128,18 @@ fn quick_report_has_every_table_and_the_figure() {
     assert_eq!(&png[1..4], b"PNG");
     let svg = std::fs::read_to_string(dir.join("figure2.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.contains("ideal"), "{svg}");
+    // each scene's heat maps, beside the report
+    let maps = r["heatmaps"].as_array().unwrap();
+    assert_eq!(maps.len(), 3);
+    for m in maps {
+        for key in ["cycles", "wait"] {
+            let png = std::fs::read(dir.join(m[key].as_str().unwrap())).unwrap();
+            assert_eq!(&png[1..4], b"PNG", "{m}");
+        }
+    }
     let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert!(md.contains("## Heat maps") && html.contains("id=\"heatmaps\""));
     for t in r["tables"].as_array().unwrap() {
         let title = t["title"].as_str().unwrap();
         assert!(md.contains(title), "{title} in report.md");
@@ -199,7 +209,11 @@ fn collect_names_missing_and_corrupt_stats_and_reports_the_rest() {
         ],
     ]
     .concat());
-    assert!(!collected.status.success());
+    assert_eq!(
+        collected.status.code(),
+        Some(2),
+        "stats missing from --collect"
+    );
     let err = String::from_utf8_lossy(&collected.stderr);
     for gone in &stats[..2] {
         let name = gone.file_name().unwrap().to_str().unwrap();
@@ -231,7 +245,7 @@ fn bad_scenes_and_output_are_named_before_any_work() {
         "--out",
         dir.to_str().unwrap(),
     ]);
-    assert!(!out.status.success());
+    assert_eq!(out.status.code(), Some(2), "bad input");
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("unknown scene \"teapot\""), "{err}");
 
@@ -245,7 +259,7 @@ fn bad_scenes_and_output_are_named_before_any_work() {
         "--out",
         under_file.to_str().unwrap(),
     ]);
-    assert!(!out.status.success());
+    assert_eq!(out.status.code(), Some(2), "bad input");
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--out"), "{err}");
     assert!(!dir.join("jobs").exists());

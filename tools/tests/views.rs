@@ -18,7 +18,8 @@ fn heatmap_and_trace_of_a_small_frame() {
     std::fs::create_dir_all(&dir).unwrap();
     let p = |name: &str| dir.join(name).to_str().unwrap().to_string();
     let base = [
-        "render", "--scene", "room", "--width", "128", "--height", "128", "--spes", "2",
+        "render", "--scene", "room", "--width", "128", "--height", "128", "--spes", "2", "--sht",
+        "1",
     ];
     let plain = spu(&[&base[..], &["-o", &p("a.png"), "--stats", &p("a.json")]].concat());
     assert!(plain.status.success());
@@ -85,7 +86,7 @@ fn heatmap_and_trace_of_a_small_frame() {
             assert!(e["dur"].as_f64().unwrap() >= 0.0, "{e}");
         }
     }
-    // packets nest in their SPU's tiles
+    // without SHT each packet lies within its tile's span on the SPU's tile track
     for pk in &packets {
         let (ts, end) = (
             pk["ts"].as_f64().unwrap(),
@@ -94,7 +95,10 @@ fn heatmap_and_trace_of_a_small_frame() {
         let tile = pk["name"].as_str().unwrap()[7..].split('.').next().unwrap();
         let t = tiles
             .iter()
-            .find(|t| t["name"] == format!("tile {tile}") && t["tid"] == pk["tid"])
+            .find(|t| {
+                t["name"] == format!("tile {tile}")
+                    && t["tid"].as_u64() == pk["tid"].as_u64().map(|s| s + 200)
+            })
             .unwrap_or_else(|| panic!("no tile for {pk}"));
         let (a, b) = (
             t["ts"].as_f64().unwrap(),
@@ -107,7 +111,7 @@ fn heatmap_and_trace_of_a_small_frame() {
         .filter(|e| e["ph"] == "M" && e["name"] == "thread_name")
         .map(|e| e["args"]["name"].as_str().unwrap())
         .collect();
-    assert!(names.contains(&"SPU 0") && names.contains(&"SPU 1 DMA waits"));
+    assert!(names.contains(&"SPU 0 packets") && names.contains(&"SPU 1 DMA waits"));
     assert!(events
         .iter()
         .any(|e| e["ph"] == "C" && e["name"] == "memory interface"));
@@ -127,4 +131,64 @@ fn an_unwritable_heatmap_or_trace_is_refused_before_rendering() {
     ]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent-dir/t.json"));
+}
+
+/// With software hyperthreading packets complete out of order across tiles: every packet
+/// is still found once, and the tile spans of an SPU do not overlap.
+#[test]
+fn trace_with_packets_in_flight() {
+    let dir = std::env::temp_dir().join(format!("spu-views-sht-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let out = spu(&[
+        "render",
+        "--scene",
+        "conference",
+        "--width",
+        "128",
+        "--height",
+        "128",
+        "--spes",
+        "2",
+        "--sht",
+        "4",
+        "-o",
+        &p("c.png"),
+        "--trace",
+        &p("t.json"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let trace: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p("t.json")).unwrap()).unwrap();
+    let events = trace["traceEvents"].as_array().unwrap();
+    let mut packets: Vec<&str> = events
+        .iter()
+        .filter(|e| e["cat"] == "packet")
+        .map(|e| e["name"].as_str().unwrap())
+        .collect();
+    packets.sort();
+    packets.dedup();
+    assert_eq!(packets.len(), 256);
+    for tid in [200, 201] {
+        let mut spans: Vec<(f64, f64)> = events
+            .iter()
+            .filter(|e| e["cat"] == "tile" && e["tid"] == tid)
+            .map(|e| {
+                let ts = e["ts"].as_f64().unwrap();
+                (ts, ts + e["dur"].as_f64().unwrap())
+            })
+            .collect();
+        spans.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        assert!(!spans.is_empty());
+        assert!(
+            spans.windows(2).all(|w| w[0].1 <= w[1].0 + 1e-9),
+            "{spans:?}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

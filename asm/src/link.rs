@@ -1,0 +1,382 @@
+//! `spu ld`: links relocatable SPU objects into an executable local-store image, as GNU
+//! ld's default SPU script lays it out (code, read-only data, data, bss, commons at the
+//! end of bss), resolving symbols across objects and applying the SPU relocations.
+//! Overlays are not supported.
+
+use crate::gas::{RelocTarget, SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE, SHT_NOBITS};
+use crate::object::{Object, SymSection};
+use std::collections::HashMap;
+
+#[derive(Clone, Debug, Default)]
+pub struct LinkOptions {
+    /// Address of the first (code) section: `-Ttext`.
+    pub text_addr: u32,
+    /// Entry symbol: `-e` (default `_start`, else the start of the code).
+    pub entry: Option<String>,
+}
+
+/// A linked program.
+#[derive(Clone, Debug, Default)]
+pub struct Linked {
+    /// Local store from address 0 to the end of the last section.
+    pub image: Vec<u8>,
+    pub elf: Vec<u8>,
+    /// Symbols (not `.L` locals) with their addresses.
+    pub symbols: Vec<(String, u32)>,
+    pub entry: u32,
+    /// Output sections: (name, address, size, is code).
+    pub sections: Vec<(String, u32, u32, bool)>,
+}
+
+const LOCAL_STORE: u64 = 256 * 1024;
+
+/// The output section an input section goes to (GNU ld's default script).
+fn output_name(name: &str) -> String {
+    for base in [".text", ".data", ".rodata", ".bss"] {
+        if name == base || name.starts_with(&format!("{base}.")) {
+            return base.to_string();
+        }
+    }
+    name.to_string()
+}
+
+/// Where an output section goes (sorted by this, then by first appearance): the
+/// order of GNU ld's SPU script (`.interrupt`, `.init`, `.text`, `.fini`, read-only
+/// data, data, bss); non-allocated sections last (they take no address).
+pub(crate) fn placement(name: &str, ty: u32, flags: u64) -> (u8, i8) {
+    let class = if flags & SHF_ALLOC == 0 {
+        4
+    } else if flags & SHF_EXECINSTR != 0 {
+        0
+    } else if ty == SHT_NOBITS {
+        3
+    } else if flags & SHF_WRITE == 0 {
+        1
+    } else {
+        2
+    };
+    let rank = match name {
+        ".interrupt" => -3,
+        ".init" => -2,
+        ".text" => -1,
+        ".fini" => 1,
+        _ => 0,
+    };
+    (class, rank)
+}
+
+struct OutSection {
+    name: String,
+    ty: u32,
+    flags: u64,
+    align: u32,
+    /// (object, input section, offset in this output section)
+    inputs: Vec<(usize, usize, u32)>,
+    size: u32,
+    addr: u32,
+}
+
+/// Where a global symbol is defined.
+#[derive(Clone, Debug)]
+struct Definition {
+    object: usize,
+    section: SymSection,
+    value: u64,
+    weak: bool,
+}
+
+/// Links `objects`; errors name the object and symbol concerned.
+pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String>> {
+    let mut errors = Vec::new();
+    // Output sections in GNU ld's order.
+    let mut outs: Vec<OutSection> = Vec::new();
+    for (o, obj) in objects.iter().enumerate() {
+        for (i, s) in obj.sections.iter().enumerate() {
+            if s.flags & SHF_ALLOC == 0 {
+                continue;
+            }
+            let name = output_name(&s.name);
+            let k = match outs.iter().position(|x| x.name == name) {
+                Some(k) => k,
+                None => {
+                    outs.push(OutSection {
+                        name,
+                        ty: s.ty,
+                        flags: s.flags,
+                        align: 1,
+                        inputs: Vec::new(),
+                        size: 0,
+                        addr: 0,
+                    });
+                    outs.len() - 1
+                }
+            };
+            let out = &mut outs[k];
+            if (out.ty == SHT_NOBITS) != (s.ty == SHT_NOBITS) {
+                // Contents into a NOBITS section (or the reverse): it becomes PROGBITS.
+                out.ty = 1;
+            }
+            out.flags |= s.flags;
+            out.align = out.align.max(s.align.max(1));
+            let at = out.size.div_ceil(s.align.max(1)) * s.align.max(1);
+            out.inputs.push((o, i, at));
+            out.size = at.saturating_add(s.size);
+        }
+    }
+    // Global symbols: strong over weak over common; two strong ones are an error.
+    let mut globals: HashMap<String, Definition> = HashMap::new();
+    let mut commons: Vec<(String, u64, u64, usize)> = Vec::new();
+    for (o, obj) in objects.iter().enumerate() {
+        for s in &obj.symbols {
+            if !s.global || s.section == SymSection::Undefined {
+                continue;
+            }
+            if s.section == SymSection::Common {
+                match commons.iter_mut().find(|c| c.0 == s.name) {
+                    Some(c) => {
+                        c.1 = c.1.max(s.size);
+                        c.2 = c.2.max(s.value);
+                    }
+                    None => commons.push((s.name.clone(), s.size, s.value.max(1), o)),
+                }
+                continue;
+            }
+            let def = Definition {
+                object: o,
+                section: s.section,
+                value: s.value,
+                weak: s.weak,
+            };
+            match globals.get(&s.name) {
+                Some(prev) if !prev.weak && !s.weak => errors.push(format!(
+                    "{}: multiple definition of `{}'; first defined in {}",
+                    obj.name, s.name, objects[prev.object].name
+                )),
+                Some(prev) if !prev.weak || s.weak => {}
+                _ => {
+                    globals.insert(s.name.clone(), def);
+                }
+            }
+        }
+    }
+    // Commons not defined elsewhere go at the end of .bss.
+    commons.retain(|c| !globals.contains_key(&c.0));
+    let mut common_at: HashMap<String, u32> = HashMap::new();
+    if !commons.is_empty() {
+        let k = match outs.iter().position(|x| x.name == ".bss") {
+            Some(k) => k,
+            None => {
+                outs.push(OutSection {
+                    name: ".bss".into(),
+                    ty: SHT_NOBITS,
+                    flags: SHF_ALLOC | SHF_WRITE,
+                    align: 1,
+                    inputs: Vec::new(),
+                    size: 0,
+                    addr: 0,
+                });
+                outs.len() - 1
+            }
+        };
+        for (name, size, align, _) in &commons {
+            let a = (*align).clamp(1, 1 << 15) as u32;
+            let out = &mut outs[k];
+            out.align = out.align.max(a);
+            let at = out.size.div_ceil(a) * a;
+            common_at.insert(name.clone(), at);
+            out.size = at.saturating_add((*size).min(LOCAL_STORE) as u32);
+        }
+    }
+    let mut order: Vec<usize> = (0..outs.len()).collect();
+    order.sort_by_key(|&k| (placement(&outs[k].name, outs[k].ty, outs[k].flags), k));
+    let mut addr = opts.text_addr as u64;
+    for (n, &k) in order.iter().enumerate() {
+        let a = outs[k].align.max(16) as u64;
+        if n > 0 || addr % a != 0 {
+            addr = addr.div_ceil(a) * a;
+        }
+        outs[k].addr = addr.min(u32::MAX as u64) as u32;
+        addr += outs[k].size as u64;
+    }
+    // Overlaps and the local store.
+    for (i, a) in outs.iter().enumerate() {
+        let a_end = a.addr as u64 + a.size as u64;
+        if a_end > LOCAL_STORE {
+            errors.push(format!(
+                "section {} [{:#x}, {:#x}) does not fit the 256 KiB local store",
+                a.name, a.addr, a_end
+            ));
+        }
+        for b in &outs[i + 1..] {
+            let b_end = b.addr as u64 + b.size as u64;
+            if a.size > 0 && b.size > 0 && (a.addr as u64) < b_end && (b.addr as u64) < a_end {
+                errors.push(format!("section {} overlaps section {}", a.name, b.name));
+            }
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    // Input section addresses.
+    let mut placed: HashMap<(usize, usize), u32> = HashMap::new();
+    for out in &outs {
+        for &(o, i, at) in &out.inputs {
+            placed.insert((o, i), out.addr + at);
+        }
+    }
+    let bss_addr = outs.iter().find(|x| x.name == ".bss").map_or(0, |x| x.addr);
+    let address_of = |o: usize, section: SymSection, value: u64| -> Option<u64> {
+        match section {
+            SymSection::Section(i) => placed.get(&(o, i)).map(|a| *a as u64 + value),
+            SymSection::Absolute => Some(value),
+            _ => None,
+        }
+    };
+    let global_address = |name: &str| -> Option<u64> {
+        if let Some(d) = globals.get(name) {
+            return address_of(d.object, d.section, d.value);
+        }
+        common_at.get(name).map(|a| (bss_addr + a) as u64)
+    };
+    let end = outs
+        .iter()
+        .map(|x| x.addr as u64 + x.size as u64)
+        .max()
+        .unwrap_or(0);
+    let mut image = vec![0u8; end as usize];
+    for out in &outs {
+        for &(o, i, at) in &out.inputs {
+            let s = &objects[o].sections[i];
+            if s.ty != SHT_NOBITS {
+                let start = (out.addr + at) as usize;
+                let n = s.data.len().min(s.size as usize);
+                image[start..start + n].copy_from_slice(&s.data[..n]);
+            }
+        }
+    }
+    // Relocations.
+    for (o, obj) in objects.iter().enumerate() {
+        let locals: HashMap<&str, (SymSection, u64)> = obj
+            .symbols
+            .iter()
+            .filter(|s| !s.global)
+            .map(|s| (s.name.as_str(), (s.section, s.value)))
+            .collect();
+        let weak_undefined = |name: &str| {
+            obj.symbols
+                .iter()
+                .any(|s| s.name == name && s.weak && s.section == SymSection::Undefined)
+        };
+        for (i, s) in obj.sections.iter().enumerate() {
+            let Some(&base) = placed.get(&(o, i)) else {
+                continue;
+            };
+            for r in &s.relocs {
+                let target = match &r.target {
+                    RelocTarget::Section(t) => placed.get(&(o, *t)).map(|a| *a as u64),
+                    RelocTarget::Symbol(n) if n.is_empty() => Some(0),
+                    RelocTarget::Symbol(n) => match locals.get(n.as_str()) {
+                        Some(&(sec, v)) => address_of(o, sec, v),
+                        None => global_address(n).or_else(|| weak_undefined(n).then_some(0)),
+                    },
+                };
+                let what = match &r.target {
+                    RelocTarget::Section(t) => obj
+                        .sections
+                        .get(*t)
+                        .map_or("?".to_string(), |x| x.name.clone()),
+                    RelocTarget::Symbol(n) => n.clone(),
+                };
+                let Some(sv) = target else {
+                    errors.push(format!(
+                        "{}: undefined reference to `{what}' ({}+{:#x})",
+                        obj.name, s.name, r.offset
+                    ));
+                    continue;
+                };
+                let value = sv as i64 + r.addend;
+                if let Err(m) = crate::reloc::apply(r.kind, &mut image, base + r.offset, value) {
+                    errors.push(format!(
+                        "{}: {}+{:#x}: {m} against `{what}'",
+                        obj.name, s.name, r.offset
+                    ));
+                }
+            }
+        }
+    }
+    if !errors.is_empty() {
+        errors.sort();
+        errors.dedup();
+        return Err(errors);
+    }
+    // Symbols of the output.
+    let mut symbols: Vec<(String, u32)> = Vec::new();
+    let mut global_names = Vec::new();
+    for (o, obj) in objects.iter().enumerate() {
+        for s in &obj.symbols {
+            if s.name.starts_with(".L") || s.name.is_empty() {
+                continue;
+            }
+            if s.global {
+                continue;
+            }
+            if let Some(a) = address_of(o, s.section, s.value) {
+                if matches!(s.section, SymSection::Section(_)) {
+                    symbols.push((s.name.clone(), a as u32));
+                }
+            }
+        }
+    }
+    let mut names: Vec<&String> = globals.keys().chain(common_at.keys()).collect();
+    names.sort();
+    for n in names {
+        if let Some(a) = global_address(n) {
+            symbols.push((n.clone(), a as u32));
+            global_names.push(n.clone());
+        }
+    }
+    symbols.sort_by(|a, b| a.1.cmp(&b.1).then(a.0.cmp(&b.0)));
+    let entry_name = opts.entry.clone().unwrap_or_else(|| "_start".into());
+    let entry = match global_address(&entry_name).or_else(|| {
+        symbols
+            .iter()
+            .find(|s| s.0 == entry_name)
+            .map(|s| s.1 as u64)
+    }) {
+        Some(a) => a as u32,
+        None if opts.entry.is_some() => {
+            // GNU ld: a number is taken as the address.
+            parse_number(&entry_name)
+                .ok_or_else(|| vec![format!("entry symbol `{entry_name}' is not defined")])?
+        }
+        None => order.first().map_or(opts.text_addr, |&k| outs[k].addr),
+    };
+    let mut sections = Vec::new();
+    let mut nobits = Vec::new();
+    let mut by_addr: Vec<&OutSection> = outs.iter().collect();
+    by_addr.sort_by_key(|x| x.addr);
+    for out in by_addr {
+        sections.push((
+            out.name.clone(),
+            out.addr,
+            out.size,
+            out.flags & SHF_EXECINSTR != 0,
+        ));
+        nobits.push(out.ty == SHT_NOBITS);
+    }
+    let elf = crate::elf::write_elf(&image, &sections, &nobits, &symbols, &global_names, entry);
+    Ok(Linked {
+        image,
+        elf,
+        symbols,
+        entry,
+        sections,
+    })
+}
+
+fn parse_number(s: &str) -> Option<u32> {
+    match s.strip_prefix("0x").or_else(|| s.strip_prefix("0X")) {
+        Some(h) => u32::from_str_radix(h, 16).ok(),
+        None => s.parse().ok(),
+    }
+}

@@ -1,0 +1,241 @@
+//! Relocatable objects (what `spu as -c` writes and `spu ld` reads) and the bounds on
+//! hostile input (issue #15's assembler classes), each asserting the result or message.
+
+use spu_asm::link::{link, LinkOptions};
+use spu_asm::object::{Object, SymSection};
+use spu_asm::reloc::*;
+use spu_asm::{assemble, assemble_object, Options, RelocTarget, Severity};
+
+fn object(src: &str) -> Object {
+    let (obj, _) = assemble_object(src, "t.s", &Options::default()).unwrap_or_else(|e| {
+        panic!(
+            "{}",
+            e.iter()
+                .map(|d| d.to_string())
+                .collect::<Vec<_>>()
+                .join("\n")
+        )
+    });
+    // Every object goes through ELF and back unchanged.
+    let back = Object::from_elf("t.o", &obj.to_elf().unwrap()).unwrap();
+    assert_eq!(back.sections, obj.sections);
+    back
+}
+
+fn errors(src: &str) -> Vec<String> {
+    match assemble(src, "t.s", &Options::default()) {
+        Ok(_) => vec![],
+        Err(d) => d
+            .iter()
+            .filter(|d| d.severity == Severity::Error)
+            .map(|d| d.message.clone())
+            .collect(),
+    }
+}
+
+/// Each operand kind that can name an address gets the relocation gas's `arg_encode`
+/// gives it, at the instruction's offset, with the field left zero for the linker.
+#[test]
+fn operands_get_their_spu_relocations() {
+    let obj = object(
+        "\t.text\n\
+         \tlqd\t$3, ext($1)\n\
+         \tai\t$3, $3, ext\n\
+         \til\t$3, ext\n\
+         \tlqa\t$3, ext\n\
+         \tila\t$3, ext+8\n\
+         \tilhu\t$3, ext@h\n\
+         \tiohl\t$3, ext@l\n\
+         \tbrsl\t$lr, ext\n\
+         \thbra\t1f, ext\n\
+         \thbrr\t1f, ext\n\
+         1:\tbi\t$lr\n\
+         \t.data\n\
+         \t.long\text+4\n",
+    );
+    let text = &obj.sections[0];
+    let kinds: Vec<(u32, u32, i64)> = text
+        .relocs
+        .iter()
+        .map(|r| (r.offset, r.kind, r.addend))
+        .collect();
+    assert_eq!(
+        kinds,
+        [
+            (0x00, R_SPU_ADDR10, 0),
+            (0x04, R_SPU_ADDR10I, 0),
+            (0x08, R_SPU_ADDR16I, 0),
+            (0x0c, R_SPU_ADDR16, 0),
+            (0x10, R_SPU_ADDR18, 8),
+            (0x14, R_SPU_ADDR16_HI, 0),
+            (0x18, R_SPU_ADDR16_LO, 0),
+            (0x1c, R_SPU_REL16, 0),
+            (0x20, R_SPU_ADDR16, 0),
+            (0x24, R_SPU_REL16, 0),
+        ]
+    );
+    assert!(text
+        .relocs
+        .iter()
+        .all(|r| r.target == RelocTarget::Symbol("ext".into())));
+    // The fields are left for the linker: only the opcode and registers are there.
+    assert_eq!(&text.data[0x1c..0x20], &0x3300_0000u32.to_be_bytes());
+    let data = &obj.sections[1];
+    assert_eq!(data.relocs[0].kind, R_SPU_ADDR32);
+    assert_eq!(data.relocs[0].addend, 4);
+    let ext = obj.symbols.iter().find(|s| s.name == "ext").unwrap();
+    assert_eq!(ext.section, SymSection::Undefined);
+    assert!(ext.global);
+}
+
+/// A branch to a label of its own section is resolved by the assembler (no relocation),
+/// one to a local label of another section is relocated against that section's symbol.
+#[test]
+fn local_references_resolve_or_name_the_section() {
+    let obj = object(
+        "\t.text\nstart:\tbr\tnext\nnext:\tila\t$3, value\n\tbr\tstart\n\t.data\n\t.long\t0\nvalue:\t.long\t1\n",
+    );
+    let text = &obj.sections[0];
+    assert_eq!(&text.data[0..4], &0x3200_0080u32.to_be_bytes()); // br +4
+    assert_eq!(&text.data[8..12], &0x327f_ff00u32.to_be_bytes()); // br -8
+    assert_eq!(text.relocs.len(), 1);
+    assert_eq!(text.relocs[0].kind, R_SPU_ADDR18);
+    assert_eq!(text.relocs[0].target, RelocTarget::Section(1));
+    assert_eq!(text.relocs[0].addend, 4);
+}
+
+/// Linking the objects of two sources gives the program that assembling them as one
+/// source gives (the same layout rules), with symbols resolved across the objects.
+#[test]
+fn linked_objects_equal_one_assembly() {
+    let a = "\t.text\n\t.global _start\n_start:\tbrsl\t$lr, f\n\tila\t$4, tab\n\tlqa\t$5, tab\n\tstop\t0x2000\n\t.data\ntab:\t.long\tf, 2, 3, 4\n";
+    let b = "\t.text\n\t.global f\nf:\tai\t$3, $3, 1\n\tbi\t$lr\n";
+    let linked = link(&[object(a), object(b)], &LinkOptions::default()).unwrap();
+    // As one source: a's text, b's text, then a's data (b has none).
+    let one = format!("{a}\t.text\n{}", b.replace("\t.text\n", ""));
+    let out = assemble(&one, "one.s", &Options::default()).unwrap();
+    assert_eq!(linked.image, out.image);
+    assert_eq!(linked.entry, 0);
+    // -Ttext moves everything; the absolute references follow.
+    let moved = link(
+        &[object(a), object(b)],
+        &LinkOptions {
+            text_addr: 0x100,
+            entry: Some("f".into()),
+        },
+    )
+    .unwrap();
+    assert_eq!(moved.entry, 0x110);
+    assert_eq!(&moved.image[0x100..0x104], &out.image[0..4]); // brsl is relative
+    assert_eq!(&moved.image[0x104..0x108], &0x4200_9004u32.to_be_bytes()); // ila $4,0x120
+}
+
+#[test]
+fn commons_and_weak_symbols() {
+    let a = "\t.text\n\t.global _start\n_start:\tila\t$3, buf\n\tila\t$4, w\n\t.comm\tbuf, 32, 16\n\t.weak\tw\n";
+    let b = "\t.comm\tbuf, 64, 16\n";
+    let linked = link(&[object(a), object(b)], &LinkOptions::default()).unwrap();
+    let buf = linked.symbols.iter().find(|s| s.0 == "buf").unwrap().1;
+    assert_eq!(buf % 16, 0);
+    let bss = linked.sections.iter().find(|s| s.0 == ".bss").unwrap();
+    assert_eq!(bss.2, 64, "the larger common wins");
+    // An undefined weak symbol is 0.
+    assert_eq!(&linked.image[4..8], &0x4200_0004u32.to_be_bytes());
+}
+
+#[test]
+fn objects_for_other_machines_are_refused() {
+    let mut elf = object("nop\n").to_elf().unwrap();
+    elf[19] = 21; // EM_PPC64
+    let e = Object::from_elf("ppu.o", &elf).unwrap_err();
+    assert!(e.contains("ppu.o: ELF machine 21 is not SPU (23)"), "{e}");
+    assert!(Object::from_elf("x.o", b"\x7fELF\x02\x01").is_err());
+    assert!(Object::from_elf("x.o", &elf[..40]).is_err());
+}
+
+#[test]
+fn expressions_of_100000_terms_or_parentheses() {
+    let n = 100_000;
+    let deep = format!("il $3, {}1{}\n", "(".repeat(n), ")".repeat(n));
+    let out = assemble(&deep, "t.s", &Options::default()).unwrap();
+    assert_eq!(&out.image[0..4], &0x4080_0083u32.to_be_bytes());
+    let long = format!(".long {}\n", vec!["1"; n].join("+"));
+    let out = assemble(&long, "t.s", &Options::default()).unwrap();
+    assert_eq!(&out.image[0..4], &(n as u32).to_be_bytes());
+}
+
+#[test]
+fn nested_repetition_stops_at_the_budget() {
+    let src = ".rept 1000\n.rept 1000\n.rept 1000\nnop\n.endr\n.endr\n.endr\n";
+    let e = errors(src);
+    assert!(
+        e.iter()
+            .any(|m| m.contains("statements after expanding macros, .rept and .irp: stopped")),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn diagnostics_are_capped_with_a_count() {
+    let src: String = (0..1000).map(|i| format!("frob{i} $1\n")).collect();
+    let e = errors(&src);
+    assert_eq!(e.len(), 101, "{:?}", &e[..3]);
+    assert_eq!(e[100], "and 900 more diagnostics");
+}
+
+#[test]
+fn latin1_and_utf8_bytes_pass_through() {
+    let dir = std::env::temp_dir().join(format!("spu-latin1-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("l.s");
+    // A Latin-1 comment and string (not UTF-8), then a UTF-8 string.
+    let mut bytes = b"# caf\xe9\n.data\n.ascii \"\xe9\"\n".to_vec();
+    bytes.extend("\t.ascii \"é\"\n".as_bytes());
+    std::fs::write(&path, bytes).unwrap();
+    let out = spu_asm::assemble_file(&path, &Options::default()).unwrap();
+    let data = out.sections.iter().find(|s| s.0 == ".data").unwrap();
+    let at = data.1 as usize;
+    assert_eq!(&out.image[at..at + 3], &[0xe9, 0xc3, 0xa9]);
+}
+
+#[test]
+fn quoted_macro_arguments_and_square_brackets() {
+    let out = assemble(
+        ".macro ld3 v\n\til $3, \\v\n.endm\n.irp i,1,2\n\tld3 \"(\\i+1)\"\n.endr\n\til $4, [1+2]*2\n",
+        "t.s",
+        &Options::default(),
+    )
+    .unwrap();
+    let words: Vec<u32> = out.image[..12]
+        .chunks(4)
+        .map(|c| u32::from_be_bytes(c.try_into().unwrap()))
+        .collect();
+    assert_eq!(words, [0x4080_0103, 0x4080_0183, 0x4080_0304]);
+}
+
+/// Every truncation and many single-byte changes of an object are read or refused
+/// without a panic, and whatever is read links or is refused without one either.
+#[test]
+fn mutated_objects_never_panic() {
+    let elf = object(
+        "\t.text\n\t.global _start\n_start:\tbrsl\t$lr, ext\n\tila\t$3, d\n\t.data\nd:\t.long\text\n\t.comm\tc, 8\n",
+    )
+    .to_elf()
+    .unwrap();
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut inputs: Vec<Vec<u8>> = (0..elf.len()).map(|n| elf[..n].to_vec()).collect();
+    for _ in 0..3000 {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        let mut m = elf.clone();
+        let at = (seed as usize) % m.len();
+        m[at] = (seed >> 32) as u8;
+        inputs.push(m);
+    }
+    for m in inputs {
+        if let Ok(obj) = Object::from_elf("m.o", &m) {
+            let _ = link(&[obj], &LinkOptions::default());
+        }
+    }
+}

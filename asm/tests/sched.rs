@@ -1,0 +1,259 @@
+//! The list scheduler (`spu_asm::sched`, the `.sched` blocks): exact output on small
+//! blocks, each rule that moves an instruction, and the errors that name their line.
+
+use spu_asm::sched::{parse_options, parse_registers, schedule, SchedError, SchedOptions};
+use spu_asm::{assemble, Options};
+
+fn no_names(_: &str) -> Option<u8> {
+    None
+}
+
+fn pool(p: &str) -> SchedOptions {
+    SchedOptions {
+        pool: parse_registers(p).unwrap(),
+        scratch: Vec::new(),
+    }
+}
+
+fn run(block: &str, opts: &SchedOptions, start: Option<u32>) -> (Vec<String>, u32) {
+    let lines: Vec<&str> = block.lines().collect();
+    let s = schedule(&lines, opts, start, &no_names).unwrap_or_else(|e| panic!("{e:?}"));
+    let text = s
+        .lines
+        .iter()
+        .map(|(l, _)| l.split_whitespace().collect::<Vec<_>>().join(" "))
+        .collect();
+    (text, s.cycles)
+}
+
+fn fails(block: &str, opts: &SchedOptions) -> SchedError {
+    let lines: Vec<&str> = block.lines().collect();
+    schedule(&lines, opts, None, &no_names).unwrap_err()
+}
+
+#[test]
+fn a_load_chain_pairs_with_independent_work() {
+    // Critical path first: the load (6) feeds fa (6) feeds the store; the ai and the
+    // shuffle fill the slots; %a and %b get the pool's registers in issue order.
+    let (out, cycles) = run(
+        "lqd %a, 0($3)\nfa %b, %a, $6\nai $4, $4, 1\nstqd %b, 0($5)\nshufb $7, $8, $8, $9",
+        &pool("20-23"),
+        None,
+    );
+    assert_eq!(
+        out,
+        [
+            ".align 3",
+            "ai $4, $4, 1",
+            "lqd $20, 0($3)",
+            "nop",
+            "shufb $7, $8, $8, $9",
+            "fa $21, $20, $6",
+            "lnop",
+            "nop",
+            "stqd $21, 0($5)",
+        ]
+    );
+    assert_eq!(cycles, 13);
+}
+
+#[test]
+fn registers_are_reused_after_their_last_read() {
+    // Two independent chains through a pool of two: a chain needs both registers (the
+    // allocator takes a new one before freeing the last use), so they run one after
+    // the other and the second takes the registers the first one freed.
+    let (out, _) = run(
+        "il %a, 1\nai %b, %a, 1\nstqd %b, 0($3)\nil %c, 2\nai %d, %c, 2\nstqd %d, 16($3)",
+        &pool("30,31"),
+        None,
+    );
+    let code: Vec<&String> = out.iter().filter(|l| !l.ends_with("nop")).collect();
+    assert_eq!(
+        code,
+        [
+            ".align 3",
+            "il $30, 1",
+            "ai $31, $30, 1",
+            "stqd $31, 0($3)",
+            "il $30, 2",
+            "ai $31, $30, 2",
+            "stqd $31, 16($3)",
+        ]
+    );
+}
+
+#[test]
+fn barriers_stores_and_labels_keep_their_order() {
+    let block = "\
+start:
+lqd $10, 0($3)
+! wrch $MFC_LSA, $10
+ai $11, $11, 1
+stqd $12, 0($4)
+~ stqd $13, 16($4)
+lqd $14, 32($4)
+mid:
+br start";
+    let (out, _) = run(block, &SchedOptions::default(), None);
+    let code: Vec<&String> = out.iter().filter(|l| !l.ends_with("nop")).collect();
+    let at = |s: &str| code.iter().position(|l| l.starts_with(s)).unwrap();
+    assert_eq!(code[1], "start:");
+    // Nothing moves above the channel write, which waits for the load.
+    assert!(at("lqd $10") < at("wrch") && at("wrch") < at("ai $11"));
+    assert!(at("wrch") < at("stqd $12") && at("wrch") < at("lqd $14"));
+    // The label stays with the branch after everything else.
+    assert_eq!(code[code.len() - 2], "mid:");
+    assert_eq!(code[code.len() - 1], "br start");
+}
+
+#[test]
+fn a_hint_goes_late_but_far_enough_from_the_branch() {
+    let mut block = String::from("hbrr end, top\n");
+    for r in 10..40 {
+        block += &format!("ai ${r}, ${r}, 1\n");
+    }
+    block += "end:\nbr top";
+    let (out, _) = run(&block, &SchedOptions::default(), None);
+    let hint = out.iter().position(|l| l.starts_with("hbrr")).unwrap();
+    let branch = out.iter().position(|l| l == "br top").unwrap();
+    // One add per cycle: the latest odd slot 11 cycles before the branch, 22 instructions
+    // ahead of it (the label is not one).
+    let distance = out[hint + 1..=branch]
+        .iter()
+        .filter(|l| !l.ends_with(':'))
+        .count();
+    assert_eq!(distance, 22, "{out:?}");
+}
+
+#[test]
+fn each_fetch_line_keeps_a_cycle_for_the_prefetch() {
+    // 14 loads paired with 14 adds: at address 0 every pair would use the local store;
+    // the scheduler leaves the odd slot of pair 8 to the instruction prefetch.
+    let mut block = String::new();
+    for k in 0..14 {
+        block += &format!(
+            "lqd ${}, {}($3)\nai ${}, ${}, 1\n",
+            10 + k,
+            16 * k,
+            40 + k,
+            40 + k
+        );
+    }
+    let (at_line_start, _) = run(&block, &SchedOptions::default(), Some(0));
+    assert_eq!(at_line_start[1 + 2 * 8 + 1], "lnop", "{at_line_start:?}");
+    let (unknown, _) = run(&block, &SchedOptions::default(), None);
+    assert!(!unknown.iter().any(|l| l == "lnop"), "{unknown:?}");
+}
+
+#[test]
+fn irp_repeats_with_substitution() {
+    let (out, _) = run(
+        ".irp K, 0, 1\nil %v\\K, \\K\nstqd %v\\K, \\K*16($3)\n.endr",
+        &pool("50-53"),
+        None,
+    );
+    let code: Vec<&String> = out.iter().filter(|l| !l.ends_with("nop")).collect();
+    assert_eq!(
+        code,
+        [
+            ".align 3",
+            "il $50, 0",
+            "il $51, 1",
+            "stqd $50, 0*16($3)",
+            "stqd $51, 1*16($3)"
+        ]
+    );
+}
+
+#[test]
+fn bad_blocks_name_their_line() {
+    let e = fails("il $3, 1\nfrob $3, $4", &SchedOptions::default());
+    assert_eq!((e.line, e.column), (1, 1));
+    assert!(e.message.contains("frob"), "{}", e.message);
+    let e = fails("il $3, 1\nai $4, NOWHERE, 1", &SchedOptions::default());
+    assert_eq!(e.line, 1);
+    assert!(e.message.contains("NOWHERE"), "{}", e.message);
+    let e = fails("il $3, 1\nover:", &SchedOptions::default());
+    assert_eq!(e.line, 1);
+    let e = fails(".irp K, 1\nil $3, \\K", &SchedOptions::default());
+    assert!(e.message.contains(".endr"), "{}", e.message);
+    let e = fails("il $3, 1\n.align 3", &SchedOptions::default());
+    assert!(e.message.contains(".align"), "{}", e.message);
+    let e = fails(
+        "il %a, 1\nil %b, 2\nil %c, 3\nselb $3, %a, %b, %c",
+        &pool("20,21"),
+    );
+    assert!(e.message.contains("pool"), "{}", e.message);
+}
+
+#[test]
+fn options_are_checked() {
+    assert_eq!(
+        parse_options("pool=78-80,$83 scratch=66").unwrap(),
+        SchedOptions {
+            pool: vec![78, 79, 80, 83],
+            scratch: vec![66]
+        }
+    );
+    for bad in [
+        "pool=5-3", "pool=128", "pool=1,1", "colour=3", "pool", "pool=x",
+    ] {
+        assert!(parse_options(bad).is_err(), "{bad}");
+    }
+}
+
+fn asm(src: &str) -> Result<Vec<u8>, Vec<String>> {
+    assemble(src, "t.s", &Options::default())
+        .map(|o| o.image)
+        .map_err(|d| d.iter().map(|d| d.to_string()).collect())
+}
+
+#[test]
+fn the_assembler_assembles_the_schedule() {
+    // A .sched block with register names assembles to the schedule written out.
+    let block = "\
+        .set BASE, 3
+        il $9, 0
+        .sched pool=20-23
+        lqd %a, 0(BASE)
+        fa %b, %a, $6
+        ai $4, $4, 1
+        stqd %b, 0($5)
+        shufb $7, $8, $8, $9
+        .endsched
+        stop
+";
+    let written = "\
+        .set BASE, 3
+        il $9, 0
+        .align 3
+        ai $4, $4, 1
+        lqd $20, 0(BASE)
+        nop
+        shufb $7, $8, $8, $9
+        fa $21, $20, $6
+        lnop
+        nop
+        stqd $21, 0($5)
+        stop
+";
+    assert_eq!(asm(block).unwrap(), asm(written).unwrap());
+}
+
+#[test]
+fn the_assembler_reports_sched_errors_at_their_line() {
+    let e = asm("il $3, 0\n.sched\nil $4, 1\n").unwrap_err();
+    assert!(
+        e[0].contains("t.s:2:") && e[0].contains("missing .endsched"),
+        "{e:?}"
+    );
+    let e = asm("il $3, 0\n.endsched\n").unwrap_err();
+    assert!(
+        e[0].contains("t.s:2:") && e[0].contains(".endsched"),
+        "{e:?}"
+    );
+    let e = asm(".sched\nil $3, 0\nai $4, %q, 1\n.endsched\n").unwrap_err();
+    assert!(e[0].contains("t.s:3:"), "{e:?}");
+    let e = asm(".sched pool=9-1\n.endsched\n").unwrap_err();
+    assert!(e[0].contains("t.s:1:"), "{e:?}");
+}

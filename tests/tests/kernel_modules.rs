@@ -1,0 +1,459 @@
+//! Each kernel module runs alone on the simulator: a small driver assembles the module with
+//! the shared register map and local-store data (`modules/regs.inc`, `modules/data.s`)
+//! and a `stop` stub for every label it leaves to; the host sets the registers and local
+//! store a module expects, runs it from its entry label with the timing model, and
+//! snapshots the registers and local store it leaves (and checks them against the host
+//! reference). [`Harness`] is the mechanism; the cases below use it.
+
+use spu_asm::sched::Names;
+use spu_isa::machine::{MainMemory, Spu, StopReason};
+use spu_loader::layout::TriangleRecord;
+use std::fmt::Write;
+
+/// A module (or modules) assembled with a driver, on one simulated SPU.
+struct Harness {
+    spu: Spu,
+    memory: MainMemory,
+    symbols: Vec<(String, u32)>,
+    names: Names,
+    /// Stop codes of the stubs, by label.
+    stubs: Vec<(String, u16)>,
+}
+
+impl Harness {
+    /// Assembles `modules` (include names under `kernels/`) with stubs for `exits`, the
+    /// labels outside them the modules branch to; `extra` is more driver source.
+    fn new(modules: &[&str], exits: &[&str], extra: &str) -> Self {
+        let mut src = String::from(
+            "        .include \"layout.inc\"\n        .include \"modules/regs.inc\"\n        .include \"modules/data.s\"\n        .text\n        .global _start\n_start: stop 0x2100\n",
+        );
+        for m in modules {
+            src += &format!("        .include \"{m}\"\n");
+        }
+        let mut stubs = Vec::new();
+        for (k, label) in exits.iter().enumerate() {
+            let code = 0x2101 + k as u16;
+            src += &format!("{label}: stop {code:#x}\n");
+            stubs.push((label.to_string(), code));
+        }
+        src += extra;
+        let program = spu_loader::runtime::assemble_kernel(&src, "driver.s")
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut spu = Spu::new(0);
+        spu.load_image(&program.image);
+        spu.enable_timing(Default::default());
+        let mut names = Names::default();
+        names.collect(include_str!("../../kernels/layout.inc"), &mut |_| None);
+        names.collect(include_str!("../../kernels/modules/regs.inc"), &mut |_| {
+            None
+        });
+        Harness {
+            spu,
+            memory: MainMemory::zeroed(1 << 20),
+            symbols: program.symbols,
+            names,
+            stubs,
+        }
+    }
+
+    fn sym(&self, name: &str) -> u32 {
+        self.symbols
+            .iter()
+            .find(|(n, _)| n == name)
+            .unwrap_or_else(|| panic!("no symbol {name}"))
+            .1
+    }
+
+    fn reg_number(&self, name: &str) -> usize {
+        self.names
+            .register(name)
+            .unwrap_or_else(|| panic!("no register {name}")) as usize
+    }
+
+    fn set(&mut self, name: &str, value: [u32; 4]) {
+        let r = self.reg_number(name);
+        self.spu.set_reg(r, value);
+    }
+
+    /// A constant of the register map or `layout.inc` (`CTX_RAY_T`, `V_PFMISS`, ...).
+    fn value(&self, name: &str) -> u32 {
+        self.names
+            .value_of(name)
+            .unwrap_or_else(|| panic!("no constant {name}")) as u32
+    }
+
+    fn reg(&self, name: &str) -> [u32; 4] {
+        self.spu.reg(self.reg_number(name))
+    }
+
+    fn splat(&mut self, name: &str, value: u32) {
+        self.set(name, [value; 4]);
+    }
+
+    fn quad(&self, addr: u32) -> [u32; 4] {
+        let ls = self.spu.ls();
+        std::array::from_fn(|i| {
+            let a = addr as usize + 4 * i;
+            u32::from_be_bytes(ls[a..a + 4].try_into().unwrap())
+        })
+    }
+
+    fn write_words(&mut self, addr: u32, words: &[u32]) {
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_be_bytes()).collect();
+        self.spu.write_ls(addr, &bytes);
+    }
+
+    /// The frame constants `_start` sets (modules/frame.s), from the same data.
+    fn frame_constants(&mut self) {
+        self.splat("ZERO", 0);
+        self.splat("ONE", 1.0f32.to_bits());
+        self.splat("BIG", 0x7149_f2ca);
+        self.splat("NBIG", 0xf149_f2ca);
+        let pat = self.sym("k_pat");
+        for k in 0..4u32 {
+            let q = self.quad(pat + 16 * k);
+            self.set(&format!("PAT{k}"), q);
+        }
+        let q = self.quad(self.sym("k_swap"));
+        self.set("SWAP", q);
+        self.splat("SIGNS", 0x8000_0000);
+        let q = self.quad(self.sym("k_negodd"));
+        self.set("NEGODD", q);
+    }
+
+    /// One packet context at `base` (blocking misses, as `_start` sets up one context):
+    /// RAYS points past its header; its DMA tag is the first context's.
+    fn context(&mut self, base: u32) {
+        let rays = base + self.value("CTX_HEADER");
+        self.splat("RAYS", rays);
+        self.splat("NEGTAB", rays.wrapping_add(self.value("CTX_NEGTAB")));
+        let stack = rays + self.value("CTX_STACK");
+        self.splat("STKBASE", stack);
+        self.splat("STK", stack);
+        let tag = self.value("CONTEXT_TAG0");
+        self.write_words(rays + self.value("CTX_TAG"), &[tag, 1 << tag, 0, 0]);
+        self.var("V_NCTX1", [u32::MAX; 4]);
+        self.var("V_ASSOC4", [0; 4]);
+    }
+
+    /// Writes a cold variable (`vars+V_*`).
+    fn var(&mut self, name: &str, value: [u32; 4]) {
+        let addr = self.sym("vars") + self.value(name);
+        self.write_words(addr, &value);
+    }
+
+    /// An address in the current packet context.
+    fn ctx(&self, offset: &str) -> u32 {
+        self.reg("RAYS")[0].wrapping_add(self.value(offset))
+    }
+
+    /// The triangle cache as `_start` carves it (after a BVH cache of `bvh_lines`), every
+    /// tag invalid; triangle records at `ea` in main memory.
+    fn triangle_cache(&mut self, bvh_lines: u32, lines: u32, ea: u32) {
+        let ttags = self.sym("cache_area") + bvh_lines * 16 + bvh_lines * 64;
+        self.splat("TTAGS", ttags);
+        self.splat("TDATA", ttags + lines * 16);
+        self.splat("TMASK", lines - 1);
+        self.splat("EATRIS", ea);
+        self.write_words(ttags, &vec![u32::MAX; 4 * lines as usize]);
+    }
+
+    /// Runs from `label` until a stub stops it: the stub's label.
+    fn run_from(&mut self, label: &str) -> String {
+        let pc = self.sym(label);
+        self.spu.set_pc(pc);
+        match self.spu.run(&mut self.memory, 10_000_000) {
+            StopReason::Stop(code) => self
+                .stubs
+                .iter()
+                .find(|s| s.1 == code)
+                .map_or(format!("stop {code:#x}"), |s| s.0.clone()),
+            other => panic!("the module stopped abnormally: {other}"),
+        }
+    }
+
+    /// Named registers, then local-store regions (a label, or an offset `CTX_*` in the
+    /// packet context; bytes), as hex words.
+    fn snapshot(&self, exit: &str, regs: &[&str], regions: &[(&str, u32)]) -> String {
+        let mut out = format!("exit: {exit}\ncycles: {}\n", self.spu.cycles());
+        for r in regs {
+            let mut q = self.reg(r);
+            if *r == "STK" {
+                // Relative to the stack's base: the snapshot does not move with the code.
+                q = q.map(|w| w.wrapping_sub(self.reg("STKBASE")[0]));
+            }
+            writeln!(
+                out,
+                "{r:<8} {:08x} {:08x} {:08x} {:08x}",
+                q[0], q[1], q[2], q[3]
+            )
+            .unwrap();
+        }
+        for (label, len) in regions {
+            let base = if label.starts_with("CTX_") {
+                self.ctx(label)
+            } else {
+                self.sym(label)
+            };
+            writeln!(out, "{label}:").unwrap();
+            for off in (0..*len).step_by(16) {
+                let q = self.quad(base + off);
+                writeln!(
+                    out,
+                    "  +{off:<4} {:08x} {:08x} {:08x} {:08x}",
+                    q[0], q[1], q[2], q[3]
+                )
+                .unwrap();
+            }
+        }
+        out
+    }
+}
+
+/// A packet of 8x8 primary rays from `origin` through a grid on the plane z = 0.
+fn packet_rays(origin: [f32; 3]) -> Vec<[f32; 3]> {
+    (0..64)
+        .map(|i| {
+            let (row, col) = ((i / 8) as f32, (i % 8) as f32);
+            // Off the triangles' shared edge by construction (a third of a step).
+            let x = -1.0 + (col + 0.37) * 0.25;
+            let y = -1.0 + (row + 0.29) * 0.25;
+            [x - origin[0], y - origin[1], -origin[2]]
+        })
+        .collect()
+}
+
+#[test]
+fn triangle_test_on_a_packet() {
+    let mut h = Harness::new(
+        &["modules/triangle.s", "modules/tri_cache.s", "modules/lru.s"],
+        &["packet_done", "trav", "suspend"],
+        "        .set    .Lnewcur, trav\nharness_pf_one: br .Lpf_one\n",
+    );
+    h.frame_constants();
+    // A quad made of two triangles across part of the packet, and one triangle off to the
+    // side that every corner ray misses (culled).
+    let quads = [
+        [[-0.8f32, -0.6, 0.0], [0.5, -0.6, 0.0], [0.5, 0.7, 0.0]],
+        [[-0.8, -0.6, 0.0], [0.5, 0.7, 0.0], [-0.8, 0.7, 0.0]],
+        [[5.0, 5.0, 1.0], [6.0, 5.0, 1.0], [5.0, 6.0, 1.0]],
+    ];
+    let records: Vec<TriangleRecord> = quads
+        .iter()
+        .enumerate()
+        .map(|(i, p)| TriangleRecord::new(p.map(glam::Vec3::from_array), [0, 1, 2], 0, i as u32))
+        .collect();
+    let ea = 0x4000u32;
+    let mut bytes = vec![0u8; 64 * records.len()];
+    for (i, r) in records.iter().enumerate() {
+        r.write_be(&mut bytes[64 * i..64 * i + 64]);
+    }
+    assert!(h.memory.write_bytes(ea as u64, &bytes));
+    h.triangle_cache(256, 128, ea);
+    let contexts = h.reg("TDATA")[0] + 128 * 64;
+    h.context(contexts);
+    let pf_one = h.sym("harness_pf_one");
+    h.var("V_PFMISS", [pf_one; 4]);
+    // The packet: origin, directions (structure of arrays), t = 1e30, no hit yet.
+    let origin = [0.1f32, -0.2, 3.0];
+    h.set(
+        "ORIG",
+        [
+            origin[0].to_bits(),
+            origin[1].to_bits(),
+            origin[2].to_bits(),
+            0,
+        ],
+    );
+    let rays = packet_rays(origin);
+    let dx = h.ctx("CTX_RAY_DX");
+    for axis in 0..3 {
+        let words: Vec<u32> = rays.iter().map(|d| d[axis].to_bits()).collect();
+        h.write_words(dx + 256 * axis as u32, &words);
+        let recip: Vec<u32> = rays.iter().map(|d| (1.0 / d[axis]).to_bits()).collect();
+        h.write_words(dx + 256 * (3 + axis as u32), &recip);
+    }
+    let t_addr = h.ctx("CTX_RAY_T");
+    h.write_words(t_addr, &[0x7149_f2ca; 64]);
+    h.write_words(h.ctx("CTX_RAY_ID"), &[u32::MAX; 64]);
+    let corners: Vec<u32> = (0..3)
+        .flat_map(|axis| [0, 7, 56, 63].map(|i| rays[i][axis].to_bits()))
+        .collect();
+    h.write_words(h.ctx("CTX_CORNERS"), &corners);
+    h.splat("FIRST", 0);
+    h.set("CUR", [0, (records.len() as u32) << 6, 0, 0]);
+    for s in ["S_TRIS", "S_CULLED", "S_TLOOK"] {
+        h.splat(s, 0);
+    }
+
+    let exit = h.run_from("leaf");
+
+    // Against the host reference: per ray the nearest hit of the records.
+    let mut hits = 0;
+    for (i, d) in rays.iter().enumerate() {
+        let mut best: Option<(f32, u32)> = None;
+        for (k, r) in records.iter().enumerate() {
+            let t_max = best.map_or(1e30, |b| b.0);
+            if let Some((t, _, _)) = r.intersect(origin, *d, 0.0, t_max) {
+                best = Some((t, k as u32));
+            }
+        }
+        let (vec, lane) = (i as u32 / 4 * 16, i as u32 % 4);
+        let id = h.quad(h.ctx("CTX_RAY_ID") + vec)[lane as usize];
+        let t = h.quad(t_addr + vec)[lane as usize];
+        match best {
+            Some((bt, bk)) => {
+                hits += 1;
+                // The kernel divides by a refined reciprocal: t within 1e-4 relative, as
+                // `spu render --validate` compares (loader::camera).
+                let kt = f32::from_bits(t);
+                assert_eq!(id, bk, "ray {i}");
+                assert!(
+                    (kt - bt).abs() <= 1e-4 * bt.abs(),
+                    "ray {i}: t {kt} vs {bt}"
+                );
+            }
+            None => assert_eq!((id, t), (u32::MAX, 0x7149_f2ca), "ray {i}"),
+        }
+    }
+    assert!(
+        hits > 10 && hits < 64,
+        "{hits} hits: the quad covers part of the packet"
+    );
+    assert_eq!(
+        exit, "packet_done",
+        "the stack was empty: the packet is done"
+    );
+    assert_eq!(h.reg("S_CULLED")[0], 1, "the third triangle is culled");
+    insta::assert_snapshot!(h.snapshot(
+        &exit,
+        &["S_TRIS", "S_CULLED", "S_TLOOK", "F2"],
+        &[
+            ("CTX_RAY_T", 256),
+            ("CTX_RAY_ID", 256),
+            ("CTX_RAY_ND", 256),
+            ("vars", 272)
+        ],
+    ));
+}
+
+/// The BVH cache as `_start` carves it, every tag invalid; node records at `ea`.
+fn bvh_cache(h: &mut Harness, lines: u32, ea: u32) {
+    let btags = h.sym("cache_area");
+    let bdata = btags + lines * 16;
+    h.splat("BTAGS", btags);
+    h.splat("BDATA", bdata);
+    h.splat("BDATA16", bdata + 16);
+    h.splat("BDATA32", bdata + 32);
+    h.splat("BDATA48", bdata + 48);
+    h.splat("BMASK64", (lines - 1) * 64);
+    h.splat("EANODES", ea);
+    h.write_words(btags, &vec![u32::MAX; 4 * lines as usize]);
+}
+
+#[test]
+fn ray_generation_packet_setup_and_one_traversal_step() {
+    // Ray generation and the packet setup (modules/raygen.s) enter traversal at the root's
+    // children; the step (modules/traverse.s) misses the BVH cache (modules/bvh_cache.s),
+    // fills the line, tests both children, descends to the near leaf and pushes the far
+    // one; the first ray misses one child, so find_first gives that child its own first
+    // ray (5). The next step sees the leaf and leaves for the triangle test.
+    let mut h = Harness::new(
+        &[
+            "modules/raygen.s",
+            "modules/traverse.s",
+            "modules/bvh_cache.s",
+            "modules/lru.s",
+        ],
+        &["leaf", "packet_done", "suspend"],
+        "",
+    );
+    h.frame_constants();
+    // Two triangles side by side, one leaf each under an inner root.
+    use glam::Vec3;
+    let positions = vec![
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(-0.1, -1.0, 0.0),
+        Vec3::new(-0.5, 1.0, 0.0),
+        Vec3::new(0.1, -1.0, -0.5),
+        Vec3::new(1.0, -1.0, -0.5),
+        Vec3::new(0.5, 1.0, -0.5),
+    ];
+    let triangles = (0..2)
+        .map(|t| spu_loader::Triangle {
+            v: [3 * t, 3 * t + 1, 3 * t + 2],
+            material: 0,
+        })
+        .collect();
+    let scene = spu_loader::Scene::from_parts(positions, None, Vec::new(), triangles, Vec::new());
+    let config = spu_loader::BvhConfig {
+        max_leaf_size: 1,
+        ..Default::default()
+    };
+    let bvh = spu_loader::Bvh::build(&scene, &config);
+    let nodes = spu_loader::layout::node_records(&bvh);
+    assert!(
+        !bvh.root().is_leaf() && nodes.len() == 4,
+        "a root and two leaves"
+    );
+    let ea = 0x8000u32;
+    let mut bytes = vec![0u8; 32 * nodes.len()];
+    for (i, n) in nodes.iter().enumerate() {
+        n.write_be(&mut bytes[32 * i..32 * i + 32]);
+    }
+    assert!(h.memory.write_bytes(ea as u64, &bytes));
+    bvh_cache(&mut h, 256, ea);
+    h.triangle_cache(256, 128, 0x4000);
+    let contexts = h.reg("TDATA")[0] + 128 * 64;
+    h.context(contexts);
+    let miss = h.sym("bvh_miss_one");
+    h.splat("BMISSH", miss);
+    // The root as a traversal state, as `_start` makes it: (child-pair offset, meta << 4).
+    let root = &nodes[0];
+    h.set("ROOTST", [root.link * 32, root.count_axis << 4, 0, 0]);
+    // The camera: packet 0 of tile 0 looks at the triangles from z = 3.
+    let origin = [0.05f32, 0.0, 3.0];
+    h.set(
+        "ORIG",
+        [
+            origin[0].to_bits(),
+            origin[1].to_bits(),
+            origin[2].to_bits(),
+            0,
+        ],
+    );
+    for (k, name) in ["OXS", "OYS", "OZS"].iter().enumerate() {
+        h.splat(name, origin[k].to_bits());
+    }
+    let word = |x: f32| x.to_bits();
+    h.var("V_DIR00", [word(-0.6), word(-0.7), word(-3.0), 0]);
+    h.var("V_DU", [word(0.15), 0, 0, 0]);
+    h.var("V_DV", [0, word(0.18), 0, 0]);
+    for s in ["S_STEPS", "M1V", "EEV", "S_TRIS", "S_CULLED", "S_TLOOK"] {
+        h.splat(s, 0);
+    }
+
+    let exit = h.run_from("packet_loop");
+
+    assert_eq!(exit, "leaf");
+    assert_eq!(
+        h.reg("S_STEPS")[0],
+        1,
+        "one pair step (the cache miss reruns it)"
+    );
+    let stkbase = h.reg("STKBASE")[0];
+    assert_eq!(h.reg("STK")[0], stkbase + 16, "the far child is pushed");
+    // The two children are the two leaves: CUR holds one, the stack the other.
+    let leaves: Vec<u32> = nodes[2..].iter().map(|n| n.link).collect();
+    let near = h.reg("CUR")[0];
+    let far = h.quad(stkbase)[0];
+    assert!(
+        leaves.contains(&near) && leaves.contains(&far) && near != far,
+        "{near} {far} {leaves:?}"
+    );
+    insta::assert_snapshot!(h.snapshot(
+        &exit,
+        &["CUR", "STK", "FIRST", "S_STEPS", "M1V", "EEV", "F2", "PAX", "PBX", "OAX", "OBX"],
+        &[("CTX_STACK", 32), ("CTX_CORNERS", 48), ("cache_area", 32)],
+    ));
+}
