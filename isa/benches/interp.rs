@@ -5,9 +5,11 @@
 //! `accumulating` is the loop of `spu bench` (its fma chain grows without bound, so after
 //! the first iterations every fma takes the float unit's exact path); `bounded` does the
 //! same work on values that stay in range, the common case in real kernels; `integer`
-//! replaces the float operations with `selb` and `xor`.
+//! replaces the float operations with `selb` and `xor`. Each runs with the interpreter
+//! and the block compiler (`interp` or `jit` as an argument picks one).
 
 use spu_isa::encode;
+use spu_isa::jit::Engine;
 use spu_isa::machine::{MainMemory, Spu, StopReason};
 use spu_isa::table::forms_named;
 use std::time::Instant;
@@ -64,12 +66,13 @@ fn program(iterations: u32, kind: &str) -> Vec<u8> {
     image
 }
 
-fn measure(name: &str, iterations: u32, timing: bool) {
+fn measure(name: &str, iterations: u32, timing: bool, engine: Engine) {
     let image = program(iterations, name);
     let mut best = f64::MAX;
     let mut n = 0;
     for _ in 0..3 {
         let mut spu = Spu::new(0);
+        spu.set_engine(engine);
         spu.load_image(&image);
         if timing {
             spu.enable_timing(Default::default());
@@ -83,14 +86,14 @@ fn measure(name: &str, iterations: u32, timing: bool) {
         best = best.min(s);
     }
     println!(
-        "{name:>12}: {n} instructions in {best:.3} s = {:7.1} M simulated instructions per host second (timing {}, best of 3)",
+        "{name:>12} {engine:6}: {n} instructions in {best:.3} s = {:7.1} M simulated instructions per host second (timing {}, best of 3)",
         n as f64 / best / 1e6,
         if timing { "on" } else { "off" }
     );
 }
 
 /// Arguments: an iteration count, the names of the loops to run, `on` or `off` for the
-/// timing model (both when neither is given).
+/// timing model, `interp` or `jit` for the engine (both when neither is given).
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let iterations = args
@@ -106,10 +109,18 @@ fn main() {
             !args.iter().any(|a| a == "on" || a == "off") || args.iter().any(|a| a == word)
         })
         .collect();
+    let engines: Vec<Engine> = [Engine::Interp, Engine::Jit]
+        .into_iter()
+        .filter(|e| {
+            !args.iter().any(|a| a == "interp" || a == "jit") || args.iter().any(|a| *a == e.name())
+        })
+        .collect();
     for name in LOOPS {
         if !named || args.iter().any(|a| a == name) {
             for &timing in &modes {
-                measure(name, iterations, timing);
+                for &engine in &engines {
+                    measure(name, iterations, timing, engine);
+                }
             }
         }
     }

@@ -7,6 +7,7 @@ pub mod analysis;
 pub mod codec;
 pub mod disasm;
 pub mod float;
+pub mod jit;
 pub mod machine;
 pub mod profile;
 pub mod stall;

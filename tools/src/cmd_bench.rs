@@ -1,9 +1,10 @@
 //! `spu bench`: simulator speed in simulated instructions per host second, on a mixed
 //! loop (loads, float multiply-adds, shuffles, adds, a hinted branch), with the timing
-//! model off and on, measured in one run.
+//! model off and on, with the interpreter and the block compiler, measured in one run.
 
 use crate::exit::{self, Status};
 use crate::options;
+use spu_isa::jit::Engine;
 use spu_isa::machine::{MainMemory, Spu, StopReason};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -13,6 +14,9 @@ pub struct Args {
     /// Loop iterations (11 instructions each), at least 1.
     #[arg(long, default_value_t = 10_000_000)]
     iterations: u32,
+    /// Measure only this engine (interp or jit); both by default.
+    #[arg(long)]
+    engine: Option<Engine>,
 }
 
 /// The benchmark loop, assembled from source so it reads like SPU code.
@@ -43,7 +47,7 @@ data:   .float  1.5, 2.0, 0.5, 3.0, 0.25, 1.0, 2.0, 4.0
         .space  16
 ";
 
-fn measure(iterations: u32, timing: bool) -> exit::Result<(u64, u64, f64)> {
+fn measure(iterations: u32, timing: bool, engine: Engine) -> exit::Result<(u64, u64, f64)> {
     let opts = spu_asm::Options {
         defines: vec![("ITER".into(), iterations as i64)],
         ..Default::default()
@@ -53,6 +57,7 @@ fn measure(iterations: u32, timing: bool) -> exit::Result<(u64, u64, f64)> {
     let mut spu = Spu::new(0);
     spu.load_image(&program.image);
     spu.set_pc(program.entry);
+    spu.set_engine(engine);
     if timing {
         spu.enable_timing(Default::default());
     }
@@ -71,13 +76,29 @@ fn measure(iterations: u32, timing: bool) -> exit::Result<(u64, u64, f64)> {
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
     options::count("--iterations", args.iterations, 1..=u32::MAX)?;
-    let (n_off, _, s_off) = measure(args.iterations, false)?;
-    let (n_on, cycles, s_on) = measure(args.iterations, true)?;
-    let off = n_off as f64 / s_off.max(1e-9) / 1e6;
-    let on = n_on as f64 / s_on.max(1e-9) / 1e6;
-    outln!("mixed loop: {} instructions", n_off);
-    outln!("timing off: {off:8.1} M simulated instructions per host second");
-    outln!("timing on:  {on:8.1} M simulated instructions per host second ({cycles} cycles, CPI {:.3})", cycles as f64 / n_on as f64);
-    outln!("timing overhead: {:.2}x", off / on);
+    let engines = match args.engine {
+        Some(e) => vec![e],
+        None if Engine::SUPPORTED => vec![Engine::Interp, Engine::Jit],
+        None => vec![Engine::Interp],
+    };
+    outln!("mixed loop: {} iterations", args.iterations);
+    let mut rates = Vec::new();
+    for engine in engines {
+        let (n_off, _, s_off) = measure(args.iterations, false, engine)?;
+        let (n_on, cycles, s_on) = measure(args.iterations, true, engine)?;
+        let off = n_off as f64 / s_off.max(1e-9) / 1e6;
+        let on = n_on as f64 / s_on.max(1e-9) / 1e6;
+        outln!("{engine:6} timing off: {off:8.1} M simulated instructions per host second ({n_off} instructions)");
+        outln!("{engine:6} timing on:  {on:8.1} M simulated instructions per host second ({cycles} cycles, CPI {:.3})", cycles as f64 / n_on as f64);
+        outln!("{engine:6} timing overhead: {:.2}x", off / on);
+        rates.push((off, on));
+    }
+    if let [(i_off, i_on), (j_off, j_on)] = rates[..] {
+        outln!(
+            "jit / interp: {:.2}x timing off, {:.2}x timing on",
+            j_off / i_off,
+            j_on / i_on
+        );
+    }
     Ok(ExitCode::SUCCESS)
 }

@@ -11,6 +11,10 @@ use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// Engine: the block compiler (jit; the default where the host has one) or the
+    /// interpreter (interp). Results are the same; only host speed differs.
+    #[arg(long, default_value_t = spu_isa::jit::Engine::host_default())]
+    engine: spu_isa::jit::Engine,
     /// Program: SPU assembly (.s), an SPU ELF or a flat image.
     file: PathBuf,
     /// Print JSON for tools.
@@ -28,6 +32,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
+    spu_isa::jit::Engine::set_default(args.engine);
     options::max_cycles(args.max_cycles)?;
     let memory_bytes = options::memory(args.memory)?;
     let (mut spu, symbols) = crate::cmd_run::load(&args.file)?;

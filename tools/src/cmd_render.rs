@@ -18,6 +18,10 @@ use std::time::Instant;
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// Engine: the block compiler (jit; the default where the host has one) or the
+    /// interpreter (interp). Results are the same; only host speed differs.
+    #[arg(long, default_value_t = spu_isa::jit::Engine::host_default())]
+    engine: spu_isa::jit::Engine,
     /// A built-in scene (room, conference, beetle) or an OBJ/PLY file (optionally .gz).
     #[arg(long, default_value = "room")]
     scene: String,
@@ -277,6 +281,7 @@ fn check_options(args: &Args) -> exit::Result<Option<Camera>> {
 }
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
+    spu_isa::jit::Engine::set_default(args.engine);
     let camera = check_options(&args)?;
     let started = Instant::now();
     let mut scene = load_scene(&args.scene)?;

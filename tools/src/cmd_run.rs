@@ -9,6 +9,10 @@ use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
+    /// Engine: the block compiler (jit; the default where the host has one) or the
+    /// interpreter (interp). Results are the same; only host speed differs.
+    #[arg(long, default_value_t = spu_isa::jit::Engine::host_default())]
+    engine: spu_isa::jit::Engine,
     /// An SPU ELF, a raw image loaded at 0, or an assembly source (.s).
     file: PathBuf,
     /// Stop after this many cycles.
@@ -115,6 +119,7 @@ fn dump_range(spec: &str) -> exit::Result<std::ops::Range<usize>> {
 }
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
+    spu_isa::jit::Engine::set_default(args.engine);
     options::max_cycles(args.max_cycles)?;
     let memory_bytes = options::memory(args.memory)?;
     let dumps = args

@@ -35,6 +35,7 @@
 //! model off the clock is the instruction count, so completion times stay deterministic.
 
 mod channels;
+mod compiled;
 mod events;
 pub mod exec;
 mod memory;

@@ -6,9 +6,11 @@ use std::collections::VecDeque;
 
 use super::apply_quantum;
 use super::channels::ChannelOutcome;
+use super::compiled::CompiledBlocks;
 use super::memory::MainMemory;
 use super::mfc::{DmaCommand, LoggedWrite};
 use crate::codec::{decode, Inst};
+use crate::jit::Engine;
 use crate::machine::exec::{
     execute, execute_in, Core, Effect, Reg, TruncatingFloats, LS_MASK, LS_SIZE,
 };
@@ -98,6 +100,16 @@ pub struct Spu {
     pub(super) decoded: Box<[Inst; LS_SIZE / 4]>,
     /// Bumped whenever a store or DMA makes a decoded instruction stale.
     pub(super) code_epoch: u64,
+    /// Per local-store quadword: nonzero where it may hold decoded (not stale) words, so
+    /// a store there must mark them stale; compiled code reads it after each store.
+    pub(super) code_quads: Box<[u8]>,
+    pub(super) engine: Engine,
+    /// Compiled blocks (made on first use with [`Engine::Jit`]).
+    pub(super) compiled: Option<Box<CompiledBlocks>>,
+    /// Instructions executed by compiled code.
+    pub(super) compiled_instructions: u64,
+    /// The last block ran only in part (timing off, compiled engine).
+    pub(super) block_cut: bool,
     pub(super) pc: u32,
     pub(super) instructions: u64,
     pub(super) cycle: u64,
@@ -184,8 +196,13 @@ fn host_has_x86_64_v3() -> bool {
 /// Marks the four decoded words of the quadword a store wrote at `addr` stale (they are
 /// decoded again when fetched); whether any held decoded code.
 #[inline(always)]
-pub(super) fn invalidate_quad(decoded: &mut [Inst; LS_SIZE / 4], addr: u32) -> bool {
+pub(super) fn invalidate_quad(
+    decoded: &mut [Inst; LS_SIZE / 4],
+    code_quads: &mut [u8],
+    addr: u32,
+) -> bool {
     let s = (addr & LS_MASK & !15) as usize / 4;
+    code_quads[s / 4] = 0;
     let quad = &mut decoded[s..s + 4];
     let touched = quad
         .iter()
@@ -200,6 +217,11 @@ impl Spu {
             index,
             core: Core::new(),
             code_epoch: 0,
+            code_quads: vec![1; LS_SIZE / 16].into_boxed_slice(),
+            engine: Engine::default(),
+            compiled: None,
+            compiled_instructions: 0,
+            block_cut: false,
             decoded: vec![decode(0); LS_SIZE / 4]
                 .into_boxed_slice()
                 .try_into()
@@ -288,6 +310,7 @@ impl Spu {
         let b = &self.core.ls[4 * w..4 * w + 4];
         let fresh = decode(u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
         self.decoded[w] = fresh;
+        self.code_quads[w / 4] = 1;
         fresh
     }
 
@@ -382,7 +405,11 @@ impl Spu {
     pub fn run_quantum(&mut self, memory: &MainMemory, until: u64) -> Option<StopReason> {
         while self.cycle < until {
             if self.timing.is_none() {
-                self.run_fast(until);
+                if self.engine == Engine::Jit {
+                    self.run_compiled(until);
+                } else {
+                    self.run_fast(until);
+                }
             } else {
                 self.run_block_replays(until);
             }
@@ -631,8 +658,12 @@ impl Spu {
     #[inline(always)]
     pub(super) fn run_replayed_block(&mut self, pc: u32, n: usize, id: usize) {
         let block_end = pc.wrapping_add(4 * n as u32);
+        if self.engine == Engine::Jit && self.replay_compiled(pc, n, id) {
+            return;
+        }
         let core = &mut self.core;
         let decoded = &mut *self.decoded;
+        let code_quads = &mut *self.code_quads;
         let timing = self.timing.as_mut().expect("timing");
         // Blocks hold no `bisled`, the one reader of the pending-event flag.
         core.event_pending_known = false;
@@ -649,7 +680,7 @@ impl Spu {
                     break;
                 }
                 Effect::Store { addr } => {
-                    self.code_epoch += invalidate_quad(decoded, addr) as u64;
+                    self.code_epoch += invalidate_quad(decoded, code_quads, addr) as u64;
                     p = (p + 4) & LS_MASK;
                     // A store into the rest of the block: the rest goes the long way.
                     let line = addr & LS_MASK & !15;
@@ -705,6 +736,7 @@ impl Spu {
         let mut done = 0u64;
         let core = &mut self.core;
         let decoded = &mut *self.decoded;
+        let code_quads = &mut *self.code_quads;
         while done < budget {
             let w = (pc >> 2) as usize & (LS_SIZE / 4 - 1);
             let inst = decoded[w];
@@ -717,6 +749,7 @@ impl Spu {
                 let b = &core.ls[4 * w..4 * w + 4];
                 let fresh = decode(u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
                 decoded[w] = fresh;
+                code_quads[w / 4] = 1;
                 if fresh.op == Op::Unknown {
                     break;
                 }
@@ -732,7 +765,7 @@ impl Spu {
                     }
                 }
                 Effect::Store { addr } => {
-                    self.code_epoch += invalidate_quad(decoded, addr) as u64;
+                    self.code_epoch += invalidate_quad(decoded, code_quads, addr) as u64;
                     pc = (pc + 4) & LS_MASK;
                 }
                 _ => break,

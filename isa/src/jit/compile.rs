@@ -1,0 +1,837 @@
+//! Translation of one block to Cranelift IR and host code, and the per-SPU cache of
+//! compiled blocks.
+
+use std::time::Instant;
+
+use cranelift_codegen::ir::condcodes::IntCC;
+use cranelift_codegen::ir::types::{F32X4, I32, I32X4, I64, I8, I8X16};
+use cranelift_codegen::ir::{
+    AbiParam, Block as IrBlock, ConstantData, Endianness, InstBuilder, MemFlagsData, Signature,
+    UserFuncName, Value,
+};
+use cranelift_codegen::settings::{self, Configurable};
+use cranelift_codegen::Context;
+use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
+use cranelift_jit::{JITBuilder, JITModule};
+use cranelift_module::{default_libcall_names, Module};
+
+use super::helpers::{helper_for, BRANCH, TAKEN};
+use crate::analysis::is_branch;
+use crate::codec::Inst;
+use crate::machine::exec::{execute_in, Core, Reg, LS_MASK, LS_SIZE};
+use crate::table::Op;
+
+/// The longest block compiled (the timing memo's limit).
+pub(crate) const MAX_BLOCK: usize = 64;
+
+/// What a compiled block reads and writes. Offsets are fixed: the block loads them.
+#[repr(C)]
+pub(crate) struct Ctx {
+    /// The core's register file (`[Reg; 128]`).
+    pub regs: *mut Reg,
+    /// Local store, `LS_SIZE` bytes.
+    pub ls: *mut u8,
+    /// One byte per local-store quadword: nonzero where the quadword may hold decoded code.
+    pub code_quads: *mut u8,
+    pub core: *mut Core,
+    /// The SPU, for the store hook.
+    pub spu: *mut u8,
+    /// Out: the target of the block's final branch.
+    pub target: u32,
+    pub _pad: u32,
+}
+
+const CTX_REGS: i32 = 0;
+const CTX_LS: i32 = 8;
+const CTX_QUADS: i32 = 16;
+const CTX_CORE: i32 = 24;
+const CTX_TARGET: i32 = 40;
+
+/// Called after a store into a quadword that may hold decoded code: `(ctx, address,
+/// address of the next instruction, end of the block, whether instructions follow in the
+/// block)`; marks the words stale and returns nonzero when the store wrote the rest of the
+/// block (which must then end).
+pub(crate) type StoreHook = unsafe extern "C" fn(*mut Ctx, u32, u32, u32, u32) -> u32;
+
+/// A compiled block's entry: returns the next address (bits 0..31), the instructions done
+/// (bits 32..47), whether its final branch was taken (bit 48) and whether it ended early
+/// after a store into its own rest (bit 49).
+pub(crate) type Entry = unsafe extern "C" fn(*mut Ctx) -> u64;
+pub(crate) const RESULT_TAKEN: u64 = 1 << 48;
+pub(crate) const RESULT_PARTIAL: u64 = 1 << 49;
+
+pub(crate) struct Block {
+    pub entry: Entry,
+    pub n: u32,
+    /// The words compiled, to check against local store when the code epoch moved.
+    pub words: Box<[u32]>,
+    /// The code epoch at which `words` were last found in local store.
+    pub verified: u64,
+    /// The final instruction (a branch, or not).
+    pub last: Inst,
+    /// The instructions whose helpers take them by address.
+    _insts: Box<[Inst]>,
+}
+
+/// One SPU's compiled blocks, found by their first word's index.
+pub(crate) struct Blocks {
+    module: JITModule,
+    ctx: Context,
+    fctx: FunctionBuilderContext,
+    scratch: Box<Core>,
+    /// Per local-store word: 1 + index into `blocks` of the block starting there, or 0.
+    pub slots: Vec<u32>,
+    /// Per local-store word: how often a block started there without compiled code.
+    pub heat: Vec<u8>,
+    pub blocks: Vec<Block>,
+    pub stats: super::JitStats,
+}
+
+// SAFETY: the module's code and data are owned by this value alone and only used through
+// `&mut` (one thread at a time); nothing in it refers to thread-local state.
+unsafe impl Send for Blocks {}
+
+impl Drop for Blocks {
+    fn drop(&mut self) {
+        self.blocks.clear();
+        let module = std::mem::replace(&mut self.module, new_module());
+        // SAFETY: every entry into this module's code was in `blocks`, now gone.
+        unsafe { module.free_memory() };
+    }
+}
+
+fn new_module() -> JITModule {
+    let mut flags = settings::builder();
+    flags.set("opt_level", "speed").expect("opt_level");
+    flags
+        .set("use_colocated_libcalls", "false")
+        .expect("libcalls");
+    flags.set("is_pic", "false").expect("is_pic");
+    if !cfg!(debug_assertions) {
+        flags.set("enable_verifier", "false").expect("verifier");
+    }
+    let isa = cranelift_native::builder()
+        .expect("host supported by Cranelift")
+        .finish(settings::Flags::new(flags))
+        .expect("host ISA");
+    JITModule::new(JITBuilder::with_isa(isa, default_libcall_names()))
+}
+
+/// Blocks compiled before the cache starts over (code memory is only freed whole).
+const MAX_BLOCKS: usize = 1 << 14;
+
+impl Blocks {
+    pub fn new() -> Blocks {
+        let module = new_module();
+        let ctx = module.make_context();
+        Blocks {
+            module,
+            ctx,
+            fctx: FunctionBuilderContext::new(),
+            scratch: Box::new(Core::new()),
+            slots: vec![0; LS_SIZE / 4],
+            heat: vec![0; LS_SIZE / 4],
+            blocks: Vec::new(),
+            stats: Default::default(),
+        }
+    }
+
+    /// Compiles `insts` (starting at `pc`) and makes it the block at `pc`; `None` if the
+    /// block cannot be compiled (a branch before its end).
+    pub fn compile(&mut self, pc: u32, insts: &[Inst], hook: StoreHook) -> Option<usize> {
+        let n = insts.len();
+        if n == 0
+            || n > MAX_BLOCK
+            || insts[..n - 1].iter().any(|i| is_branch(i.op))
+            || insts.iter().any(|i| i.op == Op::Bisled)
+        {
+            return None;
+        }
+        if self.blocks.len() >= MAX_BLOCKS {
+            let stats = self.stats;
+            *self = Blocks::new();
+            self.stats = stats;
+        }
+        let started = Instant::now();
+        let owned: Box<[Inst]> = insts.into();
+        let entry = self.translate(pc, &owned, hook)?;
+        self.stats.blocks += 1;
+        self.stats.block_instructions += n as u64;
+        self.stats.compile_seconds += started.elapsed().as_secs_f64();
+        let id = self.blocks.len();
+        self.blocks.push(Block {
+            entry,
+            n: n as u32,
+            words: owned.iter().map(|i| i.word).collect(),
+            verified: u64::MAX,
+            last: owned[n - 1],
+            _insts: owned,
+        });
+        self.slots[(pc as usize >> 2) & (LS_SIZE / 4 - 1)] = id as u32 + 1;
+        Some(id)
+    }
+
+    fn translate(&mut self, pc: u32, insts: &[Inst], hook: StoreHook) -> Option<Entry> {
+        let ptr = self.module.target_config().pointer_type();
+        debug_assert_eq!(ptr, I64);
+        self.module.clear_context(&mut self.ctx);
+        let target = self.module.target_config();
+        let call_conv = target.default_call_conv;
+        let sig = &mut self.ctx.func.signature;
+        sig.params.push(AbiParam::new(I64));
+        sig.returns.push(AbiParam::new(I64));
+        self.ctx.func.name = UserFuncName::user(0, self.blocks.len() as u32);
+        let mut b = FunctionBuilder::new(&mut self.ctx.func, &mut self.fctx);
+        let start = b.create_block();
+        b.append_block_params_for_function_params(start);
+        b.switch_to_block(start);
+        let ctx = b.block_params(start)[0];
+        let mut t = Translator {
+            regs: b.ins().load(I64, MemFlagsData::trusted(), ctx, CTX_REGS),
+            ls: b.ins().load(I64, MemFlagsData::trusted(), ctx, CTX_LS),
+            quads: b.ins().load(I64, MemFlagsData::trusted(), ctx, CTX_QUADS),
+            core: b.ins().load(I64, MemFlagsData::trusted(), ctx, CTX_CORE),
+            ctx,
+            cache: [None; 128],
+            helper_sig: {
+                let mut s = Signature::new(call_conv);
+                s.params.push(AbiParam::new(I64));
+                s.params.push(AbiParam::new(I64));
+                s.params.push(AbiParam::new(I32));
+                s.returns.push(AbiParam::new(I64));
+                b.import_signature(s)
+            },
+            hook_sig: {
+                let mut s = Signature::new(call_conv);
+                s.params.push(AbiParam::new(I64));
+                for _ in 0..4 {
+                    s.params.push(AbiParam::new(I32));
+                }
+                s.returns.push(AbiParam::new(I32));
+                b.import_signature(s)
+            },
+            hook,
+            scratch: &mut self.scratch,
+            b,
+        };
+        let n = insts.len();
+        let block_end = pc.wrapping_add(4 * n as u32);
+        let mut done = false;
+        for (k, inst) in insts.iter().enumerate() {
+            let p = pc.wrapping_add(4 * k as u32) & LS_MASK;
+            let more = k + 1 < n;
+            if is_branch(inst.op) {
+                t.branch(inst, p, n as u64);
+                done = true;
+            } else {
+                t.instruction(inst, p, k as u64, block_end, more);
+            }
+        }
+        if !done {
+            let next = pc.wrapping_add(4 * n as u32) & LS_MASK;
+            let r =
+                t.b.ins()
+                    .iconst(I64, (next as u64 | (n as u64) << 32) as i64);
+            t.b.ins().return_(&[r]);
+        }
+        t.b.seal_all_blocks();
+        t.b.finalize(target);
+        let id = self
+            .module
+            .declare_anonymous_function(&self.ctx.func.signature)
+            .ok()?;
+        self.module.define_function(id, &mut self.ctx).ok()?;
+        self.module.clear_context(&mut self.ctx);
+        self.module.finalize_definitions().ok()?;
+        let code = self.module.get_finalized_function(id);
+        // SAFETY: the function was just compiled with the `Entry` signature.
+        Some(unsafe { std::mem::transmute::<*const u8, Entry>(code) })
+    }
+}
+
+struct Translator<'a> {
+    b: FunctionBuilder<'a>,
+    ctx: Value,
+    regs: Value,
+    ls: Value,
+    quads: Value,
+    core: Value,
+    /// The value of each register as this block last loaded or wrote it.
+    cache: [Option<Value>; 128],
+    helper_sig: cranelift_codegen::ir::SigRef,
+    hook_sig: cranelift_codegen::ir::SigRef,
+    hook: StoreHook,
+    scratch: &'a mut Core,
+}
+
+/// Whether the host has fused multiply-add (Cranelift's `fma` is one instruction there).
+fn host_fma() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::is_x86_feature_detected!("fma")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// Host byte position of each big-endian byte of a register (words are host-order).
+const fn host(j: usize) -> u8 {
+    (j ^ 3) as u8
+}
+
+impl Translator<'_> {
+    fn flags() -> MemFlagsData {
+        MemFlagsData::new().with_notrap()
+    }
+
+    fn get(&mut self, r: u8) -> Value {
+        let r = r as usize & 127;
+        if let Some(v) = self.cache[r] {
+            return v;
+        }
+        let v = self
+            .b
+            .ins()
+            .load(I32X4, Self::flags(), self.regs, 16 * r as i32);
+        self.cache[r] = Some(v);
+        v
+    }
+
+    fn set(&mut self, r: u8, v: Value) {
+        let r = r as usize & 127;
+        self.b
+            .ins()
+            .store(Self::flags(), v, self.regs, 16 * r as i32);
+        self.cache[r] = Some(v);
+    }
+
+    fn bytes(&mut self, v: Value) -> Value {
+        let le = MemFlagsData::new().with_endianness(Endianness::Little);
+        self.b.ins().bitcast(I8X16, le, v)
+    }
+
+    fn words(&mut self, v: Value) -> Value {
+        let le = MemFlagsData::new().with_endianness(Endianness::Little);
+        self.b.ins().bitcast(I32X4, le, v)
+    }
+
+    fn vconst(&mut self, r: Reg) -> Value {
+        let mut bytes = Vec::with_capacity(16);
+        for w in r {
+            bytes.extend(w.to_le_bytes());
+        }
+        let c = self.b.func.dfg.constants.insert(ConstantData::from(bytes));
+        self.b.ins().vconst(I32X4, c)
+    }
+
+    fn splat(&mut self, x: u32) -> Value {
+        self.vconst([x; 4])
+    }
+
+    /// `shuffle` of the bytes of `a` and `b` by host positions (16.. pick from `b`).
+    fn shuffle(&mut self, a: Value, b: Value, mask: [u8; 16]) -> Value {
+        let (a, b) = (self.bytes(a), self.bytes(b));
+        let imm = self
+            .b
+            .func
+            .dfg
+            .immediates
+            .push(ConstantData::from(mask.to_vec()));
+        let r = self.b.ins().shuffle(a, b, imm);
+        self.words(r)
+    }
+
+    /// The byte swap of each word between local store (big-endian) and a register.
+    fn swap_words(&mut self, v: Value) -> Value {
+        let mut mask = [0u8; 16];
+        for (h, m) in mask.iter_mut().enumerate() {
+            *m = host(h);
+        }
+        let imm = self
+            .b
+            .func
+            .dfg
+            .immediates
+            .push(ConstantData::from(mask.to_vec()));
+        self.b.ins().shuffle(v, v, imm)
+    }
+
+    /// The local-store address of quadword-aligned `addr` (a 32-bit value), as a pointer.
+    fn ls_address(&mut self, addr: Value) -> (Value, Value) {
+        let a = self.b.ins().band_imm_u(addr, (LS_MASK & !15) as i64);
+        let wide = self.b.ins().uextend(I64, a);
+        (a, self.b.ins().iadd(self.ls, wide))
+    }
+
+    fn preferred(&mut self, v: Value) -> Value {
+        self.b.ins().extractlane(v, 0)
+    }
+
+    fn address(&mut self, inst: &Inst, p: u32) -> Value {
+        let imm = inst.imm;
+        match inst.op {
+            Op::Lqd | Op::Stqd => {
+                let ra = self.get(inst.ra);
+                let a = self.preferred(ra);
+                self.b.ins().iadd_imm_s(a, (imm << 4) as i64)
+            }
+            Op::Lqx | Op::Stqx => {
+                let (ra, rb) = (self.get(inst.ra), self.get(inst.rb));
+                let (a, b) = (self.preferred(ra), self.preferred(rb));
+                self.b.ins().iadd(a, b)
+            }
+            Op::Lqa | Op::Stqa => self.b.ins().iconst(I32, ((imm << 2) as u32) as i64),
+            _ => self
+                .b
+                .ins()
+                .iconst(I32, (p.wrapping_add((imm << 2) as u32)) as i64),
+        }
+    }
+
+    /// The result of an instruction that only reads immediates, computed now by the
+    /// interpreter itself.
+    fn constant_of(&mut self, inst: &Inst, p: u32) -> Value {
+        let _ = execute_in::<false>(self.scratch, *inst, p);
+        let r = self.scratch.regs[inst.rt as usize & 127];
+        self.vconst(r)
+    }
+
+    fn call_helper(&mut self, inst: &Inst, p: u32) -> Value {
+        let f = helper_for(inst.op);
+        let callee = self.b.ins().iconst(I64, f as usize as i64);
+        let ip = self
+            .b
+            .ins()
+            .iconst(I64, inst as *const Inst as usize as i64);
+        let pc = self.b.ins().iconst(I32, p as i64);
+        let call = self
+            .b
+            .ins()
+            .call_indirect(self.helper_sig, callee, &[self.core, ip, pc]);
+        // The helper wrote its result in memory.
+        self.cache = [None; 128];
+        self.b.inst_results(call)[0]
+    }
+
+    /// Emits one non-branch instruction.
+    fn instruction(&mut self, inst: &Inst, p: u32, k: u64, block_end: u32, more: bool) {
+        use Op::*;
+        let i10 = inst.imm as u32;
+        macro_rules! bin {
+            ($f:ident) => {{
+                let (a, b) = (self.get(inst.ra), self.get(inst.rb));
+                let v = self.b.ins().$f(a, b);
+                self.set(inst.rt, v)
+            }};
+        }
+        macro_rules! imm {
+            ($f:ident) => {{
+                let a = self.get(inst.ra);
+                let c = self.splat(i10);
+                let v = self.b.ins().$f(a, c);
+                self.set(inst.rt, v)
+            }};
+        }
+        macro_rules! cmp {
+            ($cc:expr, $b:expr) => {{
+                let a = self.get(inst.ra);
+                let b = $b;
+                let v = self.b.ins().icmp($cc, a, b);
+                self.set(inst.rt, v)
+            }};
+        }
+        match inst.op {
+            Nop | Lnop | Hbra | Hbrr | Hbr => {}
+            Il | Ilh | Ilhu | Ila | Fsmbi => {
+                let v = self.constant_of(inst, p);
+                self.set(inst.rt, v)
+            }
+            Iohl => {
+                let t = self.get(inst.rt);
+                let c = self.splat(inst.imm as u32 & 0xffff);
+                let v = self.b.ins().bor(t, c);
+                self.set(inst.rt, v)
+            }
+            A => bin!(iadd),
+            Ai => imm!(iadd),
+            Sf => {
+                let (a, b) = (self.get(inst.ra), self.get(inst.rb));
+                let v = self.b.ins().isub(b, a);
+                self.set(inst.rt, v)
+            }
+            Sfi => {
+                let a = self.get(inst.ra);
+                let c = self.splat(i10);
+                let v = self.b.ins().isub(c, a);
+                self.set(inst.rt, v)
+            }
+            And => bin!(band),
+            Andc => bin!(band_not),
+            Or => bin!(bor),
+            Orc => bin!(bor_not),
+            Xor => bin!(bxor),
+            Nand | Nor | Eqv => {
+                let (a, b) = (self.get(inst.ra), self.get(inst.rb));
+                let v = match inst.op {
+                    Nand => self.b.ins().band(a, b),
+                    Nor => self.b.ins().bor(a, b),
+                    _ => self.b.ins().bxor(a, b),
+                };
+                let v = self.b.ins().bnot(v);
+                self.set(inst.rt, v)
+            }
+            Andi => imm!(band),
+            Ori => imm!(bor),
+            Xori => imm!(bxor),
+            Ceq => cmp!(IntCC::Equal, self.get(inst.rb)),
+            Cgt => cmp!(IntCC::SignedGreaterThan, self.get(inst.rb)),
+            Clgt => cmp!(IntCC::UnsignedGreaterThan, self.get(inst.rb)),
+            Ceqi => cmp!(IntCC::Equal, self.splat(i10)),
+            Cgti => cmp!(IntCC::SignedGreaterThan, self.splat(i10)),
+            Clgti => cmp!(IntCC::UnsignedGreaterThan, self.splat(i10)),
+            Selb => {
+                let (a, b, c) = (self.get(inst.ra), self.get(inst.rb), self.get(inst.rc));
+                let v = self.b.ins().bitselect(c, b, a);
+                self.set(inst.rt, v)
+            }
+            Shufb => {
+                let (a, b, c) = (self.get(inst.ra), self.get(inst.rb), self.get(inst.rc));
+                let v = self.shufb(a, b, c);
+                self.set(inst.rt, v)
+            }
+            Shli | Rotmi | Rotmai | Roti => {
+                let a = self.get(inst.ra);
+                let v = self.word_shift(inst.op, a, inst.imm as u32);
+                self.set(inst.rt, v)
+            }
+            Rotqbyi | Shlqbyi | Rotqmbyi => {
+                let a = self.get(inst.ra);
+                let imm = inst.imm as u32;
+                // Result byte j (big-endian) takes source byte `from(j)`, or zero.
+                let from = |j: u32| -> Option<u32> {
+                    match inst.op {
+                        Rotqbyi => Some((j + (imm & 15)) & 15),
+                        Shlqbyi => {
+                            let c = imm & 0x1f;
+                            (j + c < 16).then_some(j + c)
+                        }
+                        _ => {
+                            let c = imm.wrapping_neg() & 0x1f;
+                            (j >= c && c < 16).then(|| j - c)
+                        }
+                    }
+                };
+                let mut mask = [0u8; 16];
+                for j in 0..16u32 {
+                    mask[host(j as usize) as usize] = match from(j) {
+                        Some(s) => host(s as usize),
+                        None => 16,
+                    };
+                }
+                let zero = self.splat(0);
+                let v = self.shuffle(a, zero, mask);
+                self.set(inst.rt, v)
+            }
+            Fa | Fs | Fm if cfg!(target_arch = "x86_64") => self.single_precision(inst, p),
+            Fma | Fms | Fnms if host_fma() => self.single_precision(inst, p),
+            Lqd | Lqx | Lqa | Lqr => {
+                let addr = self.address(inst, p);
+                let (_, at) = self.ls_address(addr);
+                let raw = self.b.ins().load(I8X16, Self::flags(), at, 0);
+                let swapped = self.swap_words(raw);
+                let v = self.words(swapped);
+                self.set(inst.rt, v)
+            }
+            Stqd | Stqx | Stqa | Stqr => {
+                let addr = self.address(inst, p);
+                let (a, at) = self.ls_address(addr);
+                let t = self.get(inst.rt);
+                let bytes = self.bytes(t);
+                let swapped = self.swap_words(bytes);
+                self.b.ins().store(Self::flags(), swapped, at, 0);
+                self.after_store(a, p, k, block_end, more);
+            }
+            _ => {
+                self.call_helper(inst, p);
+            }
+        }
+    }
+
+    /// The single-precision arithmetic (`fa`, `fs`, `fm`, `fma`, `fms`, `fnms`): the host's
+    /// vector operation (the block runs with the host's floating point truncating, as the
+    /// interpreter's fast loops do) where the interpreter's fast path takes it, with that
+    /// path's criteria lane for lane (`exec::sp4_truncating`: every operand normal or
+    /// zero, the result normal and not the largest magnitude, or a zero that cannot be an
+    /// underflow); otherwise a call to the interpreter's semantics for the instruction,
+    /// which gives the exact result and flags.
+    fn single_precision(&mut self, inst: &Inst, p: u32) {
+        use Op::*;
+        let three = matches!(inst.op, Fma | Fms | Fnms);
+        let (a, b) = (self.get(inst.ra), self.get(inst.rb));
+        let c = if three { Some(self.get(inst.rc)) } else { None };
+        let exp = self.splat(0x7f80_0000);
+        let step = self.splat(0x0080_0000);
+        let below = self.splat(0x00ff_ffff);
+        let abs = self.splat(0x7fff_ffff);
+        let zero = self.splat(0);
+        let normal_or_zero = |t: &mut Self, v: Value| {
+            let e = t.b.ins().band(v, exp);
+            let e = t.b.ins().iadd(e, step);
+            let normal = t.b.ins().icmp(IntCC::SignedGreaterThan, e, below);
+            let m = t.b.ins().band(v, abs);
+            let is_zero = t.b.ins().icmp(IntCC::Equal, m, zero);
+            (t.b.ins().bor(normal, is_zero), is_zero)
+        };
+        let (ok_a, zero_a) = normal_or_zero(self, a);
+        let (ok_b, zero_b) = normal_or_zero(self, b);
+        let mut ok = self.b.ins().band(ok_a, ok_b);
+        if let Some(c) = c {
+            let (ok_c, _) = normal_or_zero(self, c);
+            ok = self.b.ins().band(ok, ok_c);
+        }
+        let le = MemFlagsData::new().with_endianness(Endianness::Little);
+        let f = |t: &mut Self, v: Value| t.b.ins().bitcast(F32X4, le, v);
+        let (fa, fb) = (f(self, a), f(self, b));
+        let r = match inst.op {
+            Fa => self.b.ins().fadd(fa, fb),
+            Fs => self.b.ins().fsub(fa, fb),
+            Fm => self.b.ins().fmul(fa, fb),
+            _ => {
+                let fc = f(self, c.expect("three operands"));
+                match inst.op {
+                    Fma => self.b.ins().fma(fa, fb, fc),
+                    Fms => {
+                        let nc = self.b.ins().fneg(fc);
+                        self.b.ins().fma(fa, fb, nc)
+                    }
+                    _ => {
+                        let na = self.b.ins().fneg(fa);
+                        self.b.ins().fma(na, fb, fc)
+                    }
+                }
+            }
+        };
+        let v = self.b.ins().bitcast(I32X4, le, r);
+        let mag = self.b.ins().band(v, abs);
+        let result_zero = self.b.ins().icmp(IntCC::Equal, mag, zero);
+        let smallest = self.splat(0x007f_ffff);
+        let largest = self.splat(0x7f7f_ffff);
+        let above = self.b.ins().icmp(IntCC::SignedGreaterThan, mag, smallest);
+        let under = self.b.ins().icmp(IntCC::SignedLessThan, mag, largest);
+        let normal = self.b.ins().band(above, under);
+        let zero_ok = if matches!(inst.op, Fa | Fs) {
+            result_zero
+        } else {
+            let factor = self.b.ins().bor(zero_a, zero_b);
+            self.b.ins().band(result_zero, factor)
+        };
+        let good = self.b.ins().bor(normal, zero_ok);
+        let good = self.b.ins().band(good, ok);
+        let all = self.b.ins().vall_true(good);
+        let result = self.b.ins().band_not(v, result_zero);
+        let fast = self.b.create_block();
+        let exact = self.b.create_block();
+        let cont = self.b.create_block();
+        self.b.ins().brif(all, fast, &[], exact, &[]);
+        let saved = self.cache;
+        self.b.switch_to_block(fast);
+        self.set(inst.rt, result);
+        self.b.ins().jump(cont, &[]);
+        self.b.switch_to_block(exact);
+        let helper = helper_for(inst.op);
+        let callee = self.b.ins().iconst(I64, helper as usize as i64);
+        let ip = self
+            .b
+            .ins()
+            .iconst(I64, inst as *const Inst as usize as i64);
+        let pc = self.b.ins().iconst(I32, p as i64);
+        self.b
+            .ins()
+            .call_indirect(self.helper_sig, callee, &[self.core, ip, pc]);
+        self.b.ins().jump(cont, &[]);
+        self.b.switch_to_block(cont);
+        // Both paths wrote the result to memory; every other register is as before.
+        self.cache = saved;
+        self.cache[inst.rt as usize & 127] = None;
+    }
+
+    /// `shli`, `rotmi`, `rotmai`, `roti` by a constant count, as the interpreter counts.
+    fn word_shift(&mut self, op: Op, a: Value, imm: u32) -> Value {
+        let amount = |t: &mut Self, c: u32| t.b.ins().iconst(I32, c as i64);
+        match op {
+            Op::Shli => {
+                let c = imm & 0x3f;
+                if c > 31 {
+                    self.splat(0)
+                } else {
+                    let s = amount(self, c);
+                    self.b.ins().ishl(a, s)
+                }
+            }
+            Op::Rotmi => {
+                let c = imm.wrapping_neg() & 0x3f;
+                if c > 31 {
+                    self.splat(0)
+                } else {
+                    let s = amount(self, c);
+                    self.b.ins().ushr(a, s)
+                }
+            }
+            Op::Rotmai => {
+                let c = (imm.wrapping_neg() & 0x3f).min(31);
+                let s = amount(self, c);
+                self.b.ins().sshr(a, s)
+            }
+            _ => {
+                let c = imm & 0x1f;
+                if c == 0 {
+                    return a;
+                }
+                let (l, r) = (amount(self, c), amount(self, 32 - c));
+                let hi = self.b.ins().ishl(a, l);
+                let lo = self.b.ins().ushr(a, r);
+                self.b.ins().bor(hi, lo)
+            }
+        }
+    }
+
+    /// `shufb` on host byte positions: a control byte's index (its low 5 bits, big-endian
+    /// numbering) XOR 3 is a host position in RA (0..15) or RB (16..31); top bit set:
+    /// 10xxxxxx → 0x00, 110xxxxx → 0xFF, 111xxxxx → 0x80.
+    fn shufb(&mut self, a: Value, b: Value, c: Value) -> Value {
+        let (a, b, c) = (self.bytes(a), self.bytes(b), self.bytes(c));
+        let bconst = |t: &mut Self, x: u8| {
+            let v = t.splat(u32::from_ne_bytes([x; 4]));
+            t.bytes(v)
+        };
+        let m1f = bconst(self, 0x1f);
+        let three = bconst(self, 3);
+        let sixteen = bconst(self, 0x10);
+        let idx = self.b.ins().band(c, m1f);
+        let idx = self.b.ins().bxor(idx, three);
+        // Out-of-range indices (16..31 for RA, after flipping bit 4 for RB) give zero.
+        let from_a = self.b.ins().swizzle(a, idx);
+        let idx_b = self.b.ins().bxor(idx, sixteen);
+        let from_b = self.b.ins().swizzle(b, idx_b);
+        let picked = self.b.ins().bor(from_a, from_b);
+        let zero = bconst(self, 0);
+        let special = self.b.ins().icmp(IntCC::SignedLessThan, c, zero);
+        let e0 = bconst(self, 0xe0);
+        let c0 = bconst(self, 0xc0);
+        let x80 = bconst(self, 0x80);
+        let top3 = self.b.ins().band(c, e0);
+        let ff = self.b.ins().icmp(IntCC::Equal, top3, c0);
+        let is_e0 = self.b.ins().icmp(IntCC::Equal, top3, e0);
+        let eighty = self.b.ins().band(is_e0, x80);
+        let constant = self.b.ins().bor(ff, eighty);
+        let r = self.b.ins().bitselect(special, constant, picked);
+        self.words(r)
+    }
+
+    /// After a store to (aligned, wrapped) `a`: where local store may hold decoded code
+    /// there, the hook marks it stale; the block ends when the hook says so.
+    fn after_store(&mut self, a: Value, p: u32, k: u64, block_end: u32, more: bool) {
+        let quad = self.b.ins().ushr_imm_u(a, 4);
+        let quad = self.b.ins().uextend(I64, quad);
+        let at = self.b.ins().iadd(self.quads, quad);
+        let flag = self.b.ins().load(I8, Self::flags(), at, 0);
+        let hook_block = self.b.create_block();
+        let cont = self.b.create_block();
+        self.b.ins().brif(flag, hook_block, &[], cont, &[]);
+        self.b.switch_to_block(hook_block);
+        let next = p.wrapping_add(4) & LS_MASK;
+        let callee = self.b.ins().iconst(I64, self.hook as usize as i64);
+        let next_v = self.b.ins().iconst(I32, next as i64);
+        let end_v = self.b.ins().iconst(I32, block_end as i64);
+        let more_v = self.b.ins().iconst(I32, more as i64);
+        let call = self.b.ins().call_indirect(
+            self.hook_sig,
+            callee,
+            &[self.ctx, a, next_v, end_v, more_v],
+        );
+        let exit = self.b.inst_results(call)[0];
+        let exit_block: IrBlock = self.b.create_block();
+        self.b.ins().brif(exit, exit_block, &[], cont, &[]);
+        self.b.switch_to_block(exit_block);
+        let r = self
+            .b
+            .ins()
+            .iconst(I64, (next as u64 | (k + 1) << 32 | RESULT_PARTIAL) as i64);
+        self.b.ins().return_(&[r]);
+        self.b.switch_to_block(cont);
+    }
+
+    /// Emits the block's final branch and its return.
+    fn branch(&mut self, inst: &Inst, p: u32, n: u64) {
+        use Op::*;
+        let next = p.wrapping_add(4) & LS_MASK;
+        let imm = inst.imm;
+        let done = n << 32;
+        let (target, taken): (Value, Value) = match inst.op {
+            Br | Bra | Brsl | Brasl => {
+                let target = if matches!(inst.op, Br | Brsl) {
+                    p.wrapping_add((imm << 2) as u32)
+                } else {
+                    (imm << 2) as u32
+                } & LS_MASK
+                    & !3;
+                if matches!(inst.op, Brsl | Brasl) {
+                    let link = self.vconst([next, 0, 0, 0]);
+                    self.set(inst.rt, link);
+                }
+                let t = self.b.ins().iconst(I32, target as i64);
+                let one = self.b.ins().iconst(I8, 1);
+                (t, one)
+            }
+            Brz | Brnz | Brhz | Brhnz => {
+                let target = p.wrapping_add((imm << 2) as u32) & LS_MASK & !3;
+                let rt = self.get(inst.rt);
+                let v = self.preferred(rt);
+                let v = if matches!(inst.op, Brhz | Brhnz) {
+                    self.b.ins().band_imm_u(v, 0xffff)
+                } else {
+                    v
+                };
+                let cc = if matches!(inst.op, Brz | Brhz) {
+                    IntCC::Equal
+                } else {
+                    IntCC::NotEqual
+                };
+                let taken = self.b.ins().icmp_imm_u(cc, v, 0);
+                let t = self.b.ins().iconst(I32, target as i64);
+                (t, taken)
+            }
+            _ => {
+                let code = self.call_helper(inst, p);
+                let t = self.b.ins().ireduce(I32, code);
+                let taken = self.b.ins().band_imm_u(code, TAKEN as i64);
+                let taken = self.b.ins().icmp_imm_u(IntCC::NotEqual, taken, 0);
+                debug_assert!(BRANCH != 0);
+                (t, taken)
+            }
+        };
+        self.b
+            .ins()
+            .store(MemFlagsData::trusted(), target, self.ctx, CTX_TARGET);
+        let next_v = self.b.ins().iconst(I32, next as i64);
+        let to = self.b.ins().select(taken, target, next_v);
+        let to = self.b.ins().uextend(I64, to);
+        let taken64 = self.b.ins().uextend(I64, taken);
+        let taken64 = self.b.ins().ishl_imm_u(taken64, 48);
+        let r = self.b.ins().bor_imm_u(to, done as i64);
+        let r = self.b.ins().bor(r, taken64);
+        self.b.ins().return_(&[r]);
+    }
+}
+
+#[allow(dead_code)]
+fn _assert_layout() {
+    use std::mem::offset_of;
+    const _: () = assert!(offset_of!(Ctx, regs) == CTX_REGS as usize);
+    const _: () = assert!(offset_of!(Ctx, ls) == CTX_LS as usize);
+    const _: () = assert!(offset_of!(Ctx, code_quads) == CTX_QUADS as usize);
+    const _: () = assert!(offset_of!(Ctx, core) == CTX_CORE as usize);
+    const _: () = assert!(offset_of!(Ctx, target) == CTX_TARGET as usize);
+}

@@ -1,0 +1,119 @@
+//! The block compiler: hot basic blocks of local store translated to host code with
+//! Cranelift (the code generator wasmtime uses), so that simulated SPUs run near host speed
+//! with exactly the interpreter's results.
+//!
+//! A block is what the timing model's memo calls one: straight-line instructions up to and
+//! including the first branch, ending before anything that needs the SPU around the core
+//! (channels, stops, halts, `sync`, register-target hints, `bisled`, undecodable words).
+//! Registers live in the core's register file as 128-bit vectors; the common operations
+//! (loads, stores, integer and logical word operations, compares, `selb`, `shufb`, constant
+//! shifts and rotates, immediate loads, the simple branches) become host vector code, and
+//! every other instruction is a call into the interpreter's own semantics for that one
+//! instruction ([`crate::machine::exec`]), specialised per operation so the call does no
+//! dispatch: the single-precision arithmetic keeps its one exact definition (the fast path
+//! in host vector instructions where the result is an ordinary number, the exact code in
+//! [`crate::float`] otherwise) and nothing is written twice.
+//!
+//! Stores check a per-quadword map of local store holding decoded code; a store there
+//! calls back into the SPU, which marks the words stale and bumps the code epoch (compiled
+//! blocks check their words again when the epoch moved), and ends the block early when it
+//! wrote the block's own remaining instructions, as the interpreter's replay does.
+//!
+//! The SPU drives compiled blocks in `machine::compiled`; quanta, channels, DMA, timing
+//! and multi-SPU determinism are the interpreter's, unchanged.
+
+use std::fmt;
+use std::str::FromStr;
+use std::sync::atomic::{AtomicU8, Ordering};
+
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+mod compile;
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+mod helpers;
+
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+pub(crate) use compile::{Blocks, Ctx, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN};
+
+/// Which engine runs an SPU's instructions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum Engine {
+    /// The interpreter: every instruction through the semantics' `match` (the reference).
+    Interp,
+    /// Compiled blocks where the host has a code generator, the interpreter elsewhere.
+    Jit,
+}
+
+impl Engine {
+    /// Whether this host has the block compiler (x86_64 and aarch64, Cranelift's targets).
+    pub const SUPPORTED: bool = cfg!(any(target_arch = "x86_64", target_arch = "aarch64"));
+
+    /// The compiler where the host has one, the interpreter elsewhere.
+    pub const fn host_default() -> Engine {
+        if Engine::SUPPORTED {
+            Engine::Jit
+        } else {
+            Engine::Interp
+        }
+    }
+
+    pub const fn name(self) -> &'static str {
+        match self {
+            Engine::Interp => "interp",
+            Engine::Jit => "jit",
+        }
+    }
+}
+
+/// The engine new SPUs start with: 0 the host default, else 1 + `Engine as u8`.
+static DEFAULT: AtomicU8 = AtomicU8::new(0);
+
+impl Engine {
+    /// Sets the engine every SPU made from now on starts with (the `--engine` option of
+    /// the `spu` commands, so the runtime that makes the SPUs needs no parameter for it).
+    /// Results do not depend on it, only host speed.
+    pub fn set_default(engine: Engine) {
+        DEFAULT.store(1 + engine as u8, Ordering::Relaxed);
+    }
+}
+
+impl Default for Engine {
+    /// The engine set by [`Engine::set_default`], else [`Engine::host_default`].
+    fn default() -> Self {
+        match DEFAULT.load(Ordering::Relaxed) {
+            1 => Engine::Interp,
+            2 if Engine::SUPPORTED => Engine::Jit,
+            _ => Engine::host_default(),
+        }
+    }
+}
+
+impl fmt::Display for Engine {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.pad(self.name())
+    }
+}
+
+impl FromStr for Engine {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Engine, String> {
+        match s {
+            "interp" => Ok(Engine::Interp),
+            "jit" => Ok(Engine::Jit),
+            other => Err(format!("unknown engine `{other}` (interp or jit)")),
+        }
+    }
+}
+
+/// What the block compiler did for one SPU.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JitStats {
+    /// Blocks compiled (including recompilations after code changed).
+    pub blocks: u64,
+    /// Instructions in those blocks.
+    pub block_instructions: u64,
+    /// Host seconds spent compiling.
+    pub compile_seconds: f64,
+    /// Simulated instructions executed by compiled code.
+    pub compiled_instructions: u64,
+}

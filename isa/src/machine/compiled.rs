@@ -1,0 +1,282 @@
+//! The SPU's run loops over compiled blocks ([`crate::jit`]): with the timing model off,
+//! compiled blocks back to back, cold blocks through the interpreter's fast loop; with it
+//! on, a memoized block's replay runs its compiled code and applies the block's timing
+//! record exactly as the interpreter's replay does, so cycles, stalls and profiles are
+//! the same. Everything else (channels, stops, interrupts, the quantum's end) goes back
+//! to the general path.
+
+use super::spu::Spu;
+use crate::jit::{Engine, JitStats};
+
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+pub(super) type CompiledBlocks = crate::jit::Blocks;
+
+/// No block compiler on this host.
+#[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+pub(super) struct CompiledBlocks;
+
+impl Spu {
+    /// Chooses the engine (the interpreter where the host has no block compiler).
+    pub fn set_engine(&mut self, engine: Engine) {
+        self.engine = if Engine::SUPPORTED {
+            engine
+        } else {
+            Engine::Interp
+        };
+    }
+
+    pub fn engine(&self) -> Engine {
+        self.engine
+    }
+
+    /// What the block compiler did so far.
+    pub fn jit_stats(&self) -> JitStats {
+        #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+        let base = self.compiled.as_ref().map(|b| b.stats).unwrap_or_default();
+        #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+        let base = JitStats::default();
+        JitStats {
+            compiled_instructions: self.compiled_instructions,
+            ..base
+        }
+    }
+}
+
+#[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+impl Spu {
+    pub(super) fn run_compiled(&mut self, until: u64) {
+        self.run_fast(until)
+    }
+
+    pub(super) fn replay_compiled(&mut self, _pc: u32, _n: usize, _memo: usize) -> bool {
+        false
+    }
+}
+
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+mod host {
+    use super::super::spu::{invalidate_quad, Spu};
+    use crate::analysis::is_branch;
+    use crate::codec::Inst;
+    use crate::jit::{Blocks, Ctx, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN};
+    use crate::machine::exec::{TruncatingFloats, LS_MASK, LS_SIZE};
+    use crate::table::Op;
+    use crate::timing::ends_block;
+
+    /// A block is compiled when it has started this often without compiled code: blocks
+    /// entered only now and then (the rest of a block cut by a quantum's end, by a store
+    /// into it) stay interpreted rather than compiled again and again.
+    const HOT: u8 = 16;
+    /// A slot whose block the compiler declined: interpreted from then on.
+    const DECLINED: u32 = u32::MAX;
+
+    /// After a compiled store into a quadword that may hold decoded code: marks it stale
+    /// (bumping the code epoch if it held any) and says whether the block must end (the
+    /// store wrote its own remaining instructions), as the interpreter's replay decides.
+    unsafe extern "C" fn store_hook(
+        ctx: *mut Ctx,
+        addr: u32,
+        next: u32,
+        block_end: u32,
+        more: u32,
+    ) -> u32 {
+        // SAFETY: the block was called by `Spu::call_block` with `spu` pointing at the
+        // SPU, which nothing else uses during the call.
+        let spu = unsafe { &mut *((*ctx).spu as *mut Spu) };
+        spu.code_epoch += invalidate_quad(&mut spu.decoded, &mut spu.code_quads, addr) as u64;
+        let line = addr & LS_MASK & !15;
+        (more != 0 && line < block_end && line + 16 > next) as u32
+    }
+
+    impl Spu {
+        /// How many instructions a block starting at `pc` holds: up to and including the
+        /// first branch, before anything that ends a block, at most [`MAX_BLOCK`].
+        fn block_from(&mut self, pc: u32, out: Option<&mut Vec<Inst>>) -> usize {
+            let mut n = 0;
+            let mut p = pc;
+            let mut out = out;
+            while n < MAX_BLOCK {
+                let inst = self.fetch(p);
+                if ends_block(inst) || inst.op == Op::Bisled {
+                    break;
+                }
+                if let Some(out) = out.as_mut() {
+                    out.push(inst);
+                }
+                n += 1;
+                if is_branch(inst.op) {
+                    break;
+                }
+                p = (p + 4) & LS_MASK;
+            }
+            n
+        }
+
+        /// Whether local store still holds block `id`'s words at `pc`.
+        fn block_still_there(&mut self, pc: u32, words: &[u32]) -> bool {
+            words.iter().enumerate().all(|(k, &word)| {
+                let inst = self.fetch(pc.wrapping_add(4 * k as u32) & LS_MASK);
+                inst.word == word && !ends_block(inst) && inst.op != Op::Bisled
+            })
+        }
+
+        /// The compiled block starting at `pc` (with `n` instructions, when given),
+        /// compiling it if it is hot and `whole` (not the rest of a cut block); `None`:
+        /// interpret it.
+        fn compiled_block(&mut self, pc: u32, n: Option<usize>, whole: bool) -> Option<usize> {
+            let w = (pc as usize >> 2) & (LS_SIZE / 4 - 1);
+            let blocks = self.compiled.get_or_insert_with(|| Box::new(Blocks::new()));
+            let slot = blocks.slots[w];
+            if slot == DECLINED {
+                return None;
+            }
+            if slot != 0 {
+                let id = slot as usize - 1;
+                let b = &blocks.blocks[id];
+                if n.is_none_or(|n| b.n as usize == n) {
+                    if b.verified == self.code_epoch {
+                        return Some(id);
+                    }
+                    let words = b.words.clone();
+                    if self.block_still_there(pc, &words) {
+                        let epoch = self.code_epoch;
+                        self.compiled.as_mut().expect("blocks").blocks[id].verified = epoch;
+                        return Some(id);
+                    }
+                }
+                self.compiled.as_mut().expect("blocks").slots[w] = 0;
+            }
+            let blocks = self.compiled.as_mut().expect("blocks");
+            if !whole {
+                return None;
+            }
+            blocks.heat[w] = blocks.heat[w].saturating_add(1);
+            if blocks.heat[w] < HOT {
+                return None;
+            }
+            blocks.heat[w] = 0;
+            let mut insts = Vec::new();
+            match n {
+                Some(n) => {
+                    for k in 0..n {
+                        insts.push(self.fetch(pc.wrapping_add(4 * k as u32) & LS_MASK));
+                    }
+                }
+                None => {
+                    self.block_from(pc, Some(&mut insts));
+                }
+            }
+            let epoch = self.code_epoch;
+            let blocks = self.compiled.as_mut().expect("blocks");
+            match blocks.compile(pc, &insts, store_hook) {
+                Some(id) => {
+                    blocks.blocks[id].verified = epoch;
+                    Some(id)
+                }
+                None => {
+                    if n.is_none() {
+                        blocks.slots[w] = DECLINED;
+                    }
+                    None
+                }
+            }
+        }
+
+        /// Runs compiled block `id`; returns its result word and its final branch's target.
+        #[inline(always)]
+        fn call_block(&mut self, id: usize) -> (u64, u32) {
+            let spu: *mut Spu = self;
+            // SAFETY: every pointer is derived from the exclusively borrowed SPU and used
+            // only during the call; the block's code is owned by its cache, which stays
+            // alive (compiling happens only outside calls).
+            unsafe {
+                let entry = (*spu).compiled.as_ref().expect("blocks").blocks[id].entry;
+                let mut ctx = Ctx {
+                    regs: (*spu).core.regs.as_mut_ptr(),
+                    ls: (*spu).core.ls.as_mut_ptr(),
+                    code_quads: (*spu).code_quads.as_mut_ptr(),
+                    core: &mut (*spu).core,
+                    spu: spu as *mut u8,
+                    target: 0,
+                    _pad: 0,
+                };
+                let r = entry(&mut ctx);
+                (r, ctx.target)
+            }
+        }
+
+        /// Timing off: compiled blocks back to back while the clock is before `until`, the
+        /// interpreter's fast loop for blocks not compiled (yet). Returns at anything for
+        /// the general path (a channel, stop, interrupt, ...), at `until`, or when the
+        /// interpreter stopped early.
+        #[inline(never)]
+        pub(in crate::machine) fn run_compiled(&mut self, until: u64) {
+            let truncating = TruncatingFloats::hold();
+            while self.cycle < until && !self.core.interrupts_enabled {
+                let pc = self.pc;
+                let budget = until - self.cycle;
+                // Where the last block was cut short (by the quantum's end or a store into
+                // it), this is the rest of a block, which is not made a block of its own.
+                let whole = !std::mem::take(&mut self.block_cut);
+                if let Some(id) = self.compiled_block(pc, None, whole) {
+                    let n = self.compiled.as_ref().expect("blocks").blocks[id].n as u64;
+                    if n <= budget {
+                        let (r, _) = self.call_block(id);
+                        self.block_cut = r & RESULT_PARTIAL != 0;
+                        let done = (r >> 32) & 0xffff;
+                        self.pc = r as u32;
+                        self.instructions += done;
+                        self.cycle += done;
+                        self.compiled_instructions += done;
+                        continue;
+                    }
+                }
+                let n = self.block_from(pc, None) as u64;
+                if n == 0 {
+                    break;
+                }
+                self.block_cut = n > budget;
+                let stop = self.cycle + n.min(budget);
+                self.run_fast(stop);
+                if self.cycle < stop {
+                    break;
+                }
+            }
+            truncating.release();
+        }
+
+        /// Timing on: runs the memoized block `memo` (`n` instructions at `pc`, its replay
+        /// just started) as compiled code and applies its timing record; false (nothing
+        /// done) when it has no compiled code.
+        pub(in crate::machine) fn replay_compiled(
+            &mut self,
+            pc: u32,
+            n: usize,
+            memo: usize,
+        ) -> bool {
+            let Some(id) = self.compiled_block(pc, Some(n), true) else {
+                return false;
+            };
+            // Blocks hold no `bisled`, the one reader of the pending-event flag.
+            self.core.event_pending_known = false;
+            let (r, target) = self.call_block(id);
+            let done = ((r >> 32) & 0xffff) as usize;
+            let last = self.compiled.as_ref().expect("blocks").blocks[id].last;
+            let timing = self.timing.as_mut().expect("timing");
+            if r & RESULT_PARTIAL != 0 {
+                timing.block_replayed_partly(memo, done);
+            } else if is_branch(last.op) {
+                let last_pc = pc.wrapping_add(4 * (n as u32 - 1)) & LS_MASK;
+                let taken = r & RESULT_TAKEN != 0;
+                timing.block_replayed(memo, Some((last_pc, last, taken, target)));
+            } else {
+                timing.block_replayed(memo, None);
+            }
+            self.pc = r as u32;
+            self.instructions += done as u64;
+            self.compiled_instructions += done as u64;
+            self.cycle = timing.now();
+            true
+        }
+    }
+}

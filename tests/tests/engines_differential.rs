@@ -1,0 +1,380 @@
+//! The block compiler against the interpreter (`--engine jit` against `--engine interp`):
+//! random programs (integer, float, shifts and shuffles, loads and stores, branches,
+//! hints, calls), programs with channels, DMA and self-modifying code, and a kernel frame
+//! give the same registers, local store, main memory, instructions, cycles, counters,
+//! profiles and images, with the timing model off and on.
+
+use spu_isa::jit::Engine;
+use spu_isa::machine::{MainMemory, Spu, StopReason};
+use spu_isa::timing::TimingConfig;
+use spu_tests::XorShift as Rng;
+
+/// What a run left behind, for comparing engines.
+#[derive(Debug, PartialEq)]
+struct Outcome {
+    stop: StopReason,
+    regs: Vec<[u32; 4]>,
+    instructions: u64,
+    cycles: u64,
+    totals: Option<String>,
+    per_address: Option<Vec<String>>,
+}
+
+/// Runs `src` on one SPU with `engine`, the timing model on or off; main memory of
+/// 64 KiB filled with a pattern.
+fn run(src: &str, engine: Engine, timing: bool) -> (Outcome, Spu, MainMemory) {
+    let program = spu_asm::assemble(src, "engines.s", &Default::default())
+        .unwrap_or_else(|d| panic!("{d:?}\n{src}"));
+    let mut spu = Spu::new(0);
+    spu.set_engine(engine);
+    spu.load_image(&program.image);
+    spu.set_pc(program.entry);
+    if timing {
+        spu.enable_timing(TimingConfig::default());
+    }
+    let mut memory = MainMemory::zeroed(64 * 1024);
+    for (i, b) in memory.bytes_mut().iter_mut().enumerate() {
+        *b = (i * 7 + 3) as u8;
+    }
+    let stop = spu.run(&mut memory, 20_000_000);
+    let profile = spu.timing().map(|t| t.finish_profile());
+    let outcome = Outcome {
+        stop,
+        regs: (0..128).map(|r| spu.reg(r)).collect(),
+        instructions: spu.instructions(),
+        cycles: spu.cycles(),
+        totals: profile.as_ref().map(|p| format!("{:?}", p.totals)),
+        per_address: profile.as_ref().map(|p| {
+            p.addresses()
+                .map(|(pc, s)| format!("{pc:#x}: {s:?}"))
+                .collect()
+        }),
+    };
+    (outcome, spu, memory)
+}
+
+/// Runs `src` with both engines, timing off and on: everything the same. Returns the
+/// compiled runs' SPUs (timing off, on).
+fn same_with_both_engines(src: &str) -> [Spu; 2] {
+    [false, true].map(|timing| {
+        let (a, sa, ma) = run(src, Engine::Interp, timing);
+        let (b, sb, mb) = run(src, Engine::Jit, timing);
+        assert_eq!(a, b, "timing {timing}\n{src}");
+        assert!(
+            sa.ls() == sb.ls(),
+            "local store differs, timing {timing}\n{src}"
+        );
+        assert!(
+            ma.bytes() == mb.bytes(),
+            "main memory differs, timing {timing}\n{src}"
+        );
+        sb
+    })
+}
+
+/// A random instruction on registers $10..$21 ($3 points at the data, $5 holds a small
+/// data offset).
+fn random_op(rng: &mut Rng) -> String {
+    let reg = |rng: &mut Rng| 10 + rng.below(12);
+    let (t, a, b, c) = (reg(rng), reg(rng), reg(rng), reg(rng));
+    let s10 = rng.below(1024) as i64 - 512;
+    let u7 = rng.below(128);
+    match rng.below(48) {
+        0 => format!("a ${t}, ${a}, ${b}"),
+        1 => format!("ai ${t}, ${a}, {s10}"),
+        2 => format!("sf ${t}, ${a}, ${b}"),
+        3 => format!("sfi ${t}, ${a}, {s10}"),
+        4 => format!("and ${t}, ${a}, ${b}"),
+        5 => format!("andc ${t}, ${a}, ${b}"),
+        6 => format!("or ${t}, ${a}, ${b}"),
+        7 => format!("orc ${t}, ${a}, ${b}"),
+        8 => format!("xor ${t}, ${a}, ${b}"),
+        9 => format!(
+            "{} ${t}, ${a}, ${b}",
+            ["nand", "nor", "eqv"][rng.below(3) as usize]
+        ),
+        10 => format!(
+            "{} ${t}, ${a}, {s10}",
+            ["andi", "ori", "xori"][rng.below(3) as usize]
+        ),
+        11 => format!(
+            "{} ${t}, ${a}, ${b}",
+            ["ceq", "cgt", "clgt"][rng.below(3) as usize]
+        ),
+        12 => format!(
+            "{} ${t}, ${a}, {s10}",
+            ["ceqi", "cgti", "clgti"][rng.below(3) as usize]
+        ),
+        13 => format!("il ${t}, {}", rng.below(65536) as i64 - 32768),
+        14 => format!("ilhu ${t}, {}", rng.below(65536)),
+        15 => format!("iohl ${t}, {}", rng.below(65536)),
+        16 => format!("ila ${t}, {}", rng.below(1 << 18)),
+        17 => format!("ilh ${t}, {}", rng.below(65536)),
+        18 => format!("fsmbi ${t}, {}", rng.below(65536)),
+        19 => format!("shli ${t}, ${a}, {u7}"),
+        20 => format!("rotmi ${t}, ${a}, {}", -(rng.below(64) as i64)),
+        21 => format!("rotmai ${t}, ${a}, {}", -(rng.below(64) as i64)),
+        22 => format!("roti ${t}, ${a}, {}", rng.below(64) as i64 - 32),
+        23 => format!("rotqbyi ${t}, ${a}, {}", rng.below(32)),
+        24 => format!("shlqbyi ${t}, ${a}, {}", rng.below(32)),
+        25 => format!("rotqmbyi ${t}, ${a}, {}", -(rng.below(32) as i64)),
+        26 => format!("selb ${t}, ${a}, ${b}, ${c}"),
+        27 | 28 => format!("shufb ${t}, ${a}, ${b}, ${c}"),
+        29 => format!("fa ${t}, ${a}, ${b}"),
+        30 => format!("fs ${t}, ${a}, ${b}"),
+        31 => format!("fm ${t}, ${a}, ${b}"),
+        32 => format!("fma ${t}, ${a}, ${b}, ${c}"),
+        33 => format!("fnms ${t}, ${a}, ${b}, ${c}"),
+        34 => format!("fms ${t}, ${a}, ${b}, ${c}"),
+        35 => format!(
+            "{} ${t}, ${a}, ${b}",
+            ["fcgt", "fceq", "fcmgt"][rng.below(3) as usize]
+        ),
+        36 => format!("frest ${t}, ${a}"),
+        37 => format!("fi ${t}, ${a}, ${b}"),
+        38 => format!("cfltu ${t}, ${a}, {}", rng.below(128)),
+        39 => format!("lqd ${t}, {}($3)", 16 * rng.below(8)),
+        40 => format!("stqd ${t}, {}($3)", 16 * rng.below(8)),
+        41 => format!("lqx ${t}, $3, $5"),
+        42 => format!("stqx ${t}, $3, $5"),
+        43 => format!(
+            "{} ${t}, ${a}, ${b}",
+            ["rotqby", "mpy", "ah"][rng.below(3) as usize]
+        ),
+        44 => format!(
+            "{} ${t}, ${a}",
+            ["gb", "clz", "cntb"][rng.below(3) as usize]
+        ),
+        45 => format!("dfa ${t}, ${a}, ${b}"),
+        46 => "nop".into(),
+        _ => "lnop".into(),
+    }
+}
+
+/// Random programs with loops: blocks of random instructions, hints right, wrong or
+/// absent, data-dependent branches and a call.
+#[test]
+fn random_programs_run_the_same_compiled() {
+    let mut compiled = 0;
+    for seed in 1..=16u64 {
+        let mut rng = Rng(0x2545_f491_4f6c_dd1d ^ seed.wrapping_mul(0x9e37_79b9));
+        let blocks = 3 + rng.below(5) as usize;
+        let mut src = String::from(
+            "        .text\n        .global _start\n_start: ila $3, data\n il $4, 600\n il $5, 80\n",
+        );
+        for r in 10..22 {
+            src += &format!(" lqd ${r}, {}($3)\n", 16 * (r % 8));
+        }
+        for i in 0..blocks {
+            let target = rng.below(blocks as u64);
+            src += &format!("b{i}:\n");
+            match rng.below(3) {
+                0 => src += &format!(" hbrr .Lbr{i}, b{target}\n"),
+                1 => src += &format!(" hbrr .Lbr{i}, b{}\n", (target + 1) % blocks as u64),
+                _ => {}
+            }
+            for _ in 0..rng.below(16) {
+                src += &format!(" {}\n", random_op(&mut rng));
+            }
+            if rng.below(4) == 0 {
+                src += " brsl $0, sub\n";
+            }
+            src += " ai $4, $4, -1\n brz $4, end\n";
+            for _ in 0..rng.below(8) {
+                src += &format!(" {}\n", random_op(&mut rng));
+            }
+            let cond = ["brnz", "brz", "brhnz", "brhz"][rng.below(4) as usize];
+            src += &format!(".Lbr{i}: {cond} ${}, b{target}\n", 10 + rng.below(12));
+        }
+        src += " br b0\nsub:\n";
+        for _ in 0..rng.below(6) {
+            src += &format!(" {}\n", random_op(&mut rng));
+        }
+        src += " bi $0\nend: stop 0x2000\n        .data\n        .align 4\ndata:\n";
+        for k in 0..32 {
+            // Ordinary floats mostly, and raw words (zeros, denormals, huge values) too.
+            let w = rng.next() as u32;
+            let w = if k % 4 == 3 {
+                w
+            } else {
+                w & 0xc3ff_ffff | 0x0800_0000
+            };
+            src += &format!(" .long {w}\n");
+        }
+        let [off, _] = same_with_both_engines(&src);
+        compiled += off.jit_stats().compiled_instructions;
+    }
+    assert!(
+        compiled > 10_000,
+        "only {compiled} instructions ran compiled"
+    );
+}
+
+/// Stores that rewrite code: an instruction later in the same block (the block must end
+/// and the new word run), a quadword of the block with what it already holds, and a
+/// called routine rewritten between calls.
+#[test]
+fn self_modifying_code_runs_the_same_compiled() {
+    let src = "
+        .text
+        .global _start
+_start: il      $9, 40
+        ila     $3, data
+outer:  brsl    $0, sub
+        ila     $14, patch              # rewrite the `ai $15, $15, 1` below...
+        lqd     $16, 0($14)
+        ila     $17, newword
+        lqd     $18, 0($17)
+        stqd    $18, 0($14)             # ... with `ai $15, $15, 2`, in this very block
+        .align  4
+patch:  ai      $15, $15, 1
+        lnop
+        nop
+        lnop
+        stqd    $16, 0($14)             # and back
+        br      1f
+1:      ila     $24, patch2
+        lqd     $25, 0($24)
+        stqd    $25, 0($24)             # the same words again, later in this block
+        .align  4
+patch2: ai      $26, $26, 3
+        lnop
+        ila     $27, subbody            # the routine alternates between two bodies
+        andi    $28, $9, 1
+        shli    $28, $28, 4
+        ila     $29, bodies
+        lqx     $30, $29, $28
+        stqd    $30, 0($27)
+        ai      $9, $9, -1
+        brnz    $9, outer
+        stop    0x2000
+        .align  4
+sub:    nop
+        lnop
+        nop
+        lnop
+subbody: ai     $31, $31, 5
+        lnop
+        nop
+        bi      $0
+        .align  4
+newword: ai     $15, $15, 2
+        lnop
+        nop
+        lnop
+bodies: ai      $31, $31, 7
+        lnop
+        nop
+        bi      $0
+        ai      $31, $31, 11
+        lnop
+        nop
+        bi      $0
+        .data
+        .align  4
+data:   .space  64
+";
+    let [off, on] = same_with_both_engines(src);
+    // The patched instruction ran 40 times with the new word, the routine 40 times with
+    // bodies chosen by the count's parity (the first call with its original body).
+    for spu in [&off, &on] {
+        assert_eq!(spu.reg(15)[0], 80);
+        assert_eq!(spu.reg(26)[0], 120);
+        assert_eq!(spu.reg(31)[0], 5 + 20 * 7 + 19 * 11);
+    }
+    assert!(off.jit_stats().compiled_instructions > 0);
+}
+
+/// DMA gets and puts inside a loop of computation, tag waits, the decrementer read
+/// between blocks (its value depends on the cycle), and an outbound mailbox write at the
+/// end: the same registers, local store, main memory and cycles.
+#[test]
+fn channels_and_dma_run_the_same_compiled() {
+    let mut src = String::from(
+        "        .text\n        .global _start\n_start: il $9, 24\n ila $3, 0x8000\n\
+         il $70, -1\n wrch $SPU_WrDec, $70\n",
+    );
+    src += "loop:\n";
+    // get 256 bytes from EA 0x1000 + 256 * (count & 7) into 0x8000, wait.
+    src += " andi $20, $9, 7\n shli $20, $20, 8\n ai $21, $20, 0x100\n shli $21, $21, 4\n";
+    src += " ila $70, 0x8000\n wrch $MFC_LSA, $70\n il $70, 0\n wrch $MFC_EAH, $70\n";
+    src += " wrch $MFC_EAL, $21\n il $70, 256\n wrch $MFC_Size, $70\n il $70, 1\n";
+    src += " wrch $MFC_TagID, $70\n il $70, 0x40\n wrch $MFC_Cmd, $70\n";
+    src += " il $70, 2\n wrch $MFC_WrTagMask, $70\n il $70, 2\n wrch $MFC_WrTagUpdate, $70\n";
+    src += " rdch $22, $MFC_RdTagStat\n";
+    // Compute on what arrived while nothing is in flight, then put it back elsewhere.
+    src += " lqd $10, 0($3)\n lqd $11, 16($3)\n lqd $12, 32($3)\n";
+    for k in 0..6 {
+        src += &format!(
+            " a $13, $10, $11\n xor $14, $13, $12\n shufb $15, $14, $10, $11\n\
+             stqd $15, {}($3)\n rotqbyi $10, $15, {}\n",
+            48 + 16 * k,
+            k + 1
+        );
+    }
+    src += " rdch $23, $SPU_RdDec\n a $24, $24, $23\n";
+    src += " ila $70, 0x8000\n wrch $MFC_LSA, $70\n il $70, 0\n wrch $MFC_EAH, $70\n";
+    src += " ila $25, 0x4000\n a $21, $21, $25\n wrch $MFC_EAL, $21\n il $70, 256\n wrch $MFC_Size, $70\n";
+    src += " il $70, 2\n wrch $MFC_TagID, $70\n il $70, 0x20\n wrch $MFC_Cmd, $70\n";
+    src += " il $70, 4\n wrch $MFC_WrTagMask, $70\n il $70, 2\n wrch $MFC_WrTagUpdate, $70\n";
+    src += " rdch $22, $MFC_RdTagStat\n";
+    src += " ai $9, $9, -1\n brnz $9, loop\n wrch $SPU_WrOutMbox, $24\n stop 0x2000\n";
+    let [off, on] = same_with_both_engines(&src);
+    for spu in [&off, &on] {
+        assert_eq!(spu.reg(9)[0], 0);
+        assert_eq!(spu.reg(22)[0], 4);
+    }
+}
+
+/// A kernel frame (the room, 64x64, two SPUs with the timing model): the same image,
+/// cycles, per-SPU counts and profile with either engine.
+#[test]
+fn a_kernel_frame_is_the_same_compiled() {
+    use spu_loader::frame::{FrameLayout, SCENE_BASE};
+    use spu_loader::runtime::render_frame;
+    use spu_loader::{procedural, Bvh, BvhConfig, StagedScene};
+    let scene = procedural::room();
+    let bvh = Bvh::build(
+        &scene,
+        &BvhConfig {
+            threads: 1,
+            ..BvhConfig::default()
+        },
+    );
+    let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
+    let basis = scene.camera.basis(64, 64);
+    let layout = FrameLayout::new(&staged, &basis, 64, 64, 2, 256, 256).unwrap();
+    let frame = |engine: Engine| {
+        Engine::set_default(engine);
+        let run = render_frame(
+            &staged,
+            &layout,
+            2,
+            1,
+            &TimingConfig::default(),
+            false,
+            50_000_000_000,
+            &mut |_, _| {},
+        );
+        Engine::set_default(Engine::host_default());
+        run.unwrap()
+    };
+    let a = frame(Engine::Interp);
+    let b = frame(Engine::Jit);
+    assert!(a.frame_buffer == b.frame_buffer, "images differ");
+    assert_eq!(a.frame_cycles, b.frame_cycles);
+    for (x, y) in a.spus.iter().zip(&b.spus) {
+        assert_eq!(
+            (x.cycles, x.instructions, x.tiles),
+            (y.cycles, y.instructions, y.tiles)
+        );
+    }
+    let (pa, pb) = (a.profile.unwrap(), b.profile.unwrap());
+    assert_eq!(pa.totals, pb.totals);
+    let per = |p: &spu_isa::profile::Profile| -> Vec<String> {
+        p.addresses()
+            .map(|(pc, s)| format!("{pc:#x}: {s:?}"))
+            .collect()
+    };
+    assert_eq!(per(&pa), per(&pb));
+}
