@@ -77,6 +77,8 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     let jobs_dir = args.out.join("jobs");
 
     if args.list_jobs {
+        // the listed renders write their files there, and a renderer does not make folders
+        std::fs::create_dir_all(&jobs_dir).map_err(|e| Error::output(&jobs_dir, e))?;
         let exe = std::env::current_exe()
             .ok()
             .and_then(|p| p.to_str().map(str::to_string))

@@ -164,6 +164,11 @@ fn quick_report_has_every_table_and_the_figure() {
         assert!(Path::new(stats).is_file(), "{stats}");
         assert!(line.contains(" render ") && line.contains("--width 128"));
     }
+    // ... and makes the jobs folder, so the listed commands run in a fresh --out
+    let fresh = dir.join("fresh");
+    let listed = spu(&["paper", "--out", fresh.to_str().unwrap(), "--list-jobs"]);
+    assert!(listed.status.success());
+    assert!(fresh.join("jobs").is_dir());
     let _ = std::fs::remove_dir_all(&dir);
 }
 
