@@ -31,6 +31,14 @@ fn spu(args: &[&str]) -> Outcome {
     outcome
 }
 
+impl Outcome {
+    /// The command failed with `status` and its message says `reason`.
+    fn refused(&self, status: i32, reason: &str) {
+        assert_eq!(self.status, status, "{}", self.stderr);
+        assert!(self.stderr.contains(reason), "{}", self.stderr);
+    }
+}
+
 /// A fresh directory for one test.
 fn dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("spu-exit-{name}-{}", std::process::id()));
@@ -74,13 +82,7 @@ fn run_exits_with_the_programs_exit_code() {
     }
     let src = program(&d, "other.s", "        stop 0x1234\n");
     let out = spu(&["run", &src]);
-    assert_eq!(out.status, 134);
-    assert!(
-        out.stderr
-            .contains("stop 0x1234 is not an exit (0x2000..0x20ff)"),
-        "{}",
-        out.stderr
-    );
+    out.refused(134, "stop 0x1234 is not an exit (0x2000..0x20ff)");
 }
 
 #[test]
@@ -88,12 +90,9 @@ fn abnormal_stops_exit_134_with_the_reason() {
     let d = dir("abnormal");
     let illegal = program(&d, "illegal.s", "        .word 0x60000000\n");
     let out = spu(&["run", &illegal]);
-    assert_eq!(out.status, 134);
-    assert!(
-        out.stderr
-            .contains("SPU stopped abnormally: illegal instruction 0x60000000 at 0x0"),
-        "{}",
-        out.stderr
+    out.refused(
+        134,
+        "SPU stopped abnormally: illegal instruction 0x60000000 at 0x0",
     );
     let deadlock = program(
         &d,
@@ -101,13 +100,7 @@ fn abnormal_stops_exit_134_with_the_reason() {
         "        rdch $3, $SPU_RdInMbox\n        stop 0x2000\n",
     );
     let out = spu(&["run", &deadlock]);
-    assert_eq!(out.status, 134);
-    assert!(
-        out.stderr
-            .contains("deadlock at 0x0 on channel SPU_RdInMbox (29)"),
-        "{}",
-        out.stderr
-    );
+    out.refused(134, "deadlock at 0x0 on channel SPU_RdInMbox (29)");
 
     // `spu prof` still prints the profile, then says how the program ended.
     for (file, reason) in [
@@ -247,33 +240,19 @@ fn outputs_are_checked_up_front_and_never_left_partial() {
         "-o",
         jpg.to_str().unwrap(),
     ]);
-    assert_eq!(out.status, 2);
-    assert!(
-        out.stderr
-            .contains("the image is written as PNG; name it .png"),
-        "{}",
-        out.stderr
-    );
+    out.refused(2, "the image is written as PNG; name it .png");
     let out = spu(&["render", "--heatmap", jpg.to_str().unwrap()]);
-    assert_eq!(out.status, 2);
-    assert!(
-        out.stderr.contains("--heatmap")
-            && out.stderr.contains("x.jpg: the image is written as PNG"),
-        "{}",
-        out.stderr
-    );
+    out.refused(2, "--heatmap");
+    out.refused(2, "x.jpg: the image is written as PNG");
     let missing = d.join("no/such/dir/out.png");
     let out = spu(&["render", "-o", missing.to_str().unwrap()]);
-    assert_eq!(out.status, 2);
-    assert!(out.stderr.contains("cannot write"), "{}", out.stderr);
+    out.refused(2, "cannot write");
     let out = spu(&["render", "--stats", d.to_str().unwrap()]);
-    assert_eq!(out.status, 2);
-    assert!(out.stderr.contains("is a directory"), "{}", out.stderr);
+    out.refused(2, "is a directory");
 
     let src = program(&d, "p.s", "        stop 0x2000\n");
     let out = spu(&["as", &src, "-o", missing.to_str().unwrap()]);
-    assert_eq!(out.status, 2);
-    assert!(out.stderr.contains("cannot write"), "{}", out.stderr);
+    out.refused(2, "cannot write");
     // A write that fails part-way (a full device) is a failure, status 1.
     if Path::new("/dev/full").exists() {
         let out = spu(&["as", &src, "-o", "/dev/full"]);
@@ -288,8 +267,7 @@ fn outputs_are_checked_up_front_and_never_left_partial() {
     let bad = write(&d, "bad.s", "        frob $1\n");
     let elf = d.join("bad.elf");
     let out = spu(&["as", &bad, "-o", elf.to_str().unwrap()]);
-    assert_eq!(out.status, 2);
-    assert!(out.stderr.contains("bad.s:1:"), "{}", out.stderr);
+    out.refused(2, "bad.s:1:");
     assert_eq!(files_in(&d), ["bad.s", "p.s"]);
     // Success leaves the output only.
     let good = d.join("p.elf");
@@ -316,39 +294,20 @@ fn bad_scenes_are_refused_with_the_reason() {
          property list uchar int vertex_indices\nend_header\n0123456789",
     );
     let out = render(&huge);
-    assert_eq!(out.status, 2);
-    assert!(
-        out.stderr
-            .contains("header declares 4000000000 'vertex' elements but the 10 body bytes"),
-        "{}",
-        out.stderr
+    out.refused(
+        2,
+        "header declares 4000000000 'vertex' elements but the 10 body bytes",
     );
     // Infinite vertices: refused naming the line, not rendered black.
     let inf = write(&d, "inf.obj", "v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n");
     let out = render(&inf);
-    assert_eq!(out.status, 2);
-    assert!(
-        out.stderr
-            .contains("inf.obj:2: vertex 1 is not finite (inf, 0, 0)"),
-        "{}",
-        out.stderr
-    );
+    out.refused(2, "inf.obj:2: vertex 1 is not finite (inf, 0, 0)");
     let empty = write(&d, "empty.obj", "v 0 0 0\n");
     let out = render(&empty);
-    assert_eq!(out.status, 2);
-    assert!(
-        out.stderr.contains("the scene has no triangles"),
-        "{}",
-        out.stderr
-    );
+    out.refused(2, "the scene has no triangles");
     let missing = d.join("missing.obj");
     let out = render(missing.to_str().unwrap());
-    assert_eq!(out.status, 2);
-    assert!(
-        out.stderr.contains("missing.obj: cannot read"),
-        "{}",
-        out.stderr
-    );
+    out.refused(2, "missing.obj: cannot read");
     assert!(
         !Path::new(png).exists(),
         "no image is written for a refused scene"
@@ -370,20 +329,9 @@ fn malformed_programs_are_bad_input() {
     }
     let big = write(&d, "big.bin", vec![0u8; 300 * 1024]);
     let out = spu(&["run", &big]);
-    assert_eq!(out.status, 2);
-    assert!(
-        out.stderr
-            .contains("307200 bytes do not fit the 256 KiB local store"),
-        "{}",
-        out.stderr
-    );
+    out.refused(2, "307200 bytes do not fit the 256 KiB local store");
     let out = spu(&["run", d.join("absent.elf").to_str().unwrap()]);
-    assert_eq!(out.status, 2);
-    assert!(
-        out.stderr.contains("absent.elf: No such file"),
-        "{}",
-        out.stderr
-    );
+    out.refused(2, "absent.elf: No such file");
 }
 
 #[test]
@@ -395,12 +343,9 @@ fn timing_reports_statements_it_does_not_time() {
         "        .text\nfoo:    il $3, 1\n        frob $1, $2\n        ai $3, $3, 1\n",
     );
     let out = spu(&["timing", &src]);
-    assert_eq!(out.status, 0);
-    assert!(
-        out.stderr
-            .contains("t.s:3: warning: `frob` is not an SPU instruction; not timed"),
-        "{}",
-        out.stderr
+    out.refused(
+        0,
+        "t.s:3: warning: `frob` is not an SPU instruction; not timed",
     );
 }
 
