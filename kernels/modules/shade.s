@@ -451,198 +451,73 @@ shade_packet:
         gb      %sameb, %same
         ceqi    %samec, %sameb, 15
         or      %nogo, %allm, %samec
-        and     %ti0, %ids, TMASK
-        shli    %to0, %ti0, 4
-        lqx     %tag0, TTAGS, %to0
-        shli    %tl0, %ti0, 6
-        a       %line0, %tl0, TDATA
-        ceq     %th0, %tag0, %ids
-        lqd     %q30, 48(%line0)
-        and     %vi0, %q30, $121
-        shli    %vo00, %vi0, 4
-        shli    %vl00, %vi0, 6
-        rotqbyi %vo10, %vo00, 4
-        rotqbyi %vo20, %vo00, 8
-        rotqbyi %vl10, %vl00, 4
-        rotqbyi %vl20, %vl00, 8
-        lqx     %vt00, $115, %vo00
-        lqx     %vt10, $115, %vo10
-        lqx     %vt20, $115, %vo20
-        rotqbyi %q3b0, %q30, 4
-        rotqbyi %q3c0, %q30, 8
-        ceq     %h00, %vt00, %q30
-        ceq     %h10, %vt10, %q3b0
-        ceq     %h20, %vt20, %q3c0
-        and     %h010, %h00, %h10
-        and     %h0120, %h010, %h20
-        and     %hh0, %h0120, %th0
-        or      %okl0, %hh0, %miss          # a lane without a hit needs nothing
-        lqx     %n00, $123, %vl00
-        lqx     %n10, $123, %vl10
-        lqx     %n20, $123, %vl20
-        fs      %d10, %n10, %n00           # n1 - n0, n2 - n0
-        fs      %d20, %n20, %n00
-        lqd     %q00, 0(%line0)
-        lqd     %q10, 16(%line0)
-        lqd     %q20, 32(%line0)
-        shufb   %kq0, %q00, %q30, %phi       # words 2, 3: k (q0 word 3), the material (q3's)
-        rotqbyi %id1, %ids, 4
-        rotqbyi %ms1, %miss, 4
-        and     %ti1, %id1, TMASK
-        shli    %to1, %ti1, 4
-        lqx     %tag1, TTAGS, %to1
-        shli    %tl1, %ti1, 6
-        a       %line1, %tl1, TDATA
-        ceq     %th1, %tag1, %id1
-        lqd     %q31, 48(%line1)
-        and     %vi1, %q31, $121
-        shli    %vo01, %vi1, 4
-        shli    %vl01, %vi1, 6
-        rotqbyi %vo11, %vo01, 4
-        rotqbyi %vo21, %vo01, 8
-        rotqbyi %vl11, %vl01, 4
-        rotqbyi %vl21, %vl01, 8
-        lqx     %vt01, $115, %vo01
-        lqx     %vt11, $115, %vo11
-        lqx     %vt21, $115, %vo21
-        rotqbyi %q3b1, %q31, 4
-        rotqbyi %q3c1, %q31, 8
-        ceq     %h01, %vt01, %q31
-        ceq     %h11, %vt11, %q3b1
-        ceq     %h21, %vt21, %q3c1
-        and     %h011, %h01, %h11
-        and     %h0121, %h011, %h21
-        and     %hh1, %h0121, %th1
-        or      %okl1, %hh1, %ms1
-        lqx     %n01, $123, %vl01
-        lqx     %n11, $123, %vl11
-        lqx     %n21, $123, %vl21
-        fs      %d11, %n11, %n01
-        fs      %d21, %n21, %n01
-        lqd     %q01, 0(%line1)
-        lqd     %q11, 16(%line1)
-        lqd     %q21, 32(%line1)
-        shufb   %kq1, %q01, %q31, %phi
-        shufb   %q1lo01, %q10, %q11, %plo
-        shufb   %q1hi01, %q10, %q11, %phi
-        shufb   %q2lo01, %q20, %q21, %plo
-        shufb   %q2hi01, %q20, %q21, %phi
-        shufb   %n0lo01, %n00, %n01, %plo
-        shufb   %n0hi01, %n00, %n01, %phi
-        shufb   %d1lo01, %d10, %d11, %plo
-        shufb   %d1hi01, %d10, %d11, %phi
-        shufb   %d2lo01, %d20, %d21, %plo
-        shufb   %d2hi01, %d20, %d21, %phi
-        shufb   %kq01, %kq0, %kq1, %phi
-        rotqbyi %id2, %ids, 8 @after %q21
-        rotqbyi %ms2, %miss, 8
-        and     %ti2, %id2, TMASK
-        shli    %to2, %ti2, 4
-        lqx     %tag2, TTAGS, %to2
-        shli    %tl2, %ti2, 6
-        a       %line2, %tl2, TDATA
-        ceq     %th2, %tag2, %id2
-        lqd     %q32, 48(%line2)
-        and     %vi2, %q32, $121
-        shli    %vo02, %vi2, 4
-        shli    %vl02, %vi2, 6
-        rotqbyi %vo12, %vo02, 4
-        rotqbyi %vo22, %vo02, 8
-        rotqbyi %vl12, %vl02, 4
-        rotqbyi %vl22, %vl02, 8
-        lqx     %vt02, $115, %vo02
-        lqx     %vt12, $115, %vo12
-        lqx     %vt22, $115, %vo22
-        rotqbyi %q3b2, %q32, 4
-        rotqbyi %q3c2, %q32, 8
-        ceq     %h02, %vt02, %q32
-        ceq     %h12, %vt12, %q3b2
-        ceq     %h22, %vt22, %q3c2
-        and     %h012, %h02, %h12
-        and     %h0122, %h012, %h22
-        and     %hh2, %h0122, %th2
-        or      %okl2, %hh2, %ms2
-        lqx     %n02, $123, %vl02
-        lqx     %n12, $123, %vl12
-        lqx     %n22, $123, %vl22
-        fs      %d12, %n12, %n02
-        fs      %d22, %n22, %n02
-        lqd     %q02, 0(%line2)
-        lqd     %q12, 16(%line2)
-        lqd     %q22, 32(%line2)
-        shufb   %kq2, %q02, %q32, %phi
-        rotqbyi %id3, %ids, 12 @after %q21
-        rotqbyi %ms3, %miss, 12
-        and     %ti3, %id3, TMASK
-        shli    %to3, %ti3, 4
-        lqx     %tag3, TTAGS, %to3
-        shli    %tl3, %ti3, 6
-        a       %line3, %tl3, TDATA
-        ceq     %th3, %tag3, %id3
-        lqd     %q33, 48(%line3)
-        and     %vi3, %q33, $121
-        shli    %vo03, %vi3, 4
-        shli    %vl03, %vi3, 6
-        rotqbyi %vo13, %vo03, 4
-        rotqbyi %vo23, %vo03, 8
-        rotqbyi %vl13, %vl03, 4
-        rotqbyi %vl23, %vl03, 8
-        lqx     %vt03, $115, %vo03
-        lqx     %vt13, $115, %vo13
-        lqx     %vt23, $115, %vo23
-        rotqbyi %q3b3, %q33, 4
-        rotqbyi %q3c3, %q33, 8
-        ceq     %h03, %vt03, %q33
-        ceq     %h13, %vt13, %q3b3
-        ceq     %h23, %vt23, %q3c3
-        and     %h013, %h03, %h13
-        and     %h0123, %h013, %h23
-        and     %hh3, %h0123, %th3
-        or      %okl3, %hh3, %ms3
-        lqx     %n03, $123, %vl03
-        lqx     %n13, $123, %vl13
-        lqx     %n23, $123, %vl23
-        fs      %d13, %n13, %n03
-        fs      %d23, %n23, %n03
-        lqd     %q03, 0(%line3)
-        lqd     %q13, 16(%line3)
-        lqd     %q23, 32(%line3)
-        shufb   %kq3, %q03, %q33, %phi
-        shufb   %q1lo23, %q12, %q13, %plo
-        shufb   %q1hi23, %q12, %q13, %phi
-        shufb   %q2lo23, %q22, %q23, %plo
-        shufb   %q2hi23, %q22, %q23, %phi
-        shufb   %n0lo23, %n02, %n03, %plo
-        shufb   %n0hi23, %n02, %n03, %phi
-        shufb   %d1lo23, %d12, %d13, %plo
-        shufb   %d1hi23, %d12, %d13, %phi
-        shufb   %d2lo23, %d22, %d23, %plo
-        shufb   %d2hi23, %d22, %d23, %phi
-        shufb   %kq23, %kq2, %kq3, %phi
-        and     %ok01, %okl0, %okl1
-        and     %ok23, %okl2, %okl3
-        and     %ok03, %ok01, %ok23
+        rotqbyi %r4, %ids, 4                  # a lane without a hit looks up the
+        cgt     %c4, %ids, %r4                # largest id of the group (a hit's)
+        selb    %m4, %r4, %ids, %c4
+        rotqbyi %r8, %m4, 8
+        cgt     %c8, %m4, %r8
+        selb    %mx, %r8, %m4, %c8
+        shufb   %mxs, %mx, %mx, $91
+        selb    %idv, %ids, %mxs, %miss
+        .irp    P, 0, 8                       # pairs of lanes: 0 and 4, 8 and 12
+        .irp    J, 0, 4
+        rotqbyi %id\P\()_\J, %idv, \P+\J
+        and     %ti\P\()_\J, %id\P\()_\J, TMASK
+        shli    %to\P\()_\J, %ti\P\()_\J, 4
+        lqx     %tag\P\()_\J, TTAGS, %to\P\()_\J
+        shli    %tl\P\()_\J, %ti\P\()_\J, 6
+        a       %line\P\()_\J, %tl\P\()_\J, TDATA
+        ceq     %th\P\()_\J, %tag\P\()_\J, %id\P\()_\J
+        lqd     %q3\P\()_\J, 48(%line\P\()_\J)
+        and     %vi\P\()_\J, %q3\P\()_\J, $121
+        shli    %vo0\P\()_\J, %vi\P\()_\J, 4
+        shli    %vl0\P\()_\J, %vi\P\()_\J, 6
+        rotqbyi %vo1\P\()_\J, %vo0\P\()_\J, 4
+        rotqbyi %vo2\P\()_\J, %vo0\P\()_\J, 8
+        rotqbyi %vl1\P\()_\J, %vl0\P\()_\J, 4
+        rotqbyi %vl2\P\()_\J, %vl0\P\()_\J, 8
+        lqx     %vt0\P\()_\J, $115, %vo0\P\()_\J
+        lqx     %vt1\P\()_\J, $115, %vo1\P\()_\J
+        lqx     %vt2\P\()_\J, $115, %vo2\P\()_\J
+        rotqbyi %q3b\P\()_\J, %q3\P\()_\J, 4
+        rotqbyi %q3c\P\()_\J, %q3\P\()_\J, 8
+        ceq     %h0\P\()_\J, %vt0\P\()_\J, %q3\P\()_\J
+        ceq     %h1\P\()_\J, %vt1\P\()_\J, %q3b\P\()_\J
+        ceq     %h2\P\()_\J, %vt2\P\()_\J, %q3c\P\()_\J
+        and     %h01\P\()_\J, %h0\P\()_\J, %h1\P\()_\J
+        and     %h012\P\()_\J, %h01\P\()_\J, %h2\P\()_\J
+        and     %okl\P\()_\J, %h012\P\()_\J, %th\P\()_\J
+        lqx     %n0\P\()_\J, $123, %vl0\P\()_\J
+        lqx     %n1\P\()_\J, $123, %vl1\P\()_\J
+        lqx     %n2\P\()_\J, $123, %vl2\P\()_\J
+        fs      %d1\P\()_\J, %n1\P\()_\J, %n0\P\()_\J           # n1 - n0, n2 - n0
+        fs      %d2\P\()_\J, %n2\P\()_\J, %n0\P\()_\J
+        lqd     %q0\P\()_\J, 0(%line\P\()_\J)
+        lqd     %q1\P\()_\J, 16(%line\P\()_\J)
+        lqd     %q2\P\()_\J, 32(%line\P\()_\J)
+        shufb   %kq\P\()_\J, %q0\P\()_\J, %q3\P\()_\J, %phi     # words 2, 3: k (q0 word 3), the material (q3's)
+        .endr
+        .irp    R, q1, q2, n0, d1, d2         # rows by pairs of lanes: b, c, n0, n1 - n0, n2 - n0
+        shufb   %lo\P\R, %\R\()\P\()_0, %\R\()\P\()_4, %plo
+        shufb   %hi\P\R, %\R\()\P\()_0, %\R\()\P\()_4, %phi
+        .endr
+        shufb   %kq\P, %kq\P\()_0, %kq\P\()_4, %phi
+        and     %ok\P, %okl\P\()_0, %okl\P\()_4
+        .endr
+        and     %ok03, %ok0, %ok8
         andc    %ok, %ok03, %nogo
-        shufb   %bnu, %q1lo01, %q1lo23, $119
-        shufb   %bnv, %q1lo01, %q1lo23, %psnd
-        shufb   %bd, %q1hi01, %q1hi23, $119
-        shufb   %cnu, %q2lo01, %q2lo23, $119
-        shufb   %cnv, %q2lo01, %q2lo23, %psnd
-        shufb   %cd, %q2hi01, %q2hi23, $119
-        shufb   %n0x, %n0lo01, %n0lo23, $119
-        shufb   %n0y, %n0lo01, %n0lo23, %psnd
-        shufb   %n0z, %n0hi01, %n0hi23, $119
-        shufb   %d1x, %d1lo01, %d1lo23, $119
-        shufb   %d1y, %d1lo01, %d1lo23, %psnd
-        shufb   %d1z, %d1hi01, %d1hi23, $119
-        shufb   %d2x, %d2lo01, %d2lo23, $119
-        shufb   %d2y, %d2lo01, %d2lo23, %psnd
-        shufb   %d2z, %d2hi01, %d2hi23, $119
-        shufb   %k, %kq01, %kq23, $119
-        shufb   %mc, %kq01, %kq23, %psnd
+        # the columns: b and c (q1, q2 words 0-2), n0, n1 - n0, n2 - n0 (x, y, z); k and
+        # the material
+        .irp    R, q1, q2, n0, d1, d2
+        shufb   %c0\R, %lo0\R, %lo8\R, $119
+        shufb   %c1\R, %lo0\R, %lo8\R, %psnd
+        shufb   %c2\R, %hi0\R, %hi8\R, $119
+        .endr
+        shufb   %k, %kq0, %kq8, $119
+        shufb   %mc, %kq0, %kq8, %psnd
         or      %mat, %mc, %miss              # no hit: no material
       ~ stqd    %mat, SH_MAT(%gp)
-        lqd     %t, CTX_RAY_T(%rp) @after %q23
+        lqd     %t, CTX_RAY_T(%rp)
         lqd     %dx, 0(%rp)
         lqd     %dy, 256(%rp)
         lqd     %dz, 512(%rp)
@@ -658,18 +533,18 @@ shade_packet:
         selb    %u, %u1, %py, %k0
         selb    %v1, %py, %px, %k1            # v: k0 -> z, k1 -> x, k2 -> y
         selb    %v, %v1, %pz, %k0
-        fm      %b1, %bnu, %u                 # beta = (b_nu u + b_nv v) + b_d
-        fma     %b2, %bnv, %v, %b1
-        fa      %beta, %b2, %bd
-        fm      %g1, %cnu, %u                 # gamma = (c_nu u + c_nv v) + c_d
-        fma     %g2, %cnv, %v, %g1
-        fa      %gamma, %g2, %cd
-        fma     %nx1, %d1x, %beta, %n0x       # n0 + (n1 - n0) beta + (n2 - n0) gamma
-        fma     %ny1, %d1y, %beta, %n0y
-        fma     %nz1, %d1z, %beta, %n0z
-        fma     %nx, %d2x, %gamma, %nx1
-        fma     %ny, %d2y, %gamma, %ny1
-        fma     %nz, %d2z, %gamma, %nz1
+        fm      %b1, %c0q1, %u                 # beta = (b_nu u + b_nv v) + b_d
+        fma     %b2, %c1q1, %v, %b1
+        fa      %beta, %b2, %c2q1
+        fm      %g1, %c0q2, %u                 # gamma = (c_nu u + c_nv v) + c_d
+        fma     %g2, %c1q2, %v, %g1
+        fa      %gamma, %g2, %c2q2
+        fma     %nx1, %c0d1, %beta, %c0n0       # n0 + (n1 - n0) beta + (n2 - n0) gamma
+        fma     %ny1, %c1d1, %beta, %c1n0
+        fma     %nz1, %c2d1, %beta, %c2n0
+        fma     %nx, %c0d2, %gamma, %nx1
+        fma     %ny, %c1d2, %gamma, %ny1
+        fma     %nz, %c2d2, %gamma, %nz1
         fm      %e1, %nx, %dx                 # dot(N, d) > 0: negate N
         fma     %e2, %ny, %dy, %e1
         fma     %e, %nz, %dz, %e2
