@@ -410,9 +410,333 @@ shade_packet:
 .Lsh_group_br:
         brz     %end, .Lsh_group
         .endsched
-        br      .Lsh_iset_done
+        # (the slow path: out of line, after the end)
 
-        # ---- the slow path: an empty or mixed group, or a cache miss
+        # the fast groups' counters (groups, same, triangle lookups) to SH_STATS
+.Lsh_iset_done:
+        lqd     $70, SH_BLOCK($66)            # materials, colour, lights
+        rotqbyi $101, $70, 4
+        rotqbyi $102, $70, 8
+        rotqbyi $103, $70, 12
+        lqd     $70, SH_BLOCK+SHB_MODE($66)
+        il      $75, 1
+        rotqbyi $71, $70, 12
+        shl     $105, $75, $71
+        ai      $105, $105, -1                # material cache index mask
+        lqd     $70, SH_STATS+SHS_GROUPS($66)
+        lqd     $71, SH_STATS+SHS_SAME($66)
+        lqd     $72, SH_STATS+SHS_TLOOK($66)
+        rotqbyi $75, $124, 4
+        rotqbyi $76, $124, 8
+        a       $70, $70, $124
+        a       $71, $71, $75
+        a       $72, $72, $76
+        stqd    $70, SH_STATS+SHS_GROUPS($66)
+        stqd    $71, SH_STATS+SHS_SAME($66)
+        stqd    $72, SH_STATS+SHS_TLOOK($66)
+
+        # (SH_VIS, per light: the visibility masks of the i-set's rays; the hit points are
+        # in SH_PX, SH_PY, SH_PZ from here on)
+
+        # ---- 2. the lights' irradiance of every ray of the i-set, the same for every
+        # diffuse shader: once, not once per pass. Per light, four groups per step.
+        ila     $90, sh_const
+        lqd     $125, 176($90)                # 1.0
+        lqd     $126, 144($90)                # 0.5
+        lqd     $127, 160($90)                # 1.5
+        SH_ADDI $82, $66, SH_LIGHTS
+        SH_ADDI $83, $66, SH_VIS
+        ori     $84, $103, 0                  # lights left
+        il      $85, 0                        # 0: the first light (the sums start at 0)
+        brz     $84, .Lsh_dark
+.Lsh_light:
+        lqd     $70, 0($82)                   # the light's position, colour
+        lqd     $71, 16($82)
+        lqd     $72, 32($82)
+        lqd     $73, 48($82)
+        lqd     $74, 64($82)
+        lqd     $75, 80($82)
+        il      $67, 0
+        .sched  pool=68-69,76-81,86-90,94-96,98,106-124 scratch=66-127
+.Lsh_light_g:
+        a       %gp, $66, $67
+        a       %vp, $83, $67
+        .irp    H, 0, 16, 32, 48
+        lqd     %nx\H, SH_NX+\H(%gp)
+        lqd     %ny\H, SH_NY+\H(%gp)
+        lqd     %nz\H, SH_NZ+\H(%gp)
+        lqd     %px\H, SH_PX+\H(%gp)
+        lqd     %py\H, SH_PY+\H(%gp)
+        lqd     %pz\H, SH_PZ+\H(%gp)
+        lqd     %vis\H, \H(%vp)
+        lqd     %ir\H, SH_IRR_R+\H(%gp)
+        lqd     %ig\H, SH_IRR_G+\H(%gp)
+        lqd     %ib\H, SH_IRR_B+\H(%gp)
+        and     %ira\H, %ir\H, $85
+        and     %iga\H, %ig\H, $85
+        and     %iba\H, %ib\H, $85
+        fm      %nn1\H, %nx\H, %nx\H          # dot(N, N)
+        fma     %nn2\H, %ny\H, %ny\H, %nn1\H
+        fma     %nn\H, %nz\H, %nz\H, %nn2\H
+        fs      %lx\H, $70, %px\H             # L = light - P
+        fs      %ly\H, $71, %py\H
+        fs      %lz\H, $72, %pz\H
+        fm      %c1\H, %nx\H, %lx\H           # c = dot(N, L)
+        fma     %c2\H, %ny\H, %ly\H, %c1\H
+        fma     %c\H, %nz\H, %lz\H, %c2\H
+        fm      %l1\H, %lx\H, %lx\H           # dot(L, L)
+        fma     %l2\H, %ly\H, %ly\H, %l1\H
+        fma     %ll\H, %lz\H, %lz\H, %l2\H
+        fcgt    %lt1\H, %c\H, ZERO            # lit: facing the light
+        and     %lit\H, %lt1\H, %vis\H        # and not occluded
+        fm      %x\H, %nn\H, %ll\H            # 1 / sqrt(dot(N, N) dot(L, L)): estimate,
+        frsqest %y0\H, %x\H                   # interpolation, one Newton step
+        fi      %y1\H, %x\H, %y0\H
+        fm      %w1\H, %x\H, %y1\H
+        fm      %w2\H, %w1\H, %y1\H
+        fnms    %w3\H, %w2\H, $126, $127      # 1.5 - 0.5 x y^2
+        fm      %y\H, %y1\H, %w3\H
+        fm      %cs1\H, %c\H, %y\H            # cosine, at most 1, 0 when unlit
+        fcgt    %big\H, %cs1\H, $125
+        selb    %cs2\H, %cs1\H, $125, %big\H
+        and     %cs\H, %cs2\H, %lit\H
+        fma     %or\H, %cs\H, $73, %ira\H
+        fma     %og\H, %cs\H, $74, %iga\H
+        fma     %ob\H, %cs\H, $75, %iba\H
+      ~ stqd    %or\H, SH_IRR_R+\H(%gp)
+      ~ stqd    %og\H, SH_IRR_G+\H(%gp)
+      ~ stqd    %ob\H, SH_IRR_B+\H(%gp)
+        .endr
+        ai      $67, $67, 64
+        ceqi    %end, $67, 256
+        hbrr    .Lsh_light_br, .Lsh_light_g
+.Lsh_light_br:
+        brz     %end, .Lsh_light_g
+        .endsched
+        il      $85, -1
+        ai      $82, $82, 96
+        ai      $83, $83, 256
+        ai      $84, $84, -1
+        brnz    $84, .Lsh_light
+
+        # ---- 3. the colour block: wait for its previous put, clear to black
+.Lsh_colour:
+        lqd     $70, SH_STATS+SHS_PACKETS($66)
+        andi    $114, $70, 1                  # which block
+        shli    $115, $114, 8
+        SH_ADDI $115, $115, SH_OUT
+        a       $115, $115, $66               # its address
+        ai      $116, $114, 6                 # its tag
+        il      $71, 1
+        shl     $71, $71, $116
+        wrch    $MFC_WrTagMask, $71
+        il      $71, 2
+        wrch    $MFC_WrTagUpdate, $71
+        rdch    $71, $MFC_RdTagStat
+        ila     $90, sh_const
+        lqd     $71, 192($90)
+        .irp    Q, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
+        stqd    $71, \Q($115)
+        .endr
+
+        # ---- 4. one pass per material still referenced
+        SH_ADDI $68, $66, SH_MAT
+        br      .Lsh_pass
+.Lsh_material:
+        SH_COUNT SHS_PASSES, $74
+        # material cache
+        and     $71, $110, $105
+        shli    $72, $71, 4
+        SH_ADDI $72, $72, SH_MTAGS
+        a       $72, $72, $66
+        shli    $73, $71, 5
+        SH_ADDI $73, $73, SH_MDATA
+        a       $73, $73, $66
+        lqd     $74, 0($72)
+        ceq     $75, $74, $110
+        SH_COUNT SHS_MLOOK, $76
+        brz     $75, .Lsh_mmiss
+.Lsh_mhit:
+        lqd     $74, 0($73)                   # diffuse r, g, b
+        shufb   $121, $74, $74, $91
+        shufb   $122, $74, $74, $92
+        shufb   $123, $74, $74, $93
+        shufb   $110, $110, $110, $91         # the material in every lane
+        ila     $90, sh_const
+        lqd     $124, 112($90)                # ambient
+        lqd     $125, 176($90)                # 1.0
+        lqd     $126, 144($90)                # 0.5
+        lqd     $127, 160($90)                # 1.5
+        lqd     $106, 128($90)                # 255
+        il      $67, 0
+        .sched  pool=69-90,94-96,98-100,103-104,108-109,111-113,117-120 scratch=66-127
+.Lsh_apply:
+        a       %gp, $66, $67
+        a       %op, $115, $67
+        il      %none, -1
+        .irp    H, 0, 16, 32, 48
+        lqd     %m\H, SH_MAT+\H(%gp)
+        ceq     %sel\H, %m\H, $110            # this shader's rays
+        lqd     %ir\H, SH_IRR_R+\H(%gp)
+        lqd     %ig\H, SH_IRR_G+\H(%gp)
+        lqd     %ib\H, SH_IRR_B+\H(%gp)
+        fa      %ra\H, %ir\H, $124         # kd * (ambient + irradiance), clamped,
+        fa      %ga\H, %ig\H, $124
+        fa      %ba\H, %ib\H, $124
+        fm      %rk\H, %ra\H, $121         # to 8 bits: (c 255 + 0.5) truncated
+        fm      %gk\H, %ga\H, $122
+        fm      %bk\H, %ba\H, $123
+        fcgt    %rbig\H, %rk\H, $125
+        selb    %rc\H, %rk\H, $125, %rbig\H
+        fma     %rs\H, %rc\H, $106, $126
+        cfltu   %ru\H, %rs\H, 0
+        fcgt    %gbig\H, %gk\H, $125
+        selb    %gc\H, %gk\H, $125, %gbig\H
+        fma     %gs\H, %gc\H, $106, $126
+        cfltu   %gu\H, %gs\H, 0
+        fcgt    %bbig\H, %bk\H, $125
+        selb    %bc\H, %bk\H, $125, %bbig\H
+        fma     %bs\H, %bc\H, $106, $126
+        cfltu   %bu\H, %bs\H, 0
+        shli    %rh\H, %ru\H, 24
+        shli    %gh\H, %gu\H, 16
+        shli    %bh\H, %bu\H, 8
+        or      %rg\H, %rh\H, %gh\H
+        or      %rgb\H, %rg\H, %bh\H
+        ori     %col\H, %rgb\H, 0xff
+        lqd     %o\H, \H(%op)
+        selb    %o2\H, %o\H, %col\H, %sel\H
+      ~ stqd    %o2\H, \H(%op)
+        selb    %mn\H, %m\H, %none, %sel\H    # these rays are shaded
+      ~ stqd    %mn\H, SH_MAT+\H(%gp)
+        .endr
+        ai      $67, $67, 64
+        ceqi    %end, $67, 256
+        hbrr    .Lsh_apply_br, .Lsh_apply
+.Lsh_apply_br:
+        brz     %end, .Lsh_apply
+        .endsched
+        # the first ray (group by group, lane by lane) with a material left: a 64-bit
+        # mask of the rays without one (groups 0-7 in %hi, 8-15 in %lo, lane 0 first)
+        .sched  pool=69-90,94-96,98-100,103-104,107-109,111-113,117-120 scratch=66-127
+.Lsh_pass:
+        lqd     %m0, 0($68)
+        ceqi    %e0, %m0, -1
+        gb      %b0, %e0
+        shli    %s0, %b0, 28
+        lqd     %m1, 16($68)
+        ceqi    %e1, %m1, -1
+        gb      %b1, %e1
+        shli    %s1, %b1, 24
+        lqd     %m2, 32($68)
+        ceqi    %e2, %m2, -1
+        gb      %b2, %e2
+        shli    %s2, %b2, 20
+        lqd     %m3, 48($68)
+        ceqi    %e3, %m3, -1
+        gb      %b3, %e3
+        shli    %s3, %b3, 16
+        lqd     %m4, 64($68)
+        ceqi    %e4, %m4, -1
+        gb      %b4, %e4
+        shli    %s4, %b4, 12
+        lqd     %m5, 80($68)
+        ceqi    %e5, %m5, -1
+        gb      %b5, %e5
+        shli    %s5, %b5, 8
+        lqd     %m6, 96($68)
+        ceqi    %e6, %m6, -1
+        gb      %b6, %e6
+        shli    %s6, %b6, 4
+        lqd     %m7, 112($68)
+        ceqi    %e7, %m7, -1
+        gb      %b7, %e7
+        shli    %s7, %b7, 0
+        lqd     %m8, 128($68)
+        ceqi    %e8, %m8, -1
+        gb      %b8, %e8
+        shli    %s8, %b8, 28
+        lqd     %m9, 144($68)
+        ceqi    %e9, %m9, -1
+        gb      %b9, %e9
+        shli    %s9, %b9, 24
+        lqd     %m10, 160($68)
+        ceqi    %e10, %m10, -1
+        gb      %b10, %e10
+        shli    %s10, %b10, 20
+        lqd     %m11, 176($68)
+        ceqi    %e11, %m11, -1
+        gb      %b11, %e11
+        shli    %s11, %b11, 16
+        lqd     %m12, 192($68)
+        ceqi    %e12, %m12, -1
+        gb      %b12, %e12
+        shli    %s12, %b12, 12
+        lqd     %m13, 208($68)
+        ceqi    %e13, %m13, -1
+        gb      %b13, %e13
+        shli    %s13, %b13, 8
+        lqd     %m14, 224($68)
+        ceqi    %e14, %m14, -1
+        gb      %b14, %e14
+        shli    %s14, %b14, 4
+        lqd     %m15, 240($68)
+        ceqi    %e15, %m15, -1
+        gb      %b15, %e15
+        shli    %s15, %b15, 0
+        or      %hia, %s0, %s1
+        or      %hib, %s2, %s3
+        or      %hic, %s4, %s5
+        or      %hid, %s6, %s7
+        or      %hie, %hia, %hib
+        or      %hif, %hic, %hid
+        or      %hig, %hie, %hif
+        xori    %hi, %hig, -1
+        clz     %hiz, %hi
+        or      %loa, %s8, %s9
+        or      %lob, %s10, %s11
+        or      %loc, %s12, %s13
+        or      %lod, %s14, %s15
+        or      %loe, %loa, %lob
+        or      %lof, %loc, %lod
+        or      %log, %loe, %lof
+        xori    %lo, %log, -1
+        clz     %loz, %lo
+        ceqi    %hin, %hi, 0
+        ai      %lo32, %loz, 32
+        selb    %pos, %hiz, %lo32, %hin        # 64: none left
+        ceqi    %none, %pos, 64
+        andi    %pq, %pos, -4
+        shli    %go, %pq, 2                   # its group * 16
+        andi    %ln, %pos, 3
+        shli    %lb, %ln, 2                   # its lane * 4
+        lqx     %mq, $68, %go
+        rotqby  $110, %mq, %lb                # the material, preferred slot
+        hbrr    .Lsh_pass_br, .Lsh_material
+.Lsh_pass_br:
+        brz     %none, .Lsh_material          # a material left: its pass
+        .endsched
+
+        # ---- 5. put the block to ea_colour + packet * 256
+.Lsh_done:
+        hbr     .Lsh_ret, $0
+        shli    $70, $97, 8
+        a       $70, $70, $102
+        il      $71, 256
+        wrch    $MFC_LSA, $115
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $70
+        wrch    $MFC_Size, $71
+        wrch    $MFC_TagID, $116
+        il      $71, 0x20
+        wrch    $MFC_Cmd, $71
+        SH_COUNT SHS_PACKETS, $74
+.Lsh_ret:
+        bi      $0
+
+        # ---- out of line: the slow path, no light, a material miss
+
+        # the slow path: an empty or mixed group, or a cache miss
 .Lsh_slow:
         ai      $67, $67, -32
 .Lsh_slow_group:                              # a group the fast path did not do
@@ -426,11 +750,7 @@ shade_packet:
         ceqi    $74, $74, -1
         gb      $75, $74
         ceqi    $75, $75, 15
-        brz     $75, 1f
-        SH_ADDI $75, $66, SH_MAT              # no hit: no material
-        stqx    $74, $75, $67
-        br      .Lsh_slow_next
-1:
+        brnz    $75, .Lsh_slow_empty
 
         # Rays on different triangles, every lane's record and vertices in the caches (the
         # same lookups speculatively, lane by lane), the lanes' rows transposed into
@@ -747,114 +1067,11 @@ shade_packet:
         SH_ADDI $74, $66, SH_MAT
         stqx    $78, $74, $67
         br      .Lsh_slow_done
+.Lsh_slow_empty:                              # no hit: no material
+        SH_ADDI $75, $66, SH_MAT
+        stqx    $74, $75, $67
+        br      .Lsh_slow_next
 
-        # the fast groups' counters (groups, same, triangle lookups) to SH_STATS
-.Lsh_iset_done:
-        lqd     $70, SH_BLOCK($66)            # materials, colour, lights
-        rotqbyi $101, $70, 4
-        rotqbyi $102, $70, 8
-        rotqbyi $103, $70, 12
-        lqd     $70, SH_BLOCK+SHB_MODE($66)
-        il      $75, 1
-        rotqbyi $71, $70, 12
-        shl     $105, $75, $71
-        ai      $105, $105, -1                # material cache index mask
-        lqd     $70, SH_STATS+SHS_GROUPS($66)
-        lqd     $71, SH_STATS+SHS_SAME($66)
-        lqd     $72, SH_STATS+SHS_TLOOK($66)
-        rotqbyi $75, $124, 4
-        rotqbyi $76, $124, 8
-        a       $70, $70, $124
-        a       $71, $71, $75
-        a       $72, $72, $76
-        stqd    $70, SH_STATS+SHS_GROUPS($66)
-        stqd    $71, SH_STATS+SHS_SAME($66)
-        stqd    $72, SH_STATS+SHS_TLOOK($66)
-
-        # (SH_VIS, per light: the visibility masks of the i-set's rays; the hit points are
-        # in SH_PX, SH_PY, SH_PZ from here on)
-
-        # ---- 2. the lights' irradiance of every ray of the i-set, the same for every
-        # diffuse shader: once, not once per pass. Per light, four groups per step.
-        ila     $90, sh_const
-        lqd     $125, 176($90)                # 1.0
-        lqd     $126, 144($90)                # 0.5
-        lqd     $127, 160($90)                # 1.5
-        SH_ADDI $82, $66, SH_LIGHTS
-        SH_ADDI $83, $66, SH_VIS
-        ori     $84, $103, 0                  # lights left
-        il      $85, 0                        # 0: the first light (the sums start at 0)
-        brz     $84, .Lsh_dark
-.Lsh_light:
-        lqd     $70, 0($82)                   # the light's position, colour
-        lqd     $71, 16($82)
-        lqd     $72, 32($82)
-        lqd     $73, 48($82)
-        lqd     $74, 64($82)
-        lqd     $75, 80($82)
-        il      $67, 0
-        .sched  pool=68-69,76-81,86-90,94-96,98,106-124 scratch=66-127
-.Lsh_light_g:
-        a       %gp, $66, $67
-        a       %vp, $83, $67
-        .irp    H, 0, 16, 32, 48
-        lqd     %nx\H, SH_NX+\H(%gp)
-        lqd     %ny\H, SH_NY+\H(%gp)
-        lqd     %nz\H, SH_NZ+\H(%gp)
-        lqd     %px\H, SH_PX+\H(%gp)
-        lqd     %py\H, SH_PY+\H(%gp)
-        lqd     %pz\H, SH_PZ+\H(%gp)
-        lqd     %vis\H, \H(%vp)
-        lqd     %ir\H, SH_IRR_R+\H(%gp)
-        lqd     %ig\H, SH_IRR_G+\H(%gp)
-        lqd     %ib\H, SH_IRR_B+\H(%gp)
-        and     %ira\H, %ir\H, $85
-        and     %iga\H, %ig\H, $85
-        and     %iba\H, %ib\H, $85
-        fm      %nn1\H, %nx\H, %nx\H          # dot(N, N)
-        fma     %nn2\H, %ny\H, %ny\H, %nn1\H
-        fma     %nn\H, %nz\H, %nz\H, %nn2\H
-        fs      %lx\H, $70, %px\H             # L = light - P
-        fs      %ly\H, $71, %py\H
-        fs      %lz\H, $72, %pz\H
-        fm      %c1\H, %nx\H, %lx\H           # c = dot(N, L)
-        fma     %c2\H, %ny\H, %ly\H, %c1\H
-        fma     %c\H, %nz\H, %lz\H, %c2\H
-        fm      %l1\H, %lx\H, %lx\H           # dot(L, L)
-        fma     %l2\H, %ly\H, %ly\H, %l1\H
-        fma     %ll\H, %lz\H, %lz\H, %l2\H
-        fcgt    %lt1\H, %c\H, ZERO            # lit: facing the light
-        and     %lit\H, %lt1\H, %vis\H        # and not occluded
-        fm      %x\H, %nn\H, %ll\H            # 1 / sqrt(dot(N, N) dot(L, L)): estimate,
-        frsqest %y0\H, %x\H                   # interpolation, one Newton step
-        fi      %y1\H, %x\H, %y0\H
-        fm      %w1\H, %x\H, %y1\H
-        fm      %w2\H, %w1\H, %y1\H
-        fnms    %w3\H, %w2\H, $126, $127      # 1.5 - 0.5 x y^2
-        fm      %y\H, %y1\H, %w3\H
-        fm      %cs1\H, %c\H, %y\H            # cosine, at most 1, 0 when unlit
-        fcgt    %big\H, %cs1\H, $125
-        selb    %cs2\H, %cs1\H, $125, %big\H
-        and     %cs\H, %cs2\H, %lit\H
-        fma     %or\H, %cs\H, $73, %ira\H
-        fma     %og\H, %cs\H, $74, %iga\H
-        fma     %ob\H, %cs\H, $75, %iba\H
-      ~ stqd    %or\H, SH_IRR_R+\H(%gp)
-      ~ stqd    %og\H, SH_IRR_G+\H(%gp)
-      ~ stqd    %ob\H, SH_IRR_B+\H(%gp)
-        .endr
-        ai      $67, $67, 64
-        ceqi    %end, $67, 256
-        hbrr    .Lsh_light_br, .Lsh_light_g
-.Lsh_light_br:
-        brz     %end, .Lsh_light_g
-        .endsched
-        il      $85, -1
-        ai      $82, $82, 96
-        ai      $83, $83, 256
-        ai      $84, $84, -1
-        brnz    $84, .Lsh_light
-        br      .Lsh_colour
 .Lsh_dark:                                    # no light: no irradiance
         il      $67, 0
 1:      a       $70, $66, $67
@@ -864,221 +1081,17 @@ shade_packet:
         ai      $67, $67, 16
         ceqi    $71, $67, 256
         brz     $71, 1b
+        br      .Lsh_colour
 
-        # ---- 3. the colour block: wait for its previous put, clear to black
-.Lsh_colour:
-        lqd     $70, SH_STATS+SHS_PACKETS($66)
-        andi    $114, $70, 1                  # which block
-        shli    $115, $114, 8
-        SH_ADDI $115, $115, SH_OUT
-        a       $115, $115, $66               # its address
-        ai      $116, $114, 6                 # its tag
-        il      $71, 1
-        shl     $71, $71, $116
-        wrch    $MFC_WrTagMask, $71
-        il      $71, 2
-        wrch    $MFC_WrTagUpdate, $71
-        rdch    $71, $MFC_RdTagStat
-        ila     $90, sh_const
-        lqd     $71, 192($90)
-        .irp    Q, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
-        stqd    $71, \Q($115)
-        .endr
-
-        # ---- 4. one pass per material still referenced
-        SH_ADDI $68, $66, SH_MAT
-        # the first ray (group by group, lane by lane) with a material left: a 64-bit
-        # mask of the rays without one (groups 0-7 in %hi, 8-15 in %lo, lane 0 first)
-        .sched  pool=69-90,94-96,98-100,103-104,107-109,111-113,117-120 scratch=66-127
-.Lsh_pass:
-        lqd     %m0, 0($68)
-        ceqi    %e0, %m0, -1
-        gb      %b0, %e0
-        shli    %s0, %b0, 28
-        lqd     %m1, 16($68)
-        ceqi    %e1, %m1, -1
-        gb      %b1, %e1
-        shli    %s1, %b1, 24
-        lqd     %m2, 32($68)
-        ceqi    %e2, %m2, -1
-        gb      %b2, %e2
-        shli    %s2, %b2, 20
-        lqd     %m3, 48($68)
-        ceqi    %e3, %m3, -1
-        gb      %b3, %e3
-        shli    %s3, %b3, 16
-        lqd     %m4, 64($68)
-        ceqi    %e4, %m4, -1
-        gb      %b4, %e4
-        shli    %s4, %b4, 12
-        lqd     %m5, 80($68)
-        ceqi    %e5, %m5, -1
-        gb      %b5, %e5
-        shli    %s5, %b5, 8
-        lqd     %m6, 96($68)
-        ceqi    %e6, %m6, -1
-        gb      %b6, %e6
-        shli    %s6, %b6, 4
-        lqd     %m7, 112($68)
-        ceqi    %e7, %m7, -1
-        gb      %b7, %e7
-        shli    %s7, %b7, 0
-        lqd     %m8, 128($68)
-        ceqi    %e8, %m8, -1
-        gb      %b8, %e8
-        shli    %s8, %b8, 28
-        lqd     %m9, 144($68)
-        ceqi    %e9, %m9, -1
-        gb      %b9, %e9
-        shli    %s9, %b9, 24
-        lqd     %m10, 160($68)
-        ceqi    %e10, %m10, -1
-        gb      %b10, %e10
-        shli    %s10, %b10, 20
-        lqd     %m11, 176($68)
-        ceqi    %e11, %m11, -1
-        gb      %b11, %e11
-        shli    %s11, %b11, 16
-        lqd     %m12, 192($68)
-        ceqi    %e12, %m12, -1
-        gb      %b12, %e12
-        shli    %s12, %b12, 12
-        lqd     %m13, 208($68)
-        ceqi    %e13, %m13, -1
-        gb      %b13, %e13
-        shli    %s13, %b13, 8
-        lqd     %m14, 224($68)
-        ceqi    %e14, %m14, -1
-        gb      %b14, %e14
-        shli    %s14, %b14, 4
-        lqd     %m15, 240($68)
-        ceqi    %e15, %m15, -1
-        gb      %b15, %e15
-        shli    %s15, %b15, 0
-        or      %hia, %s0, %s1
-        or      %hib, %s2, %s3
-        or      %hic, %s4, %s5
-        or      %hid, %s6, %s7
-        or      %hie, %hia, %hib
-        or      %hif, %hic, %hid
-        or      %hig, %hie, %hif
-        xori    %hi, %hig, -1
-        clz     %hiz, %hi
-        or      %loa, %s8, %s9
-        or      %lob, %s10, %s11
-        or      %loc, %s12, %s13
-        or      %lod, %s14, %s15
-        or      %loe, %loa, %lob
-        or      %lof, %loc, %lod
-        or      %log, %loe, %lof
-        xori    %lo, %log, -1
-        clz     %loz, %lo
-        ceqi    %hin, %hi, 0
-        ai      %lo32, %loz, 32
-        selb    %pos, %hiz, %lo32, %hin        # 64: none left
-        ceqi    %none, %pos, 64
-        andi    %pq, %pos, -4
-        shli    %go, %pq, 2                   # its group * 16
-        andi    %ln, %pos, 3
-        shli    %lb, %ln, 2                   # its lane * 4
-        lqx     %mq, $68, %go
-        rotqby  $110, %mq, %lb                # the material, preferred slot
-        brnz    %none, .Lsh_done
-        .endsched
-        SH_COUNT SHS_PASSES, $74
-        # material cache
-        and     $71, $110, $105
-        shli    $72, $71, 4
-        SH_ADDI $72, $72, SH_MTAGS
-        a       $72, $72, $66
-        shli    $73, $71, 5
-        SH_ADDI $73, $73, SH_MDATA
-        a       $73, $73, $66
-        lqd     $74, 0($72)
-        ceq     $75, $74, $110
-        SH_COUNT SHS_MLOOK, $76
-        brnz    $75, 3f
+.Lsh_mmiss:                                   # a material cache miss
         shli    $74, $110, 5
         a       $74, $74, $101
         il      $75, 32
         SH_GET  $73, $74, $75, $76
         stqd    $110, 0($72)
         SH_COUNT SHS_MMISS, $76
-3:      lqd     $74, 0($73)                   # diffuse r, g, b
-        shufb   $121, $74, $74, $91
-        shufb   $122, $74, $74, $92
-        shufb   $123, $74, $74, $93
-        shufb   $110, $110, $110, $91         # the material in every lane
-        ila     $90, sh_const
-        lqd     $124, 112($90)                # ambient
-        lqd     $125, 176($90)                # 1.0
-        lqd     $126, 144($90)                # 0.5
-        lqd     $127, 160($90)                # 1.5
-        lqd     $106, 128($90)                # 255
-        il      $67, 0
-        .sched  pool=69-90,94-96,98-100,103-104,108-109,111-113,117-120 scratch=66-127
-.Lsh_apply:
-        a       %gp, $66, $67
-        a       %op, $115, $67
-        il      %none, -1
-        .irp    H, 0, 16, 32, 48
-        lqd     %m\H, SH_MAT+\H(%gp)
-        ceq     %sel\H, %m\H, $110            # this shader's rays
-        lqd     %ir\H, SH_IRR_R+\H(%gp)
-        lqd     %ig\H, SH_IRR_G+\H(%gp)
-        lqd     %ib\H, SH_IRR_B+\H(%gp)
-        fa      %ra\H, %ir\H, $124         # kd * (ambient + irradiance), clamped,
-        fa      %ga\H, %ig\H, $124
-        fa      %ba\H, %ib\H, $124
-        fm      %rk\H, %ra\H, $121         # to 8 bits: (c 255 + 0.5) truncated
-        fm      %gk\H, %ga\H, $122
-        fm      %bk\H, %ba\H, $123
-        fcgt    %rbig\H, %rk\H, $125
-        selb    %rc\H, %rk\H, $125, %rbig\H
-        fma     %rs\H, %rc\H, $106, $126
-        cfltu   %ru\H, %rs\H, 0
-        fcgt    %gbig\H, %gk\H, $125
-        selb    %gc\H, %gk\H, $125, %gbig\H
-        fma     %gs\H, %gc\H, $106, $126
-        cfltu   %gu\H, %gs\H, 0
-        fcgt    %bbig\H, %bk\H, $125
-        selb    %bc\H, %bk\H, $125, %bbig\H
-        fma     %bs\H, %bc\H, $106, $126
-        cfltu   %bu\H, %bs\H, 0
-        shli    %rh\H, %ru\H, 24
-        shli    %gh\H, %gu\H, 16
-        shli    %bh\H, %bu\H, 8
-        or      %rg\H, %rh\H, %gh\H
-        or      %rgb\H, %rg\H, %bh\H
-        ori     %col\H, %rgb\H, 0xff
-        lqd     %o\H, \H(%op)
-        selb    %o2\H, %o\H, %col\H, %sel\H
-      ~ stqd    %o2\H, \H(%op)
-        selb    %mn\H, %m\H, %none, %sel\H    # these rays are shaded
-      ~ stqd    %mn\H, SH_MAT+\H(%gp)
-        .endr
-        ai      $67, $67, 64
-        ceqi    %end, $67, 256
-        hbrr    .Lsh_apply_br, .Lsh_apply
-.Lsh_apply_br:
-        brz     %end, .Lsh_apply
-        .endsched
-        br      .Lsh_pass
+        br      .Lsh_mhit
 
-        # ---- 5. put the block to ea_colour + packet * 256
-.Lsh_done:
-        shli    $70, $97, 8
-        a       $70, $70, $102
-        il      $71, 256
-        wrch    $MFC_LSA, $115
-        wrch    $MFC_EAH, ZERO
-        wrch    $MFC_EAL, $70
-        wrch    $MFC_Size, $71
-        wrch    $MFC_TagID, $116
-        il      $71, 0x20
-        wrch    $MFC_Cmd, $71
-        SH_COUNT SHS_PACKETS, $74
-        bi      $0
 
 # a vertex cache miss: vertex $81 into line $84, tag $83; back to $88
 sh_vertex_miss:
