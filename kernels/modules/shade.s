@@ -807,6 +807,14 @@ shade_packet:
         and     %h01\P\()_\J, %h0\P\()_\J, %h1\P\()_\J
         and     %h012\P\()_\J, %h01\P\()_\J, %h2\P\()_\J
         and     %okl\P\()_\J, %h012\P\()_\J, %th\P\()_\J
+        .endr
+        and     %ok\P, %okl\P\()_0, %okl\P\()_4
+        .endr
+        and     %ok03, %ok0, %ok8
+        andc    %ok, %ok03, %nogo
+        brz     %ok, .Lsh_slow_body           # a miss: no row is loaded
+        .irp    P, 0, 8
+        .irp    J, 0, 4
         lqx     %n0\P\()_\J, $123, %vl0\P\()_\J
         lqx     %n1\P\()_\J, $123, %vl1\P\()_\J
         lqx     %n2\P\()_\J, $123, %vl2\P\()_\J
@@ -822,10 +830,7 @@ shade_packet:
         shufb   %hi\P\R, %\R\()\P\()_0, %\R\()\P\()_4, %phi
         .endr
         shufb   %kq\P, %kq\P\()_0, %kq\P\()_4, %phi
-        and     %ok\P, %okl\P\()_0, %okl\P\()_4
         .endr
-        and     %ok03, %ok0, %ok8
-        andc    %ok, %ok03, %nogo
         # the columns: b and c (q1, q2 words 0-2), n0, n1 - n0, n2 - n0 (x, y, z); k and
         # the material
         .irp    R, q1, q2, n0, d1, d2
@@ -876,19 +881,14 @@ shade_packet:
       ~ stqd    %nxo, SH_NX(%gp)
       ~ stqd    %nyo, SH_NY(%gp)
       ~ stqd    %nzo, SH_NZ(%gp)
-        shufb   %okv, %ok, %ok, $91           # counted if done: a group, its hit lanes
-        cntb    %mc1, %mb
+        cntb    %mc1, %mb                     # counted: a group, its hit lanes
         sfi     %hits, %mc1, 4
-        il      %one, 1
-        and     %ig, %one, %okv
-        and     %it, %hits, %okv
         lqd     %cg, SH_STATS+SHS_GROUPS($66)
         lqd     %ct, SH_STATS+SHS_TLOOK($66)
-        a       %cg1, %cg, %ig
-        a       %ct1, %ct, %it
+        ai      %cg1, %cg, 1
+        a       %ct1, %ct, %hits
         stqd    %cg1, SH_STATS+SHS_GROUPS($66)
         stqd    %ct1, SH_STATS+SHS_TLOOK($66)
-        brz     %ok, .Lsh_slow_body
         .endsched
         br      .Lsh_slow_next
 
