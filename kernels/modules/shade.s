@@ -12,21 +12,27 @@
 # 1. The i-set: per intersection packet of 4 rays, a flag says whether all 4 hit the same
 #    triangle; then its record (64 bytes: the barycentric rows and, in the spare 16 bytes,
 #    the vertex and material indices) and its three vertex normals are fetched once and
-#    copied to the other lanes. Otherwise per lane. Vertices go through a direct-mapped
-#    cache of 64-byte records (ShadingBlock.vertex_cache_log2 entries). The lanes' rows are
-#    transposed, and per ray the barycentrics of the hit point o + t d (the projection of
-#    the record, as the hit test computed them), the interpolated normal facing the eye and
-#    the material are stored structure-of-arrays.
-# 2. Multi-pass shading: the first material still referenced in the i-set is looked up in
-#    the direct-mapped material cache, its diffuse shader runs over all 16 intersection
-#    packets under the mask of its rays, and then clears their references; until none is
-#    left (the paper's 1-2 passes per packet).
+#    splatted to the 4 lanes; otherwise per lane, the lanes' rows transposed into columns.
+#    Vertices go through a direct-mapped cache of 64-byte records
+#    (ShadingBlock.vertex_cache_log2 entries). Per ray the hit point o + t d, its
+#    barycentrics (the projection of the record, as the hit test computed them), the
+#    interpolated normal facing the eye and the material are stored structure-of-arrays.
+#    Three paths, the hot ones scheduled `.sched` blocks: same-triangle packets found in
+#    the caches, two per step; mixed packets found in the caches; anything else (a cache
+#    miss, no hit) lane by lane with blocking DMAs. They compute the same values and counts.
+# 2. The irradiance of every ray from every light (the same for every diffuse shader, so
+#    once per i-set): dot(N, L) / (|N| |L|), clamped, times the light's colour, summed.
+#    SH_VIS (per light, the rays' visibility masks) masks each light.
+# 3. Multi-pass shading: the first material still referenced in the i-set is looked up in
+#    the direct-mapped material cache, its diffuse shader (kd * (ambient + irradiance), to
+#    8 bits) runs over all 16 intersection packets under the mask of its rays, and then
+#    clears their references; until none is left (the paper's 1-2 passes per packet).
 #
 # The shading area (SH_AREA_BYTES of local store, at the address the host puts in params
 # beside the shading block's, above everything the kernel carves) is set up on the first
-# call: the block is fetched, the lights splatted, the caches' tags cleared. Its counters (SH_STATS, one
-# per quadword, word 0) are read by the host from local store, as the PPE reads an SPE's
-# memory-mapped local store.
+# call: the block is fetched, the lights splatted, the caches' tags cleared. Its counters
+# (SH_STATS, one per quadword, word 0) are read by the host from local store, as the PPE
+# reads an SPE's memory-mapped local store.
 
         .set SH_FLAG, 0                 # "SHAD" once set up
         .set SH_STATS, 16               # 10 counters, one per quadword:
@@ -435,8 +441,10 @@ shade_packet:
         stqd    $71, SH_STATS+SHS_SAME($66)
         stqd    $72, SH_STATS+SHS_TLOOK($66)
 
-        # (SH_VIS, per light: the visibility masks of the i-set's rays; the hit points are
-        # in SH_PX, SH_PY, SH_PZ from here on)
+        # Here the hit points are in SH_PX, SH_PY, SH_PZ (and the materials in SH_MAT, -1
+        # for no hit): the place for shadow rays to fill SH_VIS (per light, the rays'
+        # visibility masks), which the irradiance below reads. Only $66, $97, $101..$103
+        # and $105 need to survive up to here; the rest is set again below.
 
         # ---- 2. the lights' irradiance of every ray of the i-set, the same for every
         # diffuse shader: once, not once per pass. Per light, four groups per step.
