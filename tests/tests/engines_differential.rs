@@ -7,7 +7,7 @@
 use spu_isa::jit::Engine;
 use spu_isa::machine::{MainMemory, Spu, StopReason};
 use spu_isa::timing::TimingConfig;
-use spu_tests::XorShift as Rng;
+use spu_tests::{looping_program, LoopShape, XorShift as Rng};
 
 /// What a run left behind, for comparing engines.
 #[derive(Debug, PartialEq)]
@@ -156,51 +156,18 @@ fn random_op(rng: &mut Rng) -> String {
 #[test]
 fn random_programs_run_the_same_compiled() {
     let mut compiled = 0;
+    let shape = LoopShape {
+        trips: 600,
+        prologue: " il $5, 80\n",
+        before: 16,
+        after: 8,
+        conditions: &["brnz", "brz", "brhnz", "brhz"],
+        calls: true,
+        raw_words: true,
+    };
     for seed in 1..=16u64 {
         let mut rng = Rng(0x2545_f491_4f6c_dd1d ^ seed.wrapping_mul(0x9e37_79b9));
-        let blocks = 3 + rng.below(5) as usize;
-        let mut src = String::from(
-            "        .text\n        .global _start\n_start: ila $3, data\n il $4, 600\n il $5, 80\n",
-        );
-        for r in 10..22 {
-            src += &format!(" lqd ${r}, {}($3)\n", 16 * (r % 8));
-        }
-        for i in 0..blocks {
-            let target = rng.below(blocks as u64);
-            src += &format!("b{i}:\n");
-            match rng.below(3) {
-                0 => src += &format!(" hbrr .Lbr{i}, b{target}\n"),
-                1 => src += &format!(" hbrr .Lbr{i}, b{}\n", (target + 1) % blocks as u64),
-                _ => {}
-            }
-            for _ in 0..rng.below(16) {
-                src += &format!(" {}\n", random_op(&mut rng));
-            }
-            if rng.below(4) == 0 {
-                src += " brsl $0, sub\n";
-            }
-            src += " ai $4, $4, -1\n brz $4, end\n";
-            for _ in 0..rng.below(8) {
-                src += &format!(" {}\n", random_op(&mut rng));
-            }
-            let cond = ["brnz", "brz", "brhnz", "brhz"][rng.below(4) as usize];
-            src += &format!(".Lbr{i}: {cond} ${}, b{target}\n", 10 + rng.below(12));
-        }
-        src += " br b0\nsub:\n";
-        for _ in 0..rng.below(6) {
-            src += &format!(" {}\n", random_op(&mut rng));
-        }
-        src += " bi $0\nend: stop 0x2000\n        .data\n        .align 4\ndata:\n";
-        for k in 0..32 {
-            // Ordinary floats mostly, and raw words (zeros, denormals, huge values) too.
-            let w = rng.next() as u32;
-            let w = if k % 4 == 3 {
-                w
-            } else {
-                w & 0xc3ff_ffff | 0x0800_0000
-            };
-            src += &format!(" .long {w}\n");
-        }
+        let src = looping_program(&mut rng, &shape, &mut random_op);
         let [off, _] = same_with_both_engines(&src);
         compiled += off.jit_stats().compiled_instructions;
     }
