@@ -160,6 +160,9 @@ pub struct SpuStats {
     pub cycles: u64,
     pub instructions: u64,
     pub tiles: u64,
+    /// Of `instructions`, those run by compiled blocks (0 with the interpreter).
+    #[serde(default)]
+    pub compiled_instructions: u64,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -406,6 +409,7 @@ impl FrameStats {
                     cycles: s.cycles,
                     instructions: s.instructions,
                     tiles: s.tiles,
+                    compiled_instructions: s.compiled_instructions,
                 })
                 .collect(),
             validation: validation.map(|(pixels, mismatches)| Validation {

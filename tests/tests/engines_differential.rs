@@ -252,6 +252,43 @@ data:   .space  64
     assert!(off.jit_stats().compiled_instructions > 0);
 }
 
+/// A block that branches back to its own start runs pass after pass inside its compiled
+/// code; at pass 101 of 200 it stores a new first quadword over itself (`ai $15, $15, 1`
+/// becomes `ai $15, $15, 2`), after which the next pass must run the new words.
+#[test]
+fn a_self_loop_that_rewrites_itself_runs_the_same_compiled() {
+    let src = "
+        .text
+        .global _start
+_start: il      $9, 200
+        ila     $3, scratch
+        ila     $4, loop
+        ila     $5, newword
+        lqd     $6, 0($5)
+        .align  4
+loop:   ai      $15, $15, 1
+        ceqi    $20, $9, 100            # pass 101 (of 200, counting down)
+        selb    $22, $3, $4, $20        # ... stores over `loop`, other passes elsewhere
+        stqd    $6, 0($22)
+        ai      $9, $9, -1
+        brnz    $9, loop
+        stop    0x2000
+        .align  4
+newword: ai     $15, $15, 2
+        ceqi    $20, $9, 100
+        selb    $22, $3, $4, $20
+        stqd    $6, 0($22)
+        .data
+        .align  4
+scratch: .space 16
+";
+    let [off, on] = same_with_both_engines(src);
+    for spu in [&off, &on] {
+        assert_eq!(spu.reg(15)[0], 101 + 2 * 99);
+    }
+    assert!(off.jit_stats().compiled_instructions > 100);
+}
+
 /// DMA gets and puts inside a loop of computation, tag waits, the decrementer read
 /// between blocks (its value depends on the cycle), and an outbound mailbox write at the
 /// end: the same registers, local store, main memory and cycles.
@@ -294,7 +331,8 @@ fn channels_and_dma_run_the_same_compiled() {
 }
 
 /// A kernel frame (the room, 64x64, two SPUs with the timing model): the same image,
-/// cycles, per-SPU counts and profile with either engine.
+/// cycles, per-SPU counts and profile with either engine; compiled on one host thread or
+/// two, the same instructions run compiled on each SPU.
 #[test]
 fn a_kernel_frame_is_the_same_compiled() {
     use spu_loader::frame::{FrameLayout, SCENE_BASE};
@@ -311,13 +349,13 @@ fn a_kernel_frame_is_the_same_compiled() {
     let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
     let basis = scene.camera.basis(64, 64);
     let layout = FrameLayout::new(&staged, &basis, 64, 64, 2, 256, 256).unwrap();
-    let frame = |engine: Engine| {
+    let frame = |engine: Engine, threads: usize| {
         Engine::set_default(engine);
         let run = render_frame(
             &staged,
             &layout,
             2,
-            1,
+            threads,
             &TimingConfig::default(),
             false,
             50_000_000_000,
@@ -326,8 +364,26 @@ fn a_kernel_frame_is_the_same_compiled() {
         Engine::set_default(Engine::host_default());
         run.unwrap()
     };
-    let a = frame(Engine::Interp);
-    let b = frame(Engine::Jit);
+    let a = frame(Engine::Interp, 1);
+    let b = frame(Engine::Jit, 1);
+    // The SPUs share one code cache; which of them compiles a block first depends on the
+    // host threads, what each runs compiled does not.
+    let c = frame(Engine::Jit, 2);
+    let compiled = |run: &spu_loader::runtime::FrameRun| -> Vec<u64> {
+        run.spus.iter().map(|s| s.compiled_instructions).collect()
+    };
+    assert_eq!(compiled(&a), [0, 0]);
+    assert!(compiled(&b).iter().all(|&n| n > 0), "{:?}", compiled(&b));
+    assert_eq!(compiled(&b), compiled(&c));
+    assert_eq!(
+        b.jit.compiled_instructions,
+        compiled(&b).iter().sum::<u64>()
+    );
+    assert_eq!(
+        (b.jit.blocks, b.jit.block_instructions),
+        (c.jit.blocks, c.jit.block_instructions)
+    );
+    assert!(b.frame_buffer == c.frame_buffer && b.frame_cycles == c.frame_cycles);
     assert!(a.frame_buffer == b.frame_buffer, "images differ");
     assert_eq!(a.frame_cycles, b.frame_cycles);
     for (x, y) in a.spus.iter().zip(&b.spus) {
