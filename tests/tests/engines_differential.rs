@@ -128,11 +128,15 @@ fn random_op(rng: &mut Rng) -> String {
         34 => format!("fms ${t}, ${a}, ${b}, ${c}"),
         35 => format!(
             "{} ${t}, ${a}, ${b}",
-            ["fcgt", "fceq", "fcmgt"][rng.below(3) as usize]
+            ["fcgt", "fceq", "fcmgt", "fcmeq"][rng.below(4) as usize]
         ),
         36 => format!("frest ${t}, ${a}"),
         37 => format!("fi ${t}, ${a}, ${b}"),
-        38 => format!("cfltu ${t}, ${a}, {}", rng.below(128)),
+        38 => format!(
+            "{} ${t}, ${a}, {}",
+            ["cfltu", "cflts"][rng.below(2) as usize],
+            rng.below(128)
+        ),
         39 => format!("lqd ${t}, {}($3)", 16 * rng.below(8)),
         40 => format!("stqd ${t}, {}($3)", 16 * rng.below(8)),
         41 => format!("lqx ${t}, $3, $5"),
@@ -287,6 +291,79 @@ scratch: .space 16
         assert_eq!(spu.reg(15)[0], 101 + 2 * 99);
     }
     assert!(off.jit_stats().compiled_instructions > 100);
+}
+
+/// The single-precision compares, `fi` and the conversions to integers, which compiled
+/// code does in host vector instructions, on operands of every kind: zeros of both
+/// signs, denormals, ordinary values, exponent 255 (an ordinary number on the SPU) and
+/// values that saturate or vanish at every scale. Everything the same as interpreted,
+/// and the loop ran compiled.
+#[test]
+fn float_compares_and_conversions_run_the_same_compiled() {
+    let specials: [u32; 16] = [
+        0x0000_0000,
+        0x8000_0000,
+        0x0000_0001,
+        0x807f_ffff,
+        0x3f80_0000,
+        0xbf80_0000,
+        0x4f00_0000,
+        0xcf00_0001,
+        0x7f80_0000,
+        0xffff_ffff,
+        0x7fff_ffff,
+        0x0080_0000,
+        0x4f80_0000,
+        0x3eff_ffff,
+        0xc2c8_0000,
+        0x4b00_0001,
+    ];
+    let mut rng = Rng(0x5eed_f10a7);
+    let mut src = String::from(
+        "        .text\n        .global _start\n_start: ila $3, data\n il $9, 64\n il $5, 0\n",
+    );
+    src += "loop: andi $6, $5, 0x1f0\n lqx $10, $3, $6\n ai $7, $6, 48\n andi $7, $7, 0x1f0\n\
+            lqx $11, $3, $7\n frest $12, $10\n";
+    // Each result is summed into an accumulator of its own ($40 up), rotated each pass.
+    let mut acc = 40;
+    let mut push = |src: &mut String, line: String| {
+        *src += &format!(" {line}\n a ${acc}, ${acc}, $30\n roti ${acc}, ${acc}, 3\n");
+        acc += 1;
+    };
+    for op in ["fcgt", "fceq", "fcmgt", "fcmeq"] {
+        push(&mut src, format!("{op} $30, $10, $11"));
+        push(&mut src, format!("{op} $30, $11, $10"));
+        push(&mut src, format!("{op} $30, $10, $10"));
+    }
+    push(&mut src, "fi $30, $10, $12".into());
+    push(&mut src, "fi $30, $11, $12".into());
+    for scale in [0, 1, 20, 31, 32, 100, 127] {
+        push(&mut src, format!("cflts $30, $10, {scale}"));
+        push(&mut src, format!("cfltu $30, $11, {scale}"));
+    }
+    src += " ai $5, $5, 16\n ai $9, $9, -1\n brnz $9, loop\n stop 0x2000\n";
+    src += "        .data\n        .align 4\ndata:\n";
+    for k in 0..32 {
+        let w = if k % 2 == 0 {
+            specials[(k / 2) % 16]
+        } else {
+            rng.next() as u32
+        };
+        src += &format!(
+            " .long {w}, {}, {}, {}\n",
+            specials[(k + 5) % 16],
+            rng.next() as u32,
+            specials[(3 * k + 1) % 16]
+        );
+    }
+    let [off, _] = same_with_both_engines(&src);
+    let stats = off.jit_stats();
+    assert!(
+        stats.compiled_instructions > off.instructions() / 2,
+        "{} of {} ran compiled",
+        stats.compiled_instructions,
+        off.instructions()
+    );
 }
 
 /// DMA gets and puts inside a loop of computation, tag waits, the decrementer read

@@ -668,6 +668,28 @@ impl Translator<'_> {
                 let v = self.shuffle(a, zero, mask);
                 self.set(inst.rt, v)
             }
+            Fceq | Fcgt | Fcmeq | Fcmgt => {
+                let (a, b) = (self.get(inst.ra), self.get(inst.rb));
+                let magnitude = matches!(inst.op, Fcmeq | Fcmgt);
+                let (ka, kb) = (self.sp_key(a, magnitude), self.sp_key(b, magnitude));
+                let cc = if matches!(inst.op, Fceq | Fcmeq) {
+                    IntCC::Equal
+                } else {
+                    IntCC::SignedGreaterThan
+                };
+                let v = self.b.ins().icmp(cc, ka, kb);
+                self.set(inst.rt, v)
+            }
+            Fi => {
+                let (x, est) = (self.get(inst.ra), self.get(inst.rb));
+                let v = self.fi(x, est);
+                self.set(inst.rt, v)
+            }
+            Cflts | Cfltu => {
+                let a = self.get(inst.ra);
+                let v = self.float_to_int(a, inst.op == Cflts, inst.imm as u32);
+                self.set(inst.rt, v)
+            }
             Fa | Fs | Fm if cfg!(target_arch = "x86_64") => self.single_precision(inst, p),
             Fma | Fms | Fnms if host_fma() => self.single_precision(inst, p),
             Lqd | Lqx | Lqa | Lqr => {
@@ -789,6 +811,109 @@ impl Translator<'_> {
         // Both paths wrote the result to memory; every other register is as before.
         self.cache = saved;
         self.cache[inst.rt as usize & 127] = None;
+    }
+
+    /// The comparison key of each single (`float::sp_key`, or of its magnitude): 0 for a
+    /// zero exponent (zeros and denormals), else sign and magnitude as a signed word
+    /// (exponent 255 is an ordinary number, so the order is that of the integers).
+    fn sp_key(&mut self, v: Value, magnitude: bool) -> Value {
+        let abs = self.splat(0x7fff_ffff);
+        let exp = self.splat(0x7f80_0000);
+        let zero = self.splat(0);
+        let mag = self.b.ins().band(v, abs);
+        let e = self.b.ins().band(v, exp);
+        let tiny = self.b.ins().icmp(IntCC::Equal, e, zero);
+        let mag = self.b.ins().band_not(mag, tiny);
+        if magnitude {
+            return mag;
+        }
+        let thirty_one = self.b.ins().iconst(I32, 31);
+        let sign = self.b.ins().sshr(v, thirty_one);
+        let flipped = self.b.ins().bxor(mag, sign);
+        self.b.ins().isub(flipped, sign)
+    }
+
+    /// `fi` lane by lane, as `float::fi`: the estimate's base less its step times the
+    /// operand's low 19 bits, in 32-bit fixed point, renormalised by one bit when the
+    /// difference went below 1.0.
+    fn fi(&mut self, x: Value, est: Value) -> Value {
+        let base_mask = self.splat(0x007f_fc00);
+        let step_mask = self.splat(0x3ff);
+        let low = self.splat(0x7_ffff);
+        let frac_mask = self.splat(0x007f_ffff);
+        let keep = self.splat(0xff80_0000);
+        let one_exp = self.splat(1 << 23);
+        let base = self.b.ins().band(est, base_mask);
+        let nine = self.b.ins().iconst(I32, 9);
+        let eight = self.b.ins().iconst(I32, 8);
+        let base = self.b.ins().ishl(base, nine);
+        let step = self.b.ins().band(est, step_mask);
+        let y = self.b.ins().band(x, low);
+        let ymul = self.b.ins().imul(step, y);
+        let t = self.b.ins().isub(base, ymul);
+        let adjust = self.b.ins().icmp(IntCC::UnsignedGreaterThan, ymul, base);
+        let by8 = self.b.ins().ushr(t, eight);
+        let by9 = self.b.ins().ushr(t, nine);
+        let frac = self.b.ins().bitselect(adjust, by8, by9);
+        let frac = self.b.ins().band(frac, frac_mask);
+        let top = self.b.ins().band(est, keep);
+        let r = self.b.ins().bor(top, frac);
+        let less = self.b.ins().band(adjust, one_exp);
+        self.b.ins().isub(r, less)
+    }
+
+    /// `cflts`/`cfltu` with the raw I8 field `i8`, as `float::cflts_scale`: scaling by a
+    /// constant power of two only moves the exponent, so where the scaled exponent is an
+    /// ordinary one the host's saturating truncation gives the exact result; a zero
+    /// exponent, before or after scaling, gives 0, and one past 254 a magnitude of at
+    /// least 2^127, which saturates just as the true value does (exponent 255 is a number).
+    fn float_to_int(&mut self, a: Value, signed: bool, i8: u32) -> Value {
+        let scale = 173 - (i8 & 0xff) as i32;
+        let e_mask = self.splat(0xff);
+        let keep = self.splat(0x807f_ffff);
+        let zero = self.splat(0);
+        let largest = self.splat(254);
+        let shift = self.b.ins().iconst(I32, 23);
+        let e = self.b.ins().ushr(a, shift);
+        let e = self.b.ins().band(e, e_mask);
+        let by = self.splat(scale as u32);
+        let scaled = self.b.ins().iadd(e, by);
+        let live = self.b.ins().icmp(IntCC::NotEqual, e, zero);
+        let positive = self.b.ins().icmp(IntCC::SignedGreaterThan, scaled, zero);
+        let live = self.b.ins().band(live, positive);
+        let unclamped = scaled;
+        let scaled = self.b.ins().smin(scaled, largest);
+        let scaled = self.b.ins().ishl(scaled, shift);
+        let y = self.b.ins().band(a, keep);
+        let y = self.b.ins().bor(y, scaled);
+        let y = self.b.ins().band(y, live);
+        let le = MemFlagsData::new().with_endianness(Endianness::Little);
+        if signed {
+            let f = self.b.ins().bitcast(F32X4, le, y);
+            return self.b.ins().fcvt_to_sint_sat(I32X4, f);
+        }
+        // Unsigned: negative values give 0; below 2^31 the signed truncation is exact; at
+        // exponent 158 ([2^31, 2^32)) the integer is the significand shifted by 8; above,
+        // 0xffffffff.
+        let thirty_one = self.b.ins().iconst(I32, 31);
+        let negative = self.b.ins().sshr(a, thirty_one);
+        let y = self.b.ins().band_not(y, negative);
+        let live = self.b.ins().band_not(live, negative);
+        let f = self.b.ins().bitcast(F32X4, le, y);
+        let low = self.b.ins().fcvt_to_sint_sat(I32X4, f);
+        let top = self.splat(158);
+        let at_top = self.b.ins().icmp(IntCC::Equal, unclamped, top);
+        let at_top = self.b.ins().band(at_top, live);
+        let above = self.b.ins().icmp(IntCC::SignedGreaterThan, unclamped, top);
+        let above = self.b.ins().band(above, live);
+        let fraction = self.splat(0x007f_ffff);
+        let one = self.splat(0x0080_0000);
+        let m = self.b.ins().band(a, fraction);
+        let m = self.b.ins().bor(m, one);
+        let eight = self.b.ins().iconst(I32, 8);
+        let m = self.b.ins().ishl(m, eight);
+        let r = self.b.ins().bitselect(at_top, m, low);
+        self.b.ins().bor(r, above)
     }
 
     /// `shli`, `rotmi`, `rotmai`, `roti` by a constant count, as the interpreter counts.
