@@ -308,15 +308,19 @@ fn expand(lines: &[(String, usize)], depth: usize) -> Result<Vec<(String, usize)
     Ok(out)
 }
 
-/// Replaces `\var` (not followed by an identifier character) with `value`.
+/// Replaces `\var` (not followed by an identifier character) with `value`; `\var\()`
+/// separates the value from text that follows it, as in gas (`%\R\()0`).
 fn substitute(text: &str, var: &str, value: &str) -> String {
     let pattern = format!("\\{var}");
     let mut out = String::new();
     let mut rest = text;
     while let Some(k) = rest.find(&pattern) {
-        let after = &rest[k + pattern.len()..];
+        let mut after = &rest[k + pattern.len()..];
         out.push_str(&rest[..k]);
-        if after
+        if let Some(tail) = after.strip_prefix("\\()") {
+            out.push_str(value);
+            after = tail;
+        } else if after
             .chars()
             .next()
             .is_some_and(|c| c.is_ascii_alphanumeric() || c == '_')

@@ -145,22 +145,41 @@ fn each_fetch_line_keeps_a_cycle_for_the_prefetch() {
     assert!(!unknown.iter().any(|l| l == "lnop"), "{unknown:?}");
 }
 
+/// The instructions of a scheduled block, without the filler.
+fn code(block: &str, opts: &SchedOptions) -> Vec<String> {
+    let (out, _) = run(block, opts, None);
+    out.into_iter().filter(|l| !l.ends_with("nop")).collect()
+}
+
 #[test]
 fn irp_repeats_with_substitution() {
-    let (out, _) = run(
-        ".irp K, 0, 1\nil %v\\K, \\K\nstqd %v\\K, \\K*16($3)\n.endr",
-        &pool("50-53"),
-        None,
-    );
-    let code: Vec<&String> = out.iter().filter(|l| !l.ends_with("nop")).collect();
     assert_eq!(
-        code,
+        code(
+            ".irp K, 0, 1\nil %v\\K, \\K\nstqd %v\\K, \\K*16($3)\n.endr",
+            &pool("50-53")
+        ),
         [
             ".align 3",
             "il $50, 0",
             "il $51, 1",
             "stqd $50, 0*16($3)",
             "stqd $51, 1*16($3)"
+        ]
+    );
+    // `\()` ends a parameter's name, so a value can come before more text (gas's rule).
+    assert_eq!(
+        code(
+            ".irp R, a, b\nil %\\R\\()0, 1\nil %\\R\\()1, 2\na $3, %\\R\\()0, %\\R\\()1\n.endr",
+            &pool("50-53")
+        ),
+        [
+            ".align 3",
+            "il $50, 1",
+            "il $51, 2",
+            "il $52, 1",
+            "a $3, $50, $51",
+            "il $53, 2",
+            "a $3, $52, $53"
         ]
     );
 }

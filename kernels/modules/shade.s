@@ -43,6 +43,7 @@
         .set SH_BLOCK, 256              # the shading block (SHADING_BLOCK_BYTES)
         .set SH_LIGHTS, 640             # per light: px, py, pz, r, g, b splats (96 bytes)
         .set SH_SCRATCH, 1408           # the normals' columns (144 bytes), the same flag
+        .set SH_SAVE, SH_SCRATCH+160    # the fast path's registers over the slow path (80)
         .set SH_SAME, SH_SCRATCH+240
         .set SH_STAGE, 1664             # per lane: the triangle record (64 bytes)
         .set SH_NRM, 1920               # per lane: n0, n1, n2, - (64 bytes)
@@ -53,6 +54,9 @@
         .set SH_PY, 3200
         .set SH_PZ, 3456
         .set SH_MAT, 3712               # material (-1: none left)
+        .set SH_IRR_R, SH_SCRATCH       # irradiance r, g, b of the i-set (after the i-set
+        .set SH_IRR_G, SH_STAGE         # is built, over its scratch: 16 vectors each)
+        .set SH_IRR_B, SH_NRM
         .set SH_OUT, 3968               # two colour blocks, alternating
         .set SH_VIS, 4480               # per light: visibility masks (256 bytes)
         .set SH_VTAGS, 6528             # vertex cache tags (up to 256 x 16)
@@ -172,6 +176,9 @@ sh_const:
         .float  1.5, 1.5, 1.5, 1.5                                 # +160
         .float  1.0, 1.0, 1.0, 1.0                                 # +176
         .long   0x000000ff, 0x000000ff, 0x000000ff, 0x000000ff     # +192 a miss: black
+        .long   0x0c0d0e0f, 0x0c0d0e0f, 0x0c0d0e0f, 0x0c0d0e0f     # +208 splat word 3
+        .long   0x80000000, 0x80000000, 0x80000000, 0x80000000     # +224 sign bits
+        .long   1, 1, 1, 0                  # +240 a fast group: groups, same, tri lookups
 
         .align  3
 shade_packet:
@@ -251,43 +258,343 @@ shade_packet:
         brnz    $71, 1b
 
 .Lsh_ready:
-        lqd     $70, SH_BLOCK($66)            # vertices, materials, colour, lights
-        ori     $100, $70, 0
-        rotqbyi $101, $70, 4
-        rotqbyi $102, $70, 8
-        rotqbyi $103, $70, 12
+        ila     $90, sh_const
+        lqd     $119, 32($90)
+        lqd     $91, 64($90)
+        lqd     $92, 80($90)
+        lqd     $93, 96($90)
+        lqd     $120, 208($90)                # splat word 3
+        lqd     $122, 224($90)                # sign bits
+        ila     $70, params
+        lqd     $71, PARAM_ORIGIN($70)
+        shufb   $107, $71, $71, $91           # origin x, y, z splats
+        shufb   $108, $71, $71, $92
+        shufb   $109, $71, $71, $93
+        lqd     $70, SH_BLOCK+SHB_MODE($66)
+        il      $75, 1
+        rotqbyi $71, $70, 8
+        shl     $71, $75, $71
+        ai      $71, $71, -1
+        shufb   $121, $71, $71, $91           # the vertex index mask in every lane
+
+        # ---- 1. the i-set
+        SH_ADDI $115, $66, SH_VTAGS
+        SH_ADDI $123, $66, SH_VDATA+16        # the lines' normals
+        il      $124, 0                       # the fast groups' counters (sh_const+240)
+        il      $67, 0                        # intersection packet * 16
+
+        # The fast path, two groups a step, for a group whose 4 rays hit one triangle found
+        # in the triangle cache with its 3 vertices in the vertex cache (94.9% in the
+        # room): every lookup is made speculatively (masked indices keep the loads in the
+        # caches) and the group shaded from splats; a branch at the end sends a step with
+        # any other group to the slow path, which does that group (and its stores) again,
+        # lane by lane.
+        .sched  pool=68-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
+.Lsh_group:
+        a       %rp, $99, $67
+        a       %gp, $66, $67
+        .irp    H, 0, 16
+        lqd     %ids\H, CTX_RAY_ID+\H(%rp)
+        ceqi    %miss\H, %ids\H, -1
+        shufb   %s0\H, %ids\H, %ids\H, $91
+        ceq     %same\H, %ids\H, %s0\H
+        gb      %sameb\H, %same\H
+        ceqi    %ok0\H, %sameb\H, 15
+        andc    %ok1\H, %ok0\H, %miss\H
+        and     %ti\H, %ids\H, TMASK
+        shli    %to\H, %ti\H, 4
+        lqx     %tag\H, TTAGS, %to\H
+        shli    %tl\H, %ti\H, 6
+        a       %line\H, %tl\H, TDATA
+        ceq     %th\H, %tag\H, %ids\H
+        and     %ok2\H, %ok1\H, %th\H
+        lqd     %q3\H, 48(%line\H)                # vertex indices, material
+        and     %vi\H, %q3\H, $121
+        shli    %vo0\H, %vi\H, 4
+        shli    %vl0\H, %vi\H, 6
+        rotqbyi %vo1\H, %vo0\H, 4
+        rotqbyi %vo2\H, %vo0\H, 8
+        rotqbyi %vl1\H, %vl0\H, 4
+        rotqbyi %vl2\H, %vl0\H, 8
+        lqx     %vt0\H, $115, %vo0\H
+        lqx     %vt1\H, $115, %vo1\H
+        lqx     %vt2\H, $115, %vo2\H
+        rotqbyi %q3b\H, %q3\H, 4
+        rotqbyi %q3c\H, %q3\H, 8
+        ceq     %h0\H, %vt0\H, %q3\H
+        ceq     %h1\H, %vt1\H, %q3b\H
+        ceq     %h2\H, %vt2\H, %q3c\H
+        and     %h01\H, %h0\H, %h1\H
+        and     %h012\H, %h01\H, %h2\H
+        and     %ok\H, %ok2\H, %h012\H
+        lqx     %n0\H, $123, %vl0\H
+        lqx     %n1\H, $123, %vl1\H
+        lqx     %n2\H, $123, %vl2\H
+        lqd     %q0\H, 0(%line\H)
+        lqd     %q1\H, 16(%line\H)
+        lqd     %q2\H, 32(%line\H)
+        lqd     %t\H, CTX_RAY_T+\H(%rp)
+        lqd     %dx\H, 0+\H(%rp)
+        lqd     %dy\H, 256+\H(%rp)
+        lqd     %dz\H, 512+\H(%rp)
+        fma     %px\H, %t\H, %dx\H, $107            # the hit point
+        fma     %py\H, %t\H, %dy\H, $108
+        fma     %pz\H, %t\H, %dz\H, $109
+      ~ stqd    %px\H, SH_PX+\H(%gp)
+      ~ stqd    %py\H, SH_PY+\H(%gp)
+      ~ stqd    %pz\H, SH_PZ+\H(%gp)
+        shufb   %mat\H, %q3\H, %q3\H, $120
+      ~ stqd    %mat\H, SH_MAT+\H(%gp)
+        shufb   %k\H, %q0\H, %q0\H, $120
+        ceqi    %k0\H, %k\H, 0
+        ceqi    %k1\H, %k\H, 1
+        selb    %u1\H, %px\H, %pz\H, %k1\H            # u: k0 -> y, k1 -> z, k2 -> x
+        selb    %u\H, %u1\H, %py\H, %k0\H
+        selb    %v1\H, %py\H, %px\H, %k1\H            # v: k0 -> z, k1 -> x, k2 -> y
+        selb    %v\H, %v1\H, %pz\H, %k0\H
+        shufb   %bnu\H, %q1\H, %q1\H, $91
+        shufb   %bnv\H, %q1\H, %q1\H, $92
+        shufb   %bd\H, %q1\H, %q1\H, $93
+        shufb   %cnu\H, %q2\H, %q2\H, $91
+        shufb   %cnv\H, %q2\H, %q2\H, $92
+        shufb   %cd\H, %q2\H, %q2\H, $93
+        fm      %b1\H, %bnu\H, %u\H                 # beta = (b_nu u + b_nv v) + b_d
+        fma     %b2\H, %bnv\H, %v\H, %b1\H
+        fa      %beta\H, %b2\H, %bd\H
+        fm      %g1\H, %cnu\H, %u\H                 # gamma = (c_nu u + c_nv v) + c_d
+        fma     %g2\H, %cnv\H, %v\H, %g1\H
+        fa      %gamma\H, %g2\H, %cd\H
+        fs      %d1\H, %n1\H, %n0\H                 # n1 - n0, n2 - n0
+        fs      %d2\H, %n2\H, %n0\H
+        shufb   %n0x\H, %n0\H, %n0\H, $91
+        shufb   %n0y\H, %n0\H, %n0\H, $92
+        shufb   %n0z\H, %n0\H, %n0\H, $93
+        shufb   %d1x\H, %d1\H, %d1\H, $91
+        shufb   %d1y\H, %d1\H, %d1\H, $92
+        shufb   %d1z\H, %d1\H, %d1\H, $93
+        shufb   %d2x\H, %d2\H, %d2\H, $91
+        shufb   %d2y\H, %d2\H, %d2\H, $92
+        shufb   %d2z\H, %d2\H, %d2\H, $93
+        fma     %nx1\H, %d1x\H, %beta\H, %n0x\H       # n0 + (n1 - n0) beta + (n2 - n0) gamma
+        fma     %ny1\H, %d1y\H, %beta\H, %n0y\H
+        fma     %nz1\H, %d1z\H, %beta\H, %n0z\H
+        fma     %nx\H, %d2x\H, %gamma\H, %nx1\H
+        fma     %ny\H, %d2y\H, %gamma\H, %ny1\H
+        fma     %nz\H, %d2z\H, %gamma\H, %nz1\H
+        fm      %e1\H, %nx\H, %dx\H                 # dot(N, d) > 0: negate N
+        fma     %e2\H, %ny\H, %dy\H, %e1\H
+        fma     %e\H, %nz\H, %dz\H, %e2\H
+        fcgt    %f1\H, %e\H, ZERO
+        and     %f\H, %f1\H, $122
+        xor     %nxo\H, %nx\H, %f\H
+        xor     %nyo\H, %ny\H, %f\H
+        xor     %nzo\H, %nz\H, %f\H
+      ~ stqd    %nxo\H, SH_NX+\H(%gp)
+      ~ stqd    %nyo\H, SH_NY+\H(%gp)
+      ~ stqd    %nzo\H, SH_NZ+\H(%gp)
+        .endr
+        shufb   %okp, %ok0, %ok16, $119
+      ~ stqd    %okp, SH_SCRATCH+144($66)     # which of the two groups are done
+        lqa     %cinc, sh_const+240
+        shufb   %okv0, %ok0, %ok0, $91
+        shufb   %okv16, %ok16, %ok16, $91
+        and     %inc0, %cinc, %okv0
+        and     %inc16, %cinc, %okv16
+        a       %inc, %inc0, %inc16
+        a       $124, $124, %inc
+        and     %okab, %ok0, %ok16
+        ai      $67, $67, 32
+        ceqi    %end, $67, 256
+        hbrr    .Lsh_group_br, .Lsh_group
+        brz     %okab, .Lsh_slow
+.Lsh_group_br:
+        brz     %end, .Lsh_group
+        .endsched
+        br      .Lsh_iset_done
+
+        # ---- the slow path: an empty or mixed group, or a cache miss
+.Lsh_slow:
+        ai      $67, $67, -32
+.Lsh_slow_group:                              # a group the fast path did not do
+        lqd     $74, SH_SCRATCH+144($66)
+        andi    $75, $67, 16
+        rotmi   $75, $75, -1
+        rotqby  $74, $74, $75
+        brnz    $74, .Lsh_slow_next
+        a       $74, $99, $67
+        lqd     $74, CTX_RAY_ID($74)
+        ceqi    $74, $74, -1
+        gb      $75, $74
+        ceqi    $75, $75, 15
+        brz     $75, 1f
+        SH_ADDI $75, $66, SH_MAT              # no hit: no material
+        stqx    $74, $75, $67
+        br      .Lsh_slow_next
+1:
+
+        # Rays on different triangles, every lane's record and vertices in the caches (the
+        # same lookups speculatively, lane by lane), the lanes' rows transposed into
+        # columns by pairs of lanes; otherwise (a cache miss, no hit at all) the lanes one
+        # by one below. (Its pool takes $92, $93 and $120 too: reloaded after.)
+        .sched  pool=68-90,92-96,98,100-106,110-114,116-118,120,125-127 scratch=66-127
+        a       %rp, $99, $67
+        a       %gp, $66, $67
+        lqd     %ids, CTX_RAY_ID(%rp)
+        lqa     %plo, sh_const
+        lqa     %phi, sh_const+16
+        lqa     %psnd, sh_const+48
+        ceqi    %miss, %ids, -1
+        gb      %mb, %miss
+        ceqi    %allm, %mb, 15
+        shufb   %s0, %ids, %ids, $91
+        ceq     %same, %ids, %s0
+        gb      %sameb, %same
+        ceqi    %samec, %sameb, 15
+        or      %nogo, %allm, %samec
+        rotqbyi %r4, %ids, 4                  # a lane without a hit looks up the
+        cgt     %c4, %ids, %r4                # largest id of the group (a hit's)
+        selb    %m4, %r4, %ids, %c4
+        rotqbyi %r8, %m4, 8
+        cgt     %c8, %m4, %r8
+        selb    %mx, %r8, %m4, %c8
+        shufb   %mxs, %mx, %mx, $91
+        selb    %idv, %ids, %mxs, %miss
+        .irp    P, 0, 8                       # pairs of lanes: 0 and 4, 8 and 12
+        .irp    J, 0, 4
+        rotqbyi %id\P\()_\J, %idv, \P+\J
+        and     %ti\P\()_\J, %id\P\()_\J, TMASK
+        shli    %to\P\()_\J, %ti\P\()_\J, 4
+        lqx     %tag\P\()_\J, TTAGS, %to\P\()_\J
+        shli    %tl\P\()_\J, %ti\P\()_\J, 6
+        a       %line\P\()_\J, %tl\P\()_\J, TDATA
+        ceq     %th\P\()_\J, %tag\P\()_\J, %id\P\()_\J
+        lqd     %q3\P\()_\J, 48(%line\P\()_\J)
+        and     %vi\P\()_\J, %q3\P\()_\J, $121
+        shli    %vo0\P\()_\J, %vi\P\()_\J, 4
+        shli    %vl0\P\()_\J, %vi\P\()_\J, 6
+        rotqbyi %vo1\P\()_\J, %vo0\P\()_\J, 4
+        rotqbyi %vo2\P\()_\J, %vo0\P\()_\J, 8
+        rotqbyi %vl1\P\()_\J, %vl0\P\()_\J, 4
+        rotqbyi %vl2\P\()_\J, %vl0\P\()_\J, 8
+        lqx     %vt0\P\()_\J, $115, %vo0\P\()_\J
+        lqx     %vt1\P\()_\J, $115, %vo1\P\()_\J
+        lqx     %vt2\P\()_\J, $115, %vo2\P\()_\J
+        rotqbyi %q3b\P\()_\J, %q3\P\()_\J, 4
+        rotqbyi %q3c\P\()_\J, %q3\P\()_\J, 8
+        ceq     %h0\P\()_\J, %vt0\P\()_\J, %q3\P\()_\J
+        ceq     %h1\P\()_\J, %vt1\P\()_\J, %q3b\P\()_\J
+        ceq     %h2\P\()_\J, %vt2\P\()_\J, %q3c\P\()_\J
+        and     %h01\P\()_\J, %h0\P\()_\J, %h1\P\()_\J
+        and     %h012\P\()_\J, %h01\P\()_\J, %h2\P\()_\J
+        and     %okl\P\()_\J, %h012\P\()_\J, %th\P\()_\J
+        lqx     %n0\P\()_\J, $123, %vl0\P\()_\J
+        lqx     %n1\P\()_\J, $123, %vl1\P\()_\J
+        lqx     %n2\P\()_\J, $123, %vl2\P\()_\J
+        fs      %d1\P\()_\J, %n1\P\()_\J, %n0\P\()_\J           # n1 - n0, n2 - n0
+        fs      %d2\P\()_\J, %n2\P\()_\J, %n0\P\()_\J
+        lqd     %q0\P\()_\J, 0(%line\P\()_\J)
+        lqd     %q1\P\()_\J, 16(%line\P\()_\J)
+        lqd     %q2\P\()_\J, 32(%line\P\()_\J)
+        shufb   %kq\P\()_\J, %q0\P\()_\J, %q3\P\()_\J, %phi     # words 2, 3: k (q0 word 3), the material (q3's)
+        .endr
+        .irp    R, q1, q2, n0, d1, d2         # rows by pairs of lanes: b, c, n0, n1 - n0, n2 - n0
+        shufb   %lo\P\R, %\R\()\P\()_0, %\R\()\P\()_4, %plo
+        shufb   %hi\P\R, %\R\()\P\()_0, %\R\()\P\()_4, %phi
+        .endr
+        shufb   %kq\P, %kq\P\()_0, %kq\P\()_4, %phi
+        and     %ok\P, %okl\P\()_0, %okl\P\()_4
+        .endr
+        and     %ok03, %ok0, %ok8
+        andc    %ok, %ok03, %nogo
+        # the columns: b and c (q1, q2 words 0-2), n0, n1 - n0, n2 - n0 (x, y, z); k and
+        # the material
+        .irp    R, q1, q2, n0, d1, d2
+        shufb   %c0\R, %lo0\R, %lo8\R, $119
+        shufb   %c1\R, %lo0\R, %lo8\R, %psnd
+        shufb   %c2\R, %hi0\R, %hi8\R, $119
+        .endr
+        shufb   %k, %kq0, %kq8, $119
+        shufb   %mc, %kq0, %kq8, %psnd
+        or      %mat, %mc, %miss              # no hit: no material
+      ~ stqd    %mat, SH_MAT(%gp)
+        lqd     %t, CTX_RAY_T(%rp)
+        lqd     %dx, 0(%rp)
+        lqd     %dy, 256(%rp)
+        lqd     %dz, 512(%rp)
+        fma     %px, %t, %dx, $107            # the hit point
+        fma     %py, %t, %dy, $108
+        fma     %pz, %t, %dz, $109
+      ~ stqd    %px, SH_PX(%gp)
+      ~ stqd    %py, SH_PY(%gp)
+      ~ stqd    %pz, SH_PZ(%gp)
+        ceqi    %k0, %k, 0
+        ceqi    %k1, %k, 1
+        selb    %u1, %px, %pz, %k1            # u: k0 -> y, k1 -> z, k2 -> x
+        selb    %u, %u1, %py, %k0
+        selb    %v1, %py, %px, %k1            # v: k0 -> z, k1 -> x, k2 -> y
+        selb    %v, %v1, %pz, %k0
+        fm      %b1, %c0q1, %u                 # beta = (b_nu u + b_nv v) + b_d
+        fma     %b2, %c1q1, %v, %b1
+        fa      %beta, %b2, %c2q1
+        fm      %g1, %c0q2, %u                 # gamma = (c_nu u + c_nv v) + c_d
+        fma     %g2, %c1q2, %v, %g1
+        fa      %gamma, %g2, %c2q2
+        fma     %nx1, %c0d1, %beta, %c0n0       # n0 + (n1 - n0) beta + (n2 - n0) gamma
+        fma     %ny1, %c1d1, %beta, %c1n0
+        fma     %nz1, %c2d1, %beta, %c2n0
+        fma     %nx, %c0d2, %gamma, %nx1
+        fma     %ny, %c1d2, %gamma, %ny1
+        fma     %nz, %c2d2, %gamma, %nz1
+        fm      %e1, %nx, %dx                 # dot(N, d) > 0: negate N
+        fma     %e2, %ny, %dy, %e1
+        fma     %e, %nz, %dz, %e2
+        fcgt    %f1, %e, ZERO
+        and     %f, %f1, $122
+        xor     %nxo, %nx, %f
+        xor     %nyo, %ny, %f
+        xor     %nzo, %nz, %f
+      ~ stqd    %nxo, SH_NX(%gp)
+      ~ stqd    %nyo, SH_NY(%gp)
+      ~ stqd    %nzo, SH_NZ(%gp)
+        shufb   %okv, %ok, %ok, $91           # counted if done: a group, its hit lanes
+        cntb    %mc1, %mb
+        sfi     %hits, %mc1, 4
+        il      %one, 1
+        and     %ig, %one, %okv
+        and     %it, %hits, %okv
+        lqd     %cg, SH_STATS+SHS_GROUPS($66)
+        lqd     %ct, SH_STATS+SHS_TLOOK($66)
+        a       %cg1, %cg, %ig
+        a       %ct1, %ct, %it
+        stqd    %cg1, SH_STATS+SHS_GROUPS($66)
+        stqd    %ct1, SH_STATS+SHS_TLOOK($66)
+        brz     %ok, .Lsh_slow_body
+        .endsched
+        br      .Lsh_slow_next
+
+        # one lane at a time
+.Lsh_slow_body:
+        SH_ADDI $74, $66, SH_SAVE
+        .irp    R, 0, 1, 2, 3, 4
+        stqd    $12\R, 16*\R($74)
+        .endr
+        lqd     $70, SH_BLOCK($66)            # its registers (the fast path's pool)
+        ori     $100, $70, 0                  # vertices
         lqd     $70, SH_BLOCK+SHB_MODE($66)
         il      $75, 1
         rotqbyi $71, $70, 8
         shl     $104, $75, $71
         ai      $104, $104, -1                # vertex cache index mask
-        rotqbyi $71, $70, 12
-        shl     $105, $75, $71
-        ai      $105, $105, -1                # material cache index mask
         ila     $90, sh_const
         lqd     $117, 0($90)
         lqd     $118, 16($90)
-        lqd     $119, 32($90)
         lqd     $98, 48($90)
-        lqd     $91, 64($90)
-        ila     $70, params
-        lqd     $71, PARAM_ORIGIN($70)
-        shufb   $107, $71, $71, $91           # origin x, y, z splats
-        lqd     $92, 80($90)
-        shufb   $108, $71, $71, $92
-        lqd     $93, 96($90)
-        shufb   $109, $71, $71, $93
         SH_ADDI $111, $99, CTX_RAY_ID
         SH_ADDI $112, $99, CTX_RAY_T
         ori     $113, $99, 0
-
-        # ---- 1. the i-set
         ila     $114, sh_vertex_miss
         ila     $106, sh_tri_miss
-        SH_ADDI $115, $66, SH_VTAGS
         SH_ADDI $116, $66, SH_VDATA
-        il      $67, 0                        # intersection packet * 16
-.Lsh_group:
         lqx     $70, $111, $67                # ids
         ceqi    $78, $70, -1                  # misses
         gb      $72, $78
@@ -415,25 +722,150 @@ shade_packet:
         xor     $85, $85, $88
         xor     $86, $86, $88
         xor     $87, $87, $88
-        hbrr    .Lsh_group_br, .Lsh_group
         SH_ADDI $74, $66, SH_NX
         stqx    $85, $74, $67
         SH_ADDI $74, $66, SH_NY
         stqx    $86, $74, $67
         SH_ADDI $74, $66, SH_NZ
         stqx    $87, $74, $67
-.Lsh_group_next:
+.Lsh_slow_done:
+        SH_ADDI $74, $66, SH_SAVE
+        .irp    R, 0, 1, 2, 3, 4
+        lqd     $12\R, 16*\R($74)
+        .endr
+.Lsh_slow_next:
+        lqa     $92, sh_const+80
+        lqa     $93, sh_const+96
+        lqa     $120, sh_const+208
         ai      $67, $67, 16
+        andi    $74, $67, 16
+        brnz    $74, .Lsh_slow_group
         ceqi    $74, $67, 256
-.Lsh_group_br:
         brz     $74, .Lsh_group
-        br      .Lsh_colour
+        br      .Lsh_iset_done
 .Lsh_group_empty:                             # no hit: no material
         SH_ADDI $74, $66, SH_MAT
         stqx    $78, $74, $67
-        br      .Lsh_group_next
+        br      .Lsh_slow_done
 
-        # ---- 2. the colour block: wait for its previous put, clear to black
+        # the fast groups' counters (groups, same, triangle lookups) to SH_STATS
+.Lsh_iset_done:
+        lqd     $70, SH_BLOCK($66)            # materials, colour, lights
+        rotqbyi $101, $70, 4
+        rotqbyi $102, $70, 8
+        rotqbyi $103, $70, 12
+        lqd     $70, SH_BLOCK+SHB_MODE($66)
+        il      $75, 1
+        rotqbyi $71, $70, 12
+        shl     $105, $75, $71
+        ai      $105, $105, -1                # material cache index mask
+        lqd     $70, SH_STATS+SHS_GROUPS($66)
+        lqd     $71, SH_STATS+SHS_SAME($66)
+        lqd     $72, SH_STATS+SHS_TLOOK($66)
+        rotqbyi $75, $124, 4
+        rotqbyi $76, $124, 8
+        a       $70, $70, $124
+        a       $71, $71, $75
+        a       $72, $72, $76
+        stqd    $70, SH_STATS+SHS_GROUPS($66)
+        stqd    $71, SH_STATS+SHS_SAME($66)
+        stqd    $72, SH_STATS+SHS_TLOOK($66)
+
+        # (SH_VIS, per light: the visibility masks of the i-set's rays; the hit points are
+        # in SH_PX, SH_PY, SH_PZ from here on)
+
+        # ---- 2. the lights' irradiance of every ray of the i-set, the same for every
+        # diffuse shader: once, not once per pass. Per light, four groups per step.
+        ila     $90, sh_const
+        lqd     $125, 176($90)                # 1.0
+        lqd     $126, 144($90)                # 0.5
+        lqd     $127, 160($90)                # 1.5
+        SH_ADDI $82, $66, SH_LIGHTS
+        SH_ADDI $83, $66, SH_VIS
+        ori     $84, $103, 0                  # lights left
+        il      $85, 0                        # 0: the first light (the sums start at 0)
+        brz     $84, .Lsh_dark
+.Lsh_light:
+        lqd     $70, 0($82)                   # the light's position, colour
+        lqd     $71, 16($82)
+        lqd     $72, 32($82)
+        lqd     $73, 48($82)
+        lqd     $74, 64($82)
+        lqd     $75, 80($82)
+        il      $67, 0
+        .sched  pool=68-69,76-81,86-90,94-96,98,106-124 scratch=66-127
+.Lsh_light_g:
+        a       %gp, $66, $67
+        a       %vp, $83, $67
+        .irp    H, 0, 16, 32, 48
+        lqd     %nx\H, SH_NX+\H(%gp)
+        lqd     %ny\H, SH_NY+\H(%gp)
+        lqd     %nz\H, SH_NZ+\H(%gp)
+        lqd     %px\H, SH_PX+\H(%gp)
+        lqd     %py\H, SH_PY+\H(%gp)
+        lqd     %pz\H, SH_PZ+\H(%gp)
+        lqd     %vis\H, \H(%vp)
+        lqd     %ir\H, SH_IRR_R+\H(%gp)
+        lqd     %ig\H, SH_IRR_G+\H(%gp)
+        lqd     %ib\H, SH_IRR_B+\H(%gp)
+        and     %ira\H, %ir\H, $85
+        and     %iga\H, %ig\H, $85
+        and     %iba\H, %ib\H, $85
+        fm      %nn1\H, %nx\H, %nx\H          # dot(N, N)
+        fma     %nn2\H, %ny\H, %ny\H, %nn1\H
+        fma     %nn\H, %nz\H, %nz\H, %nn2\H
+        fs      %lx\H, $70, %px\H             # L = light - P
+        fs      %ly\H, $71, %py\H
+        fs      %lz\H, $72, %pz\H
+        fm      %c1\H, %nx\H, %lx\H           # c = dot(N, L)
+        fma     %c2\H, %ny\H, %ly\H, %c1\H
+        fma     %c\H, %nz\H, %lz\H, %c2\H
+        fm      %l1\H, %lx\H, %lx\H           # dot(L, L)
+        fma     %l2\H, %ly\H, %ly\H, %l1\H
+        fma     %ll\H, %lz\H, %lz\H, %l2\H
+        fcgt    %lt1\H, %c\H, ZERO            # lit: facing the light
+        and     %lit\H, %lt1\H, %vis\H        # and not occluded
+        fm      %x\H, %nn\H, %ll\H            # 1 / sqrt(dot(N, N) dot(L, L)): estimate,
+        frsqest %y0\H, %x\H                   # interpolation, one Newton step
+        fi      %y1\H, %x\H, %y0\H
+        fm      %w1\H, %x\H, %y1\H
+        fm      %w2\H, %w1\H, %y1\H
+        fnms    %w3\H, %w2\H, $126, $127      # 1.5 - 0.5 x y^2
+        fm      %y\H, %y1\H, %w3\H
+        fm      %cs1\H, %c\H, %y\H            # cosine, at most 1, 0 when unlit
+        fcgt    %big\H, %cs1\H, $125
+        selb    %cs2\H, %cs1\H, $125, %big\H
+        and     %cs\H, %cs2\H, %lit\H
+        fma     %or\H, %cs\H, $73, %ira\H
+        fma     %og\H, %cs\H, $74, %iga\H
+        fma     %ob\H, %cs\H, $75, %iba\H
+      ~ stqd    %or\H, SH_IRR_R+\H(%gp)
+      ~ stqd    %og\H, SH_IRR_G+\H(%gp)
+      ~ stqd    %ob\H, SH_IRR_B+\H(%gp)
+        .endr
+        ai      $67, $67, 64
+        ceqi    %end, $67, 256
+        hbrr    .Lsh_light_br, .Lsh_light_g
+.Lsh_light_br:
+        brz     %end, .Lsh_light_g
+        .endsched
+        il      $85, -1
+        ai      $82, $82, 96
+        ai      $83, $83, 256
+        ai      $84, $84, -1
+        brnz    $84, .Lsh_light
+        br      .Lsh_colour
+.Lsh_dark:                                    # no light: no irradiance
+        il      $67, 0
+1:      a       $70, $66, $67
+        stqd    ZERO, SH_IRR_R($70)
+        stqd    ZERO, SH_IRR_G($70)
+        stqd    ZERO, SH_IRR_B($70)
+        ai      $67, $67, 16
+        ceqi    $71, $67, 256
+        brz     $71, 1b
+
+        # ---- 3. the colour block: wait for its previous put, clear to black
 .Lsh_colour:
         lqd     $70, SH_STATS+SHS_PACKETS($66)
         andi    $114, $70, 1                  # which block
@@ -449,32 +881,110 @@ shade_packet:
         rdch    $71, $MFC_RdTagStat
         ila     $90, sh_const
         lqd     $71, 192($90)
-        il      $72, 0
-1:      stqx    $71, $115, $72
-        ai      $72, $72, 16
-        ceqi    $73, $72, 256
-        brz     $73, 1b
+        .irp    Q, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
+        stqd    $71, \Q($115)
+        .endr
 
-        # ---- 3. one pass per material still referenced
+        # ---- 4. one pass per material still referenced
         SH_ADDI $68, $66, SH_MAT
-        il      $107, 0                       # packets before this one are all done
+        # the first ray (group by group, lane by lane) with a material left: a 64-bit
+        # mask of the rays without one (groups 0-7 in %hi, 8-15 in %lo, lane 0 first)
+        .sched  pool=69-90,94-96,98-100,103-104,107-109,111-113,117-120 scratch=66-127
 .Lsh_pass:
-        ori     $67, $107, 0
-1:      ceqi    $73, $67, 256
-        brnz    $73, .Lsh_done
-        lqx     $70, $68, $67
-        ceqi    $71, $70, -1
-        gb      $72, $71
-        ceqi    $73, $72, 15
-        ai      $67, $67, 16
-        brnz    $73, 1b
-        ai      $67, $67, -16
-        ori     $107, $67, 0
-        xori    $72, $72, 15                  # lanes with a material: the first
-        clz     $72, $72
-        ai      $72, $72, -28
-        shli    $72, $72, 2
-        rotqby  $110, $70, $72                # the material, preferred slot
+        lqd     %m0, 0($68)
+        ceqi    %e0, %m0, -1
+        gb      %b0, %e0
+        shli    %s0, %b0, 28
+        lqd     %m1, 16($68)
+        ceqi    %e1, %m1, -1
+        gb      %b1, %e1
+        shli    %s1, %b1, 24
+        lqd     %m2, 32($68)
+        ceqi    %e2, %m2, -1
+        gb      %b2, %e2
+        shli    %s2, %b2, 20
+        lqd     %m3, 48($68)
+        ceqi    %e3, %m3, -1
+        gb      %b3, %e3
+        shli    %s3, %b3, 16
+        lqd     %m4, 64($68)
+        ceqi    %e4, %m4, -1
+        gb      %b4, %e4
+        shli    %s4, %b4, 12
+        lqd     %m5, 80($68)
+        ceqi    %e5, %m5, -1
+        gb      %b5, %e5
+        shli    %s5, %b5, 8
+        lqd     %m6, 96($68)
+        ceqi    %e6, %m6, -1
+        gb      %b6, %e6
+        shli    %s6, %b6, 4
+        lqd     %m7, 112($68)
+        ceqi    %e7, %m7, -1
+        gb      %b7, %e7
+        shli    %s7, %b7, 0
+        lqd     %m8, 128($68)
+        ceqi    %e8, %m8, -1
+        gb      %b8, %e8
+        shli    %s8, %b8, 28
+        lqd     %m9, 144($68)
+        ceqi    %e9, %m9, -1
+        gb      %b9, %e9
+        shli    %s9, %b9, 24
+        lqd     %m10, 160($68)
+        ceqi    %e10, %m10, -1
+        gb      %b10, %e10
+        shli    %s10, %b10, 20
+        lqd     %m11, 176($68)
+        ceqi    %e11, %m11, -1
+        gb      %b11, %e11
+        shli    %s11, %b11, 16
+        lqd     %m12, 192($68)
+        ceqi    %e12, %m12, -1
+        gb      %b12, %e12
+        shli    %s12, %b12, 12
+        lqd     %m13, 208($68)
+        ceqi    %e13, %m13, -1
+        gb      %b13, %e13
+        shli    %s13, %b13, 8
+        lqd     %m14, 224($68)
+        ceqi    %e14, %m14, -1
+        gb      %b14, %e14
+        shli    %s14, %b14, 4
+        lqd     %m15, 240($68)
+        ceqi    %e15, %m15, -1
+        gb      %b15, %e15
+        shli    %s15, %b15, 0
+        or      %hia, %s0, %s1
+        or      %hib, %s2, %s3
+        or      %hic, %s4, %s5
+        or      %hid, %s6, %s7
+        or      %hie, %hia, %hib
+        or      %hif, %hic, %hid
+        or      %hig, %hie, %hif
+        xori    %hi, %hig, -1
+        clz     %hiz, %hi
+        or      %loa, %s8, %s9
+        or      %lob, %s10, %s11
+        or      %loc, %s12, %s13
+        or      %lod, %s14, %s15
+        or      %loe, %loa, %lob
+        or      %lof, %loc, %lod
+        or      %log, %loe, %lof
+        xori    %lo, %log, -1
+        clz     %loz, %lo
+        ceqi    %hin, %hi, 0
+        ai      %lo32, %loz, 32
+        selb    %pos, %hiz, %lo32, %hin        # 64: none left
+        ceqi    %none, %pos, 64
+        andi    %pq, %pos, -4
+        shli    %go, %pq, 2                   # its group * 16
+        andi    %ln, %pos, 3
+        shli    %lb, %ln, 2                   # its lane * 4
+        lqx     %mq, $68, %go
+        rotqby  $110, %mq, %lb                # the material, preferred slot
+        brnz    %none, .Lsh_done
+        .endsched
         SH_COUNT SHS_PASSES, $74
         # material cache
         and     $71, $110, $105
@@ -506,102 +1016,56 @@ shade_packet:
         lqd     $127, 160($90)                # 1.5
         lqd     $106, 128($90)                # 255
         il      $67, 0
-.Lsh_packet:
-        lqx     $70, $68, $67
-        ceq     $69, $70, $110                # this shader's rays
-        gb      $71, $69
-        brz     $71, .Lsh_packet_next
-        SH_ADDI $71, $66, SH_NX
-        lqx     $72, $71, $67
-        SH_ADDI $71, $66, SH_NY
-        lqx     $73, $71, $67
-        SH_ADDI $71, $66, SH_NZ
-        lqx     $74, $71, $67
-        SH_ADDI $71, $66, SH_PX
-        lqx     $75, $71, $67
-        SH_ADDI $71, $66, SH_PY
-        lqx     $76, $71, $67
-        SH_ADDI $71, $66, SH_PZ
-        lqx     $77, $71, $67
-        fm      $78, $72, $72                 # dot(N, N)
-        fma     $78, $73, $73, $78
-        fma     $78, $74, $74, $78
-        il      $79, 0                        # irradiance r, g, b
-        il      $80, 0
-        il      $81, 0
-        SH_ADDI $82, $66, SH_LIGHTS
-        SH_ADDI $83, $66, SH_VIS
-        ori     $84, $103, 0                  # lights left
-        brz     $84, 5f
-4:      lqd     $85, 0($82)
-        lqd     $86, 16($82)
-        lqd     $87, 32($82)
-        fs      $85, $85, $75                 # L = light - P
-        fs      $86, $86, $76
-        fs      $87, $87, $77
-        fm      $88, $72, $85                 # c = dot(N, L)
-        fma     $88, $73, $86, $88
-        fma     $88, $74, $87, $88
-        fm      $89, $85, $85                 # dot(L, L)
-        fma     $89, $86, $86, $89
-        fma     $89, $87, $87, $89
-        fcgt    $94, $88, ZERO                # lit: facing the light
-        lqx     $95, $83, $67                 # and not occluded
-        and     $94, $94, $95
-        fm      $89, $78, $89                 # 1 / sqrt(dot(N, N) dot(L, L)): estimate,
-        frsqest $95, $89                      # interpolation, one Newton step
-        fi      $95, $89, $95
-        fm      $96, $89, $95
-        fm      $96, $96, $95
-        fnms    $96, $96, $126, $127          # 1.5 - 0.5 x y^2
-        fm      $95, $95, $96
-        fm      $88, $88, $95                 # cosine, at most 1, 0 when unlit
-        fcgt    $96, $88, $125
-        selb    $88, $88, $125, $96
-        and     $88, $88, $94
-        lqd     $85, 48($82)
-        lqd     $86, 64($82)
-        lqd     $87, 80($82)
-        fma     $79, $88, $85, $79
-        fma     $80, $88, $86, $80
-        fma     $81, $88, $87, $81
-        ai      $82, $82, 96
-        ai      $83, $83, 256
-        ai      $84, $84, -1
-        brnz    $84, 4b
-5:      hbrr    .Lsh_packet_br, .Lsh_packet
-        fa      $79, $79, $124                # kd * (ambient + irradiance), clamped,
-        fa      $80, $80, $124                # to 8 bits: (c 255 + 0.5) truncated
-        fa      $81, $81, $124
-        fm      $79, $79, $121
-        fm      $80, $80, $122
-        fm      $81, $81, $123
-        .irp    R, $79, $80, $81
-        fcgt    $96, \R, $125
-        selb    \R, \R, $125, $96
-        fma     \R, \R, $106, $126
-        cfltu   \R, \R, 0
+        .sched  pool=69-90,94-96,98-100,103-104,108-109,111-113,117-120 scratch=66-127
+.Lsh_apply:
+        a       %gp, $66, $67
+        a       %op, $115, $67
+        il      %none, -1
+        .irp    H, 0, 16, 32, 48
+        lqd     %m\H, SH_MAT+\H(%gp)
+        ceq     %sel\H, %m\H, $110            # this shader's rays
+        lqd     %ir\H, SH_IRR_R+\H(%gp)
+        lqd     %ig\H, SH_IRR_G+\H(%gp)
+        lqd     %ib\H, SH_IRR_B+\H(%gp)
+        fa      %ra\H, %ir\H, $124         # kd * (ambient + irradiance), clamped,
+        fa      %ga\H, %ig\H, $124
+        fa      %ba\H, %ib\H, $124
+        fm      %rk\H, %ra\H, $121         # to 8 bits: (c 255 + 0.5) truncated
+        fm      %gk\H, %ga\H, $122
+        fm      %bk\H, %ba\H, $123
+        fcgt    %rbig\H, %rk\H, $125
+        selb    %rc\H, %rk\H, $125, %rbig\H
+        fma     %rs\H, %rc\H, $106, $126
+        cfltu   %ru\H, %rs\H, 0
+        fcgt    %gbig\H, %gk\H, $125
+        selb    %gc\H, %gk\H, $125, %gbig\H
+        fma     %gs\H, %gc\H, $106, $126
+        cfltu   %gu\H, %gs\H, 0
+        fcgt    %bbig\H, %bk\H, $125
+        selb    %bc\H, %bk\H, $125, %bbig\H
+        fma     %bs\H, %bc\H, $106, $126
+        cfltu   %bu\H, %bs\H, 0
+        shli    %rh\H, %ru\H, 24
+        shli    %gh\H, %gu\H, 16
+        shli    %bh\H, %bu\H, 8
+        or      %rg\H, %rh\H, %gh\H
+        or      %rgb\H, %rg\H, %bh\H
+        ori     %col\H, %rgb\H, 0xff
+        lqd     %o\H, \H(%op)
+        selb    %o2\H, %o\H, %col\H, %sel\H
+      ~ stqd    %o2\H, \H(%op)
+        selb    %mn\H, %m\H, %none, %sel\H    # these rays are shaded
+      ~ stqd    %mn\H, SH_MAT+\H(%gp)
         .endr
-        shli    $79, $79, 24
-        shli    $80, $80, 16
-        shli    $81, $81, 8
-        or      $79, $79, $80
-        or      $79, $79, $81
-        ori     $79, $79, 0xff
-        lqx     $80, $115, $67
-        selb    $80, $80, $79, $69
-        stqx    $80, $115, $67
-        il      $71, -1                       # these rays are shaded
-        selb    $70, $70, $71, $69
-        stqx    $70, $68, $67
-.Lsh_packet_next:
-        ai      $67, $67, 16
-        ceqi    $71, $67, 256
-.Lsh_packet_br:
-        brz     $71, .Lsh_packet
+        ai      $67, $67, 64
+        ceqi    %end, $67, 256
+        hbrr    .Lsh_apply_br, .Lsh_apply
+.Lsh_apply_br:
+        brz     %end, .Lsh_apply
+        .endsched
         br      .Lsh_pass
 
-        # ---- 4. put the block to ea_colour + packet * 256
+        # ---- 5. put the block to ea_colour + packet * 256
 .Lsh_done:
         shli    $70, $97, 8
         a       $70, $70, $102
