@@ -867,6 +867,7 @@ shade_packet:
 
         # ---- 3. the colour block: wait for its previous put, clear to black
 .Lsh_colour:
+        brsl    $127, shadow_rays             # --shade shadows: SH_VIS (modules/shadow.s)
         lqd     $70, SH_STATS+SHS_PACKETS($66)
         andi    $114, $70, 1                  # which block
         shli    $115, $114, 8

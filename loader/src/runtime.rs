@@ -33,6 +33,8 @@ pub struct FrameRun {
     /// on one triangle, passes, packets, vertex lookups, misses, material lookups, misses,
     /// triangle records looked up in the traversal's triangle cache, fetched past it).
     pub shade_counters: Vec<ShadeCounters>,
+    /// Shadow rays the shadow module cast (`--shade shadows`), summed over the SPUs.
+    pub shadow_rays: u64,
     pub frame_cycles: u64,
     pub spus: Vec<SpuReport>,
     /// The timing model's counters, merged over all SPUs.
@@ -456,6 +458,20 @@ pub fn render_frame_with(
         }
     }
     let events = spus.iter_mut().map(|spu| spu.take_events()).collect();
+    let shadow_rays = match &layout.shading {
+        Some(_) if shaded => {
+            let at = layout.params.ls_shading as usize
+                + crate::kernel_abi::SHADOW_AREA
+                + crate::kernel_abi::SHADOW_RAYS_OFFSET;
+            spus.iter()
+                .map(|spu| {
+                    let w = &spu.ls()[at..at + 4];
+                    u32::from_be_bytes([w[0], w[1], w[2], w[3]]) as u64
+                })
+                .sum()
+        }
+        _ => 0,
+    };
     let (colour_buffer, shade_counters) = match &layout.shading {
         Some(shading) if shaded => {
             let at = shading.colour_addr as usize;
@@ -490,6 +506,7 @@ pub fn render_frame_with(
         traffic,
         colour_buffer,
         shade_counters,
+        shadow_rays,
         events,
         frame_buffer: memory.bytes()[fb..fb + layout.frame_buffer_len].to_vec(),
         frame_cycles: spus_report.iter().map(|s| s.cycles).max().unwrap_or(0),

@@ -173,6 +173,11 @@ pub struct Validation {
     /// `shading::COLOUR_TOLERANCE` in a channel.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub colour_mismatches: Option<usize>,
+    /// `--shade shadows`: pixels beyond the tolerance that take the colour of a shadow ray
+    /// grazing an occluder's edge (within 2^-16 barycentric), which either outcome gives
+    /// (`loader::reference::Reference::shadow_grazes`); not counted as mismatches.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shadow_edge_pixels: Option<usize>,
 }
 
 /// Per-packet averages, percentages and per-SPU speed, as in the paper's Table 2.
@@ -416,6 +421,7 @@ impl FrameStats {
                 pixels,
                 mismatches,
                 colour_mismatches: None,
+                shadow_edge_pixels: None,
             }),
             table2: Table2::new(run, rays, clock_ghz),
             config: run.config.clone(),
@@ -430,7 +436,7 @@ impl FrameStats {
             },
             rays_by_kind: RaysByKind {
                 primary: rays,
-                shadow: 0,
+                shadow: run.shadow_rays,
             },
             table4: Table4::new(&run.shade_counters),
             table6: Table6::new(&run.traffic),
