@@ -773,6 +773,7 @@ shade_packet:
 
         # (SH_VIS, per light: the visibility masks of the i-set's rays; the hit points are
         # in SH_PX, SH_PY, SH_PZ from here on)
+        brsl    $127, shadow_rays             # --shade shadows: SH_VIS (modules/shadow.s)
 
         # ---- 2. the lights' irradiance of every ray of the i-set, the same for every
         # diffuse shader: once, not once per pass. Per light, four groups per step.
@@ -867,7 +868,6 @@ shade_packet:
 
         # ---- 3. the colour block: wait for its previous put, clear to black
 .Lsh_colour:
-        brsl    $127, shadow_rays             # --shade shadows: SH_VIS (modules/shadow.s)
         lqd     $70, SH_STATS+SHS_PACKETS($66)
         andi    $114, $70, 1                  # which block
         shli    $115, $114, 8
