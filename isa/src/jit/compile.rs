@@ -1,5 +1,5 @@
-//! Translation of one block to Cranelift IR and host code, and the per-SPU cache of
-//! compiled blocks.
+//! Translation of one block to Cranelift IR and host code, the code cache the SPUs of a
+//! machine share, and each SPU's table of the blocks it runs compiled.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -70,8 +70,8 @@ pub(crate) type Entry = unsafe extern "C" fn(*mut Ctx) -> u64;
 pub(crate) const RESULT_TAKEN: u64 = 1 << 48;
 pub(crate) const RESULT_PARTIAL: u64 = 1 << 49;
 
-/// Cranelift's optimisation level for blocks: "none" compiles faster; blocks are short and
-/// already written tightly, so "speed" gained nothing measurable (docs/timing.md).
+/// Cranelift's optimisation level for blocks: "none" compiles a room frame's blocks about a
+/// third faster but its code runs slower, a net loss (docs/timing.md, "Block compiler").
 const OPT_LEVEL: &str = "speed";
 
 fn new_module() -> JITModule {

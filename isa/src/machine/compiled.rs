@@ -144,8 +144,26 @@ mod host {
 
         /// The compiled block starting at `pc` (with `n` instructions, when given),
         /// compiling it if it is hot and `whole` (not the rest of a cut block); `None`:
-        /// interpret it.
+        /// interpret it. The common case (compiled, checked at this code epoch) inline.
+        #[inline(always)]
         fn compiled_block(&mut self, pc: u32, n: Option<usize>, whole: bool) -> Option<usize> {
+            if let Some(blocks) = self.compiled.as_deref() {
+                let slot = blocks.slots[(pc as usize >> 2) & (LS_SIZE / 4 - 1)];
+                if slot != 0 && slot != DECLINED {
+                    let id = slot as usize - 1;
+                    let b = &blocks.blocks[id];
+                    if b.verified == self.code_epoch && n.is_none_or(|n| b.code.n as usize == n) {
+                        return Some(id);
+                    }
+                }
+            }
+            self.compiled_block_slow(pc, n, whole)
+        }
+
+        /// [`Spu::compiled_block`] past its common case: checking the words again after
+        /// the code epoch moved, counting heat, compiling.
+        #[inline(never)]
+        fn compiled_block_slow(&mut self, pc: u32, n: Option<usize>, whole: bool) -> Option<usize> {
             let w = (pc as usize >> 2) & (LS_SIZE / 4 - 1);
             let blocks = self
                 .compiled
