@@ -116,6 +116,18 @@ fn hit_box(
     (near <= far).then_some(near)
 }
 
+/// `node`'s box grown by `slack` of its extent and of its coordinates' magnitude per axis:
+/// it holds its triangles widened by `slack` (barycentric) and their rounding.
+fn grown(node: &NodeRecord, slack: f32) -> NodeRecord {
+    let mut g = *node;
+    for a in 0..3 {
+        let m = slack * ((node.max[a] - node.min[a]) + node.min[a].abs().max(node.max[a].abs()));
+        g.min[a] -= m;
+        g.max[a] += m;
+    }
+    g
+}
+
 /// `1 / d` per component, with zero components treated as `±1e-30` so no infinities arise
 /// (the SPU has none) and the slab test stays correct for rays parallel to a slab.
 fn safe_inverse(d: [f32; 3]) -> [f32; 3] {
@@ -196,7 +208,15 @@ impl Reference {
             return best;
         }
         let mut stack: Vec<(u32, f32)> = Vec::with_capacity(128);
-        if let Some(entry) = hit_box(&self.nodes[0], o, inverse, T_MIN, best.t) {
+        // widened triangles reach past their boxes: the boxes grow with them
+        let test_box = |node: &NodeRecord, t_max: f32| {
+            if slack > 0.0 {
+                hit_box(&grown(node, slack), o, inverse, T_MIN, t_max)
+            } else {
+                hit_box(node, o, inverse, T_MIN, t_max)
+            }
+        };
+        if let Some(entry) = test_box(&self.nodes[0], best.t) {
             stack.push((0, entry));
         }
         while let Some((index, entry)) = stack.pop() {
@@ -221,8 +241,8 @@ impl Reference {
                 continue;
             }
             let c = node.link;
-            let near = hit_box(&self.nodes[c as usize], o, inverse, T_MIN, best.t);
-            let far = hit_box(&self.nodes[c as usize + 1], o, inverse, T_MIN, best.t);
+            let near = test_box(&self.nodes[c as usize], best.t);
+            let far = test_box(&self.nodes[c as usize + 1], best.t);
             match (near, far) {
                 (Some(a), Some(b)) if a <= b => {
                     stack.push((c + 1, b));

@@ -13,8 +13,8 @@ use spu_loader::kernel_abi::{
 use spu_loader::shading::{Light, SHADOW_EPSILON};
 
 /// Bytes the stand-in traversal copies per shadow packet: the rays (dx, dy, dz, rx, ry, rz,
-/// t), 16 registers and vars words, the t array after the leaf hook.
-const DUMP_BYTES: u32 = 2304;
+/// t), 16 registers and vars words, the t array after the leaf hook, the corner rays.
+const DUMP_BYTES: u32 = 2352;
 
 const DRIVER: &str = r#"
         .include "layout.inc"
@@ -32,14 +32,14 @@ handlers: .long bvh_miss_one, .Lpf_one
 calls:  .long 0, 0, 0, 0
 markers: .space 8 * 16                      # per packet: 1 the leaf left rays, 2 it ended
 occl:   .space 8 * 256                      # per light: the ids trav records
-dump:   .space 8 * 2304
+dump:   .space 8 * 2352
 # the stand-in traversal
 set_first:
         bi      $0
 trav:   lqa     $80, calls
         ai      $81, $80, 1
         stqa    $81, calls
-        il      $82, 2304
+        il      $82, 2352
         mpy     $83, $80, $82
         ila     $84, dump
         a       $83, $83, $84                 # this packet's dump
@@ -71,6 +71,14 @@ trav:   lqa     $80, calls
         lqa     $86, vars+V_PFMISS
         stqd    $86, 240($84)
         il      BMISSH, 0                     # (a leaf's ray loop uses the register)
+        ila     $84, 2304
+        a       $84, $84, $83
+        lqd     $86, CTX_CORNERS(RAYS)
+        stqd    $86, 0($84)
+        lqd     $86, CTX_CORNERS+16(RAYS)
+        stqd    $86, 16($84)
+        lqd     $86, CTX_CORNERS+32(RAYS)
+        stqd    $86, 32($84)
         shli    $86, $80, 8                   # the host's ids for this packet
         ila     $87, occl
         a       $86, $86, $87
@@ -98,7 +106,7 @@ after_leaf:
         shli    $81, $80, 4
         ila     $82, markers
         stqx    $90, $82, $81
-        il      $82, 2304
+        il      $82, 2352
         mpy     $83, $80, $82
         ila     $84, dump+2048
         a       $83, $83, $84
@@ -386,6 +394,12 @@ fn shadow_packets_are_generated_traced_and_give_visibility() {
                 "one context while shadow packets run"
             );
             assert_eq!(quad(15)[0], h.word(handlers + 4), ".Lpf_one");
+            // the corner rays d, -d, d, -d: the leaves' culling culls nothing
+            let corner = |c: u32| [0, 1, 2].map(|a| h.f(base + 2304 + 16 * a + 4 * c));
+            assert!(corner(0).iter().any(|&x| x != 0.0));
+            assert_eq!(corner(0), corner(2));
+            assert_eq!(corner(1), corner(0).map(|x| -x));
+            assert_eq!(corner(3), corner(1));
             // early termination: the occluded rays stop, the packet ends when none is left
             let after = base + 2048;
             if early {
