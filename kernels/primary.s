@@ -31,5 +31,6 @@
         .include "modules/output.s"         # shading and packet output
         .ifdef  SHADE
         .include "modules/shade.s"          # --shade: i-sets, shading caches, diffuse
+        .include "modules/shadow.s"         # --shade shadows: shadow packets
         .endif
         .include "modules/frame_done.s"     # statistics and the end of the frame

@@ -12,6 +12,8 @@
         .align  3
 packet_done:
         .ifdef  SHADE                         # --shade simple: modules/shade.s first
+        lqa     $66, sv_trace                 # (a shadow packet: modules/shadow.s)
+        brnz    $66, shadow_done
         lqd     $69, CTX_TILE64(RAYS)
         lqd     $70, CTX_PACKET(RAYS)
         ori     $68, RAYS, 0

@@ -445,6 +445,7 @@ shade_packet:
         # for no hit): the place for shadow rays to fill SH_VIS (per light, the rays'
         # visibility masks), which the irradiance below reads. Only $66, $97, $101..$103
         # and $105 need to survive up to here; the rest is set again below.
+        brsl    $127, shadow_rays             # --shade shadows: SH_VIS (modules/shadow.s)
 
         # ---- 2. the lights' irradiance of every ray of the i-set, the same for every
         # diffuse shader: once, not once per pass. Per light, four groups per step.

@@ -319,8 +319,12 @@ tri_next:
         ai      $66, $66, 1
         ai      $67, $67, -1
         brnz    $67, tri_loop
+        .ifdef  SHADE                         # --shadow-early on: occluded rays stop
+        lqa     $80, sv_early                 # (modules/shadow.s)
+        brnz    $80, shadow_leaf
+.Lleaf_refresh:
+        .endif
         # the packet's largest t shrinks as rays hit: refresh the IA exit bound
-        
         .irp    J, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
         lqd     (\J+81), CTX_RAY_T+\J*16(RAYS)
         .endr

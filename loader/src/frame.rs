@@ -7,7 +7,7 @@
 use crate::camera::CameraBasis;
 use crate::kernel_abi::{
     check_kernel_options, colour_buffer_bytes, frame_buffer_bytes, ParamBlock, ShadingBlock,
-    SHADING_AREA_BYTES, SHADING_BLOCK_BYTES, STATS_BYTES,
+    SHADED_LS_BYTES, SHADING_BLOCK_BYTES, STATS_BYTES,
 };
 
 /// Bytes of an SPU's local store.
@@ -142,12 +142,13 @@ impl FrameLayout {
     }
 
     /// Where the shading module works in local store (`modules/shade.s`): `ls_area`,
-    /// rounded up to 128 bytes, must leave its SHADING_AREA_BYTES below 256 KiB.
+    /// rounded up to 128 bytes, must leave the shading and shadow areas (SHADED_LS_BYTES,
+    /// `modules/shadow.s` works above the shading area) below 256 KiB.
     pub fn set_shading_area(&mut self, ls_area: u32) -> Result<(), String> {
         let ls_area = ls_area.div_ceil(128) * 128;
-        if ls_area as usize + SHADING_AREA_BYTES > LS_BYTES {
+        if ls_area as usize + SHADED_LS_BYTES > LS_BYTES {
             return Err(format!(
-                "local store: the shading area ({SHADING_AREA_BYTES} bytes) does not fit above the kernel's caches at {ls_area:#x}: use smaller caches or fewer packets in flight"
+                "local store: the shading and shadow areas ({SHADED_LS_BYTES} bytes) do not fit above the kernel's caches at {ls_area:#x}: use smaller caches or fewer packets in flight"
             ));
         }
         self.params.ls_shading = ls_area;

@@ -254,6 +254,23 @@ pub struct ShadingBlock {
 /// a test keeps the two equal).
 pub const SHADING_AREA_BYTES: usize = 39296;
 
+/// The shadow module's area (`modules/shadow.s`), right above the shading area (its offset
+/// from the shading area): the shadow-ray counter, the state kept while the shadow packets
+/// run (the light, the saved miss handlers and registers) and the shadow packets' own
+/// packet context.
+pub const SHADOW_AREA: usize = SHADING_AREA_BYTES;
+/// Offset in the shadow area of the shadow rays cast (word 0 of the quadword).
+pub const SHADOW_RAYS_OFFSET: usize = 0;
+/// Offset in the shadow area of the shadow packets' context (its start, not its pointer).
+pub const SHADOW_CONTEXT_OFFSET: usize = 128 + 128 * 16;
+/// Bytes of the shadow area.
+pub const SHADOW_AREA_BYTES: usize = SHADOW_CONTEXT_OFFSET + context::BYTES as usize;
+/// Local-store bytes a shaded frame needs above the kernel's caches: the shading and
+/// shadow areas.
+pub const SHADED_LS_BYTES: usize = SHADING_AREA_BYTES + SHADOW_AREA_BYTES;
+/// The DMA tag of the shadow packets' context.
+pub const SHADOW_TAG: u32 = 1;
+
 /// Bytes of the shading block.
 pub const SHADING_BLOCK_BYTES: usize = 384;
 pub const SHB_EA_VERTICES: usize = 0;
@@ -416,6 +433,12 @@ pub fn spu_include() -> String {
             "SHADOW_LIMIT_BITS",
             (1.0 - crate::shading::SHADOW_EPSILON).to_bits() as i64,
         ),
+        ("SHADOW_AREA", SHADOW_AREA as i64),
+        (
+            "SHADOW_CTX",
+            (SHADOW_AREA + SHADOW_CONTEXT_OFFSET) as i64 + context::HEADER as i64,
+        ),
+        ("SHADOW_TAG", SHADOW_TAG as i64),
         ("CONTEXT_TAG0", CONTEXT_TAG0 as i64),
         ("STAGE_TRIANGLES", context::STAGE_TRIANGLES as i64),
         ("CTX_HEADER", context::HEADER as i64),

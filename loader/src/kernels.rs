@@ -57,6 +57,10 @@ pub const MODULES: &[(&str, &str)] = &[
         "modules/shade.s",
         include_str!("../../kernels/modules/shade.s"),
     ),
+    (
+        "modules/shadow.s",
+        include_str!("../../kernels/modules/shadow.s"),
+    ),
 ];
 
 /// The text of `layout.inc`: record layouts and the kernel ABI, from their one definition.

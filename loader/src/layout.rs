@@ -374,6 +374,20 @@ impl TriangleRecord {
         t_min: f32,
         t_max: f32,
     ) -> Option<(f32, f32, f32)> {
+        self.intersect_with_slack(o, d, t_min, t_max, 0.0)
+    }
+
+    /// [`TriangleRecord::intersect`] with the barycentric range widened (positive `slack`)
+    /// or narrowed (negative) by `slack`: to tell whether a hit depends on an edge.
+    #[inline]
+    pub fn intersect_with_slack(
+        &self,
+        o: [f32; 3],
+        d: [f32; 3],
+        t_min: f32,
+        t_max: f32,
+        slack: f32,
+    ) -> Option<(f32, f32, f32)> {
         let k = self.k as usize;
         let (u, v) = ((k + 1) % 3, (k + 2) % 3);
         let numerator = ((self.n_d - o[k]) - self.n_u * o[u]) - self.n_v * o[v];
@@ -386,7 +400,8 @@ impl TriangleRecord {
         let hv = o[v] + t * d[v];
         let beta = (self.b_nu * hu + self.b_nv * hv) + self.b_d;
         let gamma = (self.c_nu * hu + self.c_nv * hv) + self.c_d;
-        (beta >= 0.0 && gamma >= 0.0 && beta + gamma <= 1.0).then_some((t, beta, gamma))
+        (beta >= -slack && gamma >= -slack && beta + gamma <= 1.0 + slack)
+            .then_some((t, beta, gamma))
     }
 
     /// The barycentric weights `(beta, gamma)` of `v1` and `v2` at the point `o + t d`, by

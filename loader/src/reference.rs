@@ -116,6 +116,18 @@ fn hit_box(
     (near <= far).then_some(near)
 }
 
+/// `node`'s box grown by `slack` of its extent and of its coordinates' magnitude per axis:
+/// it holds its triangles widened by `slack` (barycentric) and their rounding.
+fn grown(node: &NodeRecord, slack: f32) -> NodeRecord {
+    let mut g = *node;
+    for a in 0..3 {
+        let m = slack * ((node.max[a] - node.min[a]) + node.min[a].abs().max(node.max[a].abs()));
+        g.min[a] -= m;
+        g.max[a] += m;
+    }
+    g
+}
+
 /// `1 / d` per component, with zero components treated as `±1e-30` so no infinities arise
 /// (the SPU has none) and the slab test stays correct for rays parallel to a slab.
 fn safe_inverse(d: [f32; 3]) -> [f32; 3] {
@@ -162,6 +174,27 @@ impl Reference {
 
     /// The nearest hit with `T_MIN < t < t_max` (a miss keeps `t = t_max`).
     pub fn trace_within(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Hit {
+        self.trace_within_slack(origin, dir, t_max, 0.0)
+    }
+
+    /// Whether the shadow ray from `light` to `point` grazes an occluder's edge: it is
+    /// occluded when every triangle is widened by [`SHADOW_GRAZE`] (barycentric) and not
+    /// when every triangle is narrowed by it. Such a ray may come out either way in the
+    /// SPU's truncating single precision, which computes the point and the test in its
+    /// own rounding.
+    pub fn shadow_grazes(&self, light: Vec3, point: Vec3) -> bool {
+        let limit = 1.0 - shading::SHADOW_EPSILON;
+        let dir = point - light;
+        self.trace_within_slack(light, dir, limit, SHADOW_GRAZE)
+            .is_hit()
+            != self
+                .trace_within_slack(light, dir, limit, -SHADOW_GRAZE)
+                .is_hit()
+    }
+
+    /// [`Reference::trace_within`] with every triangle's barycentric range widened (or
+    /// narrowed, negative) by `slack`.
+    pub fn trace_within_slack(&self, origin: Vec3, dir: Vec3, t_max: f32, slack: f32) -> Hit {
         let o = origin.to_array();
         let d = dir.to_array();
         let inverse = safe_inverse(d);
@@ -175,7 +208,15 @@ impl Reference {
             return best;
         }
         let mut stack: Vec<(u32, f32)> = Vec::with_capacity(128);
-        if let Some(entry) = hit_box(&self.nodes[0], o, inverse, T_MIN, best.t) {
+        // widened triangles reach past their boxes: the boxes grow with them
+        let test_box = |node: &NodeRecord, t_max: f32| {
+            if slack > 0.0 {
+                hit_box(&grown(node, slack), o, inverse, T_MIN, t_max)
+            } else {
+                hit_box(node, o, inverse, T_MIN, t_max)
+            }
+        };
+        if let Some(entry) = test_box(&self.nodes[0], best.t) {
             stack.push((0, entry));
         }
         while let Some((index, entry)) = stack.pop() {
@@ -187,7 +228,9 @@ impl Reference {
             if count > 0 {
                 for record in node.link..node.link + count {
                     let triangle = &self.triangles[record as usize];
-                    if let Some((t, _, _)) = triangle.intersect(o, d, T_MIN, best.t) {
+                    if let Some((t, _, _)) =
+                        triangle.intersect_with_slack(o, d, T_MIN, best.t, slack)
+                    {
                         best = Hit {
                             triangle: triangle.original_index,
                             t,
@@ -198,8 +241,8 @@ impl Reference {
                 continue;
             }
             let c = node.link;
-            let near = hit_box(&self.nodes[c as usize], o, inverse, T_MIN, best.t);
-            let far = hit_box(&self.nodes[c as usize + 1], o, inverse, T_MIN, best.t);
+            let near = test_box(&self.nodes[c as usize], best.t);
+            let far = test_box(&self.nodes[c as usize + 1], best.t);
             match (near, far) {
                 (Some(a), Some(b)) if a <= b => {
                     stack.push((c + 1, b));
@@ -288,6 +331,60 @@ impl Reference {
         lights: &[Light],
         shadows: bool,
     ) -> u32 {
+        self.shade_with(hit, origin, dir, lights, &|_, light, point| {
+            !(shadows
+                && self.occluded(
+                    light.position,
+                    point - light.position,
+                    1.0 - shading::SHADOW_EPSILON,
+                ))
+        })
+    }
+
+    /// Every colour [`Reference::shade`] with shadows may legitimately give the pixel: the
+    /// shadow rays that graze an occluder's edge ([`Reference::shadow_grazes`]) taken as
+    /// occluded and as not, in every combination (one colour when none grazes).
+    pub fn shade_alternatives(
+        &self,
+        hit: &Hit,
+        origin: Vec3,
+        dir: Vec3,
+        lights: &[Light],
+    ) -> Vec<u32> {
+        if !hit.is_hit() {
+            return vec![MISS_COLOUR];
+        }
+        let point = origin + dir * hit.t;
+        let grazing: Vec<usize> = (0..lights.len())
+            .filter(|&i| self.shadow_grazes(lights[i].position, point))
+            .collect();
+        (0..1u32 << grazing.len())
+            .map(|choice| {
+                self.shade_with(hit, origin, dir, lights, &|i, light, point| match grazing
+                    .iter()
+                    .position(|&g| g == i)
+                {
+                    Some(bit) => choice & (1 << bit) != 0,
+                    None => !self.occluded(
+                        light.position,
+                        point - light.position,
+                        1.0 - shading::SHADOW_EPSILON,
+                    ),
+                })
+            })
+            .collect()
+    }
+
+    /// The model's colour with `visible(light index, light, point)` deciding each light's
+    /// occlusion (asked only for lights the surface faces).
+    fn shade_with(
+        &self,
+        hit: &Hit,
+        origin: Vec3,
+        dir: Vec3,
+        lights: &[Light],
+        visible: &dyn Fn(usize, &Light, Vec3) -> bool,
+    ) -> u32 {
         if !hit.is_hit() {
             return MISS_COLOUR;
         }
@@ -299,16 +396,9 @@ impl Reference {
         let normal = shading::shading_normal(normals, beta, gamma, dir);
         let point = origin + dir * hit.t;
         let mut irradiance = Vec3::ZERO;
-        for light in lights {
+        for (i, light) in lights.iter().enumerate() {
             let cosine = shading::light_cosine(normal, light.position - point);
-            if cosine > 0.0
-                && !(shadows
-                    && self.occluded(
-                        light.position,
-                        point - light.position,
-                        1.0 - shading::SHADOW_EPSILON,
-                    ))
-            {
+            if cosine > 0.0 && visible(i, light, point) {
                 irradiance += light.colour * cosine;
             }
         }
@@ -347,6 +437,10 @@ impl Reference {
         colours
     }
 }
+
+/// Barycentric margin within which a shadow ray grazes an occluder's edge
+/// ([`Reference::shadow_grazes`]).
+pub const SHADOW_GRAZE: f32 = 1.0 / 65536.0;
 
 /// The colour of a pixel whose primary ray hits nothing: opaque black.
 pub const MISS_COLOUR: u32 = 0x0000_00ff;

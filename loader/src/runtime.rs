@@ -11,6 +11,8 @@ use crate::layout::StagedScene;
 pub struct SpuReport {
     pub cycles: u64,
     pub instructions: u64,
+    /// Of `instructions`, those run by compiled blocks (0 with the interpreter).
+    pub compiled_instructions: u64,
     pub tiles: u64,
     pub stats: KernelStats,
 }
@@ -31,6 +33,8 @@ pub struct FrameRun {
     /// on one triangle, passes, packets, vertex lookups, misses, material lookups, misses,
     /// triangle records looked up in the traversal's triangle cache, fetched past it).
     pub shade_counters: Vec<ShadeCounters>,
+    /// Shadow rays the shadow module cast (`--shade shadows`), summed over the SPUs.
+    pub shadow_rays: u64,
     pub frame_cycles: u64,
     pub spus: Vec<SpuReport>,
     /// The timing model's counters, merged over all SPUs.
@@ -46,6 +50,9 @@ pub struct FrameRun {
     pub events: Vec<Vec<spu_isa::machine::SpuEvent>>,
     /// The caches, packets in flight and memory latency the frame ran with.
     pub config: KernelConfig,
+    /// The block compiler's work for the frame (its SPUs share one code cache), with
+    /// the instructions run compiled summed over the SPUs.
+    pub jit: spu_isa::jit::JitStats,
 }
 
 /// What a frame records beyond its image and statistics.
@@ -335,9 +342,12 @@ pub fn render_frame_with(
     let layout = &layout;
     let regions = traffic_regions(staged, layout);
     let mut memory = MainMemory::new(layout.memory_image(staged));
+    // The SPEs run the same kernel: each block is compiled once for all of them.
+    let code = spu_isa::jit::CodeCache::new();
     let mut spus: Vec<Spu> = (0..spes)
         .map(|i| {
             let mut spu = Spu::new(i as u32);
+            spu.share_code(&code);
             spu.load_image(&program.image);
             spu.set_pc(program.entry);
             spu.set_reg(3, [i as u32, 0, 0, 0]);
@@ -426,6 +436,7 @@ pub fn render_frame_with(
             SpuReport {
                 cycles: finished[i].unwrap_or(0),
                 instructions: spu.instructions(),
+                compiled_instructions: spu.jit_stats().compiled_instructions,
                 tiles: if fill {
                     stats.traversal_steps
                 } else {
@@ -447,6 +458,20 @@ pub fn render_frame_with(
         }
     }
     let events = spus.iter_mut().map(|spu| spu.take_events()).collect();
+    let shadow_rays = match &layout.shading {
+        Some(_) if shaded => {
+            let at = layout.params.ls_shading as usize
+                + crate::kernel_abi::SHADOW_AREA
+                + crate::kernel_abi::SHADOW_RAYS_OFFSET;
+            spus.iter()
+                .map(|spu| {
+                    let w = &spu.ls()[at..at + 4];
+                    u32::from_be_bytes([w[0], w[1], w[2], w[3]]) as u64
+                })
+                .sum()
+        }
+        _ => 0,
+    };
     let (colour_buffer, shade_counters) = match &layout.shading {
         Some(shading) if shaded => {
             let at = shading.colour_addr as usize;
@@ -481,13 +506,18 @@ pub fn render_frame_with(
         traffic,
         colour_buffer,
         shade_counters,
+        shadow_rays,
         events,
         frame_buffer: memory.bytes()[fb..fb + layout.frame_buffer_len].to_vec(),
         frame_cycles: spus_report.iter().map(|s| s.cycles).max().unwrap_or(0),
-        spus: spus_report,
         profile,
         symbols: program.symbols.clone(),
         kernel_image: program.image.clone(),
         config: KernelConfig::new(layout, timing),
+        jit: spu_isa::jit::JitStats {
+            compiled_instructions: spus_report.iter().map(|s| s.compiled_instructions).sum(),
+            ..code.stats()
+        },
+        spus: spus_report,
     })
 }

@@ -160,6 +160,9 @@ pub struct SpuStats {
     pub cycles: u64,
     pub instructions: u64,
     pub tiles: u64,
+    /// Of `instructions`, those run by compiled blocks (0 with the interpreter).
+    #[serde(default)]
+    pub compiled_instructions: u64,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -170,6 +173,11 @@ pub struct Validation {
     /// `shading::COLOUR_TOLERANCE` in a channel.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub colour_mismatches: Option<usize>,
+    /// `--shade shadows`: pixels beyond the tolerance that take the colour of a shadow ray
+    /// grazing an occluder's edge (within 2^-16 barycentric), which either outcome gives
+    /// (`loader::reference::Reference::shadow_grazes`); not counted as mismatches.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shadow_edge_pixels: Option<usize>,
 }
 
 /// Per-packet averages, percentages and per-SPU speed, as in the paper's Table 2.
@@ -406,12 +414,14 @@ impl FrameStats {
                     cycles: s.cycles,
                     instructions: s.instructions,
                     tiles: s.tiles,
+                    compiled_instructions: s.compiled_instructions,
                 })
                 .collect(),
             validation: validation.map(|(pixels, mismatches)| Validation {
                 pixels,
                 mismatches,
                 colour_mismatches: None,
+                shadow_edge_pixels: None,
             }),
             table2: Table2::new(run, rays, clock_ghz),
             config: run.config.clone(),
@@ -426,7 +436,7 @@ impl FrameStats {
             },
             rays_by_kind: RaysByKind {
                 primary: rays,
-                shadow: 0,
+                shadow: run.shadow_rays,
             },
             table4: Table4::new(&run.shade_counters),
             table6: Table6::new(&run.traffic),

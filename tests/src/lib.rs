@@ -17,3 +17,81 @@ impl XorShift {
         self.next() % n
     }
 }
+
+/// The shape of a random looping program ([`looping_program`]).
+pub struct LoopShape {
+    /// Passes through the blocks before the program stops (the countdown in `$4`).
+    pub trips: u32,
+    /// Lines after the prologue's `ila $3, data` and `il $4, trips`.
+    pub prologue: &'static str,
+    /// A block holds up to this many random instructions less one before its countdown,
+    /// and up to `after` less one after it.
+    pub before: u64,
+    pub after: u64,
+    /// The conditional branches that end the blocks.
+    pub conditions: &'static [&'static str],
+    /// One block in four calls a routine of random instructions (`brsl $0, sub`).
+    pub calls: bool,
+    /// Every fourth data word is raw (zeros, denormals, huge values, any sign) rather
+    /// than an ordinary float.
+    pub raw_words: bool,
+}
+
+/// A random looping program: 3 to 7 blocks of `op`'s instructions on `$10..$21` (loaded
+/// from `data`, which `$3` points at), each with a hint that is right, wrong or absent, a
+/// countdown that stops the program after `trips` passes, and a data-dependent branch to
+/// a random block; `stop 0x2000` at the end.
+pub fn looping_program(
+    rng: &mut XorShift,
+    shape: &LoopShape,
+    op: &mut dyn FnMut(&mut XorShift) -> String,
+) -> String {
+    let blocks = 3 + rng.below(5) as usize;
+    let mut src = format!(
+        "        .text\n        .global _start\n_start: ila $3, data\n il $4, {}\n{}",
+        shape.trips, shape.prologue
+    );
+    for r in 10..22 {
+        src += &format!(" lqd ${r}, {}($3)\n", 16 * (r % 8));
+    }
+    for i in 0..blocks {
+        let target = rng.below(blocks as u64);
+        src += &format!("b{i}:\n");
+        match rng.below(3) {
+            0 => src += &format!(" hbrr .Lbr{i}, b{target}\n"),
+            1 => src += &format!(" hbrr .Lbr{i}, b{}\n", (target + 1) % blocks as u64),
+            _ => {}
+        }
+        for _ in 0..rng.below(shape.before) {
+            src += &format!(" {}\n", op(rng));
+        }
+        if shape.calls && rng.below(4) == 0 {
+            src += " brsl $0, sub\n";
+        }
+        src += " ai $4, $4, -1\n brz $4, end\n";
+        for _ in 0..rng.below(shape.after) {
+            src += &format!(" {}\n", op(rng));
+        }
+        let cond = shape.conditions[rng.below(shape.conditions.len() as u64) as usize];
+        src += &format!(".Lbr{i}: {cond} ${}, b{target}\n", 10 + rng.below(12));
+    }
+    src += " br b0\n";
+    if shape.calls {
+        src += "sub:\n";
+        for _ in 0..rng.below(6) {
+            src += &format!(" {}\n", op(rng));
+        }
+        src += " bi $0\n";
+    }
+    src += "end: stop 0x2000\n        .data\n        .align 4\ndata:\n";
+    for k in 0..32 {
+        let w = rng.next() as u32;
+        let w = if shape.raw_words && k % 4 == 3 {
+            w
+        } else {
+            w & 0xc3ff_ffff | 0x0800_0000
+        };
+        src += &format!(" .long {w}\n");
+    }
+    src
+}

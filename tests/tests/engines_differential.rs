@@ -7,7 +7,7 @@
 use spu_isa::jit::Engine;
 use spu_isa::machine::{MainMemory, Spu, StopReason};
 use spu_isa::timing::TimingConfig;
-use spu_tests::XorShift as Rng;
+use spu_tests::{looping_program, LoopShape, XorShift as Rng};
 
 /// What a run left behind, for comparing engines.
 #[derive(Debug, PartialEq)]
@@ -128,11 +128,15 @@ fn random_op(rng: &mut Rng) -> String {
         34 => format!("fms ${t}, ${a}, ${b}, ${c}"),
         35 => format!(
             "{} ${t}, ${a}, ${b}",
-            ["fcgt", "fceq", "fcmgt"][rng.below(3) as usize]
+            ["fcgt", "fceq", "fcmgt", "fcmeq"][rng.below(4) as usize]
         ),
         36 => format!("frest ${t}, ${a}"),
         37 => format!("fi ${t}, ${a}, ${b}"),
-        38 => format!("cfltu ${t}, ${a}, {}", rng.below(128)),
+        38 => format!(
+            "{} ${t}, ${a}, {}",
+            ["cfltu", "cflts"][rng.below(2) as usize],
+            rng.below(128)
+        ),
         39 => format!("lqd ${t}, {}($3)", 16 * rng.below(8)),
         40 => format!("stqd ${t}, {}($3)", 16 * rng.below(8)),
         41 => format!("lqx ${t}, $3, $5"),
@@ -156,51 +160,18 @@ fn random_op(rng: &mut Rng) -> String {
 #[test]
 fn random_programs_run_the_same_compiled() {
     let mut compiled = 0;
+    let shape = LoopShape {
+        trips: 600,
+        prologue: " il $5, 80\n",
+        before: 16,
+        after: 8,
+        conditions: &["brnz", "brz", "brhnz", "brhz"],
+        calls: true,
+        raw_words: true,
+    };
     for seed in 1..=16u64 {
         let mut rng = Rng(0x2545_f491_4f6c_dd1d ^ seed.wrapping_mul(0x9e37_79b9));
-        let blocks = 3 + rng.below(5) as usize;
-        let mut src = String::from(
-            "        .text\n        .global _start\n_start: ila $3, data\n il $4, 600\n il $5, 80\n",
-        );
-        for r in 10..22 {
-            src += &format!(" lqd ${r}, {}($3)\n", 16 * (r % 8));
-        }
-        for i in 0..blocks {
-            let target = rng.below(blocks as u64);
-            src += &format!("b{i}:\n");
-            match rng.below(3) {
-                0 => src += &format!(" hbrr .Lbr{i}, b{target}\n"),
-                1 => src += &format!(" hbrr .Lbr{i}, b{}\n", (target + 1) % blocks as u64),
-                _ => {}
-            }
-            for _ in 0..rng.below(16) {
-                src += &format!(" {}\n", random_op(&mut rng));
-            }
-            if rng.below(4) == 0 {
-                src += " brsl $0, sub\n";
-            }
-            src += " ai $4, $4, -1\n brz $4, end\n";
-            for _ in 0..rng.below(8) {
-                src += &format!(" {}\n", random_op(&mut rng));
-            }
-            let cond = ["brnz", "brz", "brhnz", "brhz"][rng.below(4) as usize];
-            src += &format!(".Lbr{i}: {cond} ${}, b{target}\n", 10 + rng.below(12));
-        }
-        src += " br b0\nsub:\n";
-        for _ in 0..rng.below(6) {
-            src += &format!(" {}\n", random_op(&mut rng));
-        }
-        src += " bi $0\nend: stop 0x2000\n        .data\n        .align 4\ndata:\n";
-        for k in 0..32 {
-            // Ordinary floats mostly, and raw words (zeros, denormals, huge values) too.
-            let w = rng.next() as u32;
-            let w = if k % 4 == 3 {
-                w
-            } else {
-                w & 0xc3ff_ffff | 0x0800_0000
-            };
-            src += &format!(" .long {w}\n");
-        }
+        let src = looping_program(&mut rng, &shape, &mut random_op);
         let [off, _] = same_with_both_engines(&src);
         compiled += off.jit_stats().compiled_instructions;
     }
@@ -285,6 +256,116 @@ data:   .space  64
     assert!(off.jit_stats().compiled_instructions > 0);
 }
 
+/// A block that branches back to its own start runs pass after pass inside its compiled
+/// code; at pass 101 of 200 it stores a new first quadword over itself (`ai $15, $15, 1`
+/// becomes `ai $15, $15, 2`), after which the next pass must run the new words.
+#[test]
+fn a_self_loop_that_rewrites_itself_runs_the_same_compiled() {
+    let src = "
+        .text
+        .global _start
+_start: il      $9, 200
+        ila     $3, scratch
+        ila     $4, loop
+        ila     $5, newword
+        lqd     $6, 0($5)
+        .align  4
+loop:   ai      $15, $15, 1
+        ceqi    $20, $9, 100            # pass 101 (of 200, counting down)
+        selb    $22, $3, $4, $20        # ... stores over `loop`, other passes elsewhere
+        stqd    $6, 0($22)
+        ai      $9, $9, -1
+        brnz    $9, loop
+        stop    0x2000
+        .align  4
+newword: ai     $15, $15, 2
+        ceqi    $20, $9, 100
+        selb    $22, $3, $4, $20
+        stqd    $6, 0($22)
+        .data
+        .align  4
+scratch: .space 16
+";
+    let [off, on] = same_with_both_engines(src);
+    for spu in [&off, &on] {
+        assert_eq!(spu.reg(15)[0], 101 + 2 * 99);
+    }
+    assert!(off.jit_stats().compiled_instructions > 100);
+}
+
+/// The single-precision compares, `fi` and the conversions to integers, which compiled
+/// code does in host vector instructions, on operands of every kind: zeros of both
+/// signs, denormals, ordinary values, exponent 255 (an ordinary number on the SPU) and
+/// values that saturate or vanish at every scale. Everything the same as interpreted,
+/// and the loop ran compiled.
+#[test]
+fn float_compares_and_conversions_run_the_same_compiled() {
+    let specials: [u32; 16] = [
+        0x0000_0000,
+        0x8000_0000,
+        0x0000_0001,
+        0x807f_ffff,
+        0x3f80_0000,
+        0xbf80_0000,
+        0x4f00_0000,
+        0xcf00_0001,
+        0x7f80_0000,
+        0xffff_ffff,
+        0x7fff_ffff,
+        0x0080_0000,
+        0x4f80_0000,
+        0x3eff_ffff,
+        0xc2c8_0000,
+        0x4b00_0001,
+    ];
+    let mut rng = Rng(0x5eed_f10a7);
+    let mut src = String::from(
+        "        .text\n        .global _start\n_start: ila $3, data\n il $9, 64\n il $5, 0\n",
+    );
+    src += "loop: andi $6, $5, 0x1f0\n lqx $10, $3, $6\n ai $7, $6, 48\n andi $7, $7, 0x1f0\n\
+            lqx $11, $3, $7\n frest $12, $10\n";
+    // Each result is summed into an accumulator of its own ($40 up), rotated each pass.
+    let mut acc = 40;
+    let mut push = |src: &mut String, line: String| {
+        *src += &format!(" {line}\n a ${acc}, ${acc}, $30\n roti ${acc}, ${acc}, 3\n");
+        acc += 1;
+    };
+    for op in ["fcgt", "fceq", "fcmgt", "fcmeq"] {
+        push(&mut src, format!("{op} $30, $10, $11"));
+        push(&mut src, format!("{op} $30, $11, $10"));
+        push(&mut src, format!("{op} $30, $10, $10"));
+    }
+    push(&mut src, "fi $30, $10, $12".into());
+    push(&mut src, "fi $30, $11, $12".into());
+    for scale in [0, 1, 20, 31, 32, 100, 127] {
+        push(&mut src, format!("cflts $30, $10, {scale}"));
+        push(&mut src, format!("cfltu $30, $11, {scale}"));
+    }
+    src += " ai $5, $5, 16\n ai $9, $9, -1\n brnz $9, loop\n stop 0x2000\n";
+    src += "        .data\n        .align 4\ndata:\n";
+    for k in 0..32 {
+        let w = if k % 2 == 0 {
+            specials[(k / 2) % 16]
+        } else {
+            rng.next() as u32
+        };
+        src += &format!(
+            " .long {w}, {}, {}, {}\n",
+            specials[(k + 5) % 16],
+            rng.next() as u32,
+            specials[(3 * k + 1) % 16]
+        );
+    }
+    let [off, _] = same_with_both_engines(&src);
+    let stats = off.jit_stats();
+    assert!(
+        stats.compiled_instructions > off.instructions() / 2,
+        "{} of {} ran compiled",
+        stats.compiled_instructions,
+        off.instructions()
+    );
+}
+
 /// DMA gets and puts inside a loop of computation, tag waits, the decrementer read
 /// between blocks (its value depends on the cycle), and an outbound mailbox write at the
 /// end: the same registers, local store, main memory and cycles.
@@ -327,7 +408,8 @@ fn channels_and_dma_run_the_same_compiled() {
 }
 
 /// A kernel frame (the room, 64x64, two SPUs with the timing model): the same image,
-/// cycles, per-SPU counts and profile with either engine.
+/// cycles, per-SPU counts and profile with either engine; compiled on one host thread or
+/// two, the same instructions run compiled on each SPU.
 #[test]
 fn a_kernel_frame_is_the_same_compiled() {
     use spu_loader::frame::{FrameLayout, SCENE_BASE};
@@ -344,13 +426,13 @@ fn a_kernel_frame_is_the_same_compiled() {
     let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
     let basis = scene.camera.basis(64, 64);
     let layout = FrameLayout::new(&staged, &basis, 64, 64, 2, 256, 256).unwrap();
-    let frame = |engine: Engine| {
+    let frame = |engine: Engine, threads: usize| {
         Engine::set_default(engine);
         let run = render_frame(
             &staged,
             &layout,
             2,
-            1,
+            threads,
             &TimingConfig::default(),
             false,
             50_000_000_000,
@@ -359,8 +441,26 @@ fn a_kernel_frame_is_the_same_compiled() {
         Engine::set_default(Engine::host_default());
         run.unwrap()
     };
-    let a = frame(Engine::Interp);
-    let b = frame(Engine::Jit);
+    let a = frame(Engine::Interp, 1);
+    let b = frame(Engine::Jit, 1);
+    // The SPUs share one code cache; which of them compiles a block first depends on the
+    // host threads, what each runs compiled does not.
+    let c = frame(Engine::Jit, 2);
+    let compiled = |run: &spu_loader::runtime::FrameRun| -> Vec<u64> {
+        run.spus.iter().map(|s| s.compiled_instructions).collect()
+    };
+    assert_eq!(compiled(&a), [0, 0]);
+    assert!(compiled(&b).iter().all(|&n| n > 0), "{:?}", compiled(&b));
+    assert_eq!(compiled(&b), compiled(&c));
+    assert_eq!(
+        b.jit.compiled_instructions,
+        compiled(&b).iter().sum::<u64>()
+    );
+    assert_eq!(
+        (b.jit.blocks, b.jit.block_instructions),
+        (c.jit.blocks, c.jit.block_instructions)
+    );
+    assert!(b.frame_buffer == c.frame_buffer && b.frame_cycles == c.frame_cycles);
     assert!(a.frame_buffer == b.frame_buffer, "images differ");
     assert_eq!(a.frame_cycles, b.frame_cycles);
     for (x, y) in a.spus.iter().zip(&b.spus) {

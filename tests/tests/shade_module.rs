@@ -64,6 +64,8 @@ _start: ila     $66, params
         wrch    $MFC_WrTagUpdate, $67
         rdch    $67, $MFC_RdTagStat
         stop    0x2000
+shadow_rays:                                  # shadows are another module's (shadow_module.rs)
+        bi      $127
         .include "modules/shade.s"
 "#;
 

@@ -122,9 +122,9 @@ fn replayed_blocks_match_the_per_instruction_model() {
 /// counters, program after program.
 #[test]
 fn random_looping_programs_time_the_same_with_and_without_memoization() {
-    use spu_tests::XorShift as Rng;
+    use spu_tests::{looping_program, LoopShape, XorShift as Rng};
     let reg = |rng: &mut Rng| 10 + rng.below(12);
-    let body_op = |rng: &mut Rng| -> String {
+    let mut body_op = |rng: &mut Rng| -> String {
         let (t, a, b, c) = (reg(rng), reg(rng), reg(rng), reg(rng));
         match rng.below(16) {
             0 => format!("a ${t}, ${a}, ${b}"),
@@ -146,37 +146,18 @@ fn random_looping_programs_time_the_same_with_and_without_memoization() {
         }
     };
     let mut replays = 0;
+    let shape = LoopShape {
+        trips: 3000,
+        prologue: "",
+        before: 14,
+        after: 6,
+        conditions: &["brnz", "brz", "brhnz"],
+        calls: false,
+        raw_words: false,
+    };
     for seed in 1..=24u64 {
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15 ^ seed.wrapping_mul(0x1234_5678_9abc));
-        let blocks = 3 + rng.below(5) as usize;
-        let mut src = String::from(
-            "        .text\n        .global _start\n_start: ila $3, data\n il $4, 3000\n",
-        );
-        for r in 10..22 {
-            src += &format!(" lqd ${r}, {}($3)\n", 16 * (r % 8));
-        }
-        for i in 0..blocks {
-            let target = rng.below(blocks as u64);
-            src += &format!("b{i}:\n");
-            match rng.below(3) {
-                0 => src += &format!(" hbrr .Lbr{i}, b{target}\n"),
-                1 => src += &format!(" hbrr .Lbr{i}, b{}\n", (target + 1) % blocks as u64),
-                _ => {}
-            }
-            for _ in 0..rng.below(14) {
-                src += &format!(" {}\n", body_op(&mut rng));
-            }
-            src += " ai $4, $4, -1\n brz $4, end\n";
-            for _ in 0..rng.below(6) {
-                src += &format!(" {}\n", body_op(&mut rng));
-            }
-            let cond = ["brnz", "brz", "brhnz"][rng.below(3) as usize];
-            src += &format!(".Lbr{i}: {cond} ${}, b{target}\n", reg(&mut rng));
-        }
-        src += " br b0\nend: stop 0x2000\n        .data\n        .align 4\ndata:\n";
-        for _ in 0..32 {
-            src += &format!(" .long {}\n", rng.next() as u32 & 0xc3ff_ffff);
-        }
+        let src = looping_program(&mut rng, &shape, &mut body_op);
         let (b, _) = same_both_ways(&src);
         replays += b.timing().expect("timing").memo_stats().1;
     }

@@ -18,11 +18,10 @@ use std::time::Instant;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Engine: the interpreter (interp, the default here) or the block compiler (jit).
-    /// Results are the same; only host speed differs. Each SPU compiles its own blocks, so
-    /// with many SPEs the compile time outweighs the gain (room 512x512 on 16 SPEs: 0.25 s
-    /// interpreted, 1.1 s compiled) and frames default to the interpreter.
-    #[arg(long, default_value_t = spu_isa::jit::Engine::Interp)]
+    /// Engine: the block compiler (jit, the default where the host has one; the SPEs
+    /// share their compiled blocks) or the interpreter (interp). Results are the same;
+    /// only host speed differs.
+    #[arg(long, default_value_t = spu_isa::jit::Engine::host_default())]
     engine: spu_isa::jit::Engine,
     /// A built-in scene (room, conference, beetle) or an OBJ/PLY file (optionally .gz).
     #[arg(long, default_value = "room")]
@@ -118,7 +117,7 @@ fn cache_lines(text: &str) -> Result<u32, String> {
 
 /// Whether the kernel traces shadow packets (`--shade shadows`); until it does, the mode
 /// is refused before any work and `spu paper` says why its shadow rows are empty.
-pub const KERNEL_TRACES_SHADOWS: bool = false;
+pub const KERNEL_TRACES_SHADOWS: bool = true;
 
 /// `--shadow-early`: on or off.
 fn shadow_early(text: &str) -> Result<bool, String> {
@@ -382,6 +381,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
 
     let record_to_original: Vec<u32> = staged.triangles.iter().map(|t| t.original_index).collect();
     let mut colour_validation = None;
+    let mut shadow_edges = None;
     let validation = if args.validate && !args.fill {
         let reference = Reference::from_staged(&staged);
         let hits = reference.render(&scene.camera, args.width, args.height, threads);
@@ -395,7 +395,23 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
                 args.shade == ShadeMode::Shadows,
                 threads,
             );
-            colour_validation = Some(validate_colours(&colours, &expected, args.width));
+            let basis = scene.camera.basis(args.width, args.height);
+            // A pixel beyond the tolerance whose shadow ray grazes an occluder's edge may
+            // take the colour of either outcome (Reference::shade_alternatives).
+            let grazing = |i: usize| {
+                args.shade == ShadeMode::Shadows && {
+                    let (x, y) = (i as u32 % args.width, i as u32 / args.width);
+                    reference
+                        .shade_alternatives(&hits[i], basis.origin, basis.direction(x, y), &lights)
+                        .iter()
+                        .any(|&c| {
+                            shading::channel_difference(colours[i], c) <= shading::COLOUR_TOLERANCE
+                        })
+                }
+            };
+            let (off, edges) = validate_colours(&colours, &expected, args.width, &grazing);
+            colour_validation = Some(off);
+            shadow_edges = (args.shade == ShadeMode::Shadows).then_some(edges);
         }
         Some(validate(&pixels, &hits, &record_to_original, args.width))
     } else {
@@ -421,11 +437,27 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         instructions as f64 / host_seconds / 1e6,
         args.output.display()
     );
+        if run.jit.blocks > 0 {
+            outln!(
+                "block compiler: {:.1}% ran compiled; {} blocks ({} instructions) compiled in {:.2} s",
+                100.0 * run.jit.compiled_instructions as f64 / instructions.max(1) as f64,
+                run.jit.blocks,
+                run.jit.block_instructions,
+                run.jit.compile_seconds
+            );
+        }
     }
     match (validation, colour_validation) {
         (Some((n, bad)), Some(off)) => outln!(
-            "validation: {bad} of {n} pixels differ from the host reference in the hit triangle, {off} in colour (more than {} of 255 in a channel)",
-            shading::COLOUR_TOLERANCE
+            "validation: {bad} of {n} pixels differ from the host reference in the hit triangle, {off} in colour (more than {} of 255 in a channel){}",
+            shading::COLOUR_TOLERANCE,
+            match shadow_edges {
+                Some(edges) => format!(
+                    "; {edges} more take the colour of a shadow ray grazing an occluder's edge \
+                     (within 2^-16 barycentric), which either outcome gives"
+                ),
+                None => String::new(),
+            }
         ),
         (Some((n, bad)), None) => {
             outln!("validation: {bad} of {n} pixels differ from the host reference")
@@ -445,6 +477,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         );
         if let Some(v) = stats.validation.as_mut() {
             v.colour_mismatches = colour_validation;
+            v.shadow_edge_pixels = shadow_edges;
         }
         let json = stats.to_json();
         exit::write_file(path, json.as_bytes())?;
@@ -499,10 +532,22 @@ fn kernel_profile(
 
 /// Colours against the reference shading: the pixels with a channel off by more than
 /// [`shading::COLOUR_TOLERANCE`]; the first few are printed.
-fn validate_colours(colours: &[u32], expected: &[u32], width: u32) -> usize {
+/// Colours beyond the tolerance: `(differing, accepted by grazing)`, where `grazing(pixel)`
+/// says whether another legitimate outcome of a shadow ray gives the kernel's colour.
+fn validate_colours(
+    colours: &[u32],
+    expected: &[u32],
+    width: u32,
+    grazing: &dyn Fn(usize) -> bool,
+) -> (usize, usize) {
     let mut off = 0;
+    let mut edges = 0;
     for (i, (&c, &e)) in colours.iter().zip(expected).enumerate() {
         if shading::channel_difference(c, e) > shading::COLOUR_TOLERANCE {
+            if grazing(i) {
+                edges += 1;
+                continue;
+            }
             if off < 10 {
                 eprintln!(
                     "colour mismatch at ({}, {}): kernel {c:08x} / reference {e:08x}",
@@ -513,7 +558,7 @@ fn validate_colours(colours: &[u32], expected: &[u32], width: u32) -> usize {
             off += 1;
         }
     }
-    off
+    (off, edges)
 }
 
 fn write_png(path: &PathBuf, colours: &[u32], width: u32, height: u32) -> exit::Result<()> {

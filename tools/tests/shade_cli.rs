@@ -25,7 +25,7 @@ fn bad_shading_options_exit_2_before_any_work() {
         vec!["--shadow-early", "maybe"],
         vec!["--vertex-cache", "100"],
         vec!["--material-cache", "512"],
-        vec!["--shade", "shadows"],
+        vec!["--shade", "shadows", "--fill"],
         vec!["--shade", "simple", "--fill"],
         nine.iter().map(String::as_str).collect(),
     ];
@@ -80,5 +80,48 @@ fn a_shaded_frame_validates_hits_and_colours() {
         "a coloured image: {} colours",
         distinct.len()
     );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_frame_with_shadows_validates() {
+    let dir = std::env::temp_dir().join(format!("spu-shadows-ok-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("room.png");
+    let stats = dir.join("room.json");
+    let run = spu(&[
+        "render",
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "--shade",
+        "shadows",
+        "--shadow-early",
+        "on",
+        "--validate",
+        "--stats",
+        stats.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert!(run.status.success(), "{run:?}");
+    assert!(
+        text.contains(
+            "0 of 4096 pixels differ from the host reference in the hit triangle, 0 in colour"
+        ) && text.contains("grazing an occluder's edge"),
+        "{text}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let shadow = json["rays_by_kind"]["shadow"].as_u64().unwrap();
+    assert!(shadow > 0 && shadow <= 4096, "{json}");
+    assert_eq!(json["rays_by_kind"]["primary"].as_u64(), Some(4096));
+    assert!(
+        json["validation"]["shadow_edge_pixels"].as_u64().is_some(),
+        "{json}"
+    );
+    assert!(json["fps"].as_f64().unwrap() > 0.0);
     std::fs::remove_dir_all(&dir).ok();
 }

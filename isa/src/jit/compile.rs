@@ -1,6 +1,8 @@
-//! Translation of one block to Cranelift IR and host code, and the per-SPU cache of
-//! compiled blocks.
+//! Translation of one block to Cranelift IR and host code, the code cache the SPUs of a
+//! machine share, and each SPU's table of the blocks it runs compiled.
 
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use cranelift_codegen::ir::condcodes::IntCC;
@@ -39,6 +41,12 @@ pub(crate) struct Ctx {
     /// Out: the target of the block's final branch.
     pub target: u32,
     pub _pad: u32,
+    /// In: the instructions the call may run. A block whose final branch goes back to its
+    /// start runs again while the whole next pass fits (0 or less than twice its length:
+    /// it runs once); a store into decoded code sets it to 0.
+    pub budget: u64,
+    /// Out: the passes through a self-looping block before the last one.
+    pub loops: u64,
 }
 
 const CTX_REGS: i32 = 0;
@@ -46,6 +54,8 @@ const CTX_LS: i32 = 8;
 const CTX_QUADS: i32 = 16;
 const CTX_CORE: i32 = 24;
 const CTX_TARGET: i32 = 40;
+const CTX_BUDGET: i32 = 48;
+const CTX_LOOPS: i32 = 56;
 
 /// Called after a store into a quadword that may hold decoded code: `(ctx, address,
 /// address of the next instruction, end of the block, whether instructions follow in the
@@ -60,49 +70,13 @@ pub(crate) type Entry = unsafe extern "C" fn(*mut Ctx) -> u64;
 pub(crate) const RESULT_TAKEN: u64 = 1 << 48;
 pub(crate) const RESULT_PARTIAL: u64 = 1 << 49;
 
-pub(crate) struct Block {
-    pub entry: Entry,
-    pub n: u32,
-    /// The words compiled, to check against local store when the code epoch moved.
-    pub words: Box<[u32]>,
-    /// The code epoch at which `words` were last found in local store.
-    pub verified: u64,
-    /// The final instruction (a branch, or not).
-    pub last: Inst,
-    /// The instructions whose helpers take them by address.
-    _insts: Box<[Inst]>,
-}
-
-/// One SPU's compiled blocks, found by their first word's index.
-pub(crate) struct Blocks {
-    module: JITModule,
-    ctx: Context,
-    fctx: FunctionBuilderContext,
-    scratch: Box<Core>,
-    /// Per local-store word: 1 + index into `blocks` of the block starting there, or 0.
-    pub slots: Vec<u32>,
-    /// Per local-store word: how often a block started there without compiled code.
-    pub heat: Vec<u8>,
-    pub blocks: Vec<Block>,
-    pub stats: super::JitStats,
-}
-
-// SAFETY: the module's code and data are owned by this value alone and only used through
-// `&mut` (one thread at a time); nothing in it refers to thread-local state.
-unsafe impl Send for Blocks {}
-
-impl Drop for Blocks {
-    fn drop(&mut self) {
-        self.blocks.clear();
-        let module = std::mem::replace(&mut self.module, new_module());
-        // SAFETY: every entry into this module's code was in `blocks`, now gone.
-        unsafe { module.free_memory() };
-    }
-}
+/// Cranelift's optimisation level for blocks: "none" compiles a room frame's blocks about a
+/// third faster but its code runs slower, a net loss (docs/timing.md, "Block compiler").
+const OPT_LEVEL: &str = "speed";
 
 fn new_module() -> JITModule {
     let mut flags = settings::builder();
-    flags.set("opt_level", "speed").expect("opt_level");
+    flags.set("opt_level", OPT_LEVEL).expect("opt_level");
     flags
         .set("use_colocated_libcalls", "false")
         .expect("libcalls");
@@ -117,28 +91,101 @@ fn new_module() -> JITModule {
     JITModule::new(JITBuilder::with_isa(isa, default_libcall_names()))
 }
 
-/// Blocks compiled before the cache starts over (code memory is only freed whole).
+/// Blocks compiled into one code memory before the cache starts another (code memory is
+/// only freed whole), and blocks one SPU keeps before it starts over.
 const MAX_BLOCKS: usize = 1 << 14;
 
-impl Blocks {
-    pub fn new() -> Blocks {
+/// One compiled block, shared by every SPU of the machine whose local store holds the
+/// same words at the same address.
+pub(crate) struct Code {
+    pub entry: Entry,
+    pub n: u32,
+    /// The words compiled, to check against local store when the code epoch moved.
+    pub words: Box<[u32]>,
+    /// The final instruction (a branch, or not).
+    pub last: Inst,
+    /// The instructions whose helpers take them by address.
+    _insts: Box<[Inst]>,
+    /// The code memory holding `entry`, freed when its last block is gone.
+    _memory: Arc<CodeMemory>,
+}
+
+/// A Cranelift module's code memory, freed when the last block compiled into it is gone.
+struct CodeMemory(Mutex<Option<JITModule>>);
+
+// SAFETY: the module is only used under its mutex; nothing in it refers to thread-local
+// state, and its code is position-fixed memory any thread may run.
+unsafe impl Send for CodeMemory {}
+unsafe impl Sync for CodeMemory {}
+
+impl Drop for CodeMemory {
+    fn drop(&mut self) {
+        let module = self.0.get_mut().unwrap_or_else(|e| e.into_inner()).take();
+        if let Some(module) = module {
+            // SAFETY: every entry into this module's code was held by a `Code`, which
+            // held this memory alive; all are gone.
+            unsafe { module.free_memory() };
+        }
+    }
+}
+
+/// What a compiled block's code depends on besides the fixed store hook: its address (for
+/// relative branches, loads and links) and its words.
+type Key = (u32, Box<[u32]>);
+
+/// The compiler and the blocks it made, for all SPUs of a machine.
+struct Compiler {
+    memory: Arc<CodeMemory>,
+    ctx: Context,
+    fctx: FunctionBuilderContext,
+    scratch: Box<Core>,
+    made: HashMap<Key, Arc<Code>>,
+    /// Functions declared in `memory`'s module (their names).
+    functions: u32,
+    stats: super::JitStats,
+}
+
+// SAFETY: as for `CodeMemory`: used only under the cache's mutex.
+unsafe impl Send for Compiler {}
+
+/// The compile cache of a machine: every SPU given the same cache (with
+/// [`crate::machine::Spu::share_code`]) compiles each block once, whichever SPU gets there
+/// first. What an SPU runs, and so every cycle and counter, does not depend on it: each
+/// SPU decides by its own counts which of its blocks to run compiled, and a block's code
+/// depends only on its address and words.
+#[derive(Clone)]
+pub struct CodeCache(Arc<Mutex<Compiler>>);
+
+impl Default for CodeCache {
+    fn default() -> Self {
+        CodeCache::new()
+    }
+}
+
+impl CodeCache {
+    pub fn new() -> CodeCache {
         let module = new_module();
         let ctx = module.make_context();
-        Blocks {
-            module,
+        CodeCache(Arc::new(Mutex::new(Compiler {
+            memory: Arc::new(CodeMemory(Mutex::new(Some(module)))),
             ctx,
             fctx: FunctionBuilderContext::new(),
             scratch: Box::new(Core::new()),
-            slots: vec![0; LS_SIZE / 4],
-            heat: vec![0; LS_SIZE / 4],
-            blocks: Vec::new(),
+            made: HashMap::new(),
+            functions: 0,
             stats: Default::default(),
-        }
+        })))
     }
 
-    /// Compiles `insts` (starting at `pc`) and makes it the block at `pc`; `None` if the
-    /// block cannot be compiled (a branch before its end).
-    pub fn compile(&mut self, pc: u32, insts: &[Inst], hook: StoreHook) -> Option<usize> {
+    /// Blocks compiled, their instructions and the host seconds spent (for all SPUs of
+    /// the cache; `compiled_instructions` is left 0).
+    pub fn stats(&self) -> super::JitStats {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).stats
+    }
+
+    /// The code for `insts` at `pc`, compiled now unless some SPU already did; `None` if
+    /// the block cannot be compiled (a branch before its end).
+    fn code(&self, pc: u32, insts: &[Inst], hook: StoreHook) -> Option<Arc<Code>> {
         let n = insts.len();
         if n == 0
             || n > MAX_BLOCK
@@ -147,40 +194,123 @@ impl Blocks {
         {
             return None;
         }
-        if self.blocks.len() >= MAX_BLOCKS {
-            let stats = self.stats;
-            *self = Blocks::new();
-            self.stats = stats;
+        let key: Key = (pc, insts.iter().map(|i| i.word).collect());
+        let mut guard = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        let c = &mut *guard;
+        if let Some(code) = c.made.get(&key) {
+            return Some(code.clone());
+        }
+        if c.made.len() >= MAX_BLOCKS {
+            // Code memory is only freed whole: a new module; the old one goes when the
+            // last SPU drops its blocks.
+            let module = new_module();
+            c.ctx = module.make_context();
+            c.memory = Arc::new(CodeMemory(Mutex::new(Some(module))));
+            c.made.clear();
+            c.functions = 0;
         }
         let started = Instant::now();
         let owned: Box<[Inst]> = insts.into();
-        let entry = self.translate(pc, &owned, hook)?;
-        self.stats.blocks += 1;
-        self.stats.block_instructions += n as u64;
-        self.stats.compile_seconds += started.elapsed().as_secs_f64();
-        let id = self.blocks.len();
-        self.blocks.push(Block {
+        let self_loop = self_loop(pc, &owned[n - 1], pc.wrapping_add(4 * (n as u32 - 1)));
+        let entry = c.translate(pc, &owned, hook, self_loop)?;
+        c.stats.blocks += 1;
+        c.stats.block_instructions += n as u64;
+        c.stats.compile_seconds += started.elapsed().as_secs_f64();
+        let code = Arc::new(Code {
             entry,
             n: n as u32,
-            words: owned.iter().map(|i| i.word).collect(),
-            verified: u64::MAX,
+            words: key.1.clone(),
             last: owned[n - 1],
             _insts: owned,
+            _memory: c.memory.clone(),
+        });
+        c.made.insert(key, code.clone());
+        Some(code)
+    }
+}
+
+/// Whether `last` (at `at`) is a direct branch that may go back to `pc`.
+fn self_loop(pc: u32, last: &Inst, at: u32) -> bool {
+    use Op::*;
+    let imm = (last.imm << 2) as u32;
+    let target = match last.op {
+        Br | Brz | Brnz | Brhz | Brhnz => at.wrapping_add(imm),
+        Bra => imm,
+        _ => return false,
+    };
+    target & LS_MASK & !3 == pc & LS_MASK
+}
+
+/// A block as one SPU knows it: the shared code and the code epoch at which the SPU last
+/// found the block's words in its local store.
+pub(crate) struct Block {
+    pub code: Arc<Code>,
+    pub verified: u64,
+}
+
+/// One SPU's compiled blocks, found by their first word's index.
+pub(crate) struct Blocks {
+    cache: CodeCache,
+    /// Per local-store word: 1 + index into `blocks` of the block starting there, or 0.
+    pub slots: Vec<u32>,
+    /// Per local-store word: how often a block started there without compiled code.
+    pub heat: Vec<u8>,
+    pub blocks: Vec<Block>,
+}
+
+impl Blocks {
+    pub fn new(cache: CodeCache) -> Blocks {
+        Blocks {
+            cache,
+            slots: vec![0; LS_SIZE / 4],
+            heat: vec![0; LS_SIZE / 4],
+            blocks: Vec::new(),
+        }
+    }
+
+    pub fn cache(&self) -> &CodeCache {
+        &self.cache
+    }
+
+    /// Compiles `insts` (starting at `pc`), or takes the machine's code for them, and
+    /// makes it the block at `pc`; `None` if the block cannot be compiled.
+    pub fn compile(&mut self, pc: u32, insts: &[Inst], hook: StoreHook) -> Option<usize> {
+        let code = self.cache.code(pc, insts, hook)?;
+        if self.blocks.len() >= MAX_BLOCKS {
+            self.blocks.clear();
+            self.slots.fill(0);
+        }
+        let id = self.blocks.len();
+        self.blocks.push(Block {
+            code,
+            verified: u64::MAX,
         });
         self.slots[(pc as usize >> 2) & (LS_SIZE / 4 - 1)] = id as u32 + 1;
         Some(id)
     }
+}
 
-    fn translate(&mut self, pc: u32, insts: &[Inst], hook: StoreHook) -> Option<Entry> {
-        let ptr = self.module.target_config().pointer_type();
+impl Compiler {
+    fn translate(
+        &mut self,
+        pc: u32,
+        insts: &[Inst],
+        hook: StoreHook,
+        self_loop: bool,
+    ) -> Option<Entry> {
+        let memory = self.memory.clone();
+        let mut guard = memory.0.lock().unwrap_or_else(|e| e.into_inner());
+        let module = guard.as_mut()?;
+        let ptr = module.target_config().pointer_type();
         debug_assert_eq!(ptr, I64);
-        self.module.clear_context(&mut self.ctx);
-        let target = self.module.target_config();
+        module.clear_context(&mut self.ctx);
+        let target = module.target_config();
         let call_conv = target.default_call_conv;
         let sig = &mut self.ctx.func.signature;
         sig.params.push(AbiParam::new(I64));
         sig.returns.push(AbiParam::new(I64));
-        self.ctx.func.name = UserFuncName::user(0, self.blocks.len() as u32);
+        self.ctx.func.name = UserFuncName::user(0, self.functions);
+        self.functions += 1;
         let mut b = FunctionBuilder::new(&mut self.ctx.func, &mut self.fctx);
         let start = b.create_block();
         b.append_block_params_for_function_params(start);
@@ -214,6 +344,11 @@ impl Blocks {
             scratch: &mut self.scratch,
             b,
         };
+        // The block's instructions start in a block of their own, so that a self-loop can
+        // jump back to them (registers are then loaded again).
+        let body = t.b.create_block();
+        t.b.ins().jump(body, &[]);
+        t.b.switch_to_block(body);
         let n = insts.len();
         let block_end = pc.wrapping_add(4 * n as u32);
         let mut done = false;
@@ -221,7 +356,7 @@ impl Blocks {
             let p = pc.wrapping_add(4 * k as u32) & LS_MASK;
             let more = k + 1 < n;
             if is_branch(inst.op) {
-                t.branch(inst, p, n as u64);
+                t.branch(inst, p, n as u64, self_loop.then_some(body));
                 done = true;
             } else {
                 t.instruction(inst, p, k as u64, block_end, more);
@@ -236,14 +371,13 @@ impl Blocks {
         }
         t.b.seal_all_blocks();
         t.b.finalize(target);
-        let id = self
-            .module
+        let id = module
             .declare_anonymous_function(&self.ctx.func.signature)
             .ok()?;
-        self.module.define_function(id, &mut self.ctx).ok()?;
-        self.module.clear_context(&mut self.ctx);
-        self.module.finalize_definitions().ok()?;
-        let code = self.module.get_finalized_function(id);
+        module.define_function(id, &mut self.ctx).ok()?;
+        module.clear_context(&mut self.ctx);
+        module.finalize_definitions().ok()?;
+        let code = module.get_finalized_function(id);
         // SAFETY: the function was just compiled with the `Entry` signature.
         Some(unsafe { std::mem::transmute::<*const u8, Entry>(code) })
     }
@@ -534,6 +668,28 @@ impl Translator<'_> {
                 let v = self.shuffle(a, zero, mask);
                 self.set(inst.rt, v)
             }
+            Fceq | Fcgt | Fcmeq | Fcmgt => {
+                let (a, b) = (self.get(inst.ra), self.get(inst.rb));
+                let magnitude = matches!(inst.op, Fcmeq | Fcmgt);
+                let (ka, kb) = (self.sp_key(a, magnitude), self.sp_key(b, magnitude));
+                let cc = if matches!(inst.op, Fceq | Fcmeq) {
+                    IntCC::Equal
+                } else {
+                    IntCC::SignedGreaterThan
+                };
+                let v = self.b.ins().icmp(cc, ka, kb);
+                self.set(inst.rt, v)
+            }
+            Fi => {
+                let (x, est) = (self.get(inst.ra), self.get(inst.rb));
+                let v = self.fi(x, est);
+                self.set(inst.rt, v)
+            }
+            Cflts | Cfltu => {
+                let a = self.get(inst.ra);
+                let v = self.float_to_int(a, inst.op == Cflts, inst.imm as u32);
+                self.set(inst.rt, v)
+            }
             Fa | Fs | Fm if cfg!(target_arch = "x86_64") => self.single_precision(inst, p),
             Fma | Fms | Fnms if host_fma() => self.single_precision(inst, p),
             Lqd | Lqx | Lqa | Lqr => {
@@ -657,6 +813,109 @@ impl Translator<'_> {
         self.cache[inst.rt as usize & 127] = None;
     }
 
+    /// The comparison key of each single (`float::sp_key`, or of its magnitude): 0 for a
+    /// zero exponent (zeros and denormals), else sign and magnitude as a signed word
+    /// (exponent 255 is an ordinary number, so the order is that of the integers).
+    fn sp_key(&mut self, v: Value, magnitude: bool) -> Value {
+        let abs = self.splat(0x7fff_ffff);
+        let exp = self.splat(0x7f80_0000);
+        let zero = self.splat(0);
+        let mag = self.b.ins().band(v, abs);
+        let e = self.b.ins().band(v, exp);
+        let tiny = self.b.ins().icmp(IntCC::Equal, e, zero);
+        let mag = self.b.ins().band_not(mag, tiny);
+        if magnitude {
+            return mag;
+        }
+        let thirty_one = self.b.ins().iconst(I32, 31);
+        let sign = self.b.ins().sshr(v, thirty_one);
+        let flipped = self.b.ins().bxor(mag, sign);
+        self.b.ins().isub(flipped, sign)
+    }
+
+    /// `fi` lane by lane, as `float::fi`: the estimate's base less its step times the
+    /// operand's low 19 bits, in 32-bit fixed point, renormalised by one bit when the
+    /// difference went below 1.0.
+    fn fi(&mut self, x: Value, est: Value) -> Value {
+        let base_mask = self.splat(0x007f_fc00);
+        let step_mask = self.splat(0x3ff);
+        let low = self.splat(0x7_ffff);
+        let frac_mask = self.splat(0x007f_ffff);
+        let keep = self.splat(0xff80_0000);
+        let one_exp = self.splat(1 << 23);
+        let base = self.b.ins().band(est, base_mask);
+        let nine = self.b.ins().iconst(I32, 9);
+        let eight = self.b.ins().iconst(I32, 8);
+        let base = self.b.ins().ishl(base, nine);
+        let step = self.b.ins().band(est, step_mask);
+        let y = self.b.ins().band(x, low);
+        let ymul = self.b.ins().imul(step, y);
+        let t = self.b.ins().isub(base, ymul);
+        let adjust = self.b.ins().icmp(IntCC::UnsignedGreaterThan, ymul, base);
+        let by8 = self.b.ins().ushr(t, eight);
+        let by9 = self.b.ins().ushr(t, nine);
+        let frac = self.b.ins().bitselect(adjust, by8, by9);
+        let frac = self.b.ins().band(frac, frac_mask);
+        let top = self.b.ins().band(est, keep);
+        let r = self.b.ins().bor(top, frac);
+        let less = self.b.ins().band(adjust, one_exp);
+        self.b.ins().isub(r, less)
+    }
+
+    /// `cflts`/`cfltu` with the raw I8 field `i8`, as `float::cflts_scale`: scaling by a
+    /// constant power of two only moves the exponent, so where the scaled exponent is an
+    /// ordinary one the host's saturating truncation gives the exact result; a zero
+    /// exponent, before or after scaling, gives 0, and one past 254 a magnitude of at
+    /// least 2^127, which saturates just as the true value does (exponent 255 is a number).
+    fn float_to_int(&mut self, a: Value, signed: bool, i8: u32) -> Value {
+        let scale = 173 - (i8 & 0xff) as i32;
+        let e_mask = self.splat(0xff);
+        let keep = self.splat(0x807f_ffff);
+        let zero = self.splat(0);
+        let largest = self.splat(254);
+        let shift = self.b.ins().iconst(I32, 23);
+        let e = self.b.ins().ushr(a, shift);
+        let e = self.b.ins().band(e, e_mask);
+        let by = self.splat(scale as u32);
+        let scaled = self.b.ins().iadd(e, by);
+        let live = self.b.ins().icmp(IntCC::NotEqual, e, zero);
+        let positive = self.b.ins().icmp(IntCC::SignedGreaterThan, scaled, zero);
+        let live = self.b.ins().band(live, positive);
+        let unclamped = scaled;
+        let scaled = self.b.ins().smin(scaled, largest);
+        let scaled = self.b.ins().ishl(scaled, shift);
+        let y = self.b.ins().band(a, keep);
+        let y = self.b.ins().bor(y, scaled);
+        let y = self.b.ins().band(y, live);
+        let le = MemFlagsData::new().with_endianness(Endianness::Little);
+        if signed {
+            let f = self.b.ins().bitcast(F32X4, le, y);
+            return self.b.ins().fcvt_to_sint_sat(I32X4, f);
+        }
+        // Unsigned: negative values give 0; below 2^31 the signed truncation is exact; at
+        // exponent 158 ([2^31, 2^32)) the integer is the significand shifted by 8; above,
+        // 0xffffffff.
+        let thirty_one = self.b.ins().iconst(I32, 31);
+        let negative = self.b.ins().sshr(a, thirty_one);
+        let y = self.b.ins().band_not(y, negative);
+        let live = self.b.ins().band_not(live, negative);
+        let f = self.b.ins().bitcast(F32X4, le, y);
+        let low = self.b.ins().fcvt_to_sint_sat(I32X4, f);
+        let top = self.splat(158);
+        let at_top = self.b.ins().icmp(IntCC::Equal, unclamped, top);
+        let at_top = self.b.ins().band(at_top, live);
+        let above = self.b.ins().icmp(IntCC::SignedGreaterThan, unclamped, top);
+        let above = self.b.ins().band(above, live);
+        let fraction = self.splat(0x007f_ffff);
+        let one = self.splat(0x0080_0000);
+        let m = self.b.ins().band(a, fraction);
+        let m = self.b.ins().bor(m, one);
+        let eight = self.b.ins().iconst(I32, 8);
+        let m = self.b.ins().ishl(m, eight);
+        let r = self.b.ins().bitselect(at_top, m, low);
+        self.b.ins().bor(r, above)
+    }
+
     /// `shli`, `rotmi`, `rotmai`, `roti` by a constant count, as the interpreter counts.
     fn word_shift(&mut self, op: Op, a: Value, imm: u32) -> Value {
         let amount = |t: &mut Self, c: u32| t.b.ins().iconst(I32, c as i64);
@@ -763,8 +1022,10 @@ impl Translator<'_> {
         self.b.switch_to_block(cont);
     }
 
-    /// Emits the block's final branch and its return.
-    fn branch(&mut self, inst: &Inst, p: u32, n: u64) {
+    /// Emits the block's final branch and its return; with `again`, a taken branch (back
+    /// to the block's start) runs the block again from `again` while the budget holds a
+    /// whole further pass.
+    fn branch(&mut self, inst: &Inst, p: u32, n: u64, again: Option<IrBlock>) {
         use Op::*;
         let next = p.wrapping_add(4) & LS_MASK;
         let imm = inst.imm;
@@ -812,6 +1073,28 @@ impl Translator<'_> {
                 (t, taken)
             }
         };
+        if let Some(again) = again {
+            let check = self.b.create_block();
+            let back = self.b.create_block();
+            let out = self.b.create_block();
+            self.b.ins().brif(taken, check, &[], out, &[]);
+            self.b.switch_to_block(check);
+            let flags = MemFlagsData::trusted();
+            let budget = self.b.ins().load(I64, flags, self.ctx, CTX_BUDGET);
+            let more =
+                self.b
+                    .ins()
+                    .icmp_imm_u(IntCC::UnsignedGreaterThanOrEqual, budget, 2 * n as i64);
+            self.b.ins().brif(more, back, &[], out, &[]);
+            self.b.switch_to_block(back);
+            let left = self.b.ins().iadd_imm_s(budget, -(n as i64));
+            self.b.ins().store(flags, left, self.ctx, CTX_BUDGET);
+            let loops = self.b.ins().load(I64, flags, self.ctx, CTX_LOOPS);
+            let loops = self.b.ins().iadd_imm_s(loops, 1);
+            self.b.ins().store(flags, loops, self.ctx, CTX_LOOPS);
+            self.b.ins().jump(again, &[]);
+            self.b.switch_to_block(out);
+        }
         self.b
             .ins()
             .store(MemFlagsData::trusted(), target, self.ctx, CTX_TARGET);
@@ -834,4 +1117,6 @@ fn _assert_layout() {
     const _: () = assert!(offset_of!(Ctx, code_quads) == CTX_QUADS as usize);
     const _: () = assert!(offset_of!(Ctx, core) == CTX_CORE as usize);
     const _: () = assert!(offset_of!(Ctx, target) == CTX_TARGET as usize);
+    const _: () = assert!(offset_of!(Ctx, budget) == CTX_BUDGET as usize);
+    const _: () = assert!(offset_of!(Ctx, loops) == CTX_LOOPS as usize);
 }

@@ -57,11 +57,11 @@ macro_rules! specialised {
 }
 
 specialised!(
-    Fa, Fs, Fm, Fma, Fms, Fnms, Fcgt, Fcmgt, Fceq, Fcmeq, Frest, Frsqest, Fi, Cfltu, Cflts, Csflt,
-    Cuflt, Gb, Gbh, Gbb, Fsm, Fsmh, Fsmb, Rotqby, Rotqbybi, Shlqby, Shlqbybi, Rotqmby, Rotqmbybi,
-    Rotqbi, Rotqbii, Shlqbi, Shlqbii, Rotqmbi, Rotqmbii, Mpy, Mpyu, Mpyi, Mpyui, Mpya, Mpyh, Mpyhh,
-    Mpys, Ah, Ahi, Sfh, Sfhi, Ceqb, Ceqbi, Ceqh, Ceqhi, Cgtb, Cgth, Clgtb, Clgth, Andbi, Andhi,
-    Orbi, Orhi, Xorbi, Xorhi, Cwd, Cbd, Chd, Cdd, Cwx, Cbx, Chx, Cdx, Clz, Xsbh, Xshw, Xswd, Shl,
-    Rot, Rotm, Rotma, Shlh, Shlhi, Roth, Rothi, Rothm, Rothmi, Rotmah, Rotmahi, Cntb, Avgb, Absdb,
-    Sumb, Addx, Sfx, Cg, Cgx, Bg, Bgx, Dfa, Dfs, Dfm, Dfma, Dfms, Dfnms, Dfnma, Fesd, Frds, Orx,
+    Fa, Fs, Fm, Fma, Fms, Fnms, Frest, Frsqest, Csflt, Cuflt, Gb, Gbh, Gbb, Fsm, Fsmh, Fsmb,
+    Rotqby, Rotqbybi, Shlqby, Shlqbybi, Rotqmby, Rotqmbybi, Rotqbi, Rotqbii, Shlqbi, Shlqbii,
+    Rotqmbi, Rotqmbii, Mpy, Mpyu, Mpyi, Mpyui, Mpya, Mpyh, Mpyhh, Mpys, Ah, Ahi, Sfh, Sfhi, Ceqb,
+    Ceqbi, Ceqh, Ceqhi, Cgtb, Cgth, Clgtb, Clgth, Andbi, Andhi, Orbi, Orhi, Xorbi, Xorhi, Cwd, Cbd,
+    Chd, Cdd, Cwx, Cbx, Chx, Cdx, Clz, Xsbh, Xshw, Xswd, Shl, Rot, Rotm, Rotma, Shlh, Shlhi, Roth,
+    Rothi, Rothm, Rothmi, Rotmah, Rotmahi, Cntb, Avgb, Absdb, Sumb, Addx, Sfx, Cg, Cgx, Bg, Bgx,
+    Dfa, Dfs, Dfm, Dfma, Dfms, Dfnms, Dfnma, Fesd, Frds, Orx,
 );

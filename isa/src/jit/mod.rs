@@ -32,7 +32,25 @@ mod compile;
 mod helpers;
 
 #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+pub use compile::CodeCache;
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 pub(crate) use compile::{Blocks, Ctx, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN};
+
+/// No block compiler on this host: nothing to share.
+#[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+#[derive(Clone, Default)]
+pub struct CodeCache;
+
+#[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+impl CodeCache {
+    pub fn new() -> CodeCache {
+        CodeCache
+    }
+
+    pub fn stats(&self) -> JitStats {
+        JitStats::default()
+    }
+}
 
 /// Which engine runs an SPU's instructions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -6,7 +6,7 @@
 //! to the general path.
 
 use super::spu::Spu;
-use crate::jit::{Engine, JitStats};
+use crate::jit::{CodeCache, Engine, JitStats};
 
 #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 pub(super) type CompiledBlocks = crate::jit::Blocks;
@@ -29,10 +29,28 @@ impl Spu {
         self.engine
     }
 
-    /// What the block compiler did so far.
+    /// Compiles into `cache`, shared with the other SPUs given it (so a block the SPUs
+    /// share is compiled once); drops the blocks compiled so far. Results do not depend on
+    /// it, only host time.
+    pub fn share_code(&mut self, cache: &CodeCache) {
+        #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+        {
+            self.compiled = Some(Box::new(crate::jit::Blocks::new(cache.clone())));
+        }
+        #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+        let _ = cache;
+    }
+
+    /// What the block compiler did so far: the blocks compiled and the compile time are
+    /// those of the SPU's code cache (shared by the SPUs given the same one), the
+    /// instructions run compiled this SPU's own.
     pub fn jit_stats(&self) -> JitStats {
         #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
-        let base = self.compiled.as_ref().map(|b| b.stats).unwrap_or_default();
+        let base = self
+            .compiled
+            .as_ref()
+            .map(|b| b.cache().stats())
+            .unwrap_or_default();
         #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
         let base = JitStats::default();
         JitStats {
@@ -58,7 +76,7 @@ mod host {
     use super::super::spu::{invalidate_quad, Spu};
     use crate::analysis::is_branch;
     use crate::codec::Inst;
-    use crate::jit::{Blocks, Ctx, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN};
+    use crate::jit::{Blocks, CodeCache, Ctx, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN};
     use crate::machine::exec::{TruncatingFloats, LS_MASK, LS_SIZE};
     use crate::table::Op;
     use crate::timing::ends_block;
@@ -83,7 +101,11 @@ mod host {
         // SAFETY: the block was called by `Spu::call_block` with `spu` pointing at the
         // SPU, which nothing else uses during the call.
         let spu = unsafe { &mut *((*ctx).spu as *mut Spu) };
-        spu.code_epoch += invalidate_quad(&mut spu.decoded, &mut spu.code_quads, addr) as u64;
+        if invalidate_quad(&mut spu.decoded, &mut spu.code_quads, addr) {
+            spu.code_epoch += 1;
+            // The block's words may have changed: no further pass of a self-loop.
+            unsafe { (*ctx).budget = 0 };
+        }
         let line = addr & LS_MASK & !15;
         (more != 0 && line < block_end && line + 16 > next) as u32
     }
@@ -122,10 +144,30 @@ mod host {
 
         /// The compiled block starting at `pc` (with `n` instructions, when given),
         /// compiling it if it is hot and `whole` (not the rest of a cut block); `None`:
-        /// interpret it.
+        /// interpret it. The common case (compiled, checked at this code epoch) inline.
+        #[inline(always)]
         fn compiled_block(&mut self, pc: u32, n: Option<usize>, whole: bool) -> Option<usize> {
+            if let Some(blocks) = self.compiled.as_deref() {
+                let slot = blocks.slots[(pc as usize >> 2) & (LS_SIZE / 4 - 1)];
+                if slot != 0 && slot != DECLINED {
+                    let id = slot as usize - 1;
+                    let b = &blocks.blocks[id];
+                    if b.verified == self.code_epoch && n.is_none_or(|n| b.code.n as usize == n) {
+                        return Some(id);
+                    }
+                }
+            }
+            self.compiled_block_slow(pc, n, whole)
+        }
+
+        /// [`Spu::compiled_block`] past its common case: checking the words again after
+        /// the code epoch moved, counting heat, compiling.
+        #[inline(never)]
+        fn compiled_block_slow(&mut self, pc: u32, n: Option<usize>, whole: bool) -> Option<usize> {
             let w = (pc as usize >> 2) & (LS_SIZE / 4 - 1);
-            let blocks = self.compiled.get_or_insert_with(|| Box::new(Blocks::new()));
+            let blocks = self
+                .compiled
+                .get_or_insert_with(|| Box::new(Blocks::new(CodeCache::new())));
             let slot = blocks.slots[w];
             if slot == DECLINED {
                 return None;
@@ -133,12 +175,12 @@ mod host {
             if slot != 0 {
                 let id = slot as usize - 1;
                 let b = &blocks.blocks[id];
-                if n.is_none_or(|n| b.n as usize == n) {
+                if n.is_none_or(|n| b.code.n as usize == n) {
                     if b.verified == self.code_epoch {
                         return Some(id);
                     }
-                    let words = b.words.clone();
-                    if self.block_still_there(pc, &words) {
+                    let code = b.code.clone();
+                    if self.block_still_there(pc, &code.words) {
                         let epoch = self.code_epoch;
                         self.compiled.as_mut().expect("blocks").blocks[id].verified = epoch;
                         return Some(id);
@@ -182,15 +224,18 @@ mod host {
             }
         }
 
-        /// Runs compiled block `id`; returns its result word and its final branch's target.
+        /// Runs compiled block `id` with a `budget` of instructions (a self-looping block
+        /// runs again while a whole pass fits); returns its result word, its final
+        /// branch's target and the instructions done.
         #[inline(always)]
-        fn call_block(&mut self, id: usize) -> (u64, u32) {
+        fn call_block(&mut self, id: usize, budget: u64) -> (u64, u32, u64) {
             let spu: *mut Spu = self;
             // SAFETY: every pointer is derived from the exclusively borrowed SPU and used
             // only during the call; the block's code is owned by its cache, which stays
             // alive (compiling happens only outside calls).
             unsafe {
-                let entry = (*spu).compiled.as_ref().expect("blocks").blocks[id].entry;
+                let code = &(*spu).compiled.as_ref().expect("blocks").blocks[id].code;
+                let (entry, n) = (code.entry, code.n as u64);
                 let mut ctx = Ctx {
                     regs: (*spu).core.regs.as_mut_ptr(),
                     ls: (*spu).core.ls.as_mut_ptr(),
@@ -199,9 +244,11 @@ mod host {
                     spu: spu as *mut u8,
                     target: 0,
                     _pad: 0,
+                    budget,
+                    loops: 0,
                 };
                 let r = entry(&mut ctx);
-                (r, ctx.target)
+                (r, ctx.target, ctx.loops * n + ((r >> 32) & 0xffff))
             }
         }
 
@@ -219,11 +266,10 @@ mod host {
                 // it), this is the rest of a block, which is not made a block of its own.
                 let whole = !std::mem::take(&mut self.block_cut);
                 if let Some(id) = self.compiled_block(pc, None, whole) {
-                    let n = self.compiled.as_ref().expect("blocks").blocks[id].n as u64;
+                    let n = self.compiled.as_ref().expect("blocks").blocks[id].code.n as u64;
                     if n <= budget {
-                        let (r, _) = self.call_block(id);
+                        let (r, _, done) = self.call_block(id, budget);
                         self.block_cut = r & RESULT_PARTIAL != 0;
-                        let done = (r >> 32) & 0xffff;
                         self.pc = r as u32;
                         self.instructions += done;
                         self.cycle += done;
@@ -259,9 +305,10 @@ mod host {
             };
             // Blocks hold no `bisled`, the one reader of the pending-event flag.
             self.core.event_pending_known = false;
-            let (r, target) = self.call_block(id);
-            let done = ((r >> 32) & 0xffff) as usize;
-            let last = self.compiled.as_ref().expect("blocks").blocks[id].last;
+            // Timing on: one pass (each pass needs its timing record applied).
+            let (r, target, done) = self.call_block(id, 0);
+            let done = done as usize;
+            let last = self.compiled.as_ref().expect("blocks").blocks[id].code.last;
             let timing = self.timing.as_mut().expect("timing");
             if r & RESULT_PARTIAL != 0 {
                 timing.block_replayed_partly(memo, done);
