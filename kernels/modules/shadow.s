@@ -282,14 +282,13 @@ shadow_done:
         ila     $71, SH_VIS
         a       $70, $70, $71
         a       $70, $70, $66                 # the light's masks
-        il      $67, 0
-1:      a       $93, RAYS, $67
-        lqd     $92, CTX_RAY_ID($93)
-        ceqi    $92, $92, -1                  # nothing recorded: visible
-        stqx    $92, $70, $67
-        ai      $67, $67, 16
-        ceqi    $94, $67, 256
-        brz     $94, 1b
+        .sched  pool=71-99 scratch=66-127
+        .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
+        lqd     %id\V, CTX_RAY_ID+16*\V(RAYS)
+        ceqi    %vis\V, %id\V, -1              # nothing recorded: visible
+      ~ stqd    %vis\V, 16*\V($70)
+        .endr
+        .endsched
         ai      $69, $69, 1
         stqd    $69, SV_LIGHT($68)
         br      .Lsv_light
