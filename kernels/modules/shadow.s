@@ -33,6 +33,9 @@
         .set SV_LIGHT, 16               # the light being traced,
         .set SV_HANDLERS, 32            # the five miss-handler words of vars, saved
         .set SV_REGS, 128               # the registers, one quadword each
+        .if     SH_PY - SH_PX != 256 || SH_PZ - SH_PY != 256 || SH_NY - SH_NX != 256 || SH_NZ - SH_NY != 256
+        .error  "shadow.s reads the i-set's x, y, z arrays 256 bytes apart"
+        .endif
 
         .text
         .align  4
@@ -168,54 +171,41 @@ shadow_rays:
         ori     $110, NBIG, 0
         ori     $111, NBIG, 0
         il      $112, 0                       # minus the rays cast, per lane
-        il      $67, 0                        # intersection packet * 16
-.Lsv_gen:
-        a       $69, $66, $67
-        lqd     $70, SH_PX($69)
-        lqd     $71, SH_PY($69)
-        lqd     $72, SH_PZ($69)
-        lqd     $73, SH_NX($69)
-        lqd     $74, SH_NY($69)
-        lqd     $75, SH_NZ($69)
-        lqd     $76, SH_MAT($69)
-        fs      $77, OXS, $70                 # L = light - P and c = dot(N, L), as shade.s
-        fs      $78, OYS, $71
-        fs      $79, OZS, $72
-        fm      $80, $73, $77
-        fma     $80, $74, $78, $80
-        fma     $80, $75, $79, $80
-        fcgt    $81, $80, ZERO
-        ceqi    $82, $76, -1
-        andc    $81, $81, $82                 # cast: a hit facing the light
-        fs      $83, $70, OXS                 # d = P - light
-        fs      $84, $71, OYS
-        fs      $85, $72, OZS
-        .irp    A, 0, 1, 2
-        frest   (86+2*\A), (83+\A)            # 1/d, one Newton step
-        fi      (86+2*\A), (83+\A), (86+2*\A)
-        fnms    (87+2*\A), (83+\A), (86+2*\A), ONE
-        fma     (86+2*\A), (87+2*\A), (86+2*\A), (86+2*\A)
-        selb    $94, BIG, (86+2*\A), $81       # the range of the cast rays' 1/d
-        fcgt    $95, (106+\A), $94
-        selb    (106+\A), (106+\A), $94, $95
-        selb    $94, NBIG, (86+2*\A), $81
-        fcgt    $95, $94, (109+\A)
-        selb    (109+\A), (109+\A), $94, $95
+        # (scheduled into even/odd pairs: the 16 vectors of the i-set, unrolled)
+        .sched  pool=69-102,113-127 scratch=66-127
+        .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
+        lqd     %mat\V, SH_MAT+16*\V($66)
+        il      %c\V, 0                       # L = light - P and c = dot(N, L), as shade.s
+        .irp    K, 0, 1, 2                    # (fma onto +0 rounds as shade.s's first fm)
+        lqd     %p\V\K, SH_PX+256*\K+16*\V($66)
+        lqd     %n\V\K, SH_NX+256*\K+16*\V($66)
+        fs      %l\V\K, (OXS+\K), %p\V\K
+        fma     %c\V, %n\V\K, %l\V\K, %c\V
         .endr
-        selb    $92, $104, $103, $81          # t: the limit, or -1 (not cast)
-        a       $112, $112, $81
-        a       $93, RAYS, $67
-        stqd    $83, CTX_RAY_DX($93)
-        stqd    $84, CTX_RAY_DX+256($93)
-        stqd    $85, CTX_RAY_DX+512($93)
-        stqd    $86, CTX_RAY_RX($93)
-        stqd    $88, CTX_RAY_RX+256($93)
-        stqd    $90, CTX_RAY_RX+512($93)
-        stqd    $92, CTX_RAY_T($93)
-        stqd    $105, CTX_RAY_ID($93)
-        ai      $67, $67, 16
-        ceqi    $94, $67, 256
-        brz     $94, .Lsv_gen
+        fcgt    %lit\V, %c\V, ZERO
+        ceqi    %miss\V, %mat\V, -1
+        andc    %cast\V, %lit\V, %miss\V       # cast: a hit facing the light
+        .irp    K, 0, 1, 2
+        fs      %d\V\K, %p\V\K, (OXS+\K)       # d = P - light
+        frest   %y\V\K, %d\V\K                # 1/d, one Newton step
+        fi      %y\V\K, %d\V\K, %y\V\K
+        fnms    %e\V\K, %d\V\K, %y\V\K, ONE
+        fma     %r\V\K, %e\V\K, %y\V\K, %y\V\K
+        selb    %lo\V\K, BIG, %r\V\K, %cast\V  # the range of the cast rays' 1/d
+        fcgt    %ml\V\K, (106+\K), %lo\V\K
+        selb    (106+\K), (106+\K), %lo\V\K, %ml\V\K
+        selb    %hi\V\K, NBIG, %r\V\K, %cast\V
+        fcgt    %mh\V\K, %hi\V\K, (109+\K)
+        selb    (109+\K), (109+\K), %hi\V\K, %mh\V\K
+      ~ stqd    %d\V\K, CTX_RAY_DX+256*\K+16*\V(RAYS)
+      ~ stqd    %r\V\K, CTX_RAY_RX+256*\K+16*\V(RAYS)
+        .endr
+        selb    %t\V, $104, $103, %cast\V       # t: the limit, or -1 (not cast)
+        a       $112, $112, %cast\V
+      ~ stqd    %t\V, CTX_RAY_T+16*\V(RAYS)
+      ~ stqd    $105, CTX_RAY_ID+16*\V(RAYS)
+        .endr
+        .endsched
         # the rays cast: counted; none (or an empty scene) leaves the light visible
         rotqbyi $94, $112, 8
         a       $112, $112, $94
@@ -292,14 +282,13 @@ shadow_done:
         ila     $71, SH_VIS
         a       $70, $70, $71
         a       $70, $70, $66                 # the light's masks
-        il      $67, 0
-1:      a       $93, RAYS, $67
-        lqd     $92, CTX_RAY_ID($93)
-        ceqi    $92, $92, -1                  # nothing recorded: visible
-        stqx    $92, $70, $67
-        ai      $67, $67, 16
-        ceqi    $94, $67, 256
-        brz     $94, 1b
+        .sched  pool=71-99 scratch=66-127
+        .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
+        lqd     %id\V, CTX_RAY_ID+16*\V(RAYS)
+        ceqi    %vis\V, %id\V, -1              # nothing recorded: visible
+      ~ stqd    %vis\V, 16*\V($70)
+        .endr
+        .endsched
         ai      $69, $69, 1
         stqd    $69, SV_LIGHT($68)
         br      .Lsv_light
