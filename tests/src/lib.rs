@@ -95,3 +95,16 @@ pub fn looping_program(
     }
     src
 }
+
+/// Assembles `src` (named `name` in diagnostics) with the kernel modules and `layout.inc`
+/// the host provides in memory, as the frame programs are; panics with every diagnostic.
+pub fn assemble_with_kernels(src: &str, name: &str) -> spu_asm::Output {
+    let opts = spu_asm::Options {
+        virtual_files: spu_loader::kernels::include_files(),
+        ..Default::default()
+    };
+    spu_asm::assemble(src, name, &opts).unwrap_or_else(|diags| {
+        let text: Vec<String> = diags.iter().map(|d| d.to_string()).collect();
+        panic!("{name} does not assemble:\n{}", text.join("\n"))
+    })
+}

@@ -82,19 +82,7 @@ struct Harness {
 fn harness(staged: &StagedScene, scene: &Scene, block: ShadingBlock) -> Harness {
     let basis = scene.camera.basis(64, 64);
     let layout = FrameLayout::new(staged, &basis, 64, 64, 1, 256, 256).unwrap();
-    let opts = spu_asm::Options {
-        virtual_files: spu_loader::kernels::include_files(),
-        ..Default::default()
-    };
-    let out = spu_asm::assemble(DRIVER, "driver.s", &opts).unwrap_or_else(|d| {
-        panic!(
-            "{}",
-            d.iter()
-                .map(|e| e.to_string())
-                .collect::<Vec<_>>()
-                .join("\n")
-        )
-    });
+    let out = spu_tests::assemble_with_kernels(DRIVER, "driver.s");
     let symbols: HashMap<String, u32> = out.symbols.into_iter().collect();
     let mut layout = layout.with_shading(staged, block).unwrap();
     layout.set_shading_area(symbols["area"]).unwrap();

@@ -175,13 +175,7 @@ fn simple_shading_of_the_room_matches_the_reference() {
 #[test]
 fn simple_shading_with_hyperthreading_and_4_way_caches() {
     let scene = procedural::room();
-    let lights = [
-        Light::white(glam::Vec3::new(-0.6, 2.7, 0.4)),
-        Light {
-            position: glam::Vec3::new(2.5, 1.2, 2.0),
-            colour: glam::Vec3::new(0.3, 0.3, 0.6),
-        },
-    ];
+    let lights = room_lights();
     let shaded = shaded_frame(&scene, 64, 1, SHADE_SIMPLE, &lights, false, (4, 4));
     assert_eq!(shaded.triangle_mismatches, 0);
     assert_eq!(shaded.colour_mismatches, 0);
@@ -194,13 +188,7 @@ fn simple_shading_with_hyperthreading_and_4_way_caches() {
 #[test]
 fn shadows_of_the_room_match_the_reference_with_and_without_early_termination() {
     let scene = procedural::room();
-    let lights = [
-        Light::white(glam::Vec3::new(-0.6, 2.7, 0.4)),
-        Light {
-            position: glam::Vec3::new(2.5, 1.2, 2.0),
-            colour: glam::Vec3::new(0.3, 0.3, 0.6),
-        },
-    ];
+    let lights = room_lights();
     let simple = shaded_frame(&scene, 64, 1, SHADE_SIMPLE, &lights, false, (1, 1));
     assert_eq!(simple.run.shadow_rays, 0);
     let mut colours = Vec::new();
@@ -251,4 +239,15 @@ fn shadows_with_hyperthreading_and_4_way_caches() {
         assert_eq!(packets, 64);
         assert!(shaded.run.shadow_rays > 0);
     }
+}
+
+/// Two lights in the room, one white and one dim blue, so that passes add irradiance.
+fn room_lights() -> [Light; 2] {
+    [
+        Light::white(glam::Vec3::new(-0.6, 2.7, 0.4)),
+        Light {
+            position: glam::Vec3::new(2.5, 1.2, 2.0),
+            colour: glam::Vec3::new(0.3, 0.3, 0.6),
+        },
+    ]
 }

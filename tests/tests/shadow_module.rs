@@ -150,19 +150,7 @@ struct Harness {
 }
 
 fn harness() -> Harness {
-    let opts = spu_asm::Options {
-        virtual_files: spu_loader::kernels::include_files(),
-        ..Default::default()
-    };
-    let out = spu_asm::assemble(DRIVER, "driver.s", &opts).unwrap_or_else(|d| {
-        panic!(
-            "{}",
-            d.iter()
-                .map(|e| e.to_string())
-                .collect::<Vec<_>>()
-                .join("\n")
-        )
-    });
+    let out = spu_tests::assemble_with_kernels(DRIVER, "driver.s");
     let symbols: std::collections::HashMap<String, u32> = out.symbols.into_iter().collect();
     let mut spu = Spu::new(0);
     spu.load_image(&out.image);
