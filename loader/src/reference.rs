@@ -375,6 +375,44 @@ impl Reference {
             .collect()
     }
 
+    /// The colour of the kernel's hit on staged record `record` when it is another triangle
+    /// than the reference's nearest `hit` yet an equally valid one: a ray through an edge
+    /// two triangles share (a box's corner, a crease) hits both at one distance, and single
+    /// precision gives it to either, whose normals may shade it differently (the room's
+    /// picture frame at (1021, 164) of 1024x1024: its front lit, its side not). The kernel's
+    /// triangle, widened by [`EDGE_TIE`] (barycentric), must be hit within 1e-4 (relative)
+    /// of `hit.t`. `None` when it is the reference's own triangle or no such tie.
+    pub fn shade_edge_tie(
+        &self,
+        hit: &Hit,
+        record: u32,
+        origin: Vec3,
+        dir: Vec3,
+        lights: &[Light],
+        shadows: bool,
+    ) -> Option<u32> {
+        if !hit.is_hit() || record == hit.record {
+            return None;
+        }
+        let triangle = self.triangles.get(record as usize)?;
+        let (t, _, _) = triangle.intersect_with_slack(
+            origin.to_array(),
+            dir.to_array(),
+            T_MIN,
+            T_MAX,
+            EDGE_TIE,
+        )?;
+        if (t - hit.t).abs() > 1e-4 * t.abs().max(hit.t.abs()) {
+            return None;
+        }
+        let tie = Hit {
+            triangle: triangle.original_index,
+            t,
+            record,
+        };
+        Some(self.shade(&tie, origin, dir, lights, shadows))
+    }
+
     /// The model's colour with `visible(light index, light, point)` deciding each light's
     /// occlusion (asked only for lights the surface faces).
     fn shade_with(
@@ -441,6 +479,10 @@ impl Reference {
 /// Barycentric margin within which a shadow ray grazes an occluder's edge
 /// ([`Reference::shadow_grazes`]).
 pub const SHADOW_GRAZE: f32 = 1.0 / 65536.0;
+
+/// Barycentric margin within which a primary ray through an edge shared by two
+/// triangles may hit either ([`Reference::shade_edge_tie`]).
+pub const EDGE_TIE: f32 = 1.0 / 65536.0;
 
 /// The colour of a pixel whose primary ray hits nothing: opaque black.
 pub const MISS_COLOUR: u32 = 0x0000_00ff;

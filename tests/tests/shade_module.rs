@@ -80,8 +80,13 @@ struct Harness {
 }
 
 fn harness(staged: &StagedScene, scene: &Scene, block: ShadingBlock) -> Harness {
-    let basis = scene.camera.basis(64, 64);
-    let layout = FrameLayout::new(staged, &basis, 64, 64, 1, 256, 256).unwrap();
+    harness_sized(staged, scene, block, 64)
+}
+
+/// [`harness`] for a `size` x `size` frame.
+fn harness_sized(staged: &StagedScene, scene: &Scene, block: ShadingBlock, size: u32) -> Harness {
+    let basis = scene.camera.basis(size, size);
+    let layout = FrameLayout::new(staged, &basis, size, size, 1, 256, 256).unwrap();
     let out = spu_tests::assemble_with_kernels(DRIVER, "driver.s");
     let symbols: HashMap<String, u32> = out.symbols.into_iter().collect();
     let mut layout = layout.with_shading(staged, block).unwrap();
@@ -118,7 +123,12 @@ struct Packet {
 }
 
 fn trace_packet(reference: &Reference, scene: &Scene, x0: u32, y0: u32) -> Packet {
-    let basis = scene.camera.basis(64, 64);
+    trace_packet_sized(reference, scene, x0, y0, 64)
+}
+
+/// [`trace_packet`] in a `size` x `size` frame.
+fn trace_packet_sized(reference: &Reference, scene: &Scene, x0: u32, y0: u32, size: u32) -> Packet {
+    let basis = scene.camera.basis(size, size);
     let dirs: Vec<glam::Vec3> = (0..64)
         .map(|i| basis.direction(x0 + i % 8, y0 + i / 8))
         .collect();
@@ -328,4 +338,64 @@ fn shading_area_size_is_one_number() {
         .unwrap();
     let value: usize = line.split(',').nth(1).unwrap().trim().parse().unwrap();
     assert_eq!(value, spu_loader::kernel_abi::SHADING_AREA_BYTES);
+}
+
+/// A ray through the edge two triangles share: pixel (1021, 164) of the 1024x1024 room
+/// meets the picture frame's corner, where its front (lit) and its side (facing away from
+/// the light) are hit at one distance. The reference takes the side; the SPU's intersection
+/// test took the front, and the module shades that hit as the front's, so the frame's
+/// colour check must accept the other triangle's colour there (`Reference::shade_edge_tie`)
+/// and nowhere else.
+#[test]
+fn an_edge_shared_by_two_triangles_takes_either_triangles_colour() {
+    let (scene, staged, reference) = room_setup();
+    let lights = shading::default_lights(&scene);
+    let basis = scene.camera.basis(1024, 1024);
+    let (o, d) = (basis.origin, basis.direction(1021, 164));
+    let hit = reference.trace(o, d);
+    let own = reference.shade(&hit, o, d, &lights, false);
+    let ties: Vec<(u32, u32)> = (0..reference.triangles.len() as u32)
+        .filter_map(|r| {
+            reference
+                .shade_edge_tie(&hit, r, o, d, &lights, false)
+                .map(|c| (r, c))
+        })
+        .collect();
+    assert_eq!(
+        ties.len(),
+        1,
+        "one other triangle shares the edge: {ties:?}"
+    );
+    let (record, tie_colour) = ties[0];
+    let side = &reference.triangles[hit.record as usize];
+    let front = &reference.triangles[record as usize];
+    assert_eq!((side.original_index, front.original_index), (780, 788));
+    assert_eq!((own, tie_colour), (0x0409_13ff, 0x2557_baff));
+    assert!(shading::channel_difference(own, tie_colour) > shading::COLOUR_TOLERANCE);
+    // Not a tie: the reference's own triangle, and a miss.
+    assert_eq!(
+        reference.shade_edge_tie(&hit, hit.record, o, d, &lights, false),
+        None
+    );
+    assert_eq!(
+        reference.shade_edge_tie(&Hit::NONE, record, o, d, &lights, false),
+        None
+    );
+
+    // The module, given the SPU's hit (the front, at its own t), shades the front's colour.
+    let mut h = harness_sized(&staged, &scene, block(lights.clone(), 8, 6), 1024);
+    let mut packet = trace_packet_sized(&reference, &scene, 1016, 160, 1024);
+    let lane = 4 * 8 + 5;
+    assert_eq!(packet.hits[lane], hit);
+    packet.hits[lane] = Hit {
+        triangle: front.original_index,
+        t: 4.092_560_3, // the SPU's distance
+        record,
+    };
+    let colours = h.shade(&packet, 0);
+    assert_eq!(colours[lane], tie_colour);
+    for (i, (&colour, hit)) in colours.iter().zip(&packet.hits).enumerate() {
+        let expected = reference.shade(hit, o, packet.dirs[i], &lights, false);
+        assert!(shading::channel_difference(colour, expected) <= shading::COLOUR_TOLERANCE);
+    }
 }

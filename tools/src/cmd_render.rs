@@ -382,6 +382,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     let record_to_original: Vec<u32> = staged.triangles.iter().map(|t| t.original_index).collect();
     let mut colour_validation = None;
     let mut shadow_edges = None;
+    let mut edge_ties = 0;
     let validation = if args.validate && !args.fill {
         let reference = Reference::from_staged(&staged);
         let hits = reference.render(&scene.camera, args.width, args.height, threads);
@@ -409,8 +410,26 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
                         })
                 }
             };
-            let (off, edges) = validate_colours(&colours, &expected, args.width, &grazing);
+            // A pixel whose ray hits an edge two triangles share may be the kernel's
+            // triangle's (Reference::shade_edge_tie).
+            let edge_tie = |i: usize| {
+                let (x, y) = (i as u32 % args.width, i as u32 / args.width);
+                let tie = reference.shade_edge_tie(
+                    &hits[i],
+                    pixels[i].triangle,
+                    basis.origin,
+                    basis.direction(x, y),
+                    &lights,
+                    args.shade == ShadeMode::Shadows,
+                );
+                tie.is_some_and(|c| {
+                    shading::channel_difference(colours[i], c) <= shading::COLOUR_TOLERANCE
+                })
+            };
+            let (off, edges, ties) =
+                validate_colours(&colours, &expected, args.width, &grazing, &edge_tie);
             colour_validation = Some(off);
+            edge_ties = ties;
             shadow_edges = (args.shade == ShadeMode::Shadows).then_some(edges);
         }
         Some(validate(&pixels, &hits, &record_to_original, args.width))
@@ -449,8 +468,16 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     }
     match (validation, colour_validation) {
         (Some((n, bad)), Some(off)) => outln!(
-            "validation: {bad} of {n} pixels differ from the host reference in the hit triangle, {off} in colour (more than {} of 255 in a channel){}",
+            "validation: {bad} of {n} pixels differ from the host reference in the hit triangle, {off} in colour (more than {} of 255 in a channel){}{}",
             shading::COLOUR_TOLERANCE,
+            if edge_ties > 0 {
+                format!(
+                    "; {edge_ties} more hit, at the reference's distance, another triangle \
+                     sharing an edge with the reference's and take that triangle's colour"
+                )
+            } else {
+                String::new()
+            },
             match shadow_edges {
                 Some(edges) => format!(
                     "; {edges} more take the colour of a shadow ray grazing an occluder's edge \
@@ -532,20 +559,28 @@ fn kernel_profile(
 
 /// Colours against the reference shading: the pixels with a channel off by more than
 /// [`shading::COLOUR_TOLERANCE`]; the first few are printed.
-/// Colours beyond the tolerance: `(differing, accepted by grazing)`, where `grazing(pixel)`
-/// says whether another legitimate outcome of a shadow ray gives the kernel's colour.
+/// Colours beyond the tolerance: `(differing, accepted by grazing, accepted by edge_tie)`,
+/// where `grazing(pixel)` says whether another legitimate outcome of a shadow ray gives the
+/// kernel's colour, `edge_tie(pixel)` whether the kernel's triangle, hit on an edge it
+/// shares with the reference's, does.
 fn validate_colours(
     colours: &[u32],
     expected: &[u32],
     width: u32,
     grazing: &dyn Fn(usize) -> bool,
-) -> (usize, usize) {
+    edge_tie: &dyn Fn(usize) -> bool,
+) -> (usize, usize, usize) {
     let mut off = 0;
     let mut edges = 0;
+    let mut ties = 0;
     for (i, (&c, &e)) in colours.iter().zip(expected).enumerate() {
         if shading::channel_difference(c, e) > shading::COLOUR_TOLERANCE {
             if grazing(i) {
                 edges += 1;
+                continue;
+            }
+            if edge_tie(i) {
+                ties += 1;
                 continue;
             }
             if off < 10 {
@@ -558,7 +593,7 @@ fn validate_colours(
             off += 1;
         }
     }
-    (off, edges)
+    (off, edges, ties)
 }
 
 fn write_png(path: &PathBuf, colours: &[u32], width: u32, height: u32) -> exit::Result<()> {
