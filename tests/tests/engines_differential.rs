@@ -72,6 +72,18 @@ fn same_with_both_engines(src: &str) -> [Spu; 2] {
     })
 }
 
+/// `same_with_both_engines`, and more than half the instructions ran compiled.
+fn same_and_mostly_compiled(src: &str) {
+    let [off, _] = same_with_both_engines(src);
+    let stats = off.jit_stats();
+    assert!(
+        stats.compiled_instructions > off.instructions() / 2,
+        "{} of {} ran compiled",
+        stats.compiled_instructions,
+        off.instructions()
+    );
+}
+
 /// A random instruction on registers $10..$21 ($3 points at the data, $5 holds a small
 /// data offset).
 fn random_op(rng: &mut Rng) -> String {
@@ -293,6 +305,27 @@ scratch: .space 16
     assert!(off.jit_stats().compiled_instructions > 100);
 }
 
+/// Singles of every kind: zeros of both signs, denormals, ordinary values, exponent 255
+/// (an ordinary number on the SPU), values that saturate or vanish when scaled.
+const SPECIALS: [u32; 16] = [
+    0x0000_0000,
+    0x8000_0000,
+    0x0000_0001,
+    0x807f_ffff,
+    0x3f80_0000,
+    0xbf80_0000,
+    0x4f00_0000,
+    0xcf00_0001,
+    0x7f80_0000,
+    0xffff_ffff,
+    0x7fff_ffff,
+    0x0080_0000,
+    0x4f80_0000,
+    0x3eff_ffff,
+    0xc2c8_0000,
+    0x4b00_0001,
+];
+
 /// The single-precision compares, `fi` and the conversions to integers, which compiled
 /// code does in host vector instructions, on operands of every kind: zeros of both
 /// signs, denormals, ordinary values, exponent 255 (an ordinary number on the SPU) and
@@ -300,24 +333,6 @@ scratch: .space 16
 /// and the loop ran compiled.
 #[test]
 fn float_compares_and_conversions_run_the_same_compiled() {
-    let specials: [u32; 16] = [
-        0x0000_0000,
-        0x8000_0000,
-        0x0000_0001,
-        0x807f_ffff,
-        0x3f80_0000,
-        0xbf80_0000,
-        0x4f00_0000,
-        0xcf00_0001,
-        0x7f80_0000,
-        0xffff_ffff,
-        0x7fff_ffff,
-        0x0080_0000,
-        0x4f80_0000,
-        0x3eff_ffff,
-        0xc2c8_0000,
-        0x4b00_0001,
-    ];
     let mut rng = Rng(0x5eed_f10a7);
     let mut src = String::from(
         "        .text\n        .global _start\n_start: ila $3, data\n il $9, 64\n il $5, 0\n",
@@ -345,25 +360,57 @@ fn float_compares_and_conversions_run_the_same_compiled() {
     src += "        .data\n        .align 4\ndata:\n";
     for k in 0..32 {
         let w = if k % 2 == 0 {
-            specials[(k / 2) % 16]
+            SPECIALS[(k / 2) % 16]
         } else {
             rng.next() as u32
         };
         src += &format!(
             " .long {w}, {}, {}, {}\n",
-            specials[(k + 5) % 16],
+            SPECIALS[(k + 5) % 16],
             rng.next() as u32,
-            specials[(3 * k + 1) % 16]
+            SPECIALS[(3 * k + 1) % 16]
         );
     }
-    let [off, _] = same_with_both_engines(&src);
-    let stats = off.jit_stats();
-    assert!(
-        stats.compiled_instructions > off.instructions() / 2,
-        "{} of {} ran compiled",
-        stats.compiled_instructions,
-        off.instructions()
+    same_and_mostly_compiled(&src);
+}
+
+/// Runs of single-precision arithmetic with register-only instructions between them,
+/// which compiled code checks once for the whole run: operands of every kind (zeros,
+/// denormals, exponent 255, values whose products overflow or vanish) mixed with ordinary
+/// quadwords, so that some passes take the fast path and others redo the whole run
+/// exactly, including a run whose last operation overwrites its first one's operand.
+/// Registers (the status register read back too), local store and cycles the same.
+#[test]
+fn float_runs_run_the_same_compiled() {
+    let mut rng = Rng(0xf1_0a75);
+    let mut src = String::from(
+        "        .text\n        .global _start\n_start: ila $3, data\n il $9, 96\n il $5, 0\n\
+         ila $13, 0x10203\n",
     );
+    src += "loop: andi $6, $5, 0x1f0\n lqx $10, $3, $6\n ai $7, $6, 48\n andi $7, $7, 0x1f0\n\
+            lqx $11, $3, $7\n ai $7, $6, 112\n andi $7, $7, 0x1f0\n lqx $12, $3, $7\n\
+            fma $20, $10, $11, $12\n fm $21, $11, $12\n lnop\n shufb $22, $20, $21, $13\n\
+            a $40, $40, $22\n fnms $23, $20, $10, $21\n fs $24, $23, $12\n roti $41, $24, 5\n\
+            fms $25, $21, $11, $20\n xor $42, $42, $41\n fa $10, $25, $10\n\
+            stqd $10, 1024($3)\n a $43, $43, $10\n fa $26, $11, $12\n fm $27, $26, $26\n\
+            a $44, $44, $27\n ai $5, $5, 16\n ai $9, $9, -1\n brnz $9, loop\n\
+            fscrrd $50\n stop 0x2000\n";
+    src += "        .data\n        .align 4\ndata:\n";
+    for k in 0..32 {
+        let mut word = |j: usize| {
+            if k % 3 == 0 && j == k % 4 {
+                SPECIALS[(k + 2) % 16]
+            } else {
+                // An ordinary single between 2^-8 and 2^8, either sign.
+                let r = rng.next() as u32;
+                (r & 0x8000_0000) | (0x3b80_0000 + (r & 0x07ff_ffff))
+            }
+        };
+        let w: Vec<u32> = (0..4).map(&mut word).collect();
+        src += &format!(" .long {}, {}, {}, {}\n", w[0], w[1], w[2], w[3]);
+    }
+    src += " .space 1040\n";
+    same_and_mostly_compiled(&src);
 }
 
 /// DMA gets and puts inside a loop of computation, tag waits, the decrementer read

@@ -342,6 +342,7 @@ impl Compiler {
             },
             hook,
             scratch: &mut self.scratch,
+            deferred: None,
             b,
         };
         // The block's instructions start in a block of their own, so that a self-loop can
@@ -352,15 +353,22 @@ impl Compiler {
         let n = insts.len();
         let block_end = pc.wrapping_add(4 * n as u32);
         let mut done = false;
-        for (k, inst) in insts.iter().enumerate() {
+        let mut k = 0;
+        while k < n {
+            let inst = &insts[k];
             let p = pc.wrapping_add(4 * k as u32) & LS_MASK;
             let more = k + 1 < n;
             if is_branch(inst.op) {
                 t.branch(inst, p, n as u64, self_loop.then_some(body));
                 done = true;
+            } else if let Some(end) = float_run(insts, k) {
+                t.float_run(&insts[k..end], p);
+                k = end;
+                continue;
             } else {
                 t.instruction(inst, p, k as u64, block_end, more);
             }
+            k += 1;
         }
         if !done {
             let next = pc.wrapping_add(4 * n as u32) & LS_MASK;
@@ -396,6 +404,9 @@ struct Translator<'a> {
     hook_sig: cranelift_codegen::ir::SigRef,
     hook: StoreHook,
     scratch: &'a mut Core,
+    /// Inside a run of float arithmetic: the registers written so far, whose stores wait
+    /// until the run's one check has chosen the fast or the exact path.
+    deferred: Option<Vec<usize>>,
 }
 
 /// Whether the host has fused multiply-add (Cranelift's `fma` is one instruction there).
@@ -408,6 +419,86 @@ fn host_fma() -> bool {
     {
         false
     }
+}
+
+/// Whether the host's vector unit does this single-precision operation inline (`fa`,
+/// `fs`, `fm` on x86_64; the fused ones where the host has fused multiply-add).
+fn host_float(op: Op) -> bool {
+    use Op::*;
+    match op {
+        Fa | Fs | Fm => cfg!(target_arch = "x86_64"),
+        Fma | Fms | Fnms => host_fma(),
+        _ => false,
+    }
+}
+
+/// Whether `Translator::instruction` emits this operation as pure register code (no
+/// memory but the registers, no call, no side effect), so that it may sit inside a float
+/// run and be done again by the interpreter's semantics on the run's exact path.
+fn register_only(op: Op) -> bool {
+    use Op::*;
+    matches!(
+        op,
+        Nop | Lnop
+            | Il
+            | Ilh
+            | Ilhu
+            | Ila
+            | Iohl
+            | Fsmbi
+            | A
+            | Ai
+            | Sf
+            | Sfi
+            | And
+            | Andc
+            | Or
+            | Orc
+            | Xor
+            | Nand
+            | Nor
+            | Eqv
+            | Andi
+            | Ori
+            | Xori
+            | Ceq
+            | Cgt
+            | Clgt
+            | Ceqi
+            | Cgti
+            | Clgti
+            | Selb
+            | Shufb
+            | Shli
+            | Rotmi
+            | Rotmai
+            | Roti
+            | Rotqbyi
+            | Shlqbyi
+            | Rotqmbyi
+            | Fceq
+            | Fcgt
+            | Fcmeq
+            | Fcmgt
+    )
+}
+
+/// The end (exclusive) of the float run starting at `insts[k]`, if one starts there: from
+/// a float operation the host does inline, over register-only instructions, to the last
+/// such float operation before anything else.
+fn float_run(insts: &[Inst], k: usize) -> Option<usize> {
+    if !host_float(insts[k].op) {
+        return None;
+    }
+    let mut end = k + 1;
+    for (j, inst) in insts.iter().enumerate().skip(k + 1) {
+        if host_float(inst.op) {
+            end = j + 1;
+        } else if !register_only(inst.op) {
+            break;
+        }
+    }
+    Some(end)
 }
 
 /// Host byte position of each big-endian byte of a register (words are host-order).
@@ -435,9 +526,14 @@ impl Translator<'_> {
 
     fn set(&mut self, r: u8, v: Value) {
         let r = r as usize & 127;
-        self.b
-            .ins()
-            .store(Self::flags(), v, self.regs, 16 * r as i32);
+        match &mut self.deferred {
+            Some(written) => written.push(r),
+            None => {
+                self.b
+                    .ins()
+                    .store(Self::flags(), v, self.regs, 16 * r as i32);
+            }
+        }
         self.cache[r] = Some(v);
     }
 
@@ -532,7 +628,9 @@ impl Translator<'_> {
         self.vconst(r)
     }
 
-    fn call_helper(&mut self, inst: &Inst, p: u32) -> Value {
+    /// A call of the interpreter's semantics for `inst` (at `p`), which reads and writes
+    /// the registers in memory.
+    fn emit_helper(&mut self, inst: &Inst, p: u32) -> cranelift_codegen::ir::Inst {
         let f = helper_for(inst.op);
         let callee = self.b.ins().iconst(I64, f as usize as i64);
         let ip = self
@@ -540,10 +638,13 @@ impl Translator<'_> {
             .ins()
             .iconst(I64, inst as *const Inst as usize as i64);
         let pc = self.b.ins().iconst(I32, p as i64);
-        let call = self
-            .b
+        self.b
             .ins()
-            .call_indirect(self.helper_sig, callee, &[self.core, ip, pc]);
+            .call_indirect(self.helper_sig, callee, &[self.core, ip, pc])
+    }
+
+    fn call_helper(&mut self, inst: &Inst, p: u32) -> Value {
+        let call = self.emit_helper(inst, p);
         // The helper wrote its result in memory.
         self.cache = [None; 128];
         self.b.inst_results(call)[0]
@@ -690,8 +791,6 @@ impl Translator<'_> {
                 let v = self.float_to_int(a, inst.op == Cflts, inst.imm as u32);
                 self.set(inst.rt, v)
             }
-            Fa | Fs | Fm if cfg!(target_arch = "x86_64") => self.single_precision(inst, p),
-            Fma | Fms | Fnms if host_fma() => self.single_precision(inst, p),
             Lqd | Lqx | Lqa | Lqr => {
                 let addr = self.address(inst, p);
                 let (_, at) = self.ls_address(addr);
@@ -715,14 +814,74 @@ impl Translator<'_> {
         }
     }
 
-    /// The single-precision arithmetic (`fa`, `fs`, `fm`, `fma`, `fms`, `fnms`): the host's
-    /// vector operation (the block runs with the host's floating point truncating, as the
-    /// interpreter's fast loops do) where the interpreter's fast path takes it, with that
-    /// path's criteria lane for lane (`exec::sp4_truncating`: every operand normal or
-    /// zero, the result normal and not the largest magnitude, or a zero that cannot be an
-    /// underflow); otherwise a call to the interpreter's semantics for the instruction,
-    /// which gives the exact result and flags.
-    fn single_precision(&mut self, inst: &Inst, p: u32) {
+    /// A run of single-precision arithmetic (`fa`, `fs`, `fm`, `fma`, `fms`, `fnms`) and the
+    /// register-only instructions between them (`float_run` chooses it): each operation
+    /// is the host's vector operation (the block runs with the host's floating point
+    /// truncating, as the interpreter's fast loops do), and one check over the whole run
+    /// takes that path where the interpreter's fast path takes it for every operation,
+    /// with that path's criteria lane for lane (`exec::sp4_truncating`: every operand
+    /// normal or zero, the result normal and not the largest magnitude, or a zero that
+    /// cannot be an underflow). Otherwise the whole run is done again from the registers
+    /// it started with by the interpreter's semantics, instruction by instruction, which
+    /// gives the exact results and flags. The run's register writes wait for the check.
+    fn float_run(&mut self, run: &[Inst], p: u32) {
+        self.deferred = Some(Vec::new());
+        // Results of the run's float operations: if the run's check holds, each is a
+        // normal number or +0, so as a later operand it needs no check of its own.
+        let mut ordinary = Vec::new();
+        let mut all_good: Option<Value> = None;
+        for (k, inst) in run.iter().enumerate() {
+            let at = p.wrapping_add(4 * k as u32) & LS_MASK;
+            if host_float(inst.op) {
+                let (result, good) = self.single_precision(inst, &ordinary);
+                all_good = Some(match all_good {
+                    Some(g) => self.b.ins().band(g, good),
+                    None => good,
+                });
+                ordinary.push(result);
+                self.set(inst.rt, result);
+            } else {
+                self.instruction(inst, at, 0, 0, true);
+            }
+        }
+        let mut written = self.deferred.take().unwrap_or_default();
+        written.sort_unstable();
+        written.dedup();
+        let all = self
+            .b
+            .ins()
+            .vall_true(all_good.expect("a run starts with a float operation"));
+        let fast = self.b.create_block();
+        let exact = self.b.create_block();
+        let cont = self.b.create_block();
+        self.b.ins().brif(all, fast, &[], exact, &[]);
+        self.b.switch_to_block(fast);
+        for &r in &written {
+            let v = self.cache[r].expect("a written register is cached");
+            self.b
+                .ins()
+                .store(Self::flags(), v, self.regs, 16 * r as i32);
+        }
+        self.b.ins().jump(cont, &[]);
+        self.b.switch_to_block(exact);
+        for (k, inst) in run.iter().enumerate() {
+            if matches!(inst.op, Op::Nop | Op::Lnop) {
+                continue;
+            }
+            self.emit_helper(inst, p.wrapping_add(4 * k as u32) & LS_MASK);
+        }
+        self.b.ins().jump(cont, &[]);
+        self.b.switch_to_block(cont);
+        // Both paths wrote the run's results to memory; every other register is as before.
+        for r in written {
+            self.cache[r] = None;
+        }
+    }
+
+    /// One single-precision operation of a float run on the host's vector unit: its
+    /// result and the lanes where the interpreter's fast path gives that result (operands
+    /// in `ordinary` are known to pass the operand criteria).
+    fn single_precision(&mut self, inst: &Inst, ordinary: &[Value]) -> (Value, Value) {
         use Op::*;
         let three = matches!(inst.op, Fma | Fms | Fnms);
         let (a, b) = (self.get(inst.ra), self.get(inst.rb));
@@ -732,20 +891,27 @@ impl Translator<'_> {
         let below = self.splat(0x00ff_ffff);
         let abs = self.splat(0x7fff_ffff);
         let zero = self.splat(0);
+        let is_zero = |t: &mut Self, v: Value| {
+            let m = t.b.ins().band(v, abs);
+            t.b.ins().icmp(IntCC::Equal, m, zero)
+        };
         let normal_or_zero = |t: &mut Self, v: Value| {
             let e = t.b.ins().band(v, exp);
             let e = t.b.ins().iadd(e, step);
             let normal = t.b.ins().icmp(IntCC::SignedGreaterThan, e, below);
-            let m = t.b.ins().band(v, abs);
-            let is_zero = t.b.ins().icmp(IntCC::Equal, m, zero);
-            (t.b.ins().bor(normal, is_zero), is_zero)
+            let z = is_zero(t, v);
+            t.b.ins().bor(normal, z)
         };
-        let (ok_a, zero_a) = normal_or_zero(self, a);
-        let (ok_b, zero_b) = normal_or_zero(self, b);
-        let mut ok = self.b.ins().band(ok_a, ok_b);
-        if let Some(c) = c {
-            let (ok_c, _) = normal_or_zero(self, c);
-            ok = self.b.ins().band(ok, ok_c);
+        let mut ok: Option<Value> = None;
+        for v in [Some(a), Some(b), c].into_iter().flatten() {
+            if ordinary.contains(&v) {
+                continue;
+            }
+            let o = normal_or_zero(self, v);
+            ok = Some(match ok {
+                Some(k) => self.b.ins().band(k, o),
+                None => o,
+            });
         }
         let le = MemFlagsData::new().with_endianness(Endianness::Little);
         let f = |t: &mut Self, v: Value| t.b.ins().bitcast(F32X4, le, v);
@@ -780,37 +946,15 @@ impl Translator<'_> {
         let zero_ok = if matches!(inst.op, Fa | Fs) {
             result_zero
         } else {
+            let (zero_a, zero_b) = (is_zero(self, a), is_zero(self, b));
             let factor = self.b.ins().bor(zero_a, zero_b);
             self.b.ins().band(result_zero, factor)
         };
-        let good = self.b.ins().bor(normal, zero_ok);
-        let good = self.b.ins().band(good, ok);
-        let all = self.b.ins().vall_true(good);
-        let result = self.b.ins().band_not(v, result_zero);
-        let fast = self.b.create_block();
-        let exact = self.b.create_block();
-        let cont = self.b.create_block();
-        self.b.ins().brif(all, fast, &[], exact, &[]);
-        let saved = self.cache;
-        self.b.switch_to_block(fast);
-        self.set(inst.rt, result);
-        self.b.ins().jump(cont, &[]);
-        self.b.switch_to_block(exact);
-        let helper = helper_for(inst.op);
-        let callee = self.b.ins().iconst(I64, helper as usize as i64);
-        let ip = self
-            .b
-            .ins()
-            .iconst(I64, inst as *const Inst as usize as i64);
-        let pc = self.b.ins().iconst(I32, p as i64);
-        self.b
-            .ins()
-            .call_indirect(self.helper_sig, callee, &[self.core, ip, pc]);
-        self.b.ins().jump(cont, &[]);
-        self.b.switch_to_block(cont);
-        // Both paths wrote the result to memory; every other register is as before.
-        self.cache = saved;
-        self.cache[inst.rt as usize & 127] = None;
+        let mut good = self.b.ins().bor(normal, zero_ok);
+        if let Some(ok) = ok {
+            good = self.b.ins().band(good, ok);
+        }
+        (self.b.ins().band_not(v, result_zero), good)
     }
 
     /// The comparison key of each single (`float::sp_key`, or of its magnitude): 0 for a
