@@ -305,6 +305,65 @@ scratch: .space 16
     assert!(off.jit_stats().compiled_instructions > 100);
 }
 
+/// A program around `body` ($3 points at eight floats and a free quadword, $8 = 40,
+/// $10 = 1.0, $11 a shuffle pattern, $30 = 3), ending with `stop 0x2000`.
+fn steady_loop(body: &str) -> String {
+    format!(
+        "        .text\n        .global _start\n_start: ila $3, data\n il $8, 40\n\
+         ilhu $10, 0x3f80\n ila $11, 0x10203\n il $30, 3\n{body}\n stop 0x2000\n\
+         .data\n .align 4\ndata: .float 1.5, 2.0, 0.5, 3.0, 0.25, 1.0, 2.0, 4.0\n\
+         .space 16\n"
+    )
+}
+
+/// Self-loops with the timing model on: once a pass leaves the state its record was
+/// made in, the compiled code runs pass after pass with the record applied once for them
+/// all. Each program reaches such a steady state in another way (what the state settles
+/// on: the loop's own hint, a hint's distance, a miss every pass, a result and a
+/// double-precision block from before the loop, DMA cycles ahead); the runs must still be
+/// the interpreter's to the cycle and counter, and most passes run steady.
+#[test]
+fn steady_self_loops_time_the_same_compiled() {
+    let programs = [
+        // The benchmark's loop: its own hint, loads, float runs and a store; 3000 passes
+        // over many quanta.
+        " il $9, 3000\n\
+         loop: hbrr .Lback, loop\n lqd $5, 0($3)\n lqd $6, 16($3)\n\
+         fma $7, $5, $6, $7\n fma $8, $6, $10, $8\n shufb $12, $5, $6, $11\n\
+         a $4, $4, $12\n ai $9, $9, -1\n fa $13, $7, $8\n stqd $13, 32($3)\n\
+         .Lback: brnz $9, loop",
+        // A hint issued before the loop (its window long past after the first pass).
+        "outer: hbrr .Lin, inner\n il $9, 12\n il $24, 1\n il $25, 2\n il $26, 3\n\
+         il $27, 4\n il $28, 5\ninner: ai $9, $9, -1\n.Lin: brnz $9, inner\n\
+         a $21, $21, $9\n ai $8, $8, -1\n brnz $8, outer",
+        // No hint at all: every pass a miss.
+        "outer: il $9, 30\ninner: ai $9, $9, -1\n a $22, $22, $9\n brnz $9, inner\n\
+         ai $8, $8, -1\n brnz $8, outer",
+        // A long-latency result from before the loop that the loop reads and does not
+        // write, a double-precision block before it, and one inside a second loop.
+        "outer: il $9, 20\n dfa $40, $41, $42\n mpy $20, $30, $8\n hbrr .La, ina\n\
+         ina: a $21, $21, $20\n fm $22, $22, $10\n ai $9, $9, -1\n.La: brnz $9, ina\n\
+         il $9, 15\n hbrr .Lb, inb\ninb: dfa $44, $45, $46\n ai $9, $9, -1\n\
+         a $23, $23, $44\n.Lb: brnz $9, inb\n ai $8, $8, -1\n brnz $8, outer",
+        // A DMA moving 2 KiB into local store while a loop that loads runs: passes
+        // replay only clear of its local-store cycles.
+        "outer: ila $70, 0x8000\n wrch $MFC_LSA, $70\n il $70, 0\n wrch $MFC_EAH, $70\n\
+         wrch $MFC_EAL, $70\n il $70, 2048\n wrch $MFC_Size, $70\n il $70, 1\n\
+         wrch $MFC_TagID, $70\n il $70, 0x40\n wrch $MFC_Cmd, $70\n il $9, 300\n\
+         hbrr .Ld, ind\nind: lqd $22, 0($3)\n a $21, $21, $22\n ai $9, $9, -1\n a $23, $23, $9\n\
+         .Ld: brnz $9, ind\n il $70, 2\n wrch $MFC_WrTagMask, $70\n\
+         wrch $MFC_WrTagUpdate, $70\n rdch $22, $MFC_RdTagStat\n ai $8, $8, -1\n\
+         brnz $8, outer",
+    ];
+    for body in programs {
+        let src = steady_loop(body);
+        let [_, on] = same_with_both_engines(&src);
+        assert_eq!(on.reg(9)[0], 0, "{src}");
+        let steady = on.jit_stats().steady_passes;
+        assert!(steady > 100, "{steady} steady passes\n{src}");
+    }
+}
+
 /// Singles of every kind: zeros of both signs, denormals, ordinary values, exponent 255
 /// (an ordinary number on the SPU), values that saturate or vanish when scaled.
 const SPECIALS: [u32; 16] = [

@@ -104,6 +104,9 @@ pub(crate) struct Code {
     pub words: Box<[u32]>,
     /// The final instruction (a branch, or not).
     pub last: Inst,
+    /// The final branch may go back to the block's start, and then the code runs the
+    /// block again while the budget holds a further pass ([`Ctx::budget`]).
+    pub self_loop: bool,
     /// The instructions whose helpers take them by address.
     _insts: Box<[Inst]>,
     /// The code memory holding `entry`, freed when its last block is gone.
@@ -221,6 +224,7 @@ impl CodeCache {
             n: n as u32,
             words: key.1.clone(),
             last: owned[n - 1],
+            self_loop,
             _insts: owned,
             _memory: c.memory.clone(),
         });

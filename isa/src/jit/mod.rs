@@ -134,4 +134,8 @@ pub struct JitStats {
     pub compile_seconds: f64,
     /// Simulated instructions executed by compiled code.
     pub compiled_instructions: u64,
+    /// Passes of self-looping blocks that ran with the timing model on in a steady state,
+    /// their timing record applied once for a whole run of passes (per SPU, like
+    /// `compiled_instructions`).
+    pub steady_passes: u64,
 }

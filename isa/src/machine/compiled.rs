@@ -55,6 +55,7 @@ impl Spu {
         let base = JitStats::default();
         JitStats {
             compiled_instructions: self.compiled_instructions,
+            steady_passes: self.steady_passes,
             ..base
         }
     }
@@ -66,7 +67,13 @@ impl Spu {
         self.run_fast(until)
     }
 
-    pub(super) fn replay_compiled(&mut self, _pc: u32, _n: usize, _memo: usize) -> bool {
+    pub(super) fn replay_compiled(
+        &mut self,
+        _pc: u32,
+        _n: usize,
+        _memo: usize,
+        _until: u64,
+    ) -> bool {
         false
     }
 }
@@ -226,9 +233,10 @@ mod host {
 
         /// Runs compiled block `id` with a `budget` of instructions (a self-looping block
         /// runs again while a whole pass fits); returns its result word, its final
-        /// branch's target and the instructions done.
+        /// branch's target, the passes before the last (each back to the start) and the
+        /// instructions done.
         #[inline(always)]
-        fn call_block(&mut self, id: usize, budget: u64) -> (u64, u32, u64) {
+        fn call_block(&mut self, id: usize, budget: u64) -> (u64, u32, u64, u64) {
             let spu: *mut Spu = self;
             // SAFETY: every pointer is derived from the exclusively borrowed SPU and used
             // only during the call; the block's code is owned by its cache, which stays
@@ -248,7 +256,12 @@ mod host {
                     loops: 0,
                 };
                 let r = entry(&mut ctx);
-                (r, ctx.target, ctx.loops * n + ((r >> 32) & 0xffff))
+                (
+                    r,
+                    ctx.target,
+                    ctx.loops,
+                    ctx.loops * n + ((r >> 32) & 0xffff),
+                )
             }
         }
 
@@ -268,7 +281,7 @@ mod host {
                 if let Some(id) = self.compiled_block(pc, None, whole) {
                     let n = self.compiled.as_ref().expect("blocks").blocks[id].code.n as u64;
                     if n <= budget {
-                        let (r, _, done) = self.call_block(id, budget);
+                        let (r, _, _, done) = self.call_block(id, budget);
                         self.block_cut = r & RESULT_PARTIAL != 0;
                         self.pc = r as u32;
                         self.instructions += done;
@@ -293,37 +306,77 @@ mod host {
 
         /// Timing on: runs the memoized block `memo` (`n` instructions at `pc`, its replay
         /// just started) as compiled code and applies its timing record; false (nothing
-        /// done) when it has no compiled code.
+        /// done) when it has no compiled code. A block whose branch went back to its start
+        /// in a steady state ([`crate::timing::Timing::steady_passes`]) then runs pass
+        /// after pass inside its compiled code, its record applied once for them all,
+        /// while the passes start before `until`.
         pub(in crate::machine) fn replay_compiled(
             &mut self,
             pc: u32,
             n: usize,
             memo: usize,
+            until: u64,
         ) -> bool {
             let Some(id) = self.compiled_block(pc, Some(n), true) else {
                 return false;
             };
             // Blocks hold no `bisled`, the one reader of the pending-event flag.
             self.core.event_pending_known = false;
-            // Timing on: one pass (each pass needs its timing record applied).
-            let (r, target, done) = self.call_block(id, 0);
-            let done = done as usize;
-            let last = self.compiled.as_ref().expect("blocks").blocks[id].code.last;
+            // One pass (its timing record applied), then more in one go if steady.
+            let (r, target, _, done) = self.call_block(id, 0);
+            self.compiled_pass_done(pc, n, memo, id, 0, r, target, done);
+            let code = &self.compiled.as_ref().expect("blocks").blocks[id].code;
+            if r & (RESULT_PARTIAL | RESULT_TAKEN) != RESULT_TAKEN
+                || target != pc
+                || !code.self_loop
+            {
+                return true;
+            }
+            let first = self.decoded[(pc as usize >> 2) & (LS_SIZE / 4 - 1)];
             let timing = self.timing.as_mut().expect("timing");
+            let passes = timing.steady_passes(memo, pc, first, until);
+            if passes < 2 {
+                return true;
+            }
+            let (r, target, loops, done) = self.call_block(id, passes * n as u64);
+            self.steady_passes += loops + 1;
+            self.compiled_pass_done(pc, n, memo, id, loops, r, target, done);
+            true
+        }
+
+        /// Applies the timing record of memo `memo` to `loops` passes of compiled block
+        /// `id` (`n` instructions at `pc`) that went back to its start in a steady state,
+        /// and to the pass after them, which returned `r` (its branch's `target`); `done`
+        /// instructions in all.
+        #[allow(clippy::too_many_arguments)]
+        #[inline(always)]
+        fn compiled_pass_done(
+            &mut self,
+            pc: u32,
+            n: usize,
+            memo: usize,
+            id: usize,
+            loops: u64,
+            r: u64,
+            target: u32,
+            done: u64,
+        ) {
+            let last = self.compiled.as_ref().expect("blocks").blocks[id].code.last;
+            let last_pc = pc.wrapping_add(4 * (n as u32 - 1)) & LS_MASK;
+            let timing = self.timing.as_mut().expect("timing");
+            timing.steady_replayed(memo, loops, (last_pc, last, true, pc));
             if r & RESULT_PARTIAL != 0 {
-                timing.block_replayed_partly(memo, done);
+                timing.block_replayed_partly(memo, ((r >> 32) & 0xffff) as usize);
             } else if is_branch(last.op) {
-                let last_pc = pc.wrapping_add(4 * (n as u32 - 1)) & LS_MASK;
                 let taken = r & RESULT_TAKEN != 0;
                 timing.block_replayed(memo, Some((last_pc, last, taken, target)));
             } else {
                 timing.block_replayed(memo, None);
             }
             self.pc = r as u32;
-            self.instructions += done as u64;
-            self.compiled_instructions += done as u64;
+            self.instructions += done;
+            self.compiled_instructions += done;
             self.cycle = timing.now();
-            true
         }
     }
 }

@@ -108,6 +108,9 @@ pub struct Spu {
     pub(super) compiled: Option<Box<CompiledBlocks>>,
     /// Instructions executed by compiled code.
     pub(super) compiled_instructions: u64,
+    /// Passes of self-looping blocks run with the timing model on after a steady first
+    /// pass (their timing record applied once for them all).
+    pub(super) steady_passes: u64,
     /// The last block ran only in part (timing off, compiled engine).
     pub(super) block_cut: bool,
     pub(super) pc: u32,
@@ -221,6 +224,7 @@ impl Spu {
             engine: Engine::default(),
             compiled: None,
             compiled_instructions: 0,
+            steady_passes: 0,
             block_cut: false,
             decoded: vec![decode(0); LS_SIZE / 4]
                 .into_boxed_slice()
@@ -442,7 +446,7 @@ impl Spu {
             };
             if !self.core.interrupts_enabled {
                 if let Some(n) = self.timing.as_ref().and_then(|t| t.replay_started()) {
-                    if self.replay_block(pc, n) {
+                    if self.replay_block(pc, n, until) {
                         continue;
                     }
                 }
@@ -623,7 +627,7 @@ impl Spu {
                 let t = self.timing.as_mut().expect("timing");
                 t.set_memo_verified(id, epoch);
             }
-            self.run_replayed_block(pc, n, id);
+            self.run_replayed_block(pc, n, id, until);
         }
     }
 
@@ -632,7 +636,7 @@ impl Spu {
     /// timing model as the per-instruction path would. Declines (returns false, nothing
     /// done) unless local store still holds the recorded words, decoded, and none of them
     /// needs the core's event state (`bisled`).
-    pub(super) fn replay_block(&mut self, pc: u32, n: usize) -> bool {
+    pub(super) fn replay_block(&mut self, pc: u32, n: usize, until: u64) -> bool {
         let Some(t) = self.timing.as_ref() else {
             return false;
         };
@@ -648,7 +652,7 @@ impl Spu {
             t.set_replay_verified(epoch);
         }
         let truncating = TruncatingFloats::hold();
-        self.run_replayed_block(pc, n, id);
+        self.run_replayed_block(pc, n, id, until);
         truncating.release();
         true
     }
@@ -656,9 +660,9 @@ impl Spu {
     /// The execution part of [`Spu::replay_block`]; the caller holds a
     /// [`TruncatingFloats`].
     #[inline(always)]
-    pub(super) fn run_replayed_block(&mut self, pc: u32, n: usize, id: usize) {
+    pub(super) fn run_replayed_block(&mut self, pc: u32, n: usize, id: usize, until: u64) {
         let block_end = pc.wrapping_add(4 * n as u32);
-        if self.engine == Engine::Jit && self.replay_compiled(pc, n, id) {
+        if self.engine == Engine::Jit && self.replay_compiled(pc, n, id, until) {
             return;
         }
         let core = &mut self.core;

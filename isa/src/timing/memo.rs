@@ -733,6 +733,78 @@ impl Timing {
         self.sync();
     }
 
+    /// Right after a full replay of memo `id` (entered in its recorded state) whose final
+    /// branch went back to the block's own start `pc` (first instruction `inst`): how many
+    /// passes from now, one after the other while the branch keeps going back, are sure to
+    /// replay exactly as the one just done, each starting before cycle `until` and clear
+    /// of DMA; 0 when the state is not steady (yet).
+    ///
+    /// Steady: the state now matches the record again. Then every later pass does too.
+    /// Each part of the signature is either set by the block's record and the branch
+    /// outcome (the same after every pass, relative to the next entry), or left alone by
+    /// the block, and then it moved by the pass's length between two entries that both
+    /// matched: a readiness, a redirect, a double-precision block or a hint window that
+    /// moves and still reads the same has reached its floor (already past) and stays
+    /// there. The one part that does not settle that way, whether a hint the block does
+    /// not set itself is far enough ahead of the branch, only grows from false to true,
+    /// so it is required true.
+    pub fn steady_passes(&mut self, id: usize, pc: u32, inst: Inst, until: u64) -> u64 {
+        if !self.config.memoize || self.memo.rec.is_some() || self.memo.replay.is_some() {
+            return 0;
+        }
+        match self.memo.chain_from {
+            Some(f) if f.memo == id && f.taken && f.index == self.index => {}
+            _ => return 0,
+        }
+        self.apply_deferred_writes();
+        if !self.entry_matches(id, pc, inst) {
+            return 0;
+        }
+        let m = &self.memo.memos[id];
+        if !m.sets_hint && self.hint_view_now(id)[0] & 2 == 0 {
+            return 0;
+        }
+        let delta = m.steps.last().expect("steps").last_issue_rel as u64 + 1;
+        // Passes start at now + k * delta, each before `until` ...
+        let mut last_start = until.saturating_sub(1);
+        // ... and with its use of the local store ending before the first DMA cycle.
+        if self.fetch.dma_min != u64::MAX {
+            last_start = last_start.min(self.fetch.dma_min.saturating_sub(m.dma_horizon_rel + 1));
+        }
+        if last_start < self.now {
+            return 0;
+        }
+        ((last_start - self.now) / delta + 1).min(1 << 32)
+    }
+
+    /// The core ran `passes` passes of memo `id`'s block in the steady state
+    /// [`Timing::steady_passes`] found, each a full replay whose final branch (at
+    /// `branch.0`, the instruction `branch.1`) went back to the block's start `branch.3`:
+    /// the state and counters become what replaying them one by one would have made them.
+    pub fn steady_replayed(&mut self, id: usize, passes: u64, branch: (u32, Inst, bool, u32)) {
+        if passes == 0 {
+            return;
+        }
+        let skip = passes - 1;
+        if skip > 0 {
+            let m = &mut self.memo.memos[id];
+            m.hits += skip;
+            let last = m.steps.last().expect("steps");
+            let delta = last.last_issue_rel as u64 + 1;
+            let hinted = last.last.hinted();
+            let entry = self.now;
+            // The state at the last pass's entry: every pass sets the same parts (the
+            // last pass sets them again), the rest is left alone.
+            self.max_ready = self
+                .max_ready
+                .max(entry + (skip - 1) * delta + m.max_ready_rel);
+            self.index += skip * m.words.len() as u64;
+            self.now = entry + skip * delta;
+            self.count_branch(hinted, true, branch.3 & 0x3_ffff, skip);
+        }
+        self.block_replayed(id, Some(branch));
+    }
+
     /// The memo whose replay `issue` started.
     #[inline]
     pub fn replay_memo(&self) -> Option<usize> {

@@ -247,6 +247,17 @@ struct Last {
     branch_hint: Option<u32>,
 }
 
+impl Last {
+    /// The target a hint predicted for this branch, if one applied when it issued.
+    #[inline]
+    fn hinted(&self) -> Option<u32> {
+        match self.branch_hint {
+            Some(NO_PC) | None => None,
+            Some(t) => Some(t),
+        }
+    }
+}
+
 /// Per-issue detail of one instruction, for the static `spu timing` listing and tests.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct IssueRecord {
@@ -642,28 +653,9 @@ impl Timing {
         if let Some(from) = &mut self.memo.chain_from {
             from.taken = taken;
         }
-        let hinted = match self.last.branch_hint {
-            Some(NO_PC) | None => None,
-            Some(t) => Some(t),
-        };
+        let hinted = self.last.hinted();
         let target = target & 0x3_ffff;
-        let miss = match (taken, hinted) {
-            (true, Some(t)) => t != target,
-            (true, None) => true,
-            (false, Some(_)) => true,
-            (false, None) => false,
-        };
-        let t = &mut self.profile.totals;
-        if taken {
-            t.branches_taken += 1;
-        } else {
-            t.branches_not_taken += 1;
-        }
-        if taken && hinted == Some(target) {
-            t.hint_hits += 1;
-        }
-        if miss {
-            t.branch_misses += 1;
+        if self.count_branch(hinted, taken, target, 1) {
             // R4: the next instruction issues 18 cycles later than it otherwise could.
             self.redirect = self.last.issue + 1 + self.config.branch_miss_penalty as u64;
             self.miss_pc = pc;
@@ -674,6 +666,31 @@ impl Timing {
             self.fetch.line = u32::MAX;
             self.fetch.pending = false;
         }
+    }
+
+    /// Counts `times` resolutions of a branch predicted `hinted` (the hint's target, if
+    /// any), `taken` or not to `target`; returns whether it was a miss (R4).
+    #[inline]
+    fn count_branch(&mut self, hinted: Option<u32>, taken: bool, target: u32, times: u64) -> bool {
+        let miss = match (taken, hinted) {
+            (true, Some(t)) => t != target,
+            (true, None) => true,
+            (false, Some(_)) => true,
+            (false, None) => false,
+        };
+        let t = &mut self.profile.totals;
+        if taken {
+            t.branches_taken += times;
+        } else {
+            t.branches_not_taken += times;
+        }
+        if taken && hinted == Some(target) {
+            t.hint_hits += times;
+        }
+        if miss {
+            t.branch_misses += times;
+        }
+        miss
     }
 
     /// After a hint executed: the branch address it names and the target it predicts
