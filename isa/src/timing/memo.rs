@@ -54,6 +54,10 @@ pub(super) struct Memo {
     /// Past every cycle the block's timing looks at in the local store (the fetch
     /// model's probes, the issue cycles), relative to the entry.
     pub dma_horizon_rel: u64,
+    /// The cycles, relative to the entry and from it on, at which the fetch model looked
+    /// for a local-store cycle free of DMA (sorted): a DMA cycle elsewhere changes
+    /// nothing the block's timing depends on.
+    pub probes: Vec<u32>,
     /// The block sets the hint entry (so after a replay it follows from the record).
     pub sets_hint: bool,
     /// Distinguishes this record from an earlier one in the same place.
@@ -120,6 +124,8 @@ pub(super) struct Recording {
     pub dp_changed: bool,
     pub hint_changed: bool,
     pub steps: Vec<Step>,
+    /// The cycles the fetch model probed for a free local-store cycle (absolute).
+    pub probes: Vec<u64>,
 }
 
 /// The state a block's timing depends on, at its entry.
@@ -475,6 +481,7 @@ impl Timing {
             dp_changed: false,
             hint_changed: false,
             steps: Vec::new(),
+            probes: Vec::new(),
         }));
         self.profile.log = Some(Vec::new());
         let t = self.issue_slow(pc, inst);
@@ -648,9 +655,12 @@ impl Timing {
         }
     }
 
-    /// Whether memo `id`'s block, starting now, ends its use of the local store before
-    /// the first cycle a DMA holds: the model then asks of it exactly what it asked when
-    /// the block was recorded (with no DMA), so the record holds.
+    /// Whether memo `id`'s block, starting now, is clear of the cycles DMA holds in the
+    /// local store: it ends its use of the local store before the first of them, or none
+    /// of them before that end is now or later than now and a cycle its fetch model
+    /// probed (DMA reaches the timing only through those probes). The model then asks of
+    /// it exactly what it asked when the block was recorded (with no DMA), so the record
+    /// holds.
     #[inline]
     fn clear_of_dma(&mut self, id: usize) -> bool {
         let horizon = self.now + self.memo.memos[id].dma_horizon_rel;
@@ -658,7 +668,20 @@ impl Timing {
             return true;
         }
         self.drop_past_dma_cycles();
-        self.fetch.dma_min > horizon
+        self.fetch.dma_min > horizon || self.probes_miss_dma(id, horizon)
+    }
+
+    /// Whether every DMA cycle up to `horizon` is now or later and none is one of memo
+    /// `id`'s probes (relative to now).
+    #[cold]
+    fn probes_miss_dma(&self, id: usize, horizon: u64) -> bool {
+        let probes = &self.memo.memos[id].probes;
+        let now = self.now;
+        self.fetch
+            .dma
+            .iter()
+            .take_while(|&&c| c <= horizon)
+            .all(|&c| c >= now && probes.binary_search(&((c - now) as u32)).is_err())
     }
 
     /// Forgets DMA cycles no fetch probe can reach any more: those before now and before
@@ -956,6 +979,7 @@ impl Timing {
             max_ready_rel: 0,
             writes_mask: 0,
             dma_horizon_rel: 0,
+            probes: Vec::new(),
             generation: self.memo.generations,
             sets_hint: rec.hint_changed,
             chain: [NO_CHAIN; 2],
@@ -969,6 +993,15 @@ impl Timing {
             .max()
             .unwrap_or(0)
             + 2;
+        let entry_now = rec.entry.now;
+        memo.probes = rec
+            .probes
+            .iter()
+            .filter(|&&c| c >= entry_now)
+            .map(|&c| (c - entry_now) as u32)
+            .collect();
+        memo.probes.sort_unstable();
+        memo.probes.dedup();
         for st in memo.steps.iter().rev() {
             if st.write < 128 && !memo.final_writes.iter().any(|w| w.reg == st.write) {
                 let ready_rel = st.ready_rel.max(0) as u64;

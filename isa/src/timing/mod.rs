@@ -619,6 +619,9 @@ impl Timing {
     /// The first cycle at or after `from` that no DMA takes (drops older DMA cycles).
     #[inline]
     fn fetch_first_free(&mut self, from: u64) -> u64 {
+        if let Some(rec) = self.memo.rec.as_deref_mut() {
+            rec.probes.push(from);
+        }
         if from < self.fetch.dma_min {
             return from;
         }
