@@ -192,3 +192,47 @@ fn deferred_writes_survive_a_replayed_block_that_writes_other_registers() {
     let replays = b.timing().expect("timing").memo_stats().1;
     assert!(replays > 0, "{replays} replays");
 }
+
+/// DMA moving 2 KiB into local store (a local-store cycle every 16) before each of six
+/// loops whose blocks cross instruction lines (fetch probes) and start in several states
+/// (a data-dependent trip count, a double-precision block before the first loop on every
+/// other pass): blocks are recorded while DMA cycles are pending, and some of their
+/// probes meet one (the recording must end unfinished); blocks replay with DMA cycles
+/// ahead that miss every probe, or go the long way when one meets a probe.
+#[test]
+fn blocks_record_and_replay_around_dma_cycles_exactly() {
+    const OPS: [&str; 9] = [
+        "a $20, $20, $10",
+        "lqd $5, 0($3)",
+        "fma $7, $5, $6, $7",
+        "shufb $10, $5, $6, $11",
+        "lqd $6, 16($3)",
+        "fa $22, $22, $21",
+        "stqd $7, 32($3)",
+        "xor $23, $23, $20",
+        "mpy $24, $20, $9",
+    ];
+    let mut src = String::from(
+        "        .text\n        .global _start\n_start: ila $3, data\n il $9, 48\n\
+         ilhu $21, 0x3f80\n ila $11, 0x10203\nouter: andi $30, $9, 1\n brz $30, 1f\n\
+         dfa $40, $41, $42\n1:\n",
+    );
+    for k in 0..6 {
+        src += " il $70, 0x4000\n wrch $MFC_LSA, $70\n il $70, 0\n wrch $MFC_EAH, $70\n\
+                wrch $MFC_EAL, $70\n il $70, 2048\n wrch $MFC_Size, $70\n il $70, 1\n\
+                wrch $MFC_TagID, $70\n il $70, 0x40\n wrch $MFC_Cmd, $70\n\
+                andi $8, $9, 7\n ai $8, $8, 6\n";
+        src += &format!("inner{k}:\n");
+        for j in 0..36 + 3 * k {
+            src += &format!(" {}\n", OPS[(j * 5 + k) % OPS.len()]);
+        }
+        src += &format!(" ai $8, $8, -1\n brnz $8, inner{k}\n");
+        src += " il $70, 2\n wrch $MFC_WrTagMask, $70\n wrch $MFC_WrTagUpdate, $70\n\
+                rdch $31, $MFC_RdTagStat\n";
+    }
+    src += " ai $9, $9, -1\n brnz $9, outer\n stop 0x2000\n .data\n .align 4\n\
+            data: .float 1.5, 2.0, 0.5, 3.0, 0.25, 1.0, 2.0, 4.0\n .space 16\n";
+    let (b, p) = same_both_ways(&src);
+    assert_eq!(b.reg(9)[0], 0);
+    assert!(p.totals.dma_contention > 0, "{:?}", p.totals);
+}

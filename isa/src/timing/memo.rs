@@ -449,14 +449,13 @@ impl Timing {
             self.memo.second.resize(0x1_0000, 0);
             self.memo.fails.resize(0x1_0000, 0);
         }
-        // While DMA holds local-store cycles, blocks replay only clear of them and are not
-        // recorded (a record must not depend on them).
-        let dma = self.fetch.dma_min != u64::MAX;
+        // While DMA holds local-store cycles, blocks replay only clear of them, and a
+        // recording ends unfinished when the fetch model meets one (a record must not
+        // depend on them).
         match self.chained_lookup(idx, pc, inst) {
             Lookup::Never => return self.issue_slow(pc, inst),
             Lookup::Hit(id) if self.clear_of_dma(id) => return self.begin_replay(id, pc, inst),
             Lookup::Hit(_) => return self.issue_slow(pc, inst),
-            _ if dma => return self.issue_slow(pc, inst),
             Lookup::Differs(id) => {
                 // A different state: record again (keeping what the old record counted).
                 if self.memo.memos[id].hits < 2 {

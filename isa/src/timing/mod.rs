@@ -634,6 +634,8 @@ impl Timing {
             if c < from {
                 self.fetch.dma.pop_front();
             } else if c == from {
+                // A block's record must not depend on DMA: a recording ends here.
+                self.memo.abort_recording(&mut self.profile);
                 self.fetch.dma.pop_front();
                 self.profile.totals.dma_contention += 1;
                 from += 1;
