@@ -19,10 +19,11 @@
 #    interpolated normal facing the eye and the material are stored structure-of-arrays.
 #    Three paths, the hot ones scheduled `.sched` blocks: same-triangle packets found in
 #    the caches, two per step; mixed packets found in the caches; anything else (a cache
-#    miss, no hit) lane by lane, its vertex misses fetched without waiting and landed
-#    together once its lanes are looked up (sh_vertex_miss, sh_vertex_land: one wait per
-#    packet of 4 rays, not one per miss; a triangle record past the traversal's cache is
-#    fetched blocking). They compute the same values and counts.
+#    miss, no hit) lane by lane, its vertex misses fetched without waiting into staging
+#    slots and landed together once its lanes are looked up (sh_vertex_miss,
+#    sh_vertex_land: one wait per packet of 4 rays, not one per miss; a triangle record
+#    past the traversal's cache is fetched blocking). They compute the same values and
+#    counts.
 # 2. The irradiance of every ray from every light (the same for every diffuse shader, so
 #    once per i-set): dot(N, L) / (|N| |L|), clamped, times the light's colour, summed.
 #    SH_VIS (per light, the rays' visibility masks) masks each light.
@@ -73,9 +74,12 @@
         .set SH_MTAGS, 27008            # material cache tags (up to 256 x 16)
         .set SH_MDATA, 31104            # material cache lines (up to 256 x 32)
         .set SH_DCOUNT, 39296           # the vertices in flight (sh_vertex_miss): bytes of
-        .set SH_DEFER, 39312            # their copies (each line and destination; up to
-                                        # 12: the vertices of a group of 4 rays)
-        .set SH_AREA_BYTES, 39504
+        .set SH_DEFER, 39312            # their copies (source, destination; line: up to
+        .set SH_VSTAGE, 39808           # 12, a group's lookups) and staging slots (64 bytes)
+        .set SH_AREA_BYTES, 40576
+        .if     SH_DEFER + 12 * 32 > SH_VSTAGE || SH_VSTAGE + 12 * 64 != SH_AREA_BYTES
+        .error  "the vertices in flight do not fit"
+        .endif
         .set SH_TAG, 5
         .set CTX_RAY_T, 1536
         .set CTX_RAY_ID, 1792                  # fetches; colour output on 6 and 7
@@ -1110,24 +1114,26 @@ shade_packet:
 
 
 # a vertex cache miss: vertex $81 into line $84, tag $83, its normal for $66 + $89; back
-# to $88. The fetch is queued, not waited for: the tag becomes the vertex with bit 31 set
-# (in flight), the miss is counted, and the normal's copy is left to sh_vertex_land, which
-# the slow path calls once the group's lanes are looked up: one wait for all their
-# misses. A lookup of a vertex in flight only adds its copy; a miss on a line with another
-# vertex in flight lands those first (that vertex is still to be copied).
+# to $88. The fetch is queued, not waited for, into a staging slot of its own; the tag
+# becomes the vertex with bit 31 set (in flight) and the miss is counted. A copy is left
+# to sh_vertex_land, which the slow path calls once the group's lanes are looked up: one
+# wait for all their misses, then in lookup order each slot to its line (so a line ends up
+# with the last vertex looked up there) and its normal to the lane. A lookup of a vertex
+# in flight is no miss: its copy comes from its line, after the slot's.
 sh_vertex_miss:
+        SH_ADDI $87, $66, SH_DCOUNT
+        lqd     $86, 0($87)                   # bytes of copies (32 each)
         lqd     $85, 0($83)
-        ilhu    $86, 0x8000
-        or      $87, $81, $86
-        ceq     $87, $85, $87
-        brnz    $87, 2f                       # this vertex, in flight
-        and     $87, $85, $86
-        brz     $87, 1f
-        brsl    $95, sh_vertex_land           # another one: land them
-        ilhu    $86, 0x8000
-1:      shli    $85, $81, 6
+        ilhu    $90, 0x8000
+        or      $94, $81, $90                 # the vertex, in flight
+        ceq     $85, $85, $94
+        shli    $82, $86, 1
+        SH_ADDI $82, $82, SH_VSTAGE
+        a       $82, $82, $66                 # its slot
+        brnz    $85, 1f
+        shli    $85, $81, 6
         a       $85, $85, $100
-        wrch    $MFC_LSA, $84
+        wrch    $MFC_LSA, $82
         wrch    $MFC_EAH, ZERO
         wrch    $MFC_EAL, $85
         il      $85, 64
@@ -1136,23 +1142,24 @@ sh_vertex_miss:
         wrch    $MFC_TagID, $85
         il      $85, 0x40
         wrch    $MFC_Cmd, $85
-        or      $85, $81, $86
-        stqd    $85, 0($83)                   # the tag: in flight
+        stqd    $94, 0($83)                   # the tag: in flight
         SH_COUNT SHS_VMISS, $85
-2:      SH_ADDI $87, $66, SH_DCOUNT           # the copy, for sh_vertex_land
-        lqd     $86, 0($87)
-        a       $85, $89, $66
+        br      2f
+1:      ori     $82, $84, 0                   # in flight already: from its line
+2:      a       $85, $89, $66
         lqa     $90, sh_const+256
-        shufb   $85, $85, $84, $90            # the line, the destination
+        shufb   $85, $85, $82, $90            # the source, the destination
         SH_ADDI $94, $66, SH_DEFER
-        stqx    $85, $94, $86
-        ai      $86, $86, 16
+        a       $94, $94, $86
+        stqd    $85, 0($94)
+        stqd    $84, 16($94)                  # the line
+        ai      $86, $86, 32
         stqd    $86, 0($87)
         bi      $88
 
-# the vertices in flight: one wait, their normals copied from their lines, their tags'
-# bit 31 cleared; back to $95 (the slow path's $115 tags, $116 lines; uses $85-$87, $90,
-# $94)
+# the vertices in flight: one wait, then each copy (source to line, its normal to the
+# destination) and the line's tag's bit 31 cleared; back to $95 (the slow path's $115
+# tags, $116 lines; uses $80-$90, $94)
 sh_vertex_land:
         SH_ADDI $87, $66, SH_DCOUNT
         lqd     $86, 0($87)
@@ -1165,18 +1172,26 @@ sh_vertex_land:
         rdch    $85, $MFC_RdTagStat
         SH_ADDI $94, $66, SH_DEFER
         a       $86, $86, $94                 # the end
-1:      lqd     $85, 0($94)                   # the line, the destination
-        lqd     $90, 16($85)                  # the normal
-        rotqbyi $87, $85, 4
-        stqd    $90, 0($87)
-        sf      $87, $116, $85
-        rotmi   $87, $87, -2
-        a       $87, $87, $115                # the line's tag
-        lqd     $90, 0($87)
+1:      lqd     $85, 0($94)                   # the source, the destination
+        lqd     $87, 16($94)                  # the line
+        lqd     $80, 0($85)
+        lqd     $81, 16($85)
+        lqd     $82, 32($85)
+        lqd     $83, 48($85)
+        rotqbyi $88, $85, 4
+        sf      $89, $116, $87
+        rotmi   $89, $89, -2
+        a       $89, $89, $115                # the line's tag
+        lqd     $90, 0($89)
+        stqd    $80, 0($87)
+        stqd    $81, 16($87)
+        stqd    $82, 32($87)
+        stqd    $83, 48($87)
+        stqd    $81, 0($88)                   # the normal
         shli    $90, $90, 1
         rotmi   $90, $90, -1                  # landed
-        stqd    $90, 0($87)
-        ai      $94, $94, 16
+        stqd    $90, 0($89)
+        ai      $94, $94, 32
         ceq     $85, $94, $86
         brz     $85, 1b
 2:      bi      $95
