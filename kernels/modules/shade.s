@@ -19,7 +19,11 @@
 #    interpolated normal facing the eye and the material are stored structure-of-arrays.
 #    Three paths, the hot ones scheduled `.sched` blocks: same-triangle packets found in
 #    the caches, two per step; mixed packets found in the caches; anything else (a cache
-#    miss, no hit) lane by lane with blocking DMAs. They compute the same values and counts.
+#    miss, no hit) lane by lane, its vertex misses fetched without waiting into staging
+#    slots and landed together once its lanes are looked up (sh_vertex_miss,
+#    sh_vertex_land: one wait per packet of 4 rays, not one per miss; a triangle record
+#    past the traversal's cache is fetched blocking). They compute the same values and
+#    counts.
 # 2. The irradiance of every ray from every light (the same for every diffuse shader, so
 #    once per i-set): dot(N, L) / (|N| |L|), clamped, times the light's colour, summed.
 #    SH_VIS (per light, the rays' visibility masks) masks each light.
@@ -69,14 +73,20 @@
         .set SH_VDATA, 10624            # vertex cache lines (up to 256 x 64)
         .set SH_MTAGS, 27008            # material cache tags (up to 256 x 16)
         .set SH_MDATA, 31104            # material cache lines (up to 256 x 32)
-        .set SH_AREA_BYTES, 39296
+        .set SH_DCOUNT, 39296           # the vertices in flight (sh_vertex_miss): bytes of
+        .set SH_DEFER, 39312            # their copies (source, destination; line: up to
+        .set SH_VSTAGE, 39808           # 12, a group's lookups) and staging slots (64 bytes)
+        .set SH_AREA_BYTES, 40576
+        .if     SH_DEFER + 12 * 32 > SH_VSTAGE || SH_VSTAGE + 12 * 64 != SH_AREA_BYTES
+        .error  "the vertices in flight do not fit"
+        .endif
         .set SH_TAG, 5
         .set CTX_RAY_T, 1536
         .set CTX_RAY_ID, 1792                  # fetches; colour output on 6 and 7
 
-# rt = ra + an area offset (beyond ai's 10 bits; $96 is the scratch)
+# rt = ra + an area offset (beyond ai's 10 bits, up to 18; $96 is the scratch)
         .macro  SH_ADDI rt, ra, off
-        il      $96, \off
+        ila     $96, \off
         a       \rt, \ra, $96
         .endm
 
@@ -128,6 +138,7 @@
         a       $84, $84, $116                # line address
         lqd     $85, 0($83)
         ila     $88, 1f
+        ila     $89, SH_NRM+\lane*64+\i*16
         ceq     $86, $85, $81
         biz     $86, $114
 1:      lqd     $85, 16($84)
@@ -185,6 +196,7 @@ sh_const:
         .long   0x0c0d0e0f, 0x0c0d0e0f, 0x0c0d0e0f, 0x0c0d0e0f     # +208 splat word 3
         .long   0x80000000, 0x80000000, 0x80000000, 0x80000000     # +224 sign bits
         .long   1, 1, 1, 0                  # +240 a fast group: groups, same, tri lookups
+        .long   0x10111213, 0x00010203, 0x10111213, 0x00010203     # +256 list element (b, a)
 
         .align  3
 shade_packet:
@@ -205,6 +217,8 @@ shade_packet:
         SH_ADDI $72, $66, SH_BLOCK
         il      $73, SHADING_BLOCK_BYTES
         SH_GET  $72, $71, $73, $74
+        SH_ADDI $71, $66, SH_DCOUNT
+        stqd    ZERO, 0($71)                  # no vertex in flight
         il      $70, 10
         SH_ADDI $71, $66, SH_STATS
 1:      stqd    ZERO, 0($71)
@@ -583,6 +597,8 @@ shade_packet:
         a       %gp, $66, $67
         a       %op, $115, $67
         il      %none, -1
+        fsmbi   %lo24, 0x7777                  # the low 24 bits of each word
+        fsmbi   %lo16, 0x3333                  # ... 16 bits
         .irp    H, 0, 16, 32, 48
         lqd     %m\H, SH_MAT+\H(%gp)
         ceq     %sel\H, %m\H, $110            # this shader's rays
@@ -592,26 +608,19 @@ shade_packet:
         fa      %ra\H, %ir\H, $124         # kd * (ambient + irradiance), clamped,
         fa      %ga\H, %ig\H, $124
         fa      %ba\H, %ib\H, $124
-        fm      %rk\H, %ra\H, $121         # to 8 bits: (c 255 + 0.5) truncated
-        fm      %gk\H, %ga\H, $122
-        fm      %bk\H, %ba\H, $123
-        fcgt    %rbig\H, %rk\H, $125
-        selb    %rc\H, %rk\H, $125, %rbig\H
-        fma     %rs\H, %rc\H, $106, $126
-        cfltu   %ru\H, %rs\H, 0
-        fcgt    %gbig\H, %gk\H, $125
-        selb    %gc\H, %gk\H, $125, %gbig\H
-        fma     %gs\H, %gc\H, $106, $126
-        cfltu   %gu\H, %gs\H, 0
-        fcgt    %bbig\H, %bk\H, $125
-        selb    %bc\H, %bk\H, $125, %bbig\H
-        fma     %bs\H, %bc\H, $106, $126
-        cfltu   %bu\H, %bs\H, 0
-        shli    %rh\H, %ru\H, 24
-        shli    %gh\H, %gu\H, 16
-        shli    %bh\H, %bu\H, 8
-        or      %rg\H, %rh\H, %gh\H
-        or      %rgb\H, %rg\H, %bh\H
+        fm      %rk\H, %ra\H, $121         # to 8 bits: (c 255 + 0.5) truncated, c at
+        fm      %gk\H, %ga\H, $122         # most 1: c 255 + 0.5 in 8.24 fixed point,
+        fm      %bk\H, %ba\H, $123         # which saturates at 256 (0xffffffff) and
+        fma     %rs\H, %rk\H, $106, $126    # is 255.x from c = 1 to there: its top
+        cfltu   %ru\H, %rs\H, 24           # byte is the channel
+        fma     %gs\H, %gk\H, $106, $126
+        cfltu   %gu\H, %gs\H, 24
+        fma     %bs\H, %bk\H, $106, $126
+        cfltu   %bu\H, %bs\H, 24
+        rotmi   %gh\H, %gu\H, -8
+        rotmi   %bh\H, %bu\H, -16
+        selb    %rg\H, %ru\H, %gh\H, %lo24   # r, then g from bit 23, b from bit 15
+        selb    %rgb\H, %rg\H, %bh\H, %lo16
         ori     %col\H, %rgb\H, 0xff
         lqd     %o\H, \H(%op)
         selb    %o2\H, %o\H, %col\H, %sel\H
@@ -938,6 +947,7 @@ shade_packet:
         SH_FETCH 0
         lqd     $75, SH_SAME($66)
         brz     $75, .Lsh_lanes
+        brsl    $95, sh_vertex_land
         SH_COUNT SHS_SAME, $74
         hbrr    .Lsh_copied, .Lsh_fetched
         .irp    L, 1, 2, 3
@@ -956,6 +966,7 @@ shade_packet:
         SH_FETCH 1
         SH_FETCH 2
         SH_FETCH 3
+        brsl    $95, sh_vertex_land
 .Lsh_fetched:
         # the lanes' records and normals as columns
         lqd     $70, SH_STAGE+0($66)
@@ -1102,15 +1113,88 @@ shade_packet:
         br      .Lsh_mhit
 
 
-# a vertex cache miss: vertex $81 into line $84, tag $83; back to $88
+# a vertex cache miss: vertex $81 into line $84, tag $83, its normal for $66 + $89; back
+# to $88. The fetch is queued, not waited for, into a staging slot of its own; the tag
+# becomes the vertex with bit 31 set (in flight) and the miss is counted. A copy is left
+# to sh_vertex_land, which the slow path calls once the group's lanes are looked up: one
+# wait for all their misses, then in lookup order each slot to its line (so a line ends up
+# with the last vertex looked up there) and its normal to the lane. A lookup of a vertex
+# in flight is no miss: its copy comes from its line, after the slot's.
 sh_vertex_miss:
+        SH_ADDI $87, $66, SH_DCOUNT
+        lqd     $86, 0($87)                   # bytes of copies (32 each)
+        lqd     $85, 0($83)
+        ilhu    $90, 0x8000
+        or      $94, $81, $90                 # the vertex, in flight
+        ceq     $85, $85, $94
+        shli    $82, $86, 1
+        SH_ADDI $82, $82, SH_VSTAGE
+        a       $82, $82, $66                 # its slot
+        brnz    $85, 1f
         shli    $85, $81, 6
         a       $85, $85, $100
-        il      $86, 64
-        SH_GET  $84, $85, $86, $87
-        stqd    $81, 0($83)
-        SH_COUNT SHS_VMISS, $87
+        wrch    $MFC_LSA, $82
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $85
+        il      $85, 64
+        wrch    $MFC_Size, $85
+        il      $85, SH_TAG
+        wrch    $MFC_TagID, $85
+        il      $85, 0x40
+        wrch    $MFC_Cmd, $85
+        stqd    $94, 0($83)                   # the tag: in flight
+        SH_COUNT SHS_VMISS, $85
+        br      2f
+1:      ori     $82, $84, 0                   # in flight already: from its line
+2:      a       $85, $89, $66
+        lqa     $90, sh_const+256
+        shufb   $85, $85, $82, $90            # the source, the destination
+        SH_ADDI $94, $66, SH_DEFER
+        a       $94, $94, $86
+        stqd    $85, 0($94)
+        stqd    $84, 16($94)                  # the line
+        ai      $86, $86, 32
+        stqd    $86, 0($87)
         bi      $88
+
+# the vertices in flight: one wait, then each copy (source to line, its normal to the
+# destination) and the line's tag's bit 31 cleared; back to $95 (the slow path's $115
+# tags, $116 lines; uses $80-$90, $94)
+sh_vertex_land:
+        SH_ADDI $87, $66, SH_DCOUNT
+        lqd     $86, 0($87)
+        brz     $86, 2f
+        stqd    ZERO, 0($87)
+        il      $85, 1 << SH_TAG
+        wrch    $MFC_WrTagMask, $85
+        il      $85, 2
+        wrch    $MFC_WrTagUpdate, $85
+        rdch    $85, $MFC_RdTagStat
+        SH_ADDI $94, $66, SH_DEFER
+        a       $86, $86, $94                 # the end
+1:      lqd     $85, 0($94)                   # the source, the destination
+        lqd     $87, 16($94)                  # the line
+        lqd     $80, 0($85)
+        lqd     $81, 16($85)
+        lqd     $82, 32($85)
+        lqd     $83, 48($85)
+        rotqbyi $88, $85, 4
+        sf      $89, $116, $87
+        rotmi   $89, $89, -2
+        a       $89, $89, $115                # the line's tag
+        lqd     $90, 0($89)
+        stqd    $80, 0($87)
+        stqd    $81, 16($87)
+        stqd    $82, 32($87)
+        stqd    $83, 48($87)
+        stqd    $81, 0($88)                   # the normal
+        shli    $90, $90, 1
+        rotmi   $90, $90, -1                  # landed
+        stqd    $90, 0($89)
+        ai      $94, $94, 32
+        ceq     $85, $94, $86
+        brz     $85, 1b
+2:      bi      $95
 
 # a triangle record the traversal's cache does not hold: record $80 into $82; back to $88
 sh_tri_miss:

@@ -252,7 +252,7 @@ pub struct ShadingBlock {
 
 /// Local-store bytes of the shading module's area (`SH_AREA_BYTES` in `modules/shade.s`;
 /// a test keeps the two equal).
-pub const SHADING_AREA_BYTES: usize = 39296;
+pub const SHADING_AREA_BYTES: usize = 40576;
 
 /// The shadow module's area (`modules/shadow.s`), right above the shading area (its offset
 /// from the shading area): the shadow-ray counter, the state kept while the shadow packets

@@ -399,3 +399,54 @@ fn an_edge_shared_by_two_triangles_takes_either_triangles_colour() {
         assert!(shading::channel_difference(colour, expected) <= shading::COLOUR_TOLERANCE);
     }
 }
+
+/// Vertex misses are fetched without waiting and land once a group's lanes are looked up:
+/// a packet whose 64 rays hit 64 different records misses many vertices per group of 4
+/// rays, and with a 16-line vertex cache some group's vertices share a line (the second
+/// miss lands the first). Colours against the reference and counters against the model
+/// (the cache's misses as one lookup after the other) stay exact.
+#[test]
+fn vertex_misses_of_a_group_land_together() {
+    let (scene, staged, reference) = room_setup();
+    let lights = shading::default_lights(&scene);
+    let basis = scene.camera.basis(64, 64);
+    for vertex_log2 in [8, 4] {
+        let mut h = harness(&staged, &scene, block(lights.clone(), vertex_log2, 6));
+        let mut model = Model::new(1 << vertex_log2, 64);
+        let mut packet = trace_packet(&reference, &scene, 24, 24);
+        for (i, hit) in packet.hits.iter_mut().enumerate() {
+            let record = (i as u32 * 5) % 64;
+            *hit = Hit {
+                triangle: reference.triangles[record as usize].original_index,
+                t: hit.t,
+                record,
+            };
+        }
+        let shared_line = packet.hits.chunks(4).any(|group| {
+            let mut lines = HashMap::new();
+            group.iter().any(|hit| {
+                reference.triangles[hit.record as usize]
+                    .vertices
+                    .iter()
+                    .any(|&v| *lines.entry(v % (1 << vertex_log2)).or_insert(v) != v)
+            })
+        });
+        assert_eq!(shared_line, vertex_log2 == 4);
+        for index in 0..2 {
+            let colours = h.shade(&packet, index);
+            model.packet(&reference, &packet.hits);
+            for (i, (&colour, hit)) in colours.iter().zip(&packet.hits).enumerate() {
+                let expected = reference.shade(hit, basis.origin, packet.dirs[i], &lights, false);
+                let difference = shading::channel_difference(colour, expected);
+                assert!(
+                    difference <= shading::COLOUR_TOLERANCE,
+                    "ray {i}: {colour:08x} {expected:08x}"
+                );
+            }
+        }
+        let mut counters = h.counters();
+        counters[4] = 3 * counters[8];
+        assert_eq!(counters, model.counters, "vertex cache of 2^{vertex_log2}");
+        assert!(counters[5] > 64, "{counters:?}");
+    }
+}
