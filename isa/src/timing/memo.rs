@@ -64,6 +64,8 @@ pub(super) struct Memo {
     pub generation: u64,
     /// The blocks that followed a full replay, not taken and taken (see [`Chain`]).
     pub chain: [Chain; 2],
+    /// What the core keeps with the record (its compiled code), zeros for nothing.
+    pub code: [u64; 3],
 }
 
 /// A register's state after a block, relative to the block's entry (a result is never
@@ -707,6 +709,19 @@ impl Timing {
         (&m.words, m.verified)
     }
 
+    /// What the core kept with memo `id` ([`Timing::set_memo_code`]); zeros for nothing.
+    #[inline]
+    pub fn memo_code(&self, id: usize) -> [u64; 3] {
+        self.memo.memos[id].code
+    }
+
+    /// Keeps `code` with memo `id` (the core's compiled code for the record's words), until
+    /// the record is replaced.
+    #[inline]
+    pub fn set_memo_code(&mut self, id: usize, code: [u64; 3]) {
+        self.memo.memos[id].code = code;
+    }
+
     /// Notes that local store held memo `id`'s words at code epoch `epoch`.
     #[inline]
     pub fn set_memo_verified(&mut self, id: usize, epoch: u64) {
@@ -982,6 +997,7 @@ impl Timing {
             generation: self.memo.generations,
             sets_hint: rec.hint_changed,
             chain: [NO_CHAIN; 2],
+            code: [0; 3],
         };
         self.memo.generations += 1;
         let mut memo = memo;
