@@ -656,6 +656,40 @@ impl Timing {
         }
     }
 
+    /// [`Timing::block_replay_candidate`] through the chain of the block whose full replay
+    /// just ended only, for a block whose words the core last found in local store at
+    /// code epoch `epoch` (the current one): the record's own check then stands for
+    /// reading its first word. The memo and its length, or `None` with nothing changed
+    /// (then ask [`Timing::block_replay_candidate`]).
+    #[inline(always)]
+    pub fn chained_replay_candidate(&mut self, pc: u32, epoch: u64) -> Option<(usize, usize)> {
+        if !self.config.memoize || self.memo.rec.is_some() || self.memo.replay.is_some() {
+            return None;
+        }
+        let f = self.memo.chain_from?;
+        let a = &self.memo.memos[f.memo];
+        if f.index != self.index || a.generation != f.generation {
+            return None;
+        }
+        let c = a.chain[f.taken as usize];
+        let id = c.memo as usize;
+        if c.pc != pc {
+            return None;
+        }
+        let b = &self.memo.memos[id];
+        if b.generation != c.generation
+            || b.verified != epoch
+            || b.start != pc
+            || !self.open_registers_ready(f.max_ready_at_entry, &c.open)
+            || !(a.sets_hint || self.hint_view_now(id) == c.hint)
+            || !self.clear_of_dma(id)
+        {
+            return None;
+        }
+        self.memo.chain_from = None;
+        Some((id, self.memo.memos[id].words.len()))
+    }
+
     /// Whether memo `id`'s block, starting now, is clear of the cycles DMA holds in the
     /// local store: it ends its use of the local store before the first of them, or none
     /// of them before that end is now or later than now and a cycle its fetch model
