@@ -260,6 +260,16 @@ pub(crate) struct Blocks {
     /// Per local-store word: how often a block started there without compiled code.
     pub heat: Vec<u8>,
     pub blocks: Vec<Block>,
+    /// Distinguishes this table (and each time it starts over) from every other: what a
+    /// caller kept of a block (its entry) holds while this stays the same.
+    pub generation: u64,
+}
+
+/// The next [`Blocks::generation`].
+static GENERATIONS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
+fn next_generation() -> u64 {
+    GENERATIONS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
 impl Blocks {
@@ -269,6 +279,7 @@ impl Blocks {
             slots: vec![0; LS_SIZE / 4],
             heat: vec![0; LS_SIZE / 4],
             blocks: Vec::new(),
+            generation: next_generation(),
         }
     }
 
@@ -282,6 +293,7 @@ impl Blocks {
         let code = self.cache.code(pc, insts, hook)?;
         if self.blocks.len() >= MAX_BLOCKS {
             self.blocks.clear();
+            self.generation = next_generation();
             self.slots.fill(0);
         }
         let id = self.blocks.len();

@@ -83,7 +83,7 @@ mod host {
     use super::super::spu::{invalidate_quad, Spu};
     use crate::analysis::is_branch;
     use crate::codec::Inst;
-    use crate::jit::{Blocks, CodeCache, Ctx, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN};
+    use crate::jit::{Blocks, CodeCache, Ctx, Entry, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN};
     use crate::machine::exec::{TruncatingFloats, LS_MASK, LS_SIZE};
     use crate::table::Op;
     use crate::timing::ends_block;
@@ -94,6 +94,11 @@ mod host {
     const HOT: u8 = 16;
     /// A slot whose block the compiler declined: interpreted from then on.
     const DECLINED: u32 = u32::MAX;
+    /// What a memo record keeps of its compiled block ([`crate::timing::Timing::memo_code`]):
+    /// the block table's generation, these flags, the entry.
+    const KEPT: u64 = 1;
+    const KEPT_SELF_LOOP: u64 = 2;
+    const KEPT_BRANCH: u64 = 4;
 
     /// After a compiled store into a quadword that may hold decoded code: marks it stale
     /// (bumping the code epoch if it held any) and says whether the block must end (the
@@ -237,13 +242,24 @@ mod host {
         /// instructions done.
         #[inline(always)]
         fn call_block(&mut self, id: usize, budget: u64) -> (u64, u32, u64, u64) {
+            let code = &self.compiled.as_ref().expect("blocks").blocks[id].code;
+            let (entry, n) = (code.entry, code.n as u64);
+            // SAFETY: the block's code is held by this SPU's block table.
+            unsafe { self.call_entry(entry, n, budget) }
+        }
+
+        /// [`Spu::call_block`] with the block's entry and length at hand.
+        ///
+        /// # Safety
+        /// `entry` is the entry of a block of `n` instructions that this SPU's block table
+        /// holds (so its code memory is alive).
+        #[inline(always)]
+        unsafe fn call_entry(&mut self, entry: Entry, n: u64, budget: u64) -> (u64, u32, u64, u64) {
             let spu: *mut Spu = self;
             // SAFETY: every pointer is derived from the exclusively borrowed SPU and used
             // only during the call; the block's code is owned by its cache, which stays
             // alive (compiling happens only outside calls).
             unsafe {
-                let code = &(*spu).compiled.as_ref().expect("blocks").blocks[id].code;
-                let (entry, n) = (code.entry, code.n as u64);
                 let mut ctx = Ctx {
                     regs: (*spu).core.regs.as_mut_ptr(),
                     ls: (*spu).core.ls.as_mut_ptr(),
@@ -317,18 +333,43 @@ mod host {
             memo: usize,
             until: u64,
         ) -> bool {
-            let Some(id) = self.compiled_block(pc, Some(n), true) else {
-                return false;
+            // The compiled code kept with the record (its words are the record's, which
+            // the caller found in local store), else the block table's.
+            let generation = self.compiled.as_ref().map_or(0, |b| b.generation);
+            let timing = self.timing.as_ref().expect("timing");
+            let [g, flags, entry] = timing.memo_code(memo);
+            let (entry, flags) = if g == generation && flags != 0 {
+                // SAFETY: kept below from a block the table of this generation holds.
+                (
+                    unsafe { std::mem::transmute::<usize, Entry>(entry as usize) },
+                    flags,
+                )
+            } else {
+                let Some(id) = self.compiled_block(pc, Some(n), true) else {
+                    return false;
+                };
+                let blocks = self.compiled.as_ref().expect("blocks");
+                let code = &blocks.blocks[id].code;
+                let flags = KEPT
+                    | (code.self_loop as u64 * KEPT_SELF_LOOP)
+                    | (is_branch(code.last.op) as u64 * KEPT_BRANCH);
+                let kept = [blocks.generation, flags, code.entry as usize as u64];
+                let entry = code.entry;
+                self.timing
+                    .as_mut()
+                    .expect("timing")
+                    .set_memo_code(memo, kept);
+                (entry, flags)
             };
             // Blocks hold no `bisled`, the one reader of the pending-event flag.
             self.core.event_pending_known = false;
             // One pass (its timing record applied), then more in one go if steady.
-            let (r, target, _, done) = self.call_block(id, 0);
-            self.compiled_pass_done(pc, n, memo, id, 0, r, target, done);
-            let code = &self.compiled.as_ref().expect("blocks").blocks[id].code;
+            // SAFETY: `entry` is a block of `n` instructions the block table holds.
+            let (r, target, _, done) = unsafe { self.call_entry(entry, n as u64, 0) };
+            self.compiled_pass_done(pc, n, memo, flags, 0, r, target, done);
             if r & (RESULT_PARTIAL | RESULT_TAKEN) != RESULT_TAKEN
                 || target != pc
-                || !code.self_loop
+                || flags & KEPT_SELF_LOOP == 0
             {
                 return true;
             }
@@ -338,9 +379,11 @@ mod host {
             if passes < 2 {
                 return true;
             }
-            let (r, target, loops, done) = self.call_block(id, passes * n as u64);
+            // SAFETY: as above.
+            let (r, target, loops, done) =
+                unsafe { self.call_entry(entry, n as u64, passes * n as u64) };
             self.steady_passes += loops + 1;
-            self.compiled_pass_done(pc, n, memo, id, loops, r, target, done);
+            self.compiled_pass_done(pc, n, memo, flags, loops, r, target, done);
             true
         }
 
@@ -355,19 +398,20 @@ mod host {
             pc: u32,
             n: usize,
             memo: usize,
-            id: usize,
+            flags: u64,
             loops: u64,
             r: u64,
             target: u32,
             done: u64,
         ) {
-            let last = self.compiled.as_ref().expect("blocks").blocks[id].code.last;
             let last_pc = pc.wrapping_add(4 * (n as u32 - 1)) & LS_MASK;
+            // The block's words are in local store (the caller checked them).
+            let last = self.decoded[(last_pc as usize >> 2) & (LS_SIZE / 4 - 1)];
             let timing = self.timing.as_mut().expect("timing");
             timing.steady_replayed(memo, loops, (last_pc, last, true, pc));
             if r & RESULT_PARTIAL != 0 {
                 timing.block_replayed_partly(memo, ((r >> 32) & 0xffff) as usize);
-            } else if is_branch(last.op) {
+            } else if flags & KEPT_BRANCH != 0 {
                 let taken = r & RESULT_TAKEN != 0;
                 timing.block_replayed(memo, Some((last_pc, last, taken, target)));
             } else {

@@ -607,6 +607,15 @@ impl Spu {
     pub(super) fn block_replays_loop(&mut self, until: u64) {
         while self.cycle < until && !self.core.interrupts_enabled {
             let pc = self.pc;
+            let epoch = self.code_epoch;
+            if let Some((id, n)) = self
+                .timing
+                .as_mut()
+                .and_then(|t| t.chained_replay_candidate(pc, epoch))
+            {
+                self.run_replayed_block(pc, n, id, until);
+                continue;
+            }
             let inst = self.decoded[((pc >> 2) as usize) & (LS_SIZE / 4 - 1)];
             if inst.op == Op::Unknown || inst.op == Op::Bisled {
                 return;

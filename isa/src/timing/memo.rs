@@ -64,6 +64,8 @@ pub(super) struct Memo {
     pub generation: u64,
     /// The blocks that followed a full replay, not taken and taken (see [`Chain`]).
     pub chain: [Chain; 2],
+    /// What the core keeps with the record (its compiled code), zeros for nothing.
+    pub code: [u64; 3],
 }
 
 /// A register's state after a block, relative to the block's entry (a result is never
@@ -654,6 +656,40 @@ impl Timing {
         }
     }
 
+    /// [`Timing::block_replay_candidate`] through the chain of the block whose full replay
+    /// just ended only, for a block whose words the core last found in local store at
+    /// code epoch `epoch` (the current one): the record's own check then stands for
+    /// reading its first word. The memo and its length, or `None` with nothing changed
+    /// (then ask [`Timing::block_replay_candidate`]).
+    #[inline(always)]
+    pub fn chained_replay_candidate(&mut self, pc: u32, epoch: u64) -> Option<(usize, usize)> {
+        if !self.config.memoize || self.memo.rec.is_some() || self.memo.replay.is_some() {
+            return None;
+        }
+        let f = self.memo.chain_from?;
+        let a = &self.memo.memos[f.memo];
+        if f.index != self.index || a.generation != f.generation {
+            return None;
+        }
+        let c = a.chain[f.taken as usize];
+        let id = c.memo as usize;
+        if c.pc != pc {
+            return None;
+        }
+        let b = &self.memo.memos[id];
+        if b.generation != c.generation
+            || b.verified != epoch
+            || b.start != pc
+            || !self.open_registers_ready(f.max_ready_at_entry, &c.open)
+            || !(a.sets_hint || self.hint_view_now(id) == c.hint)
+            || !self.clear_of_dma(id)
+        {
+            return None;
+        }
+        self.memo.chain_from = None;
+        Some((id, self.memo.memos[id].words.len()))
+    }
+
     /// Whether memo `id`'s block, starting now, is clear of the cycles DMA holds in the
     /// local store: it ends its use of the local store before the first of them, or none
     /// of them before that end is now or later than now and a cycle its fetch model
@@ -705,6 +741,19 @@ impl Timing {
     pub fn memo_words(&self, id: usize) -> (&[u32], u64) {
         let m = &self.memo.memos[id];
         (&m.words, m.verified)
+    }
+
+    /// What the core kept with memo `id` ([`Timing::set_memo_code`]); zeros for nothing.
+    #[inline]
+    pub fn memo_code(&self, id: usize) -> [u64; 3] {
+        self.memo.memos[id].code
+    }
+
+    /// Keeps `code` with memo `id` (the core's compiled code for the record's words), until
+    /// the record is replaced.
+    #[inline]
+    pub fn set_memo_code(&mut self, id: usize, code: [u64; 3]) {
+        self.memo.memos[id].code = code;
     }
 
     /// Notes that local store held memo `id`'s words at code epoch `epoch`.
@@ -982,6 +1031,7 @@ impl Timing {
             generation: self.memo.generations,
             sets_hint: rec.hint_changed,
             chain: [NO_CHAIN; 2],
+            code: [0; 3],
         };
         self.memo.generations += 1;
         let mut memo = memo;

@@ -905,6 +905,57 @@ mod tests {
         );
     }
 
+    /// Wherever `steady_passes` says a self-loop is steady, applying its record for those
+    /// passes at once (`steady_replayed`) gives what timing them one by one gives: the
+    /// cycle, the totals and every per-address counter. The loop (`ai`, `brnz` at 0x08)
+    /// follows a hint issued just before it, so its first passes miss and the later ones
+    /// are hinted.
+    #[test]
+    fn steady_passes_time_as_passes_one_by_one() {
+        let hbrr = w("hbrr", &[0x0c, 0x08], 0x00);
+        let il = w("il", &[9, 10], 0x04);
+        let ai = w("ai", &[9, 9, -1], 0x08);
+        let brnz = w("brnz", &[9, 0x08], 0x0c);
+        let (ai8, brnz8) = (w("ai", &[8, 8, -1], 0x10), w("brnz", &[8, 0x00], 0x14));
+        let mut t = Timing::new(TimingConfig::default());
+        let pass = |t: &mut Timing, taken: bool| {
+            t.issue(0x08, ai);
+            t.issue(0x0c, brnz);
+            t.branch_resolved(0x0c, brnz, taken, 0x08);
+        };
+        let mut steady = 0;
+        for outer in 0..8 {
+            t.issue(0x00, hbrr);
+            t.hint(0x00, 0x0c, 0x08);
+            t.issue(0x04, il);
+            for p in 0..10 {
+                if let Some(f) = t.memo.chain_from.filter(|f| f.taken && p > 0) {
+                    let mut bulk = t.clone();
+                    let passes = bulk.steady_passes(f.memo, 0x08, ai, bulk.now + 200);
+                    if passes >= 2 {
+                        steady += 1;
+                        let mut one_by_one = bulk.clone();
+                        bulk.steady_replayed(f.memo, passes, (0x0c, brnz, true, 0x08));
+                        for _ in 0..passes {
+                            pass(&mut one_by_one, true);
+                        }
+                        let (a, b) = (bulk.finish_profile(), one_by_one.finish_profile());
+                        assert_eq!(bulk.now, one_by_one.now, "outer {outer} pass {p}");
+                        assert_eq!(a.totals, b.totals, "outer {outer} pass {p}");
+                        let per =
+                            |p: &Profile| p.addresses().map(|(a, s)| (a, *s)).collect::<Vec<_>>();
+                        assert_eq!(per(&a), per(&b), "outer {outer} pass {p}");
+                    }
+                }
+                pass(&mut t, p < 9);
+            }
+            t.issue(0x10, ai8);
+            t.issue(0x14, brnz8);
+            t.branch_resolved(0x14, brnz8, true, 0x00);
+        }
+        assert!(steady > 8, "{steady} steady states");
+    }
+
     #[test]
     fn dma_helpers() {
         let c = TimingConfig::default();
