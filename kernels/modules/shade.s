@@ -1140,8 +1140,9 @@ shade_packet:
 # to $88. The fetch is queued, not waited for, into a staging slot of its own; the tag
 # becomes the vertex with bit 31 set (in flight) and the miss is counted. A copy is left
 # to sh_vertex_land, which the slow path calls once the group's lanes are looked up: one
-# wait for all their misses, then in lookup order each slot to its line (so a line ends up
-# with the last vertex looked up there) and its normal to the lane. A lookup of a vertex
+# wait for all their misses, then in lookup order each slot's normal (the one quadword
+# of a vertex record the module reads) to its line (so a line ends up with the last
+# vertex looked up there) and to the lane. A lookup of a vertex
 # in flight is no miss: its copy comes from its line, after the slot's.
 sh_vertex_miss:
         hbr     3f, $88
@@ -1181,9 +1182,9 @@ sh_vertex_miss:
 1:      ori     $82, $84, 0
         br      2b
 
-# the vertices in flight: one wait, then each copy (source to line, its normal to the
-# destination) and the line's tag's bit 31 cleared; back to $95 (the slow path's $115
-# tags, $116 lines; uses $80-$90, $94)
+# the vertices in flight: one wait, then each copy (the source's normal to the line and
+# the destination) and the line's tag's bit 31 cleared; back to $95 (the slow path's
+# $115 tags, $116 lines; uses $81, $85-$90, $94)
 sh_vertex_land:
         SH_ADDI $87, $66, SH_DCOUNT
         lqd     $86, 0($87)
@@ -1199,20 +1200,14 @@ sh_vertex_land:
 1:      lqd     $85, 0($94)                   # the source, the destination
         hbrr    3f, 1b
         lqd     $87, 16($94)                  # the line
-        lqd     $80, 0($85)
-        lqd     $81, 16($85)
-        lqd     $82, 32($85)
-        lqd     $83, 48($85)
+        lqd     $81, 16($85)                  # the normal (all the lines are read for)
         rotqbyi $88, $85, 4
         sf      $89, $116, $87
         rotmi   $89, $89, -2
         a       $89, $89, $115                # the line's tag
         lqd     $90, 0($89)
-        stqd    $80, 0($87)
         stqd    $81, 16($87)
-        stqd    $82, 32($87)
-        stqd    $83, 48($87)
-        stqd    $81, 0($88)                   # the normal
+        stqd    $81, 0($88)
         shli    $90, $90, 1
         rotmi   $90, $90, -1                  # landed
         stqd    $90, 0($89)
