@@ -145,16 +145,16 @@
         stqd    $85, SH_NRM+\lane*64+\i*16($66)
         .endm
 
-# lane LANE of the intersection packet in $70 (ids): its record to SH_STAGE + LANE*64 and
-# its vertex normals to SH_NRM + LANE*64 (nothing for a miss); a record the traversal's
-# triangle cache does not hold is fetched by sh_tri_miss ($106)
+# lane LANE of the intersection packet in $70 (ids): its record to SH_STAGE + LANE*64
+# (nothing for a miss); a record the traversal's triangle cache does not hold is fetched
+# by sh_tri_miss ($106), not waited for (SH_WAIT before the records are read)
         .macro  SH_FETCH lane
         rotqbyi $80, $70, 4*\lane
         ceqi    $81, $80, -1
         brnz    $81, 3f
         SH_COUNT SHS_TLOOK, $84
         SH_ADDI $82, $66, SH_STAGE+\lane*64
-        ila     $88, 5f
+        ila     $88, 3f
         .ifdef  TTAGS
         and     $81, $80, TMASK
         shli    $83, $81, 4
@@ -170,11 +170,28 @@
         .else
         bi      $106
         .endif
-5:      lqd     $80, SH_STAGE+\lane*64+48($66)
+3:
+        .endm
+
+# lane LANE's vertex normals to SH_NRM + LANE*64 (nothing for a miss), its record staged
+        .macro  SH_NORMALS lane
+        rotqbyi $80, $70, 4*\lane
+        ceqi    $81, $80, -1
+        brnz    $81, 3f
+        lqd     $80, SH_STAGE+\lane*64+48($66)
         SH_VERTEX \lane, 0
         SH_VERTEX \lane, 1
         SH_VERTEX \lane, 2
 3:
+        .endm
+
+# wait for the fetches on SH_TAG ($74)
+        .macro  SH_WAIT
+        il      $74, 1 << SH_TAG
+        wrch    $MFC_WrTagMask, $74
+        il      $74, 2
+        wrch    $MFC_WrTagUpdate, $74
+        rdch    $74, $MFC_RdTagStat
         .endm
 
         .text
@@ -947,6 +964,8 @@ shade_packet:
         SH_FETCH 0
         lqd     $75, SH_SAME($66)
         brz     $75, .Lsh_lanes
+        SH_WAIT
+        SH_NORMALS 0
         brsl    $95, sh_vertex_land
         SH_COUNT SHS_SAME, $74
         hbrr    .Lsh_copied, .Lsh_fetched
@@ -966,6 +985,10 @@ shade_packet:
         SH_FETCH 1
         SH_FETCH 2
         SH_FETCH 3
+        SH_WAIT
+        .irp    L, 0, 1, 2, 3
+        SH_NORMALS \L
+        .endr
         brsl    $95, sh_vertex_land
 .Lsh_fetched:
         # the lanes' records and normals as columns
@@ -1117,10 +1140,12 @@ shade_packet:
 # to $88. The fetch is queued, not waited for, into a staging slot of its own; the tag
 # becomes the vertex with bit 31 set (in flight) and the miss is counted. A copy is left
 # to sh_vertex_land, which the slow path calls once the group's lanes are looked up: one
-# wait for all their misses, then in lookup order each slot to its line (so a line ends up
-# with the last vertex looked up there) and its normal to the lane. A lookup of a vertex
+# wait for all their misses, then in lookup order each slot's normal (the one quadword
+# of a vertex record the module reads) to its line (so a line ends up with the last
+# vertex looked up there) and to the lane. A lookup of a vertex
 # in flight is no miss: its copy comes from its line, after the slot's.
 sh_vertex_miss:
+        hbr     3f, $88
         SH_ADDI $87, $66, SH_DCOUNT
         lqd     $86, 0($87)                   # bytes of copies (32 each)
         lqd     $85, 0($83)
@@ -1130,7 +1155,7 @@ sh_vertex_miss:
         shli    $82, $86, 1
         SH_ADDI $82, $82, SH_VSTAGE
         a       $82, $82, $66                 # its slot
-        brnz    $85, 1f
+        brnz    $85, 1f                       # in flight already: from its line
         shli    $85, $81, 6
         a       $85, $85, $100
         wrch    $MFC_LSA, $82
@@ -1144,8 +1169,6 @@ sh_vertex_miss:
         wrch    $MFC_Cmd, $85
         stqd    $94, 0($83)                   # the tag: in flight
         SH_COUNT SHS_VMISS, $85
-        br      2f
-1:      ori     $82, $84, 0                   # in flight already: from its line
 2:      a       $85, $89, $66
         lqa     $90, sh_const+256
         shufb   $85, $85, $82, $90            # the source, the destination
@@ -1155,11 +1178,13 @@ sh_vertex_miss:
         stqd    $84, 16($94)                  # the line
         ai      $86, $86, 32
         stqd    $86, 0($87)
-        bi      $88
+3:      bi      $88
+1:      ori     $82, $84, 0
+        br      2b
 
-# the vertices in flight: one wait, then each copy (source to line, its normal to the
-# destination) and the line's tag's bit 31 cleared; back to $95 (the slow path's $115
-# tags, $116 lines; uses $80-$90, $94)
+# the vertices in flight: one wait, then each copy (the source's normal to the line and
+# the destination) and the line's tag's bit 31 cleared; back to $95 (the slow path's
+# $115 tags, $116 lines; uses $81, $85-$90, $94)
 sh_vertex_land:
         SH_ADDI $87, $66, SH_DCOUNT
         lqd     $86, 0($87)
@@ -1173,35 +1198,38 @@ sh_vertex_land:
         SH_ADDI $94, $66, SH_DEFER
         a       $86, $86, $94                 # the end
 1:      lqd     $85, 0($94)                   # the source, the destination
+        hbrr    3f, 1b
         lqd     $87, 16($94)                  # the line
-        lqd     $80, 0($85)
-        lqd     $81, 16($85)
-        lqd     $82, 32($85)
-        lqd     $83, 48($85)
+        lqd     $81, 16($85)                  # the normal (all the lines are read for)
         rotqbyi $88, $85, 4
         sf      $89, $116, $87
         rotmi   $89, $89, -2
         a       $89, $89, $115                # the line's tag
         lqd     $90, 0($89)
-        stqd    $80, 0($87)
         stqd    $81, 16($87)
-        stqd    $82, 32($87)
-        stqd    $83, 48($87)
-        stqd    $81, 0($88)                   # the normal
+        stqd    $81, 0($88)
         shli    $90, $90, 1
         rotmi   $90, $90, -1                  # landed
         stqd    $90, 0($89)
         ai      $94, $94, 32
         ceq     $85, $94, $86
-        brz     $85, 1b
+3:      brz     $85, 1b
 2:      bi      $95
 
-# a triangle record the traversal's cache does not hold: record $80 into $82; back to $88
+# a triangle record the traversal's cache does not hold: record $80 into $82, not waited
+# for (SH_WAIT); back to $88
 sh_tri_miss:
         SH_COUNT SHS_TMISS, $84
         shli    $81, $80, 6
         a       $81, $81, EATRIS
+        wrch    $MFC_LSA, $82
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $81
         il      $83, 64
-        SH_GET  $82, $81, $83, $84
+        wrch    $MFC_Size, $83
+        il      $83, SH_TAG
+        wrch    $MFC_TagID, $83
+        il      $83, 0x40
+        wrch    $MFC_Cmd, $83
         bi      $88
 shade_end:
