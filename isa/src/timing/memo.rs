@@ -559,18 +559,9 @@ impl Timing {
         let from = self.memo.chain_from.take().filter(|f| {
             f.index == self.index && self.memo.memos[f.memo].generation == f.generation
         });
-        if let Some(f) = from {
-            let a = &self.memo.memos[f.memo];
-            let c = &a.chain[f.taken as usize];
-            if c.pc == pc {
-                let b = &self.memo.memos[c.memo as usize];
-                if b.generation == c.generation
-                    && b.words[0] == inst.word
-                    && self.open_registers_ready(f.max_ready_at_entry, &c.open)
-                    && (a.sets_hint || self.hint_view_now(c.memo as usize) == c.hint)
-                {
-                    return Lookup::Hit(c.memo as usize);
-                }
+        if let Some(id) = from.and_then(|f| self.chained_memo(f, pc)) {
+            if self.memo.memos[id].words[0] == inst.word {
+                return Lookup::Hit(id);
             }
         }
         self.apply_deferred_writes();
@@ -602,6 +593,22 @@ impl Timing {
             }
         }
         found
+    }
+
+    /// The memo that chain `f` (the block whose full replay just ended, still current)
+    /// names for a block at `pc`, when its entry state follows from that block's: the
+    /// chained record is still the one the chain saw, the registers the chain leaves open
+    /// are ready and the hint reads the same. The caller checks the block's words.
+    #[inline(always)]
+    fn chained_memo(&self, f: ChainFrom, pc: u32) -> Option<usize> {
+        let a = &self.memo.memos[f.memo];
+        let c = &a.chain[f.taken as usize];
+        let id = c.memo as usize;
+        let ok = c.pc == pc
+            && self.memo.memos[id].generation == c.generation
+            && self.open_registers_ready(f.max_ready_at_entry, &c.open)
+            && (a.sets_hint || self.hint_view_now(id) == c.hint);
+        ok.then_some(id)
     }
 
     /// Whether the registers a chain leaves open (`open`: a list ended by 128, or
@@ -639,11 +646,7 @@ impl Timing {
     /// in progress; nothing changes. Follow with [`Timing::start_block_replay`].
     #[inline(always)]
     pub fn block_replay_candidate(&mut self, pc: u32, inst: Inst) -> Option<(usize, usize)> {
-        if !self.config.memoize
-            || self.memo.rec.is_some()
-            || self.memo.replay.is_some()
-            || is_terminator(inst)
-        {
+        if !self.memo_between_blocks() || is_terminator(inst) {
             return None;
         }
         let idx = Self::slot_index(pc);
@@ -656,6 +659,13 @@ impl Timing {
         }
     }
 
+    /// Memoization is on and neither a recording nor a replay is under way: a block may
+    /// start here as a replay.
+    #[inline(always)]
+    fn memo_between_blocks(&self) -> bool {
+        self.config.memoize && self.memo.rec.is_none() && self.memo.replay.is_none()
+    }
+
     /// [`Timing::block_replay_candidate`] through the chain of the block whose full replay
     /// just ended only, for a block whose words the core last found in local store at
     /// code epoch `epoch` (the current one): the record's own check then stands for
@@ -663,27 +673,16 @@ impl Timing {
     /// (then ask [`Timing::block_replay_candidate`]).
     #[inline(always)]
     pub fn chained_replay_candidate(&mut self, pc: u32, epoch: u64) -> Option<(usize, usize)> {
-        if !self.config.memoize || self.memo.rec.is_some() || self.memo.replay.is_some() {
+        if !self.memo_between_blocks() {
             return None;
         }
         let f = self.memo.chain_from?;
-        let a = &self.memo.memos[f.memo];
-        if f.index != self.index || a.generation != f.generation {
+        if f.index != self.index || self.memo.memos[f.memo].generation != f.generation {
             return None;
         }
-        let c = a.chain[f.taken as usize];
-        let id = c.memo as usize;
-        if c.pc != pc {
-            return None;
-        }
+        let id = self.chained_memo(f, pc)?;
         let b = &self.memo.memos[id];
-        if b.generation != c.generation
-            || b.verified != epoch
-            || b.start != pc
-            || !self.open_registers_ready(f.max_ready_at_entry, &c.open)
-            || !(a.sets_hint || self.hint_view_now(id) == c.hint)
-            || !self.clear_of_dma(id)
-        {
+        if b.verified != epoch || b.start != pc || !self.clear_of_dma(id) {
             return None;
         }
         self.memo.chain_from = None;
@@ -820,7 +819,7 @@ impl Timing {
     /// not set itself is far enough ahead of the branch, only grows from false to true,
     /// so it is required true.
     pub fn steady_passes(&mut self, id: usize, pc: u32, inst: Inst, until: u64) -> u64 {
-        if !self.config.memoize || self.memo.rec.is_some() || self.memo.replay.is_some() {
+        if !self.memo_between_blocks() {
             return 0;
         }
         match self.memo.chain_from {
