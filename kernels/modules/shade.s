@@ -21,9 +21,9 @@
 #    the caches, two per step; mixed packets found in the caches; anything else (a cache
 #    miss, no hit) lane by lane, its vertex misses fetched without waiting into staging
 #    slots and landed together once its lanes are looked up (sh_vertex_miss,
-#    sh_vertex_land: one wait per packet of 4 rays, not one per miss; a triangle record
-#    past the traversal's cache is fetched blocking). They compute the same values and
-#    counts.
+#    sh_vertex_land: one wait per packet of 4 rays, not one per miss; the triangle records
+#    past the traversal's cache likewise, one wait before they are read). They compute the
+#    same values and counts.
 # 2. The irradiance of every ray from every light (the same for every diffuse shader, so
 #    once per i-set): dot(N, L) / (|N| |L|), clamped, times the light's colour, summed.
 #    SH_VIS (per light, the rays' visibility masks) masks each light.
@@ -90,6 +90,29 @@
         a       \rt, \ra, $96
         .endm
 
+# wait for the fetches on tag SH_TAG (tmp: a scratch register)
+        .macro  SH_WAIT tmp
+        il      \tmp, 1 << SH_TAG
+        wrch    $MFC_WrTagMask, \tmp
+        il      \tmp, 2
+        wrch    $MFC_WrTagUpdate, \tmp
+        rdch    \tmp, $MFC_RdTagStat
+        .endm
+
+# queue a get LS <- EA of SIZE bytes (an immediate) on tag SH_TAG, not waited for
+# (registers: ls, ea, scratch; the scratch may be ea)
+        .macro  SH_QUEUE ls, ea, size, tmp
+        wrch    $MFC_LSA, \ls
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, \ea
+        il      \tmp, \size
+        wrch    $MFC_Size, \tmp
+        il      \tmp, SH_TAG
+        wrch    $MFC_TagID, \tmp
+        il      \tmp, 0x40
+        wrch    $MFC_Cmd, \tmp
+        .endm
+
 # get LS <- EA, SIZE bytes on tag SH_TAG and wait (registers: ls, ea, size, scratch)
         .macro  SH_GET ls, ea, size, tmp
         wrch    $MFC_LSA, \ls
@@ -100,11 +123,7 @@
         wrch    $MFC_TagID, \tmp
         il      \tmp, 0x40
         wrch    $MFC_Cmd, \tmp
-        il      \tmp, 1 << SH_TAG
-        wrch    $MFC_WrTagMask, \tmp
-        il      \tmp, 2
-        wrch    $MFC_WrTagUpdate, \tmp
-        rdch    \tmp, $MFC_RdTagStat
+        SH_WAIT \tmp
         .endm
 
 # counter += 1 (a quadword of SH_STATS; $66 = area)
@@ -183,15 +202,6 @@
         SH_VERTEX \lane, 1
         SH_VERTEX \lane, 2
 3:
-        .endm
-
-# wait for the fetches on SH_TAG ($74)
-        .macro  SH_WAIT
-        il      $74, 1 << SH_TAG
-        wrch    $MFC_WrTagMask, $74
-        il      $74, 2
-        wrch    $MFC_WrTagUpdate, $74
-        rdch    $74, $MFC_RdTagStat
         .endm
 
         .text
@@ -964,7 +974,7 @@ shade_packet:
         SH_FETCH 0
         lqd     $75, SH_SAME($66)
         brz     $75, .Lsh_lanes
-        SH_WAIT
+        SH_WAIT $74
         SH_NORMALS 0
         brsl    $95, sh_vertex_land
         SH_COUNT SHS_SAME, $74
@@ -985,7 +995,7 @@ shade_packet:
         SH_FETCH 1
         SH_FETCH 2
         SH_FETCH 3
-        SH_WAIT
+        SH_WAIT $74
         .irp    L, 0, 1, 2, 3
         SH_NORMALS \L
         .endr
@@ -1158,15 +1168,7 @@ sh_vertex_miss:
         brnz    $85, 1f                       # in flight already: from its line
         shli    $85, $81, 6
         a       $85, $85, $100
-        wrch    $MFC_LSA, $82
-        wrch    $MFC_EAH, ZERO
-        wrch    $MFC_EAL, $85
-        il      $85, 64
-        wrch    $MFC_Size, $85
-        il      $85, SH_TAG
-        wrch    $MFC_TagID, $85
-        il      $85, 0x40
-        wrch    $MFC_Cmd, $85
+        SH_QUEUE $82, $85, 64, $85
         stqd    $94, 0($83)                   # the tag: in flight
         SH_COUNT SHS_VMISS, $85
 2:      a       $85, $89, $66
@@ -1190,11 +1192,7 @@ sh_vertex_land:
         lqd     $86, 0($87)
         brz     $86, 2f
         stqd    ZERO, 0($87)
-        il      $85, 1 << SH_TAG
-        wrch    $MFC_WrTagMask, $85
-        il      $85, 2
-        wrch    $MFC_WrTagUpdate, $85
-        rdch    $85, $MFC_RdTagStat
+        SH_WAIT $85
         SH_ADDI $94, $66, SH_DEFER
         a       $86, $86, $94                 # the end
 1:      lqd     $85, 0($94)                   # the source, the destination
@@ -1222,14 +1220,6 @@ sh_tri_miss:
         SH_COUNT SHS_TMISS, $84
         shli    $81, $80, 6
         a       $81, $81, EATRIS
-        wrch    $MFC_LSA, $82
-        wrch    $MFC_EAH, ZERO
-        wrch    $MFC_EAL, $81
-        il      $83, 64
-        wrch    $MFC_Size, $83
-        il      $83, SH_TAG
-        wrch    $MFC_TagID, $83
-        il      $83, 0x40
-        wrch    $MFC_Cmd, $83
+        SH_QUEUE $82, $81, 64, $83
         bi      $88
 shade_end:
