@@ -26,7 +26,7 @@ use crate::bvh::Bvh;
 use crate::camera::Camera;
 use crate::layout::{
     material_records, node_records, triangle_records, vertex_records, MaterialRecord, NodeRecord,
-    StagedScene, TriangleRecord, VertexRecord,
+    StagedScene, TriangleRecord, VertexOrder, VertexRecord,
 };
 use crate::scene::Scene;
 use crate::shading::{self, Light};
@@ -144,10 +144,11 @@ fn safe_inverse(d: [f32; 3]) -> [f32; 3] {
 
 impl Reference {
     pub fn new(scene: &Scene, bvh: &Bvh) -> Reference {
+        let order = VertexOrder::new(scene, bvh);
         Reference {
             nodes: node_records(bvh),
-            triangles: triangle_records(scene, bvh),
-            vertices: vertex_records(scene),
+            triangles: triangle_records(scene, bvh, &order),
+            vertices: vertex_records(scene, &order),
             materials: material_records(scene),
         }
     }
