@@ -4,9 +4,11 @@
 #
 # `brsl $127, shadow_rays` from shade.s once the i-set holds the hit points (SH_PX..PZ),
 # the eye-facing normals (SH_NX..NZ) and the materials (SH_MAT, -1: no hit), with $66 = the
-# shading area. Keeps every register but the statistics ones (the traversal counts the
-# shadow packets' work as it counts the primary packets'); returns to $127. Does nothing
-# unless the shading block's mode is SHADE_SHADOWS.
+# shading area. Keeps $0..$65 but the statistics ones (the traversal counts the shadow
+# packets' work as it counts the primary packets'), and of $66..$127 those shade.s reads
+# after the call: $66, $91..$93, $97, $101..$103, $105; returns to $127. Only the registers the
+# traversal changes are saved and restored (the frame's constants it only reads). Does
+# nothing unless the shading block's mode is SHADE_SHADOWS.
 #
 # A shadow ray starts AT THE LIGHT Lp with direction d = P - Lp and finds no triangle with
 # 0 < s < 1 - SHADOW_EPSILON (loader/src/shading.rs): the packet's rays share the origin,
@@ -51,19 +53,18 @@ sv_tag:         .long SHADOW_TAG, 1 << SHADOW_TAG, 0, 0
 sv_limit:       .long SHADOW_LIMIT_BITS, SHADOW_LIMIT_BITS, SHADOW_LIMIT_BITS, SHADOW_LIMIT_BITS
 sv_minus1:      .float -1.0, -1.0, -1.0, -1.0
 
-# the registers a shadow packet changes, restored at the end (not the statistics' S_TRIS,
-# S_CULLED, S_TLOOK, S_STEPS, M1V, EEV: $23, $24, $26, $30..$32)
+# the registers a shadow packet changes and its caller keeps, restored at the end: the
+# context and the packet's own of regs.inc (RAYS, ORIG, OR1X..OR1Z, OBX..OBZ, the origin
+# splats, STKBASE, NEGTAB, $43..$65), the link, and shade.s's (above). Not the frame's
+# constants (the traversal only reads them) nor the statistics.
         .macro  SV_EACH_REG op, base
-        .irp    R, 0, 1, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 25, 27, 28, 29
+        .irp    R, 0, 1, 6, 11, 25, 27, 28, 29, 33, 34, 35, 39, 40, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 54
         \op     $\R, SV_REGS+16*\R(\base)
         .endr
-        .irp    R, 33, 34, 35, 36, 37, 38, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 54, 55, 56, 57, 58, 59, 60, 61, 62, 63, 64, 65
+        .irp    R, 55, 56, 57, 58, 59, 60, 61, 62, 63, 64, 65, 66, 91, 92, 93, 97, 101, 102, 103
         \op     $\R, SV_REGS+16*\R(\base)
         .endr
-        .irp    R, 66, 67, 68, 69, 70, 71, 72, 73, 74, 75, 76, 77, 78, 79, 80, 81, 82, 83, 84, 85, 86, 87, 88, 89, 90, 91, 92, 93, 94, 95, 96
-        \op     $\R, SV_REGS+16*\R(\base)
-        .endr
-        .irp    R, 97, 98, 99, 100, 101, 102, 103, 104, 105, 106, 107, 108, 109, 110, 111, 112, 113, 114, 115, 116, 117, 118, 119, 120, 121, 122, 123, 124, 125, 127
+        .irp    R, 105, 127
         \op     $\R, SV_REGS+16*\R(\base)
         .endr
         .endm
@@ -100,8 +101,6 @@ shadow_rays:
 1:      ila     $126, SHADOW_AREA
         a       $126, $126, $66
         SV_EACH_REG stqd, $126
-        lqa     $70, sv_tmp
-        stqd    $70, SV_REGS+16*126($126)
         ori     $68, $126, 0
         # the one-context miss handlers while the shadow packets run
         .irp    W, 0, 1, 2, 3
@@ -303,7 +302,6 @@ shadow_done:
         stqa    $70, vars+V_NCTX1
         ori     $126, $68, 0
         SV_EACH_REG lqd, $126
-        lqd     $126, SV_REGS+16*126($126)
         bi      $127
 
 # ---- --shadow-early on, after each leaf (triangle.s): the rays it occluded stop (t = -1),
