@@ -64,9 +64,7 @@ sv_minus1:      .float -1.0, -1.0, -1.0, -1.0
         .irp    R, 55, 56, 57, 58, 59, 60, 61, 62, 63, 64, 65, 66, 91, 92, 93, 97, 101, 102, 103
         \op     $\R, SV_REGS+16*\R(\base)
         .endr
-        .irp    R, 105, 127
-        \op     $\R, SV_REGS+16*\R(\base)
-        .endr
+        \op     $105, SV_REGS+16*105(\base)
         .endm
 
 # the smallest lane of \lo and the largest of \hi, in every lane ($94, $95: scratch)
@@ -101,6 +99,7 @@ shadow_rays:
 1:      ila     $126, SHADOW_AREA
         a       $126, $126, $66
         SV_EACH_REG stqd, $126
+        stqd    $127, SV_REGS+16*127($126)
         ori     $68, $126, 0
         # the one-context miss handlers while the shadow packets run
         .irp    W, 0, 1, 2, 3
@@ -140,10 +139,7 @@ shadow_rays:
         stqd    $72, CTX_CORNERS+32(RAYS)
         stqd    ZERO, SV_LIGHT($68)
         lqa     $72, sv_ready                 # the first call clears the counter
-        brnz    $72, .Lsv_light
-        stqd    ZERO, SV_RAYS($68)
-        il      $72, -1
-        stqa    $72, sv_ready
+        brz     $72, .Lsv_clear               # (out of line: the branch not taken, not missed)
 
 # ---- the next light: generate its shadow packet and trace it
 .Lsv_light:
@@ -251,6 +247,7 @@ shadow_rays:
         gb      $95, $94
         ai      $67, $67, 16
         brz     $95, 1b
+        hbrr    .Lsv_first_br, set_first
         clz     $95, $95                      # 4 lanes: the first = clz - 28
         rotmi   $94, $67, -2
         a       $95, $95, $94
@@ -258,7 +255,9 @@ shadow_rays:
         shufb   FIRST, $95, $95, PAT0
         lqa     $94, sv_word2
         selb    CUR, ROOTST, FIRST, $94
+.Lsv_first_br:
         brsl    $0, set_first
+        hbrr    .Lsv_trav_br, trav
         ori     STK, STKBASE, 0
         lqa     BMISSH, vars+V_BMISSH         # (a leaf's ray loop uses the register)
         il      $94, -1
@@ -268,6 +267,7 @@ shadow_rays:
         ceqi    $94, $94, 0
         nor     $94, $94, $94
         stqa    $94, sv_early
+.Lsv_trav_br:
         br      trav
 
 # ---- the shadow packet is done (packet_done comes here while sv_trace is set): the
@@ -290,7 +290,10 @@ shadow_done:
         .endsched
         ai      $69, $69, 1
         stqd    $69, SV_LIGHT($68)
-        br      .Lsv_light
+        lqd     $70, SH_BLOCK($66)
+        rotqbyi $70, $70, SHB_LIGHT_COUNT
+        ceq     $70, $69, $70
+        brz     $70, .Lsv_light               # another light (with one, not taken: no miss)
 
 # ---- every light done: the miss handlers and the registers back
 .Lsv_end:
@@ -301,8 +304,18 @@ shadow_done:
         lqd     $70, SV_HANDLERS+16*4($68)
         stqa    $70, vars+V_NCTX1
         ori     $126, $68, 0
+        lqd     $127, SV_REGS+16*127($126)
+        hbr     .Lsv_ret, $127
         SV_EACH_REG lqd, $126
+.Lsv_ret:
         bi      $127
+
+# the first call: the shadow-ray counter starts at 0
+.Lsv_clear:
+        stqd    ZERO, SV_RAYS($68)
+        il      $72, -1
+        stqa    $72, sv_ready
+        br      .Lsv_light
 
 # ---- --shadow-early on, after each leaf (triangle.s): the rays it occluded stop (t = -1),
 # and the packet ends once none is left
