@@ -24,13 +24,15 @@
 #    sh_vertex_land: one wait per packet of 4 rays, not one per miss; the triangle records
 #    past the traversal's cache likewise, one wait before they are read). They compute the
 #    same values and counts.
-# 2. The irradiance of every ray from every light (the same for every diffuse shader, so
-#    once per i-set): dot(N, L) / (|N| |L|), clamped, times the light's colour, summed.
-#    SH_VIS (per light, the rays' visibility masks) masks each light.
-# 3. Multi-pass shading: the first material still referenced in the i-set is looked up in
+# 2. Multi-pass shading: the first material still referenced in the i-set is looked up in
 #    the direct-mapped material cache, its diffuse shader (kd * (ambient + irradiance), to
 #    8 bits) runs over all 16 intersection packets under the mask of its rays, and then
-#    clears their references; until none is left (the paper's 1-2 passes per packet).
+#    clears their references; until none is left (the paper's 1-2 passes per packet). The
+#    irradiance, dot(N, L) / (|N| |L|) clamped, times the light's colour, summed over the
+#    lights (SH_VIS: per light, the rays' visibility masks), is computed in the same block
+#    as the colour: the first pass runs it once per light, adding to the sums (stored),
+#    the last light's run shading; a later pass runs it with a black light (adding exactly
+#    0), shading from the stored sums. The pass that leaves no material ends the packet.
 #
 # The shading area (SH_AREA_BYTES of local store, at the address the host puts in params
 # beside the shading block's, above everything the kernel carves) is set up on the first
@@ -50,6 +52,10 @@
         .set SHS_MMISS, 112
         .set SHS_TLOOK, 128             #   triangle records looked up in the traversal's
         .set SHS_TMISS, 144             #   triangle cache, and fetched past it
+        .set SH_RUN, 176                # over a run of the shading block: the next light,
+                                        # the lights left, the material; the colour
+                                        # block's EA, tag, the material cache's EA, index
+                                        # mask (64)
         .set SH_BLOCK, 256              # the shading block (SHADING_BLOCK_BYTES)
         .set SH_LIGHTS, 640             # per light: px, py, pz, r, g, b splats (96 bytes)
         .set SH_SCRATCH, 1408           # the normals' columns (144 bytes), the same flag
@@ -67,6 +73,9 @@
         .set SH_IRR_R, SH_SCRATCH       # irradiance r, g, b of the i-set (after the i-set
         .set SH_IRR_G, SH_STAGE         # is built, over its scratch: 16 vectors each)
         .set SH_IRR_B, SH_NRM
+        .if     SH_IRR_G != SH_IRR_R + 256 || SH_IRR_B != SH_IRR_R + 512
+        .error  "the irradiance sums are read from one base"
+        .endif
         .set SH_OUT, 3968               # two colour blocks, alternating
         .set SH_VIS, 4480               # per light: visibility masks (256 bytes)
         .set SH_VTAGS, 6528             # vertex cache tags (up to 256 x 16)
@@ -224,6 +233,10 @@ sh_const:
         .long   0x80000000, 0x80000000, 0x80000000, 0x80000000     # +224 sign bits
         .long   1, 1, 1, 0                  # +240 a fast group: groups, same, tri lookups
         .long   0x10111213, 0x00010203, 0x10111213, 0x00010203     # +256 list element (b, a)
+        .long   0x001080c0, 0x041480c0, 0x081880c0, 0x0c1c80c0     # +272 r, g top bytes, 0xff
+        .long   0x00011003, 0x04051407, 0x0809180b, 0x0c0d1c0f     # +288 b top byte
+sh_zero:                                      # no irradiance, a black light (768 bytes)
+        .space  768
 
         .align  3
 shade_packet:
@@ -488,29 +501,104 @@ shade_packet:
         # and $105 need to survive up to here; the rest is set again below.
         brsl    $127, shadow_rays             # --shade shadows: SH_VIS (modules/shadow.s)
 
-        # ---- 2. the lights' irradiance of every ray of the i-set, the same for every
-        # diffuse shader: once, not once per pass. Per light, four groups per step.
+        # ---- 2. the colour block: wait for its previous put, clear to black
+.Lsh_colour:
+        lqd     $70, SH_STATS+SHS_PACKETS($66)
+        andi    $114, $70, 1                  # which block
+        shli    $115, $114, 8
+        SH_ADDI $115, $115, SH_OUT
+        a       $115, $115, $66               # its address
+        ai      $116, $114, 6                 # its tag
+        il      $71, 1
+        shl     $71, $71, $116
+        wrch    $MFC_WrTagMask, $71
+        il      $71, 2
+        wrch    $MFC_WrTagUpdate, $71
+        rdch    $71, $MFC_RdTagStat
         ila     $90, sh_const
+        lqd     $71, 192($90)
+        .irp    Q, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
+        stqd    $71, \Q($115)
+        .endr
+        shli    $70, $97, 8                   # what the passes and the put need, kept
+        a       $70, $70, $102                # over the runs (their registers are the
+        lqd     $72, 0($90)                   # block's pool)
+        lqd     $73, 32($90)
+        shufb   $70, $70, $116, $72
+        shufb   $71, $101, $105, $72
+        shufb   $70, $70, $71, $73
+        stqd    $70, SH_RUN+48($66)
+
+        # ---- 3. one pass per material still referenced, its rays' irradiance computed in
+        # the same block as their colour (runs of .Lsh_shade_g): in the first pass one run
+        # per light, each adding its light to the sums (stored for later passes), the last
+        # one shading (the ones before shade a material no ray has); a later pass is one
+        # run adding nothing (a black light), which shades from the stored sums.
+        SH_ADDI $68, $66, SH_MAT
+        SH_ADDI $82, $66, SH_LIGHTS           # the next light,
+        SH_ADDI $83, $66, SH_VIS              # its visibility,
+        shufb   $84, $103, $103, $91          # the first pass's lights left (every lane)
+        ila     $85, sh_zero                  # the irradiance so far: none
+        br      .Lsh_pass
+.Lsh_material:
+        lqd     $71, SH_RUN+48($66)
+        SH_COUNT SHS_PASSES, $74
+        rotqbyi $101, $71, 8                  # the material cache's EA, index mask
+        rotqbyi $105, $71, 12
+        # material cache
+        and     $71, $110, $105
+        shli    $72, $71, 4
+        SH_ADDI $72, $72, SH_MTAGS
+        a       $72, $72, $66
+        shli    $73, $71, 5
+        SH_ADDI $73, $73, SH_MDATA
+        a       $73, $73, $66
+        lqd     $74, 0($72)
+        ceq     $75, $74, $110
+        SH_COUNT SHS_MLOOK, $76
+        brz     $75, .Lsh_mmiss
+.Lsh_mhit:
+        lqd     $74, 0($73)                   # diffuse r, g, b
+        lqa     $91, sh_const+64              # (the patterns are the block's pool)
+        lqa     $92, sh_const+80
+        lqa     $93, sh_const+96
+        shufb   $121, $74, $74, $91
+        shufb   $122, $74, $74, $92
+        shufb   $123, $74, $74, $93
+        shufb   $110, $110, $110, $91         # the material in every lane
+        ila     $90, sh_const
+        lqd     $124, 112($90)                # ambient
         lqd     $125, 176($90)                # 1.0
         lqd     $126, 144($90)                # 0.5
         lqd     $127, 160($90)                # 1.5
-        SH_ADDI $82, $66, SH_LIGHTS
-        SH_ADDI $83, $66, SH_VIS
-        ori     $84, $103, 0                  # lights left
-        il      $85, 0                        # 0: the first light (the sums start at 0)
-        brz     $84, .Lsh_dark
-.Lsh_light:
-        lqd     $70, 0($82)                   # the light's position, colour
-        lqd     $71, 16($82)
-        lqd     $72, 32($82)
-        lqd     $73, 48($82)
-        lqd     $74, 64($82)
-        lqd     $75, 80($82)
+        lqd     $106, 128($90)                # 255
+        lqd     $88, 272($90)                 # r, g to a colour word
+        lqd     $89, 288($90)                 # b to it
+.Lsh_run:
+        ori     $76, $82, 0                   # the light
+        cgti    $77, $84, 1                   # not the last: shades no ray
+        il      $78, -2
+        selb    $87, $110, $78, $77           # the material shaded
+        brnz    $84, 1f
+        ila     $76, sh_zero                  # a later pass (or no light): a black one
+1:      lqd     $70, 0($76)                   # the light's position, colour
+        lqd     $71, 16($76)
+        lqd     $72, 32($76)
+        lqd     $73, 48($76)
+        lqd     $74, 64($76)
+        lqd     $75, 80($76)
+        il      $86, -1                       # every ray shaded, so far
         il      $67, 0
-        .sched  pool=68-69,76-81,86-90,94-96,98,106-124 scratch=66-127
-.Lsh_light_g:
+        stqd    $82, SH_RUN($66)              # (registers of the block's pool)
+        stqd    $84, SH_RUN+16($66)
+        stqd    $110, SH_RUN+32($66)
+        .sched  pool=69,76-82,84,90-105,107-114,116-120 scratch=66-127
+.Lsh_shade_g:
         a       %gp, $66, $67
         a       %vp, $83, $67
+        a       %pp, $85, $67
+        a       %op, $115, $67
+        il      %none, -1
         .irp    H, 0, 16, 32, 48
         lqd     %nx\H, SH_NX+\H(%gp)
         lqd     %ny\H, SH_NY+\H(%gp)
@@ -519,12 +607,9 @@ shade_packet:
         lqd     %py\H, SH_PY+\H(%gp)
         lqd     %pz\H, SH_PZ+\H(%gp)
         lqd     %vis\H, \H(%vp)
-        lqd     %ir\H, SH_IRR_R+\H(%gp)
-        lqd     %ig\H, SH_IRR_G+\H(%gp)
-        lqd     %ib\H, SH_IRR_B+\H(%gp)
-        and     %ira\H, %ir\H, $85
-        and     %iga\H, %ig\H, $85
-        and     %iba\H, %ib\H, $85
+        lqd     %ir\H, \H(%pp)                # the sums so far (r, g, b 256 bytes apart)
+        lqd     %ig\H, 256+\H(%pp)
+        lqd     %ib\H, 512+\H(%pp)
         fm      %nn1\H, %nx\H, %nx\H          # dot(N, N)
         fma     %nn2\H, %ny\H, %ny\H, %nn1\H
         fma     %nn\H, %nz\H, %nz\H, %nn2\H
@@ -550,91 +635,17 @@ shade_packet:
         fcgt    %big\H, %cs1\H, $125
         selb    %cs2\H, %cs1\H, $125, %big\H
         and     %cs\H, %cs2\H, %lit\H
-        fma     %or\H, %cs\H, $73, %ira\H
-        fma     %og\H, %cs\H, $74, %iga\H
-        fma     %ob\H, %cs\H, $75, %iba\H
+        fma     %or\H, %cs\H, $73, %ir\H      # a black light adds exactly 0
+        fma     %og\H, %cs\H, $74, %ig\H
+        fma     %ob\H, %cs\H, $75, %ib\H
       ~ stqd    %or\H, SH_IRR_R+\H(%gp)
       ~ stqd    %og\H, SH_IRR_G+\H(%gp)
       ~ stqd    %ob\H, SH_IRR_B+\H(%gp)
-        .endr
-        ai      $67, $67, 64
-        ceqi    %end, $67, 256
-        hbrr    .Lsh_light_br, .Lsh_light_g
-.Lsh_light_br:
-        brz     %end, .Lsh_light_g
-        .endsched
-        il      $85, -1
-        ai      $82, $82, 96
-        ai      $83, $83, 256
-        ai      $84, $84, -1
-        brnz    $84, .Lsh_light
-
-        # ---- 3. the colour block: wait for its previous put, clear to black
-.Lsh_colour:
-        lqd     $70, SH_STATS+SHS_PACKETS($66)
-        andi    $114, $70, 1                  # which block
-        shli    $115, $114, 8
-        SH_ADDI $115, $115, SH_OUT
-        a       $115, $115, $66               # its address
-        ai      $116, $114, 6                 # its tag
-        il      $71, 1
-        shl     $71, $71, $116
-        wrch    $MFC_WrTagMask, $71
-        il      $71, 2
-        wrch    $MFC_WrTagUpdate, $71
-        rdch    $71, $MFC_RdTagStat
-        ila     $90, sh_const
-        lqd     $71, 192($90)
-        .irp    Q, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
-        stqd    $71, \Q($115)
-        .endr
-
-        # ---- 4. one pass per material still referenced
-        SH_ADDI $68, $66, SH_MAT
-        br      .Lsh_pass
-.Lsh_material:
-        SH_COUNT SHS_PASSES, $74
-        # material cache
-        and     $71, $110, $105
-        shli    $72, $71, 4
-        SH_ADDI $72, $72, SH_MTAGS
-        a       $72, $72, $66
-        shli    $73, $71, 5
-        SH_ADDI $73, $73, SH_MDATA
-        a       $73, $73, $66
-        lqd     $74, 0($72)
-        ceq     $75, $74, $110
-        SH_COUNT SHS_MLOOK, $76
-        brz     $75, .Lsh_mmiss
-.Lsh_mhit:
-        lqd     $74, 0($73)                   # diffuse r, g, b
-        shufb   $121, $74, $74, $91
-        shufb   $122, $74, $74, $92
-        shufb   $123, $74, $74, $93
-        shufb   $110, $110, $110, $91         # the material in every lane
-        ila     $90, sh_const
-        lqd     $124, 112($90)                # ambient
-        lqd     $125, 176($90)                # 1.0
-        lqd     $126, 144($90)                # 0.5
-        lqd     $127, 160($90)                # 1.5
-        lqd     $106, 128($90)                # 255
-        il      $67, 0
-        .sched  pool=69-90,94-96,98-100,103-104,108-109,111-113,117-120 scratch=66-127
-.Lsh_apply:
-        a       %gp, $66, $67
-        a       %op, $115, $67
-        il      %none, -1
-        fsmbi   %lo24, 0x7777                  # the low 24 bits of each word
-        fsmbi   %lo16, 0x3333                  # ... 16 bits
-        .irp    H, 0, 16, 32, 48
         lqd     %m\H, SH_MAT+\H(%gp)
-        ceq     %sel\H, %m\H, $110            # this shader's rays
-        lqd     %ir\H, SH_IRR_R+\H(%gp)
-        lqd     %ig\H, SH_IRR_G+\H(%gp)
-        lqd     %ib\H, SH_IRR_B+\H(%gp)
-        fa      %ra\H, %ir\H, $124         # kd * (ambient + irradiance), clamped,
-        fa      %ga\H, %ig\H, $124
-        fa      %ba\H, %ib\H, $124
+        ceq     %sel\H, %m\H, $87            # this shader's rays
+        fa      %ra\H, %or\H, $124         # kd * (ambient + irradiance), clamped,
+        fa      %ga\H, %og\H, $124
+        fa      %ba\H, %ob\H, $124
         fm      %rk\H, %ra\H, $121         # to 8 bits: (c 255 + 0.5) truncated, c at
         fm      %gk\H, %ga\H, $122         # most 1: c 255 + 0.5 in 8.24 fixed point,
         fm      %bk\H, %ba\H, $123         # which saturates at 256 (0xffffffff) and
@@ -644,26 +655,37 @@ shade_packet:
         cfltu   %gu\H, %gs\H, 24
         fma     %bs\H, %bk\H, $106, $126
         cfltu   %bu\H, %bs\H, 24
-        rotmi   %gh\H, %gu\H, -8
-        rotmi   %bh\H, %bu\H, -16
-        selb    %rg\H, %ru\H, %gh\H, %lo24   # r, then g from bit 23, b from bit 15
-        selb    %rgb\H, %rg\H, %bh\H, %lo16
-        ori     %col\H, %rgb\H, 0xff
+        shufb   %rg\H, %ru\H, %gu\H, $88     # the top bytes: r, g, -, 0xff
+        shufb   %col\H, %rg\H, %bu\H, $89    # r, g, b, 0xff
         lqd     %o\H, \H(%op)
         selb    %o2\H, %o\H, %col\H, %sel\H
       ~ stqd    %o2\H, \H(%op)
         selb    %mn\H, %m\H, %none, %sel\H    # these rays are shaded
       ~ stqd    %mn\H, SH_MAT+\H(%gp)
+        and     $86, $86, %mn\H
         .endr
         ai      $67, $67, 64
         ceqi    %end, $67, 256
-        hbrr    .Lsh_apply_br, .Lsh_apply
-.Lsh_apply_br:
-        brz     %end, .Lsh_apply
+        hbrr    .Lsh_shade_br, .Lsh_shade_g
+.Lsh_shade_br:
+        brz     %end, .Lsh_shade_g
         .endsched
+        lqd     $82, SH_RUN($66)
+        lqd     $84, SH_RUN+16($66)
+        lqd     $110, SH_RUN+32($66)
+        SH_ADDI $85, $66, SH_IRR_R            # the sums are stored now
+        brz     $84, 2f                       # a later pass (or no light) is one run
+        ai      $82, $82, 96
+        ai      $83, $83, 256
+        ai      $84, $84, -1
+        brnz    $84, .Lsh_run                 # the next light
+2:      ceqi    $77, $86, -1                  # no material left: done
+        gb      $77, $77
+        ceqi    $77, $77, 15
+        brnz    $77, .Lsh_done
         # the first ray (group by group, lane by lane) with a material left: a 64-bit
         # mask of the rays without one (groups 0-7 in %hi, 8-15 in %lo, lane 0 first)
-        .sched  pool=69-90,94-96,98-100,103-104,107-109,111-113,117-120 scratch=66-127
+        .sched  pool=69-81,90,94-96,98-100,103-104,107-109,111-113,117-120 scratch=66-127
 .Lsh_pass:
         lqd     %m0, 0($68)
         ceqi    %e0, %m0, -1
@@ -762,12 +784,12 @@ shade_packet:
         brz     %none, .Lsh_material          # a material left: its pass
         .endsched
 
-        # ---- 5. put the block to ea_colour + packet * 256
+        # ---- 4. put the block to ea_colour + packet * 256
 .Lsh_done:
         hbr     .Lsh_ret, $0
-        shli    $70, $97, 8
-        a       $70, $70, $102
+        lqd     $70, SH_RUN+48($66)           # the block's EA, tag
         il      $71, 256
+        rotqbyi $116, $70, 4
         wrch    $MFC_LSA, $115
         wrch    $MFC_EAH, ZERO
         wrch    $MFC_EAL, $70
@@ -1124,17 +1146,6 @@ shade_packet:
         SH_ADDI $75, $66, SH_MAT
         stqx    $74, $75, $67
         br      .Lsh_slow_next
-
-.Lsh_dark:                                    # no light: no irradiance
-        il      $67, 0
-1:      a       $70, $66, $67
-        stqd    ZERO, SH_IRR_R($70)
-        stqd    ZERO, SH_IRR_G($70)
-        stqd    ZERO, SH_IRR_B($70)
-        ai      $67, $67, 16
-        ceqi    $71, $67, 256
-        brz     $71, 1b
-        br      .Lsh_colour
 
 .Lsh_mmiss:                                   # a material cache miss
         shli    $74, $110, 5
