@@ -23,7 +23,8 @@
 #    slots and landed together once its lanes are looked up (sh_vertex_miss,
 #    sh_vertex_land: one wait per packet of 4 rays, not one per miss; the triangle records
 #    past the traversal's cache likewise, one wait before they are read). They compute the
-#    same values and counts.
+#    same values and counts. A packet none of whose rays hit has no i-set (its materials
+#    -1, the counters as they are).
 # 2. Multi-pass shading: the first material still referenced in the i-set is looked up in
 #    the direct-mapped material cache, its diffuse shader (kd * (ambient + irradiance), to
 #    8 bits) runs over all 16 intersection packets under the mask of its rays, and then
@@ -56,6 +57,7 @@
                                         # the lights left, the material; the colour
                                         # block's EA, tag, the material cache's EA, index
                                         # mask (64)
+        .set SH_VMASK, 240              # the vertex index mask in every lane
         .set SH_BLOCK, 256              # the shading block (SHADING_BLOCK_BYTES)
         .set SH_LIGHTS, 640             # per light: px, py, pz, r, g, b splats (96 bytes)
         .set SH_SCRATCH, 1408           # the normals' columns (144 bytes), the same flag
@@ -133,6 +135,15 @@
         il      \tmp, 0x40
         wrch    $MFC_Cmd, \tmp
         SH_WAIT \tmp
+        .endm
+
+# $71 quadwords of VALUE from the area's OFF on ($72: scratch)
+        .macro  SH_FILL value, off
+        SH_ADDI $72, $66, \off
+1:      stqd    \value, 0($72)
+        ai      $72, $72, 16
+        ai      $71, $71, -1
+        brnz    $71, 1b
         .endm
 
 # counter += 1 (a quadword of SH_STATS; $66 = area)
@@ -235,113 +246,82 @@ sh_const:
         .long   0x10111213, 0x00010203, 0x10111213, 0x00010203     # +256 list element (b, a)
         .long   0x001080c0, 0x041480c0, 0x081880c0, 0x0c1c80c0     # +272 r, g top bytes, 0xff
         .long   0x00011003, 0x04051407, 0x0809180b, 0x0c0d1c0f     # +288 b top byte
+        .long   0x0004080c, 0x1014181c, 0x80808080, 0x80808080     # +304 top bytes of a, b
+        .long   0x80808080, 0x80808080, 0x0004080c, 0x1014181c     # +320 ... to bytes 8-15
 sh_zero:                                      # no irradiance, a black light (768 bytes)
         .space  768
 
         .align  3
 shade_packet:
+        .sched  pool=73-89,94-96,98,100-106,110-114,116-118 scratch=66-127
+        ila     $70, params
+        ila     $90, sh_const
+        lqd     $71, PARAM_SHADING_QUAD($70)
+        lqd     $72, PARAM_ORIGIN($70)
+        lqd     $91, 64($90)
+        lqd     $92, 80($90)
+        lqd     $93, 96($90)
+        lqd     $119, 32($90)
+        lqd     $120, 208($90)                # splat word 3
+        lqd     $122, 224($90)                # sign bits
         ori     $99, $68, 0                   # the rays
         ori     $97, $69, 0                   # the packet number
-        ila     $70, params
-        lqd     $71, PARAM_SHADING_QUAD($70)
         rotqbyi $71, $71, PARAM_SHADING_ROT   # shading block EA, area
         rotqbyi $66, $71, 4                   # the shading area
         lqd     $67, SH_FLAG($66)
+        lqd     $121, SH_VMASK($66)           # the vertex index mask in every lane
         ilhu    $68, 0x5348
         iohl    $68, 0x4144                   # "SHAD"
-        ceq     $69, $67, $68
-        brnz    $69, .Lsh_ready
-
-        # ---- first call: fetch the block, splat the lights, clear counters and caches
-        stqd    $68, SH_FLAG($66)
-        SH_ADDI $72, $66, SH_BLOCK
-        il      $73, SHADING_BLOCK_BYTES
-        SH_GET  $72, $71, $73, $74
-        SH_ADDI $71, $66, SH_DCOUNT
-        stqd    ZERO, 0($71)                  # no vertex in flight
-        il      $70, 10
-        SH_ADDI $71, $66, SH_STATS
-1:      stqd    ZERO, 0($71)
-        ai      $71, $71, 16
-        ai      $70, $70, -1
-        brnz    $70, 1b
-        ila     $90, sh_const
-        lqd     $91, 64($90)
-        lqd     $92, 80($90)
-        lqd     $93, 96($90)
-        lqd     $70, SH_BLOCK($66)
-        rotqbyi $71, $70, SHB_LIGHT_COUNT
-        SH_ADDI $72, $66, SH_BLOCK+SHB_LIGHTS
-        SH_ADDI $73, $66, SH_LIGHTS
-        brz     $71, 2f
-1:      lqd     $74, 0($72)
-        lqd     $75, 16($72)
-        shufb   $76, $74, $74, $91
-        stqd    $76, 0($73)
-        shufb   $76, $74, $74, $92
-        stqd    $76, 16($73)
-        shufb   $76, $74, $74, $93
-        stqd    $76, 32($73)
-        shufb   $76, $75, $75, $91
-        stqd    $76, 48($73)
-        shufb   $76, $75, $75, $92
-        stqd    $76, 64($73)
-        shufb   $76, $75, $75, $93
-        stqd    $76, 80($73)
-        ai      $72, $72, SHB_LIGHT_BYTES
-        ai      $73, $73, 96
-        ai      $71, $71, -1
-        brnz    $71, 1b
-2:      il      $74, -1                       # every light visible (no shadow rays)
-        SH_ADDI $72, $66, SH_VIS
-        il      $71, 8 * 16
-1:      stqd    $74, 0($72)
-        ai      $72, $72, 16
-        ai      $71, $71, -1
-        brnz    $71, 1b
-        lqd     $70, SH_BLOCK+SHB_MODE($66)   # mode, early, vertex log2, material log2
-        il      $74, -1
-        il      $75, 1
-        rotqbyi $71, $70, 8
-        shl     $71, $75, $71                 # vertex entries
-        SH_ADDI $72, $66, SH_VTAGS
-1:      stqd    $74, 0($72)
-        ai      $72, $72, 16
-        ai      $71, $71, -1
-        brnz    $71, 1b
-        rotqbyi $71, $70, 12
-        shl     $71, $75, $71                 # material entries
-        SH_ADDI $72, $66, SH_MTAGS
-1:      stqd    $74, 0($72)
-        ai      $72, $72, 16
-        ai      $71, $71, -1
-        brnz    $71, 1b
-
-.Lsh_ready:
-        ila     $90, sh_const
-        lqd     $119, 32($90)
-        lqd     $91, 64($90)
-        lqd     $92, 80($90)
-        lqd     $93, 96($90)
-        lqd     $120, 208($90)                # splat word 3
-        lqd     $122, 224($90)                # sign bits
-        ila     $70, params
-        lqd     $71, PARAM_ORIGIN($70)
-        shufb   $107, $71, $71, $91           # origin x, y, z splats
-        shufb   $108, $71, $71, $92
-        shufb   $109, $71, $71, $93
-        lqd     $70, SH_BLOCK+SHB_MODE($66)
-        il      $75, 1
-        rotqbyi $71, $70, 8
-        shl     $71, $75, $71
-        ai      $71, $71, -1
-        shufb   $121, $71, $71, $91           # the vertex index mask in every lane
-
-        # ---- 1. the i-set
-        SH_ADDI $115, $66, SH_VTAGS
-        SH_ADDI $123, $66, SH_VDATA+16        # the lines' normals
+        shufb   $107, $72, $72, $91           # origin x, y, z splats
+        shufb   $108, $72, $72, $92
+        shufb   $109, $72, $72, $93
+        ila     %vt, SH_VTAGS
+        a       $115, $66, %vt
+        ila     %vd, SH_VDATA+16
+        a       $123, $66, %vd                # the lines' normals
         il      $124, 0                       # the fast groups' counters (sh_const+240)
+        lqd     %id0, CTX_RAY_ID+0($99)
+        lqd     %id1, CTX_RAY_ID+16($99)
+        lqd     %id2, CTX_RAY_ID+32($99)
+        lqd     %id3, CTX_RAY_ID+48($99)
+        lqd     %id4, CTX_RAY_ID+64($99)
+        lqd     %id5, CTX_RAY_ID+80($99)
+        lqd     %id6, CTX_RAY_ID+96($99)
+        lqd     %id7, CTX_RAY_ID+112($99)
+        lqd     %id8, CTX_RAY_ID+128($99)
+        lqd     %id9, CTX_RAY_ID+144($99)
+        lqd     %id10, CTX_RAY_ID+160($99)
+        lqd     %id11, CTX_RAY_ID+176($99)
+        lqd     %id12, CTX_RAY_ID+192($99)
+        lqd     %id13, CTX_RAY_ID+208($99)
+        lqd     %id14, CTX_RAY_ID+224($99)
+        lqd     %id15, CTX_RAY_ID+240($99)
+        and     %and1, %id0, %id1
+        and     %and2, %id2, %id3
+        and     %and3, %id4, %id5
+        and     %and4, %id6, %id7
+        and     %and5, %id8, %id9
+        and     %and6, %id10, %id11
+        and     %and7, %id12, %id13
+        and     %and8, %id14, %id15
+        and     %and9, %and1, %and2
+        and     %and10, %and3, %and4
+        and     %and11, %and5, %and6
+        and     %and12, %and7, %and8
+        and     %and13, %and9, %and10
+        and     %and14, %and11, %and12
+        and     %and15, %and13, %and14
+        ceqi    %ne, %and15, -1
+        gb      %nb, %ne
+        ceqi    $117, %nb, 15                 # no ray of the packet hit
+        ceq     $69, $67, $68
+        brz     $69, .Lsh_first               # the first call: set up (out of line)
+        .endsched
+.Lsh_ready:
+        # ---- 1. the i-set (none when no ray hit: every material -1)
         il      $67, 0                        # intersection packet * 16
+        brnz    $117, .Lsh_empty
+        .align  7                             # (the loop's head at a fetch line's start)
 
         # The fast path, two groups a step, for a group whose 4 rays hit one triangle found
         # in the triangle cache with its 3 vertices in the vertex cache (94.9% in the
@@ -474,124 +454,182 @@ shade_packet:
 
         # the fast groups' counters (groups, same, triangle lookups) to SH_STATS
 .Lsh_iset_done:
+        .sched  pool=69,76-81,90,94-96,98-100,104,107-109,111-113,117-120 scratch=66-127
         lqd     $70, SH_BLOCK($66)            # materials, colour, lights
+        lqd     $71, SH_BLOCK+SHB_MODE($66)
+        lqd     %cg, SH_STATS+SHS_GROUPS($66)
+        lqd     %cs, SH_STATS+SHS_SAME($66)
+        lqd     %ct, SH_STATS+SHS_TLOOK($66)
+        rotqbyi %is, $124, 4
+        rotqbyi %it, $124, 8
+        a       %cg1, %cg, $124
+        a       %cs1, %cs, %is
+        a       %ct1, %ct, %it
+        stqd    %cg1, SH_STATS+SHS_GROUPS($66)
+        stqd    %cs1, SH_STATS+SHS_SAME($66)
+        stqd    %ct1, SH_STATS+SHS_TLOOK($66)
         rotqbyi $101, $70, 4
         rotqbyi $102, $70, 8
         rotqbyi $103, $70, 12
-        lqd     $70, SH_BLOCK+SHB_MODE($66)
-        il      $75, 1
-        rotqbyi $71, $70, 12
-        shl     $105, $75, $71
-        ai      $105, $105, -1                # material cache index mask
-        lqd     $70, SH_STATS+SHS_GROUPS($66)
-        lqd     $71, SH_STATS+SHS_SAME($66)
-        lqd     $72, SH_STATS+SHS_TLOOK($66)
-        rotqbyi $75, $124, 4
-        rotqbyi $76, $124, 8
-        a       $70, $70, $124
-        a       $71, $71, $75
-        a       $72, $72, $76
-        stqd    $70, SH_STATS+SHS_GROUPS($66)
-        stqd    $71, SH_STATS+SHS_SAME($66)
-        stqd    $72, SH_STATS+SHS_TLOOK($66)
-
+        rotqbyi %ml, $71, 12
+        il      %one, 1
+        shl     %me, %one, %ml
+        ai      $105, %me, -1                 # material cache index mask
+        hbrr    .Lsh_shadows, shadow_rays
         # Here the hit points are in SH_PX, SH_PY, SH_PZ (and the materials in SH_MAT, -1
         # for no hit): the place for shadow rays to fill SH_VIS (per light, the rays'
         # visibility masks), which the irradiance below reads. Only $66, $97, $101..$103
         # and $105 need to survive up to here; the rest is set again below.
+.Lsh_shadows:
         brsl    $127, shadow_rays             # --shade shadows: SH_VIS (modules/shadow.s)
+        .endsched
 
-        # ---- 2. the colour block: wait for its previous put, clear to black
-.Lsh_colour:
-        lqd     $70, SH_STATS+SHS_PACKETS($66)
-        andi    $114, $70, 1                  # which block
-        shli    $115, $114, 8
-        SH_ADDI $115, $115, SH_OUT
-        a       $115, $115, $66               # its address
+        # ---- 2. the colour block: wait for its previous put, clear to black; what the
+        # passes and the put need over the runs (their registers are the block's pool)
+        .sched  pool=69,76-81,90,94-96,98-100,104,107-109,111-113,117-120 scratch=66-127
+        lqd     %pk, SH_STATS+SHS_PACKETS($66)
+        andi    $114, %pk, 1                  # which block
+        shli    %bo, $114, 8
+        ila     %ob, SH_OUT
+        a       %b1, %bo, %ob
+        a       $115, %b1, $66                # its address
         ai      $116, $114, 6                 # its tag
-        il      $71, 1
-        shl     $71, $71, $116
-        wrch    $MFC_WrTagMask, $71
-        il      $71, 2
-        wrch    $MFC_WrTagUpdate, $71
-        rdch    $71, $MFC_RdTagStat
-        ila     $90, sh_const
-        lqd     $71, 192($90)
+        il      %one, 1
+        shl     %mask, %one, $116
+        il      %two, 2
+        lqa     %black, sh_const+192
+        shli    %ea0, $97, 8
+        a       %ea, %ea0, $102
+        lqa     %plo, sh_const
+        lqa     %pfh, sh_const+32
+        shufb   %w0, %ea, $116, %plo
+        shufb   %w1, $101, $105, %plo
+        shufb   %w, %w0, %w1, %pfh
+        stqd    %w, SH_RUN+48($66)            # EA, tag, material cache EA, index mask
+        ila     %o1, SH_MAT
+        a       $68, $66, %o1
+        ila     %o2, SH_LIGHTS
+        a       $82, $66, %o2                 # the next light,
+        ila     %o3, SH_VIS
+        a       $83, $66, %o3                 # its visibility,
+        shufb   $84, $103, $103, $91          # the first pass's lights left (every lane)
+        ila     $85, sh_zero                  # the irradiance so far: none
+        wrch    $MFC_WrTagMask, %mask
+        wrch    $MFC_WrTagUpdate, %two
+        rdch    %st, $MFC_RdTagStat
         .irp    Q, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
-        stqd    $71, \Q($115)
+        stqd    %black, \Q($115)
         .endr
-        shli    $70, $97, 8                   # what the passes and the put need, kept
-        a       $70, $70, $102                # over the runs (their registers are the
-        lqd     $72, 0($90)                   # block's pool)
-        lqd     $73, 32($90)
-        shufb   $70, $70, $116, $72
-        shufb   $71, $101, $105, $72
-        shufb   $70, $70, $71, $73
-        stqd    $70, SH_RUN+48($66)
+        .endsched
 
         # ---- 3. one pass per material still referenced, its rays' irradiance computed in
         # the same block as their colour (runs of .Lsh_shade_g): in the first pass one run
         # per light, each adding its light to the sums (stored for later passes), the last
         # one shading (the ones before shade a material no ray has); a later pass is one
         # run adding nothing (a black light), which shades from the stored sums.
-        SH_ADDI $68, $66, SH_MAT
-        SH_ADDI $82, $66, SH_LIGHTS           # the next light,
-        SH_ADDI $83, $66, SH_VIS              # its visibility,
-        shufb   $84, $103, $103, $91          # the first pass's lights left (every lane)
-        ila     $85, sh_zero                  # the irradiance so far: none
-        br      .Lsh_pass
+        # The first ray (group by group, lane by lane) with a material left: per 4 groups
+        # the top bytes of their "none" masks gathered (gbb), 64 bits (lane 0 of group 0
+        # the highest) in %hi and %lo.
+        .sched  pool=69-81,90,94-96,98-100,103-104,107-109,111-113,117-120 scratch=66-127
+.Lsh_pass:
+        lqa     %pa, sh_const+304
+        lqa     %pb, sh_const+320
+        .irp    Q, 0, 1, 2, 3
+        lqd     %ma\Q, 64*\Q($68)
+        lqd     %mb\Q, 64*\Q+16($68)
+        lqd     %mc\Q, 64*\Q+32($68)
+        lqd     %md\Q, 64*\Q+48($68)
+        ceqi    %ea\Q, %ma\Q, -1
+        ceqi    %eb\Q, %mb\Q, -1
+        ceqi    %ec\Q, %mc\Q, -1
+        ceqi    %ed\Q, %md\Q, -1
+        shufb   %tab\Q, %ea\Q, %eb\Q, %pa
+        shufb   %tcd\Q, %ec\Q, %ed\Q, %pb
+        or      %t\Q, %tab\Q, %tcd\Q
+        gbb     %g\Q, %t\Q
+        .endr
+        shli    %g0s, %g0, 16
+        shli    %g2s, %g2, 16
+        or      %hig, %g0s, %g1
+        or      %log, %g2s, %g3
+        xori    %hi, %hig, -1
+        clz     %hiz, %hi
+        xori    %lo, %log, -1
+        clz     %loz, %lo
+        ceqi    %hin, %hi, 0
+        ai      %lo32, %loz, 32
+        selb    %pos, %hiz, %lo32, %hin        # 64: none left
+        ceqi    %none, %pos, 64
+        andi    %pq, %pos, -4
+        shli    %go, %pq, 2                   # its group * 16
+        andi    %ln, %pos, 3
+        shli    %lb, %ln, 2                   # its lane * 4
+        lqx     %mq, $68, %go
+        rotqby  $110, %mq, %lb                # the material, preferred slot
+        brnz    %none, .Lsh_done              # none left: the packet is done
+        .endsched
 .Lsh_material:
-        lqd     $71, SH_RUN+48($66)
-        SH_COUNT SHS_PASSES, $74
-        rotqbyi $101, $71, 8                  # the material cache's EA, index mask
-        rotqbyi $105, $71, 12
-        # material cache
-        and     $71, $110, $105
-        shli    $72, $71, 4
-        SH_ADDI $72, $72, SH_MTAGS
-        a       $72, $72, $66
-        shli    $73, $71, 5
-        SH_ADDI $73, $73, SH_MDATA
-        a       $73, $73, $66
-        lqd     $74, 0($72)
-        ceq     $75, $74, $110
-        SH_COUNT SHS_MLOOK, $76
-        brz     $75, .Lsh_mmiss
+        .sched  pool=69,76-81,90,94-96,98-100,104,107-109,111-113,117-120 scratch=66-127
+        lqd     %run, SH_RUN+48($66)
+        lqd     %cp, SH_STATS+SHS_PASSES($66)
+        lqd     %cl, SH_STATS+SHS_MLOOK($66)
+        rotqbyi $101, %run, 8                 # the material cache's EA, index mask
+        rotqbyi %mmask, %run, 12
+        ai      %cp1, %cp, 1
+        ai      %cl1, %cl, 1
+        stqd    %cp1, SH_STATS+SHS_PASSES($66)
+        stqd    %cl1, SH_STATS+SHS_MLOOK($66)
+        and     %mi, $110, %mmask             # material cache
+        shli    %to, %mi, 4
+        ila     %tb, SH_MTAGS
+        a       %t1, %to, %tb
+        a       $72, %t1, $66
+        shli    %lo, %mi, 5
+        ila     %lb, SH_MDATA
+        a       %l1, %lo, %lb
+        a       $73, %l1, $66
+        lqd     %tag, 0($72)
+        ceq     %hit, %tag, $110
+        brz     %hit, .Lsh_mmiss
+        .endsched
 .Lsh_mhit:
-        lqd     $74, 0($73)                   # diffuse r, g, b
+        .sched  pool=69,76-81,90,94-96,98-100,104,107-109,111-113,117-120 scratch=66-127
+        lqd     %kd, 0($73)                   # diffuse r, g, b
         lqa     $91, sh_const+64              # (the patterns are the block's pool)
         lqa     $92, sh_const+80
         lqa     $93, sh_const+96
-        shufb   $121, $74, $74, $91
-        shufb   $122, $74, $74, $92
-        shufb   $123, $74, $74, $93
+        shufb   $121, %kd, %kd, $91
+        shufb   $122, %kd, %kd, $92
+        shufb   $123, %kd, %kd, $93
         shufb   $110, $110, $110, $91         # the material in every lane
-        ila     $90, sh_const
-        lqd     $124, 112($90)                # ambient
-        lqd     $125, 176($90)                # 1.0
-        lqd     $126, 144($90)                # 0.5
-        lqd     $127, 160($90)                # 1.5
-        lqd     $106, 128($90)                # 255
-        lqd     $88, 272($90)                 # r, g to a colour word
-        lqd     $89, 288($90)                 # b to it
+        lqa     $124, sh_const+112            # ambient
+        lqa     $125, sh_const+176            # 1.0
+        lqa     $126, sh_const+144            # 0.5
+        lqa     $127, sh_const+160            # 1.5
+        lqa     $106, sh_const+128            # 255
+        lqa     $88, sh_const+272             # r, g to a colour word
+        lqa     $89, sh_const+288             # b to it
+        .endsched
 .Lsh_run:
-        ori     $76, $82, 0                   # the light
-        cgti    $77, $84, 1                   # not the last: shades no ray
-        il      $78, -2
-        selb    $87, $110, $78, $77           # the material shaded
-        brnz    $84, 1f
-        ila     $76, sh_zero                  # a later pass (or no light): a black one
-1:      lqd     $70, 0($76)                   # the light's position, colour
-        lqd     $71, 16($76)
-        lqd     $72, 32($76)
-        lqd     $73, 48($76)
-        lqd     $74, 64($76)
-        lqd     $75, 80($76)
+        .sched  pool=69,76-81,90,94-96,98-100,104,107-109,111-113,117-120 scratch=66-127
+        cgti    %notlast, $84, 1              # not the last light: shades no ray
+        il      %m2, -2
+        selb    $87, $110, %m2, %notlast      # the material shaded
+        ceqi    %black, $84, 0                # a later pass (or no light): a black light
+        ila     %zero, sh_zero
+        selb    %lp, $82, %zero, %black
+        lqd     $70, 0(%lp)                   # the light's position, colour
+        lqd     $71, 16(%lp)
+        lqd     $72, 32(%lp)
+        lqd     $73, 48(%lp)
+        lqd     $74, 64(%lp)
+        lqd     $75, 80(%lp)
         il      $86, -1                       # every ray shaded, so far
         il      $67, 0
         stqd    $82, SH_RUN($66)              # (registers of the block's pool)
         stqd    $84, SH_RUN+16($66)
         stqd    $110, SH_RUN+32($66)
+        .endsched
         .sched  pool=69,76-82,84,90-105,107-114,116-120 scratch=66-127
 .Lsh_shade_g:
         a       %gp, $66, $67
@@ -670,134 +708,36 @@ shade_packet:
 .Lsh_shade_br:
         brz     %end, .Lsh_shade_g
         .endsched
-        lqd     $82, SH_RUN($66)
         lqd     $84, SH_RUN+16($66)
+        ceqi    $77, $86, -1                  # no material left: done
+        lqd     $82, SH_RUN($66)
+        gb      $77, $77
         lqd     $110, SH_RUN+32($66)
+        ceqi    $77, $77, 15
         SH_ADDI $85, $66, SH_IRR_R            # the sums are stored now
         brz     $84, 2f                       # a later pass (or no light) is one run
         ai      $82, $82, 96
         ai      $83, $83, 256
         ai      $84, $84, -1
         brnz    $84, .Lsh_run                 # the next light
-2:      ceqi    $77, $86, -1                  # no material left: done
-        gb      $77, $77
-        ceqi    $77, $77, 15
-        brnz    $77, .Lsh_done
-        # the first ray (group by group, lane by lane) with a material left: a 64-bit
-        # mask of the rays without one (groups 0-7 in %hi, 8-15 in %lo, lane 0 first)
-        .sched  pool=69-81,90,94-96,98-100,103-104,107-109,111-113,117-120 scratch=66-127
-.Lsh_pass:
-        lqd     %m0, 0($68)
-        ceqi    %e0, %m0, -1
-        gb      %b0, %e0
-        shli    %s0, %b0, 28
-        lqd     %m1, 16($68)
-        ceqi    %e1, %m1, -1
-        gb      %b1, %e1
-        shli    %s1, %b1, 24
-        lqd     %m2, 32($68)
-        ceqi    %e2, %m2, -1
-        gb      %b2, %e2
-        shli    %s2, %b2, 20
-        lqd     %m3, 48($68)
-        ceqi    %e3, %m3, -1
-        gb      %b3, %e3
-        shli    %s3, %b3, 16
-        lqd     %m4, 64($68)
-        ceqi    %e4, %m4, -1
-        gb      %b4, %e4
-        shli    %s4, %b4, 12
-        lqd     %m5, 80($68)
-        ceqi    %e5, %m5, -1
-        gb      %b5, %e5
-        shli    %s5, %b5, 8
-        lqd     %m6, 96($68)
-        ceqi    %e6, %m6, -1
-        gb      %b6, %e6
-        shli    %s6, %b6, 4
-        lqd     %m7, 112($68)
-        ceqi    %e7, %m7, -1
-        gb      %b7, %e7
-        shli    %s7, %b7, 0
-        lqd     %m8, 128($68)
-        ceqi    %e8, %m8, -1
-        gb      %b8, %e8
-        shli    %s8, %b8, 28
-        lqd     %m9, 144($68)
-        ceqi    %e9, %m9, -1
-        gb      %b9, %e9
-        shli    %s9, %b9, 24
-        lqd     %m10, 160($68)
-        ceqi    %e10, %m10, -1
-        gb      %b10, %e10
-        shli    %s10, %b10, 20
-        lqd     %m11, 176($68)
-        ceqi    %e11, %m11, -1
-        gb      %b11, %e11
-        shli    %s11, %b11, 16
-        lqd     %m12, 192($68)
-        ceqi    %e12, %m12, -1
-        gb      %b12, %e12
-        shli    %s12, %b12, 12
-        lqd     %m13, 208($68)
-        ceqi    %e13, %m13, -1
-        gb      %b13, %e13
-        shli    %s13, %b13, 8
-        lqd     %m14, 224($68)
-        ceqi    %e14, %m14, -1
-        gb      %b14, %e14
-        shli    %s14, %b14, 4
-        lqd     %m15, 240($68)
-        ceqi    %e15, %m15, -1
-        gb      %b15, %e15
-        shli    %s15, %b15, 0
-        or      %hia, %s0, %s1
-        or      %hib, %s2, %s3
-        or      %hic, %s4, %s5
-        or      %hid, %s6, %s7
-        or      %hie, %hia, %hib
-        or      %hif, %hic, %hid
-        or      %hig, %hie, %hif
-        xori    %hi, %hig, -1
-        clz     %hiz, %hi
-        or      %loa, %s8, %s9
-        or      %lob, %s10, %s11
-        or      %loc, %s12, %s13
-        or      %lod, %s14, %s15
-        or      %loe, %loa, %lob
-        or      %lof, %loc, %lod
-        or      %log, %loe, %lof
-        xori    %lo, %log, -1
-        clz     %loz, %lo
-        ceqi    %hin, %hi, 0
-        ai      %lo32, %loz, 32
-        selb    %pos, %hiz, %lo32, %hin        # 64: none left
-        ceqi    %none, %pos, 64
-        andi    %pq, %pos, -4
-        shli    %go, %pq, 2                   # its group * 16
-        andi    %ln, %pos, 3
-        shli    %lb, %ln, 2                   # its lane * 4
-        lqx     %mq, $68, %go
-        rotqby  $110, %mq, %lb                # the material, preferred slot
-        hbrr    .Lsh_pass_br, .Lsh_material
-.Lsh_pass_br:
-        brz     %none, .Lsh_material          # a material left: its pass
-        .endsched
+2:      brz     $77, .Lsh_pass                # a material left: its pass
 
         # ---- 4. put the block to ea_colour + packet * 256
 .Lsh_done:
-        hbr     .Lsh_ret, $0
         lqd     $70, SH_RUN+48($66)           # the block's EA, tag
+        lqd     $74, SH_STATS+SHS_PACKETS($66)
+        hbr     .Lsh_ret, $0
         il      $71, 256
+        il      $72, 0x20
         rotqbyi $116, $70, 4
+        ai      $74, $74, 1
         wrch    $MFC_LSA, $115
         wrch    $MFC_EAH, ZERO
         wrch    $MFC_EAL, $70
         wrch    $MFC_Size, $71
         wrch    $MFC_TagID, $116
-        il      $71, 0x20
-        wrch    $MFC_Cmd, $71
-        SH_COUNT SHS_PACKETS, $74
+        wrch    $MFC_Cmd, $72
+        stqd    $74, SH_STATS+SHS_PACKETS($66)
 .Lsh_ret:
         bi      $0
 
@@ -1146,6 +1086,64 @@ shade_packet:
         SH_ADDI $75, $66, SH_MAT
         stqx    $74, $75, $67
         br      .Lsh_slow_next
+
+        # ---- the first call: fetch the block, splat the lights, clear counters and caches
+.Lsh_empty:                                   # no ray hit
+        il      $70, -1
+        SH_ADDI $71, $66, SH_MAT
+        .irp    Q, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
+        stqd    $70, \Q($71)
+        .endr
+        br      .Lsh_iset_done
+
+.Lsh_first:
+        stqd    $68, SH_FLAG($66)
+        SH_ADDI $72, $66, SH_BLOCK
+        il      $73, SHADING_BLOCK_BYTES
+        SH_GET  $72, $71, $73, $74
+        SH_ADDI $71, $66, SH_DCOUNT
+        stqd    ZERO, 0($71)                  # no vertex in flight
+        il      $71, 10
+        SH_FILL ZERO, SH_STATS
+        ila     $90, sh_const
+        lqd     $91, 64($90)
+        lqd     $92, 80($90)
+        lqd     $93, 96($90)
+        lqd     $70, SH_BLOCK($66)
+        rotqbyi $71, $70, SHB_LIGHT_COUNT
+        SH_ADDI $72, $66, SH_BLOCK+SHB_LIGHTS
+        SH_ADDI $73, $66, SH_LIGHTS
+        brz     $71, 2f
+1:      lqd     $74, 0($72)
+        lqd     $75, 16($72)
+        .irp    W, 74, 75                     # position, colour: x, y, z splats
+        .irp    P, 91, 92, 93
+        shufb   $76, $\W, $\W, $\P
+        stqd    $76, (\W-74)*48+(\P-91)*16($73)
+        .endr
+        .endr
+        ai      $72, $72, SHB_LIGHT_BYTES
+        ai      $73, $73, 96
+        ai      $71, $71, -1
+        brnz    $71, 1b
+2:      il      $74, -1                       # every light visible (no shadow rays)
+        il      $71, 8 * 16
+        SH_FILL $74, SH_VIS
+        lqd     $70, SH_BLOCK+SHB_MODE($66)   # mode, early, vertex log2, material log2
+        il      $74, -1
+        il      $75, 1
+        rotqbyi $71, $70, 8
+        shl     $71, $75, $71                 # vertex entries
+        SH_FILL $74, SH_VTAGS
+        rotqbyi $71, $70, 8
+        shl     $71, $75, $71
+        ai      $71, $71, -1
+        shufb   $121, $71, $71, $91           # the vertex index mask in every lane
+        stqd    $121, SH_VMASK($66)
+        rotqbyi $71, $70, 12
+        shl     $71, $75, $71                 # material entries
+        SH_FILL $74, SH_MTAGS
+        br      .Lsh_ready
 
 .Lsh_mmiss:                                   # a material cache miss
         shli    $74, $110, 5
