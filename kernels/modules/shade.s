@@ -1161,41 +1161,62 @@ shade_packet:
 # to sh_vertex_land, which the slow path calls once the group's lanes are looked up: one
 # wait for all their misses, then in lookup order each slot's normal (the one quadword
 # of a vertex record the module reads) to its line (so a line ends up with the last
-# vertex looked up there) and to the lane. A lookup of a vertex
-# in flight is no miss: its copy comes from its line, after the slot's.
+# vertex looked up there) and to the lane, and the vertex to the line's tag (landed). A
+# lookup of a vertex in flight is no miss: its copy comes from its line, after the slot's.
+# (Uses $71-$77, $82, $85-$87, $90, $94, $125-$127.)
 sh_vertex_miss:
-        hbr     3f, $88
-        SH_ADDI $87, $66, SH_DCOUNT
-        lqd     $86, 0($87)                   # bytes of copies (32 each)
-        lqd     $85, 0($83)
-        ilhu    $90, 0x8000
-        or      $94, $81, $90                 # the vertex, in flight
-        ceq     $85, $85, $94
-        shli    $82, $86, 1
-        SH_ADDI $82, $82, SH_VSTAGE
-        a       $82, $82, $66                 # its slot
-        brnz    $85, 1f                       # in flight already: from its line
-        shli    $85, $81, 6
-        a       $85, $85, $100
-        SH_QUEUE $82, $85, 64, $85
+        .sched  pool=71-77,85-87,90,125-127 scratch=66-127
+        hbr     .Lsh_vm_ret, $88
+        ila     %o1, SH_DCOUNT
+        a       %dc, $66, %o1
+        lqd     %n, 0(%dc)                    # bytes of copies (32 each)
+        lqd     %tag, 0($83)
+        ilhu    %hb, 0x8000
+        or      $94, $81, %hb                 # the vertex, in flight
+        ceq     %inf, %tag, $94
+        shli    %n2, %n, 1
+        ila     %o2, SH_VSTAGE
+        a       %s1, %n2, %o2
+        a       $82, %s1, $66                 # its slot
+        selb    %src, $82, $84, %inf          # in flight already: from its line
+        a       %lane, $89, $66
+        lqa     %plo, sh_const
+        lqa     %pfh, sh_const+32
+        shufb   %sl, %src, %lane, %plo
+        shufb   %tv, $83, $81, %plo
+        shufb   %rec, %sl, %tv, %pfh          # the source, the lane, the tag, the vertex
+        ila     %o3, SH_DEFER
+        a       %d1, %o3, %n
+        a       %d2, %d1, $66
+        stqd    %rec, 0(%d2)
+        stqd    $84, 16(%d2)                  # the line
+        ai      %n1, %n, 32
+        stqd    %n1, 0(%dc)
+        brnz    %inf, .Lsh_vm_flight
+        .endsched
+        .sched  pool=71-77,85-87,90,125-127 scratch=66-127
+        lqd     %cnt, SH_STATS+SHS_VMISS($66)
+        shli    %ea0, $81, 6
+        a       %ea, %ea0, $100
+        il      %size, 64
+        il      %tg, SH_TAG
+        il      %cmd, 0x40
+        ai      %cnt1, %cnt, 1
+        wrch    $MFC_LSA, $82
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, %ea
+        wrch    $MFC_Size, %size
+        wrch    $MFC_TagID, %tg
+        wrch    $MFC_Cmd, %cmd
         stqd    $94, 0($83)                   # the tag: in flight
-        SH_COUNT SHS_VMISS, $85
-2:      a       $85, $89, $66
-        lqa     $90, sh_const+256
-        shufb   $85, $85, $82, $90            # the source, the destination
-        SH_ADDI $94, $66, SH_DEFER
-        a       $94, $94, $86
-        stqd    $85, 0($94)
-        stqd    $84, 16($94)                  # the line
-        ai      $86, $86, 32
-        stqd    $86, 0($87)
-3:      bi      $88
-1:      ori     $82, $84, 0
-        br      2b
+        stqd    %cnt1, SH_STATS+SHS_VMISS($66)
+.Lsh_vm_ret:
+        bi      $88
+        .endsched
+.Lsh_vm_flight:
+        bi      $88
 
-# the vertices in flight: one wait, then each copy (the source's normal to the line and
-# the destination) and the line's tag's bit 31 cleared; back to $95 (the slow path's
-# $115 tags, $116 lines; uses $81, $85-$90, $94)
+# the vertices in flight: one wait, then each copy; back to $95 (uses $81, $85-$90, $94)
 sh_vertex_land:
         SH_ADDI $87, $66, SH_DCOUNT
         lqd     $86, 0($87)
@@ -1204,23 +1225,23 @@ sh_vertex_land:
         SH_WAIT $85
         SH_ADDI $94, $66, SH_DEFER
         a       $86, $86, $94                 # the end
-1:      lqd     $85, 0($94)                   # the source, the destination
-        hbrr    3f, 1b
-        lqd     $87, 16($94)                  # the line
-        lqd     $81, 16($85)                  # the normal (all the lines are read for)
-        rotqbyi $88, $85, 4
-        sf      $89, $116, $87
-        rotmi   $89, $89, -2
-        a       $89, $89, $115                # the line's tag
-        lqd     $90, 0($89)
-        stqd    $81, 16($87)
-        stqd    $81, 0($88)
-        shli    $90, $90, 1
-        rotmi   $90, $90, -1                  # landed
-        stqd    $90, 0($89)
+        .sched  pool=81,85,87-90 scratch=66-127
+1:
+        lqd     %r0, 0($94)                   # the source, the lane, the tag, the vertex
+        lqd     %line, 16($94)
+        lqd     %nrm, 16(%r0)                 # the normal (all the lines are read for)
+        rotqbyi %lane, %r0, 4
+        rotqbyi %tag, %r0, 8
+        rotqbyi %v, %r0, 12
+        stqd    %nrm, 16(%line)
+        stqd    %nrm, 0(%lane)
+        stqd    %v, 0(%tag)                   # landed
         ai      $94, $94, 32
-        ceq     $85, $94, $86
-3:      brz     $85, 1b
+        ceq     %end, $94, $86
+        hbrr    3f, 1b
+3:
+        brz     %end, 1b
+        .endsched
 2:      bi      $95
 
 # a triangle record the traversal's cache does not hold: record $80 into $82, not waited
