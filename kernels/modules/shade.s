@@ -445,10 +445,13 @@ shade_packet:
         and     %okab, %ok0, %ok16
         ai      $67, $67, 32
         ceqi    %end, $67, 256
-        hbrr    .Lsh_group_br, .Lsh_group
+        ila     %loop, .Lsh_group
+        ila     %exit, .Lsh_iset_done
+        selb    %to, %loop, %exit, %end       # (a hinted exit: no miss at the end)
+        hbr     .Lsh_group_br, %to
         brz     %okab, .Lsh_slow
 .Lsh_group_br:
-        brz     %end, .Lsh_group
+        bi      %to
         .endsched
         # (the slow path: out of line, after the end)
 
@@ -704,10 +707,14 @@ shade_packet:
         .endr
         ai      $67, $67, 64
         ceqi    %end, $67, 256
-        hbrr    .Lsh_shade_br, .Lsh_shade_g
+        ila     %loop, .Lsh_shade_g
+        ila     %exit, .Lsh_shade_end
+        selb    %to, %loop, %exit, %end       # (a hinted exit: no miss at the end)
+        hbr     .Lsh_shade_br, %to
 .Lsh_shade_br:
-        brz     %end, .Lsh_shade_g
+        bi      %to
         .endsched
+.Lsh_shade_end:
         lqd     $84, SH_RUN+16($66)
         ceqi    $77, $86, -1                  # no material left: done
         lqd     $82, SH_RUN($66)
