@@ -153,18 +153,6 @@
         stqd    \tmp, SH_STATS+\which($66)
         .endm
 
-# 4x4 transpose of the rows a, b, c, d into the columns c0..c3 ($117..$119, $98: patterns)
-        .macro  SH_TRANSPOSE a, b, c, d, c0, c1, c2, c3, t0, t1, t2, t3
-        shufb   \t0, \a, \b, $117
-        shufb   \t1, \c, \d, $117
-        shufb   \t2, \a, \b, $118
-        shufb   \t3, \c, \d, $118
-        shufb   \c0, \t0, \t1, $119
-        shufb   \c1, \t0, \t1, $98
-        shufb   \c2, \t2, \t3, $119
-        shufb   \c3, \t2, \t3, $98
-        .endm
-
 # vertex I of lane LANE: the normal of vertex word I of $80 (the record's spare quad) to
 # SH_NRM + LANE*64 + I*16, through the vertex cache ($104 index mask, $115 tags, $116
 # lines); a miss calls sh_vertex_miss ($114) without a taken branch on the hit path
@@ -970,106 +958,94 @@ shade_packet:
         .endr
         brsl    $95, sh_vertex_land
 .Lsh_fetched:
-        # the lanes' records and normals as columns
-        lqd     $70, SH_STAGE+0($66)
-        lqd     $71, SH_STAGE+64($66)
-        lqd     $72, SH_STAGE+128($66)
-        lqd     $73, SH_STAGE+192($66)
-        SH_TRANSPOSE $70, $71, $72, $73, $74, $75, $76, $77, $80, $81, $82, $83
-        ori     $120, $77, 0                  # k
-        lqd     $70, SH_STAGE+16($66)
-        lqd     $71, SH_STAGE+80($66)
-        lqd     $72, SH_STAGE+144($66)
-        lqd     $73, SH_STAGE+208($66)
-        SH_TRANSPOSE $70, $71, $72, $73, $121, $122, $123, $77, $80, $81, $82, $83
-        lqd     $70, SH_STAGE+32($66)
-        lqd     $71, SH_STAGE+96($66)
-        lqd     $72, SH_STAGE+160($66)
-        lqd     $73, SH_STAGE+224($66)
-        SH_TRANSPOSE $70, $71, $72, $73, $124, $125, $126, $77, $80, $81, $82, $83
-        lqd     $70, SH_STAGE+48($66)
-        lqd     $71, SH_STAGE+112($66)
-        lqd     $72, SH_STAGE+176($66)
-        lqd     $73, SH_STAGE+240($66)
-        SH_TRANSPOSE $70, $71, $72, $73, $74, $75, $76, $127, $80, $81, $82, $83
-        or      $127, $127, $78               # misses: no material
-        SH_ADDI $74, $66, SH_MAT
-        stqx    $127, $74, $67                # materials (-1 for misses)
+        # the lanes' records and normals as columns (4x4 transposes: $117, $118 pair the
+        # rows' words, $119, $98 take the columns); k (record word 3), b and c (words
+        # 4-6, 8-10), the material (word 15)
+        .sched  pool=70-77,79-90,94-95,120-127 scratch=66-127
+        .irp    Q, 0, 16, 32, 48
+        lqd     %ra\Q, SH_STAGE+\Q($66)
+        lqd     %rb\Q, SH_STAGE+64+\Q($66)
+        lqd     %rc\Q, SH_STAGE+128+\Q($66)
+        lqd     %rd\Q, SH_STAGE+192+\Q($66)
+        shufb   %hab\Q, %ra\Q, %rb\Q, $118
+        shufb   %hcd\Q, %rc\Q, %rd\Q, $118
+        .endr
+        .irp    Q, 16, 32
+        shufb   %lab\Q, %ra\Q, %rb\Q, $117
+        shufb   %lcd\Q, %rc\Q, %rd\Q, $117
+        shufb   %w0\Q, %lab\Q, %lcd\Q, $119
+        shufb   %w1\Q, %lab\Q, %lcd\Q, $98
+        shufb   %w2\Q, %hab\Q, %hcd\Q, $119
+        .endr
+        .irp    Q, 0, 48
+        shufb   %w3\Q, %hab\Q, %hcd\Q, $98
+        .endr
+        a       %gp, $66, $67
+        a       %rp, $113, $67
+        or      %mat, %w348, $78              # misses: no material
+      ~ stqd    %mat, SH_MAT(%gp)
         # the hit point o + t d and its projection (u, v) by k
-        lqx     $70, $112, $67                # t
-        lqx     $71, $113, $67                # dx
-        ai      $74, $113, 256
-        lqx     $72, $74, $67                 # dy
-        SH_ADDI $74, $113, 512
-        lqx     $73, $74, $67                 # dz
-        fma     $84, $70, $71, $107           # Px
-        fma     $85, $70, $72, $108           # Py
-        fma     $86, $70, $73, $109           # Pz
-        SH_ADDI $74, $66, SH_PX
-        stqx    $84, $74, $67
-        SH_ADDI $74, $66, SH_PY
-        stqx    $85, $74, $67
-        SH_ADDI $74, $66, SH_PZ
-        stqx    $86, $74, $67
-        ceqi    $87, $120, 0
-        ceqi    $88, $120, 1
-        selb    $89, $84, $86, $88            # u: k0 -> y, k1 -> z, k2 -> x
-        selb    $89, $89, $85, $87
-        selb    $90, $85, $84, $88            # v: k0 -> z, k1 -> x, k2 -> y
-        selb    $90, $90, $86, $87
-        fm      $94, $121, $89                # beta = (b_nu u + b_nv v) + b_d
-        fma     $94, $122, $90, $94
-        fa      $94, $94, $123
-        fm      $95, $124, $89                # gamma = (c_nu u + c_nv v) + c_d
-        fma     $95, $125, $90, $95
-        fa      $95, $95, $126
+        lqd     %t, CTX_RAY_T(%rp)
+        lqd     %dx, 0(%rp)
+        lqd     %dy, 256(%rp)
+        lqd     %dz, 512(%rp)
+        fma     %px, %t, %dx, $107
+        fma     %py, %t, %dy, $108
+        fma     %pz, %t, %dz, $109
+      ~ stqd    %px, SH_PX(%gp)
+      ~ stqd    %py, SH_PY(%gp)
+      ~ stqd    %pz, SH_PZ(%gp)
+        ceqi    %k0, %w30, 0
+        ceqi    %k1, %w30, 1
+        selb    %u1, %px, %pz, %k1            # u: k0 -> y, k1 -> z, k2 -> x
+        selb    %u, %u1, %py, %k0
+        selb    %v1, %py, %px, %k1            # v: k0 -> z, k1 -> x, k2 -> y
+        selb    %v, %v1, %pz, %k0
+        fm      %b1, %w016, %u                # beta = (b_nu u + b_nv v) + b_d
+        fma     %b2, %w116, %v, %b1
+        fa      %beta, %b2, %w216
+        fm      %g1, %w032, %u                # gamma = (c_nu u + c_nv v) + c_d
+        fma     %g2, %w132, %v, %g1
+        fa      %gamma, %g2, %w232
         # the normal n0 + beta (n1 - n0) + gamma (n2 - n0), turned to the eye
         .irp    C, 0, 16, 32
-        lqd     $74, SH_NRM+\C($66)
-        lqd     $75, SH_NRM+64+\C($66)
-        lqd     $76, SH_NRM+128+\C($66)
-        lqd     $77, SH_NRM+192+\C($66)
-        SH_TRANSPOSE $74, $75, $76, $77, $80, $81, $82, $83, $84, $85, $86, $87
-        stqd    $80, SH_SCRATCH+3*\C($66)    # vertex C/16: x, y, z columns
-        stqd    $81, SH_SCRATCH+3*\C+16($66)
-        stqd    $82, SH_SCRATCH+3*\C+32($66)
+        lqd     %na\C, SH_NRM+\C($66)
+        lqd     %nb\C, SH_NRM+64+\C($66)
+        lqd     %nc\C, SH_NRM+128+\C($66)
+        lqd     %nd\C, SH_NRM+192+\C($66)
+        shufb   %lo\C, %na\C, %nb\C, $117
+        shufb   %lp\C, %nc\C, %nd\C, $117
+        shufb   %hi\C, %na\C, %nb\C, $118
+        shufb   %hj\C, %nc\C, %nd\C, $118
+        shufb   %x\C, %lo\C, %lp\C, $119      # vertex C/16: x, y, z columns
+        shufb   %y\C, %lo\C, %lp\C, $98
+        shufb   %z\C, %hi\C, %hj\C, $119
         .endr
-        lqd     $74, SH_SCRATCH($66)          # n0
-        lqd     $75, SH_SCRATCH+16($66)
-        lqd     $76, SH_SCRATCH+32($66)
-        lqd     $120, SH_SCRATCH+48($66)      # n1
-        lqd     $80, SH_SCRATCH+64($66)
-        lqd     $81, SH_SCRATCH+80($66)
-        lqd     $82, SH_SCRATCH+96($66)       # n2
-        lqd     $83, SH_SCRATCH+112($66)
-        lqd     $84, SH_SCRATCH+128($66)
-        fs      $85, $120, $74                # n1 - n0
-        fs      $86, $80, $75
-        fs      $87, $81, $76
-        fs      $88, $82, $74                 # n2 - n0
-        fs      $89, $83, $75
-        fs      $90, $84, $76
-        fma     $85, $85, $94, $74            # n0 + (n1 - n0) beta
-        fma     $86, $86, $94, $75
-        fma     $87, $87, $94, $76
-        fma     $85, $88, $95, $85            # + (n2 - n0) gamma
-        fma     $86, $89, $95, $86
-        fma     $87, $90, $95, $87
-        fm      $88, $85, $71                 # dot(N, d) > 0: negate N
-        fma     $88, $86, $72, $88
-        fma     $88, $87, $73, $88
-        fcgt    $88, $88, ZERO
-        ilhu    $89, 0x8000
-        and     $88, $88, $89
-        xor     $85, $85, $88
-        xor     $86, $86, $88
-        xor     $87, $87, $88
-        SH_ADDI $74, $66, SH_NX
-        stqx    $85, $74, $67
-        SH_ADDI $74, $66, SH_NY
-        stqx    $86, $74, $67
-        SH_ADDI $74, $66, SH_NZ
-        stqx    $87, $74, $67
+        fs      %d1x, %x16, %x0               # n1 - n0
+        fs      %d1y, %y16, %y0
+        fs      %d1z, %z16, %z0
+        fs      %d2x, %x32, %x0               # n2 - n0
+        fs      %d2y, %y32, %y0
+        fs      %d2z, %z32, %z0
+        fma     %nx1, %d1x, %beta, %x0        # n0 + (n1 - n0) beta
+        fma     %ny1, %d1y, %beta, %y0
+        fma     %nz1, %d1z, %beta, %z0
+        fma     %nx, %d2x, %gamma, %nx1       # + (n2 - n0) gamma
+        fma     %ny, %d2y, %gamma, %ny1
+        fma     %nz, %d2z, %gamma, %nz1
+        fm      %e1, %nx, %dx                 # dot(N, d) > 0: negate N
+        fma     %e2, %ny, %dy, %e1
+        fma     %e, %nz, %dz, %e2
+        fcgt    %f1, %e, ZERO
+        ilhu    %sign, 0x8000
+        and     %f, %f1, %sign
+        xor     %nxo, %nx, %f
+        xor     %nyo, %ny, %f
+        xor     %nzo, %nz, %f
+      ~ stqd    %nxo, SH_NX(%gp)
+      ~ stqd    %nyo, SH_NY(%gp)
+      ~ stqd    %nzo, SH_NZ(%gp)
+        .endsched
 .Lsh_slow_done:
         SH_ADDI $74, $66, SH_SAVE
         .irp    R, 0, 1, 2, 3, 4
