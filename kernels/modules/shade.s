@@ -212,6 +212,51 @@
 3:
         .endm
 
+# (in a .sched block) the hit point o + t d of the rays at %rp, stored at %gp, its
+# barycentrics from the columns K (the projection axis), B and C (u, v, constant terms),
+# and the normal from the columns n0, n1 - n0, n2 - n0, turned to the eye ($122: sign bits)
+        .macro  SH_GROUP_COLUMNS k, bu, bv, bd, cu, cv, cd, n0x, n0y, n0z, d1x, d1y, d1z, d2x, d2y, d2z
+        lqd     %t, CTX_RAY_T(%rp)
+        lqd     %dx, 0(%rp)
+        lqd     %dy, 256(%rp)
+        lqd     %dz, 512(%rp)
+        fma     %px, %t, %dx, $107            # the hit point
+        fma     %py, %t, %dy, $108
+        fma     %pz, %t, %dz, $109
+      ~ stqd    %px, SH_PX(%gp)
+      ~ stqd    %py, SH_PY(%gp)
+      ~ stqd    %pz, SH_PZ(%gp)
+        ceqi    %k0, \k, 0
+        ceqi    %k1, \k, 1
+        selb    %u1, %px, %pz, %k1            # u: k0 -> y, k1 -> z, k2 -> x
+        selb    %u, %u1, %py, %k0
+        selb    %v1, %py, %px, %k1            # v: k0 -> z, k1 -> x, k2 -> y
+        selb    %v, %v1, %pz, %k0
+        fm      %b1, \bu, %u                 # beta = (b_nu u + b_nv v) + b_d
+        fma     %b2, \bv, %v, %b1
+        fa      %beta, %b2, \bd
+        fm      %g1, \cu, %u                 # gamma = (c_nu u + c_nv v) + c_d
+        fma     %g2, \cv, %v, %g1
+        fa      %gamma, %g2, \cd
+        fma     %nx1, \d1x, %beta, \n0x       # n0 + (n1 - n0) beta + (n2 - n0) gamma
+        fma     %ny1, \d1y, %beta, \n0y
+        fma     %nz1, \d1z, %beta, \n0z
+        fma     %nx, \d2x, %gamma, %nx1
+        fma     %ny, \d2y, %gamma, %ny1
+        fma     %nz, \d2z, %gamma, %nz1
+        fm      %e1, %nx, %dx                 # dot(N, d) > 0: negate N
+        fma     %e2, %ny, %dy, %e1
+        fma     %e, %nz, %dz, %e2
+        fcgt    %f1, %e, ZERO
+        and     %f, %f1, $122
+        xor     %nxo, %nx, %f
+        xor     %nyo, %ny, %f
+        xor     %nzo, %nz, %f
+      ~ stqd    %nxo, SH_NX(%gp)
+      ~ stqd    %nyo, SH_NY(%gp)
+      ~ stqd    %nzo, SH_NZ(%gp)
+        .endm
+
         .text
         .align  4
 sh_const:
@@ -844,45 +889,7 @@ shade_packet:
         shufb   %mc, %kq0, %kq8, %psnd
         or      %mat, %mc, %miss              # no hit: no material
       ~ stqd    %mat, SH_MAT(%gp)
-        lqd     %t, CTX_RAY_T(%rp)
-        lqd     %dx, 0(%rp)
-        lqd     %dy, 256(%rp)
-        lqd     %dz, 512(%rp)
-        fma     %px, %t, %dx, $107            # the hit point
-        fma     %py, %t, %dy, $108
-        fma     %pz, %t, %dz, $109
-      ~ stqd    %px, SH_PX(%gp)
-      ~ stqd    %py, SH_PY(%gp)
-      ~ stqd    %pz, SH_PZ(%gp)
-        ceqi    %k0, %k, 0
-        ceqi    %k1, %k, 1
-        selb    %u1, %px, %pz, %k1            # u: k0 -> y, k1 -> z, k2 -> x
-        selb    %u, %u1, %py, %k0
-        selb    %v1, %py, %px, %k1            # v: k0 -> z, k1 -> x, k2 -> y
-        selb    %v, %v1, %pz, %k0
-        fm      %b1, %c0q1, %u                 # beta = (b_nu u + b_nv v) + b_d
-        fma     %b2, %c1q1, %v, %b1
-        fa      %beta, %b2, %c2q1
-        fm      %g1, %c0q2, %u                 # gamma = (c_nu u + c_nv v) + c_d
-        fma     %g2, %c1q2, %v, %g1
-        fa      %gamma, %g2, %c2q2
-        fma     %nx1, %c0d1, %beta, %c0n0       # n0 + (n1 - n0) beta + (n2 - n0) gamma
-        fma     %ny1, %c1d1, %beta, %c1n0
-        fma     %nz1, %c2d1, %beta, %c2n0
-        fma     %nx, %c0d2, %gamma, %nx1
-        fma     %ny, %c1d2, %gamma, %ny1
-        fma     %nz, %c2d2, %gamma, %nz1
-        fm      %e1, %nx, %dx                 # dot(N, d) > 0: negate N
-        fma     %e2, %ny, %dy, %e1
-        fma     %e, %nz, %dz, %e2
-        fcgt    %f1, %e, ZERO
-        and     %f, %f1, $122
-        xor     %nxo, %nx, %f
-        xor     %nyo, %ny, %f
-        xor     %nzo, %nz, %f
-      ~ stqd    %nxo, SH_NX(%gp)
-      ~ stqd    %nyo, SH_NY(%gp)
-      ~ stqd    %nzo, SH_NZ(%gp)
+        SH_GROUP_COLUMNS %k, %c0q1, %c1q1, %c2q1, %c0q2, %c1q2, %c2q2, %c0n0, %c1n0, %c2n0, %c0d1, %c1d1, %c2d1, %c0d2, %c1d2, %c2d2
         cntb    %mc1, %mb                     # counted: a group, its hit lanes
         sfi     %hits, %mc1, 4
         lqd     %cg, SH_STATS+SHS_GROUPS($66)
@@ -961,7 +968,7 @@ shade_packet:
         # the lanes' records and normals as columns (4x4 transposes: $117, $118 pair the
         # rows' words, $119, $98 take the columns); k (record word 3), b and c (words
         # 4-6, 8-10), the material (word 15)
-        .sched  pool=70-77,79-90,94-95,120-127 scratch=66-127
+        .sched  pool=70-77,79-90,94-95,120-121,123-127 scratch=66-127
         .irp    Q, 0, 16, 32, 48
         lqd     %ra\Q, SH_STAGE+\Q($66)
         lqd     %rb\Q, SH_STAGE+64+\Q($66)
@@ -984,29 +991,6 @@ shade_packet:
         a       %rp, $113, $67
         or      %mat, %w348, $78              # misses: no material
       ~ stqd    %mat, SH_MAT(%gp)
-        # the hit point o + t d and its projection (u, v) by k
-        lqd     %t, CTX_RAY_T(%rp)
-        lqd     %dx, 0(%rp)
-        lqd     %dy, 256(%rp)
-        lqd     %dz, 512(%rp)
-        fma     %px, %t, %dx, $107
-        fma     %py, %t, %dy, $108
-        fma     %pz, %t, %dz, $109
-      ~ stqd    %px, SH_PX(%gp)
-      ~ stqd    %py, SH_PY(%gp)
-      ~ stqd    %pz, SH_PZ(%gp)
-        ceqi    %k0, %w30, 0
-        ceqi    %k1, %w30, 1
-        selb    %u1, %px, %pz, %k1            # u: k0 -> y, k1 -> z, k2 -> x
-        selb    %u, %u1, %py, %k0
-        selb    %v1, %py, %px, %k1            # v: k0 -> z, k1 -> x, k2 -> y
-        selb    %v, %v1, %pz, %k0
-        fm      %b1, %w016, %u                # beta = (b_nu u + b_nv v) + b_d
-        fma     %b2, %w116, %v, %b1
-        fa      %beta, %b2, %w216
-        fm      %g1, %w032, %u                # gamma = (c_nu u + c_nv v) + c_d
-        fma     %g2, %w132, %v, %g1
-        fa      %gamma, %g2, %w232
         # the normal n0 + beta (n1 - n0) + gamma (n2 - n0), turned to the eye
         .irp    C, 0, 16, 32
         lqd     %na\C, SH_NRM+\C($66)
@@ -1027,24 +1011,7 @@ shade_packet:
         fs      %d2x, %x32, %x0               # n2 - n0
         fs      %d2y, %y32, %y0
         fs      %d2z, %z32, %z0
-        fma     %nx1, %d1x, %beta, %x0        # n0 + (n1 - n0) beta
-        fma     %ny1, %d1y, %beta, %y0
-        fma     %nz1, %d1z, %beta, %z0
-        fma     %nx, %d2x, %gamma, %nx1       # + (n2 - n0) gamma
-        fma     %ny, %d2y, %gamma, %ny1
-        fma     %nz, %d2z, %gamma, %nz1
-        fm      %e1, %nx, %dx                 # dot(N, d) > 0: negate N
-        fma     %e2, %ny, %dy, %e1
-        fma     %e, %nz, %dz, %e2
-        fcgt    %f1, %e, ZERO
-        ilhu    %sign, 0x8000
-        and     %f, %f1, %sign
-        xor     %nxo, %nx, %f
-        xor     %nyo, %ny, %f
-        xor     %nzo, %nz, %f
-      ~ stqd    %nxo, SH_NX(%gp)
-      ~ stqd    %nyo, SH_NY(%gp)
-      ~ stqd    %nzo, SH_NZ(%gp)
+        SH_GROUP_COLUMNS %w30, %w016, %w116, %w216, %w032, %w132, %w232, %x0, %y0, %z0, %d1x, %d1y, %d1z, %d2x, %d2y, %d2z
         .endsched
 .Lsh_slow_done:
         SH_ADDI $74, $66, SH_SAVE
