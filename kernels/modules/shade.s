@@ -75,6 +75,9 @@
         .set SH_IRR_R, SH_SCRATCH       # irradiance r, g, b of the i-set (after the i-set
         .set SH_IRR_G, SH_STAGE         # is built, over its scratch: 16 vectors each)
         .set SH_IRR_B, SH_NRM
+        .if     SH_NRM != SH_STAGE + 256
+        .error  "the slow path reads the records and normals from one base"
+        .endif
         .if     SH_IRR_G != SH_IRR_R + 256 || SH_IRR_B != SH_IRR_R + 512
         .error  "the irradiance sums are read from one base"
         .endif
@@ -969,7 +972,7 @@ shade_packet:
         # rows' words, $119, $98 take the columns); k (record word 3), b and c (words
         # 4-6, 8-10), the material (word 15)
         .sched  pool=70-77,79-90,94-95,120-121,123-127 scratch=66-127
-        .irp    Q, 0, 16, 32, 48
+        .irp    Q, 0, 16, 32, 48, 256, 272, 288   # then the normals (SH_NRM)
         lqd     %ra\Q, SH_STAGE+\Q($66)
         lqd     %rb\Q, SH_STAGE+64+\Q($66)
         lqd     %rc\Q, SH_STAGE+128+\Q($66)
@@ -977,7 +980,7 @@ shade_packet:
         shufb   %hab\Q, %ra\Q, %rb\Q, $118
         shufb   %hcd\Q, %rc\Q, %rd\Q, $118
         .endr
-        .irp    Q, 16, 32
+        .irp    Q, 16, 32, 256, 272, 288
         shufb   %lab\Q, %ra\Q, %rb\Q, $117
         shufb   %lcd\Q, %rc\Q, %rd\Q, $117
         shufb   %w0\Q, %lab\Q, %lcd\Q, $119
@@ -991,27 +994,15 @@ shade_packet:
         a       %rp, $113, $67
         or      %mat, %w348, $78              # misses: no material
       ~ stqd    %mat, SH_MAT(%gp)
-        # the normal n0 + beta (n1 - n0) + gamma (n2 - n0), turned to the eye
-        .irp    C, 0, 16, 32
-        lqd     %na\C, SH_NRM+\C($66)
-        lqd     %nb\C, SH_NRM+64+\C($66)
-        lqd     %nc\C, SH_NRM+128+\C($66)
-        lqd     %nd\C, SH_NRM+192+\C($66)
-        shufb   %lo\C, %na\C, %nb\C, $117
-        shufb   %lp\C, %nc\C, %nd\C, $117
-        shufb   %hi\C, %na\C, %nb\C, $118
-        shufb   %hj\C, %nc\C, %nd\C, $118
-        shufb   %x\C, %lo\C, %lp\C, $119      # vertex C/16: x, y, z columns
-        shufb   %y\C, %lo\C, %lp\C, $98
-        shufb   %z\C, %hi\C, %hj\C, $119
-        .endr
-        fs      %d1x, %x16, %x0               # n1 - n0
-        fs      %d1y, %y16, %y0
-        fs      %d1z, %z16, %z0
-        fs      %d2x, %x32, %x0               # n2 - n0
-        fs      %d2y, %y32, %y0
-        fs      %d2z, %z32, %z0
-        SH_GROUP_COLUMNS %w30, %w016, %w116, %w216, %w032, %w132, %w232, %x0, %y0, %z0, %d1x, %d1y, %d1z, %d2x, %d2y, %d2z
+        # the normal n0 + beta (n1 - n0) + gamma (n2 - n0) (vertex i: w0, w1, w2 of
+        # 256 + 16 i), turned to the eye
+        fs      %d1x, %w0272, %w0256          # n1 - n0
+        fs      %d1y, %w1272, %w1256
+        fs      %d1z, %w2272, %w2256
+        fs      %d2x, %w0288, %w0256          # n2 - n0
+        fs      %d2y, %w1288, %w1256
+        fs      %d2z, %w2288, %w2256
+        SH_GROUP_COLUMNS %w30, %w016, %w116, %w216, %w032, %w132, %w232, %w0256, %w1256, %w2256, %d1x, %d1y, %d1z, %d2x, %d2y, %d2z
         .endsched
 .Lsh_slow_done:
         SH_ADDI $74, $66, SH_SAVE
