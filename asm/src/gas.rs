@@ -899,6 +899,7 @@ impl<'o> Assembler<'o> {
             Ok(opts) => opts,
             Err(message) => return self.diag(Severity::Error, line, 1, message),
         };
+        let body = &self.sched_macros(body, 0)[..];
         let texts: Vec<&str> = body.iter().map(|l| l.text.as_str()).collect();
         let resolve = |text: &str| {
             self.get_reg(text, OperandKind::Ra, true)
@@ -1149,6 +1150,15 @@ impl<'o> Assembler<'o> {
     }
 
     fn expand_macro(&mut self, m: &Macro, args: &str, line: &Line) {
+        let body = self.macro_lines(m, args, line);
+        self.macro_depth += 1;
+        self.run_lines(&body);
+        self.macro_depth -= 1;
+        self.exitm = false;
+    }
+
+    /// A macro's body with its arguments substituted, at the calling line.
+    fn macro_lines(&mut self, m: &Macro, args: &str, line: &Line) -> Vec<Line> {
         // `\@` is the number of expansions before this one (GNU as counts from 0).
         let counter = self.macro_counter.to_string();
         self.macro_counter += 1;
@@ -1182,10 +1192,29 @@ impl<'o> Assembler<'o> {
                 line: line.line,
             });
         }
-        self.macro_depth += 1;
-        self.run_lines(&body);
-        self.macro_depth -= 1;
-        self.exitm = false;
+        body
+    }
+
+    /// A `.sched` block's lines with its macro calls expanded (the scheduler sees only
+    /// instructions, labels and `.irp`), so that one macro can serve several blocks.
+    fn sched_macros(&mut self, body: &[Line], depth: usize) -> Vec<Line> {
+        let mut out = Vec::new();
+        for l in body {
+            let text = strip_comment(&l.text);
+            let text = text.trim();
+            let (word, args) = match text.find(char::is_whitespace) {
+                Some(p) => (&text[..p], text[p..].trim()),
+                None => (text, ""),
+            };
+            match self.macros.get(&word.to_ascii_lowercase()).cloned() {
+                Some(m) if depth < 16 => {
+                    let lines = self.macro_lines(&m, args, l);
+                    out.extend(self.sched_macros(&lines, depth + 1));
+                }
+                _ => out.push(l.clone()),
+            }
+        }
+        out
     }
 
     fn data_values(&mut self, args: &str, line: &Line, col: usize) -> Vec<i64> {

@@ -5,7 +5,8 @@
 //! the timing model simulates.
 //!
 //! A block is written in logical order. Each line is an instruction, a label, or an
-//! `.irp`/`.endr` repetition; `nop`/`lnop` are dropped (the scheduler places its own).
+//! `.irp`/`.endr` repetition; `nop`/`lnop` are dropped (the scheduler places its own). The
+//! assembler expands the block's macro calls before it is scheduled.
 //! - `%name` is a virtual register, allocated from the pool after scheduling.
 //! - `!` before an instruction makes it a barrier: everything before it issues before it,
 //!   and no load, store or write of a non-scratch register moves above it. Branches,

@@ -276,3 +276,33 @@ fn the_assembler_reports_sched_errors_at_their_line() {
     let e = asm(".sched pool=9-1\n.endsched\n").unwrap_err();
     assert!(e[0].contains("t.s:1:"), "{e:?}");
 }
+
+#[test]
+fn a_macro_called_in_a_sched_block_is_scheduled_with_it() {
+    // The macro's lines join the block (its virtual registers, its arguments substituted)
+    // and are scheduled with the rest: the same image as the block written out.
+    let with_macro = "\
+        .macro SCALE out, in
+        fm %s, \\in, $6
+        fa \\out, %s, $7
+        .endm
+        .sched pool=20-23
+        lqd %a, 0($3)
+        SCALE %b, %a
+        stqd %b, 0($5)
+        .endsched
+        stop
+";
+    let written = "\
+        .sched pool=20-23
+        lqd %a, 0($3)
+        fm %s, %a, $6
+        fa %b, %s, $7
+        stqd %b, 0($5)
+        .endsched
+        stop
+";
+    assert_eq!(asm(with_macro).unwrap(), asm(written).unwrap());
+    // Without the expansion the block would not assemble at all.
+    assert!(asm(&with_macro.replace("SCALE %b, %a", "SCALE2 %b, %a")).is_err());
+}

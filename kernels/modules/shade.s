@@ -23,14 +23,17 @@
 #    slots and landed together once its lanes are looked up (sh_vertex_miss,
 #    sh_vertex_land: one wait per packet of 4 rays, not one per miss; the triangle records
 #    past the traversal's cache likewise, one wait before they are read). They compute the
-#    same values and counts.
-# 2. The irradiance of every ray from every light (the same for every diffuse shader, so
-#    once per i-set): dot(N, L) / (|N| |L|), clamped, times the light's colour, summed.
-#    SH_VIS (per light, the rays' visibility masks) masks each light.
-# 3. Multi-pass shading: the first material still referenced in the i-set is looked up in
+#    same values and counts. A packet none of whose rays hit has no i-set (its materials
+#    -1, the counters as they are).
+# 2. Multi-pass shading: the first material still referenced in the i-set is looked up in
 #    the direct-mapped material cache, its diffuse shader (kd * (ambient + irradiance), to
 #    8 bits) runs over all 16 intersection packets under the mask of its rays, and then
-#    clears their references; until none is left (the paper's 1-2 passes per packet).
+#    clears their references; until none is left (the paper's 1-2 passes per packet). The
+#    irradiance, dot(N, L) / (|N| |L|) clamped, times the light's colour, summed over the
+#    lights (SH_VIS: per light, the rays' visibility masks), is computed in the same block
+#    as the colour: the first pass runs it once per light, adding to the sums (stored),
+#    the last light's run shading; a later pass runs it with a black light (adding exactly
+#    0), shading from the stored sums. The pass that leaves no material ends the packet.
 #
 # The shading area (SH_AREA_BYTES of local store, at the address the host puts in params
 # beside the shading block's, above everything the kernel carves) is set up on the first
@@ -50,6 +53,11 @@
         .set SHS_MMISS, 112
         .set SHS_TLOOK, 128             #   triangle records looked up in the traversal's
         .set SHS_TMISS, 144             #   triangle cache, and fetched past it
+        .set SH_RUN, 176                # over a run of the shading block: the next light,
+                                        # the lights left, the material; the colour
+                                        # block's EA, tag, the material cache's EA, index
+                                        # mask (64)
+        .set SH_VMASK, 240              # the vertex index mask in every lane
         .set SH_BLOCK, 256              # the shading block (SHADING_BLOCK_BYTES)
         .set SH_LIGHTS, 640             # per light: px, py, pz, r, g, b splats (96 bytes)
         .set SH_SCRATCH, 1408           # the normals' columns (144 bytes), the same flag
@@ -67,6 +75,12 @@
         .set SH_IRR_R, SH_SCRATCH       # irradiance r, g, b of the i-set (after the i-set
         .set SH_IRR_G, SH_STAGE         # is built, over its scratch: 16 vectors each)
         .set SH_IRR_B, SH_NRM
+        .if     SH_NRM != SH_STAGE + 256
+        .error  "the slow path reads the records and normals from one base"
+        .endif
+        .if     SH_IRR_G != SH_IRR_R + 256 || SH_IRR_B != SH_IRR_R + 512
+        .error  "the irradiance sums are read from one base"
+        .endif
         .set SH_OUT, 3968               # two colour blocks, alternating
         .set SH_VIS, 4480               # per light: visibility masks (256 bytes)
         .set SH_VTAGS, 6528             # vertex cache tags (up to 256 x 16)
@@ -126,23 +140,20 @@
         SH_WAIT \tmp
         .endm
 
+# $71 quadwords of VALUE from the area's OFF on ($72: scratch)
+        .macro  SH_FILL value, off
+        SH_ADDI $72, $66, \off
+1:      stqd    \value, 0($72)
+        ai      $72, $72, 16
+        ai      $71, $71, -1
+        brnz    $71, 1b
+        .endm
+
 # counter += 1 (a quadword of SH_STATS; $66 = area)
         .macro  SH_COUNT which, tmp
         lqd     \tmp, SH_STATS+\which($66)
         ai      \tmp, \tmp, 1
         stqd    \tmp, SH_STATS+\which($66)
-        .endm
-
-# 4x4 transpose of the rows a, b, c, d into the columns c0..c3 ($117..$119, $98: patterns)
-        .macro  SH_TRANSPOSE a, b, c, d, c0, c1, c2, c3, t0, t1, t2, t3
-        shufb   \t0, \a, \b, $117
-        shufb   \t1, \c, \d, $117
-        shufb   \t2, \a, \b, $118
-        shufb   \t3, \c, \d, $118
-        shufb   \c0, \t0, \t1, $119
-        shufb   \c1, \t0, \t1, $98
-        shufb   \c2, \t2, \t3, $119
-        shufb   \c3, \t2, \t3, $98
         .endm
 
 # vertex I of lane LANE: the normal of vertex word I of $80 (the record's spare quad) to
@@ -204,6 +215,51 @@
 3:
         .endm
 
+# (in a .sched block) the hit point o + t d of the rays at %rp, stored at %gp, its
+# barycentrics from the columns K (the projection axis), B and C (u, v, constant terms),
+# and the normal from the columns n0, n1 - n0, n2 - n0, turned to the eye ($122: sign bits)
+        .macro  SH_GROUP_COLUMNS k, bu, bv, bd, cu, cv, cd, n0x, n0y, n0z, d1x, d1y, d1z, d2x, d2y, d2z
+        lqd     %t, CTX_RAY_T(%rp)
+        lqd     %dx, 0(%rp)
+        lqd     %dy, 256(%rp)
+        lqd     %dz, 512(%rp)
+        fma     %px, %t, %dx, $107            # the hit point
+        fma     %py, %t, %dy, $108
+        fma     %pz, %t, %dz, $109
+      ~ stqd    %px, SH_PX(%gp)
+      ~ stqd    %py, SH_PY(%gp)
+      ~ stqd    %pz, SH_PZ(%gp)
+        ceqi    %k0, \k, 0
+        ceqi    %k1, \k, 1
+        selb    %u1, %px, %pz, %k1            # u: k0 -> y, k1 -> z, k2 -> x
+        selb    %u, %u1, %py, %k0
+        selb    %v1, %py, %px, %k1            # v: k0 -> z, k1 -> x, k2 -> y
+        selb    %v, %v1, %pz, %k0
+        fm      %b1, \bu, %u                 # beta = (b_nu u + b_nv v) + b_d
+        fma     %b2, \bv, %v, %b1
+        fa      %beta, %b2, \bd
+        fm      %g1, \cu, %u                 # gamma = (c_nu u + c_nv v) + c_d
+        fma     %g2, \cv, %v, %g1
+        fa      %gamma, %g2, \cd
+        fma     %nx1, \d1x, %beta, \n0x       # n0 + (n1 - n0) beta + (n2 - n0) gamma
+        fma     %ny1, \d1y, %beta, \n0y
+        fma     %nz1, \d1z, %beta, \n0z
+        fma     %nx, \d2x, %gamma, %nx1
+        fma     %ny, \d2y, %gamma, %ny1
+        fma     %nz, \d2z, %gamma, %nz1
+        fm      %e1, %nx, %dx                 # dot(N, d) > 0: negate N
+        fma     %e2, %ny, %dy, %e1
+        fma     %e, %nz, %dz, %e2
+        fcgt    %f1, %e, ZERO
+        and     %f, %f1, $122
+        xor     %nxo, %nx, %f
+        xor     %nyo, %ny, %f
+        xor     %nzo, %nz, %f
+      ~ stqd    %nxo, SH_NX(%gp)
+      ~ stqd    %nyo, SH_NY(%gp)
+      ~ stqd    %nzo, SH_NZ(%gp)
+        .endm
+
         .text
         .align  4
 sh_const:
@@ -224,111 +280,84 @@ sh_const:
         .long   0x80000000, 0x80000000, 0x80000000, 0x80000000     # +224 sign bits
         .long   1, 1, 1, 0                  # +240 a fast group: groups, same, tri lookups
         .long   0x10111213, 0x00010203, 0x10111213, 0x00010203     # +256 list element (b, a)
+        .long   0x001080c0, 0x041480c0, 0x081880c0, 0x0c1c80c0     # +272 r, g top bytes, 0xff
+        .long   0x00011003, 0x04051407, 0x0809180b, 0x0c0d1c0f     # +288 b top byte
+        .long   0x0004080c, 0x1014181c, 0x80808080, 0x80808080     # +304 top bytes of a, b
+        .long   0x80808080, 0x80808080, 0x0004080c, 0x1014181c     # +320 ... to bytes 8-15
+sh_zero:                                      # no irradiance, a black light (768 bytes)
+        .space  768
 
         .align  3
 shade_packet:
+        .sched  pool=73-89,94-96,98,100-106,110-114,116-118 scratch=66-127
+        ila     $70, params
+        ila     $90, sh_const
+        lqd     $71, PARAM_SHADING_QUAD($70)
+        lqd     $72, PARAM_ORIGIN($70)
+        lqd     $91, 64($90)
+        lqd     $92, 80($90)
+        lqd     $93, 96($90)
+        lqd     $119, 32($90)
+        lqd     $120, 208($90)                # splat word 3
+        lqd     $122, 224($90)                # sign bits
         ori     $99, $68, 0                   # the rays
         ori     $97, $69, 0                   # the packet number
-        ila     $70, params
-        lqd     $71, PARAM_SHADING_QUAD($70)
         rotqbyi $71, $71, PARAM_SHADING_ROT   # shading block EA, area
         rotqbyi $66, $71, 4                   # the shading area
         lqd     $67, SH_FLAG($66)
+        lqd     $121, SH_VMASK($66)           # the vertex index mask in every lane
         ilhu    $68, 0x5348
         iohl    $68, 0x4144                   # "SHAD"
-        ceq     $69, $67, $68
-        brnz    $69, .Lsh_ready
-
-        # ---- first call: fetch the block, splat the lights, clear counters and caches
-        stqd    $68, SH_FLAG($66)
-        SH_ADDI $72, $66, SH_BLOCK
-        il      $73, SHADING_BLOCK_BYTES
-        SH_GET  $72, $71, $73, $74
-        SH_ADDI $71, $66, SH_DCOUNT
-        stqd    ZERO, 0($71)                  # no vertex in flight
-        il      $70, 10
-        SH_ADDI $71, $66, SH_STATS
-1:      stqd    ZERO, 0($71)
-        ai      $71, $71, 16
-        ai      $70, $70, -1
-        brnz    $70, 1b
-        ila     $90, sh_const
-        lqd     $91, 64($90)
-        lqd     $92, 80($90)
-        lqd     $93, 96($90)
-        lqd     $70, SH_BLOCK($66)
-        rotqbyi $71, $70, SHB_LIGHT_COUNT
-        SH_ADDI $72, $66, SH_BLOCK+SHB_LIGHTS
-        SH_ADDI $73, $66, SH_LIGHTS
-        brz     $71, 2f
-1:      lqd     $74, 0($72)
-        lqd     $75, 16($72)
-        shufb   $76, $74, $74, $91
-        stqd    $76, 0($73)
-        shufb   $76, $74, $74, $92
-        stqd    $76, 16($73)
-        shufb   $76, $74, $74, $93
-        stqd    $76, 32($73)
-        shufb   $76, $75, $75, $91
-        stqd    $76, 48($73)
-        shufb   $76, $75, $75, $92
-        stqd    $76, 64($73)
-        shufb   $76, $75, $75, $93
-        stqd    $76, 80($73)
-        ai      $72, $72, SHB_LIGHT_BYTES
-        ai      $73, $73, 96
-        ai      $71, $71, -1
-        brnz    $71, 1b
-2:      il      $74, -1                       # every light visible (no shadow rays)
-        SH_ADDI $72, $66, SH_VIS
-        il      $71, 8 * 16
-1:      stqd    $74, 0($72)
-        ai      $72, $72, 16
-        ai      $71, $71, -1
-        brnz    $71, 1b
-        lqd     $70, SH_BLOCK+SHB_MODE($66)   # mode, early, vertex log2, material log2
-        il      $74, -1
-        il      $75, 1
-        rotqbyi $71, $70, 8
-        shl     $71, $75, $71                 # vertex entries
-        SH_ADDI $72, $66, SH_VTAGS
-1:      stqd    $74, 0($72)
-        ai      $72, $72, 16
-        ai      $71, $71, -1
-        brnz    $71, 1b
-        rotqbyi $71, $70, 12
-        shl     $71, $75, $71                 # material entries
-        SH_ADDI $72, $66, SH_MTAGS
-1:      stqd    $74, 0($72)
-        ai      $72, $72, 16
-        ai      $71, $71, -1
-        brnz    $71, 1b
-
-.Lsh_ready:
-        ila     $90, sh_const
-        lqd     $119, 32($90)
-        lqd     $91, 64($90)
-        lqd     $92, 80($90)
-        lqd     $93, 96($90)
-        lqd     $120, 208($90)                # splat word 3
-        lqd     $122, 224($90)                # sign bits
-        ila     $70, params
-        lqd     $71, PARAM_ORIGIN($70)
-        shufb   $107, $71, $71, $91           # origin x, y, z splats
-        shufb   $108, $71, $71, $92
-        shufb   $109, $71, $71, $93
-        lqd     $70, SH_BLOCK+SHB_MODE($66)
-        il      $75, 1
-        rotqbyi $71, $70, 8
-        shl     $71, $75, $71
-        ai      $71, $71, -1
-        shufb   $121, $71, $71, $91           # the vertex index mask in every lane
-
-        # ---- 1. the i-set
-        SH_ADDI $115, $66, SH_VTAGS
-        SH_ADDI $123, $66, SH_VDATA+16        # the lines' normals
+        shufb   $107, $72, $72, $91           # origin x, y, z splats
+        shufb   $108, $72, $72, $92
+        shufb   $109, $72, $72, $93
+        ila     %vt, SH_VTAGS
+        a       $115, $66, %vt
+        ila     %vd, SH_VDATA+16
+        a       $123, $66, %vd                # the lines' normals
         il      $124, 0                       # the fast groups' counters (sh_const+240)
+        lqd     %id0, CTX_RAY_ID+0($99)
+        lqd     %id1, CTX_RAY_ID+16($99)
+        lqd     %id2, CTX_RAY_ID+32($99)
+        lqd     %id3, CTX_RAY_ID+48($99)
+        lqd     %id4, CTX_RAY_ID+64($99)
+        lqd     %id5, CTX_RAY_ID+80($99)
+        lqd     %id6, CTX_RAY_ID+96($99)
+        lqd     %id7, CTX_RAY_ID+112($99)
+        lqd     %id8, CTX_RAY_ID+128($99)
+        lqd     %id9, CTX_RAY_ID+144($99)
+        lqd     %id10, CTX_RAY_ID+160($99)
+        lqd     %id11, CTX_RAY_ID+176($99)
+        lqd     %id12, CTX_RAY_ID+192($99)
+        lqd     %id13, CTX_RAY_ID+208($99)
+        lqd     %id14, CTX_RAY_ID+224($99)
+        lqd     %id15, CTX_RAY_ID+240($99)
+        and     %and1, %id0, %id1
+        and     %and2, %id2, %id3
+        and     %and3, %id4, %id5
+        and     %and4, %id6, %id7
+        and     %and5, %id8, %id9
+        and     %and6, %id10, %id11
+        and     %and7, %id12, %id13
+        and     %and8, %id14, %id15
+        and     %and9, %and1, %and2
+        and     %and10, %and3, %and4
+        and     %and11, %and5, %and6
+        and     %and12, %and7, %and8
+        and     %and13, %and9, %and10
+        and     %and14, %and11, %and12
+        and     %and15, %and13, %and14
+        ceqi    %ne, %and15, -1
+        gb      %nb, %ne
+        ceqi    $117, %nb, 15                 # no ray of the packet hit
+        ceq     $69, $67, $68
+        brz     $69, .Lsh_first               # the first call: set up (out of line)
+        .endsched
+.Lsh_ready:
+        # ---- 1. the i-set (none when no ray hit: every material -1)
         il      $67, 0                        # intersection packet * 16
+        brnz    $117, .Lsh_empty
+        .align  7                             # (the loop's head at a fetch line's start)
 
         # The fast path, two groups a step, for a group whose 4 rays hit one triangle found
         # in the triangle cache with its 3 vertices in the vertex cache (94.9% in the
@@ -452,65 +481,201 @@ shade_packet:
         and     %okab, %ok0, %ok16
         ai      $67, $67, 32
         ceqi    %end, $67, 256
-        hbrr    .Lsh_group_br, .Lsh_group
+        ila     %loop, .Lsh_group
+        ila     %exit, .Lsh_iset_done
+        selb    %to, %loop, %exit, %end       # (a hinted exit: no miss at the end)
+        hbr     .Lsh_group_br, %to
         brz     %okab, .Lsh_slow
 .Lsh_group_br:
-        brz     %end, .Lsh_group
+        bi      %to
         .endsched
         # (the slow path: out of line, after the end)
 
         # the fast groups' counters (groups, same, triangle lookups) to SH_STATS
 .Lsh_iset_done:
+        .sched  pool=69,76-81,90,94-96,98-100,104,107-109,111-113,117-120 scratch=66-127
         lqd     $70, SH_BLOCK($66)            # materials, colour, lights
+        lqd     $71, SH_BLOCK+SHB_MODE($66)
+        lqd     %cg, SH_STATS+SHS_GROUPS($66)
+        lqd     %cs, SH_STATS+SHS_SAME($66)
+        lqd     %ct, SH_STATS+SHS_TLOOK($66)
+        rotqbyi %is, $124, 4
+        rotqbyi %it, $124, 8
+        a       %cg1, %cg, $124
+        a       %cs1, %cs, %is
+        a       %ct1, %ct, %it
+        stqd    %cg1, SH_STATS+SHS_GROUPS($66)
+        stqd    %cs1, SH_STATS+SHS_SAME($66)
+        stqd    %ct1, SH_STATS+SHS_TLOOK($66)
         rotqbyi $101, $70, 4
         rotqbyi $102, $70, 8
         rotqbyi $103, $70, 12
-        lqd     $70, SH_BLOCK+SHB_MODE($66)
-        il      $75, 1
-        rotqbyi $71, $70, 12
-        shl     $105, $75, $71
-        ai      $105, $105, -1                # material cache index mask
-        lqd     $70, SH_STATS+SHS_GROUPS($66)
-        lqd     $71, SH_STATS+SHS_SAME($66)
-        lqd     $72, SH_STATS+SHS_TLOOK($66)
-        rotqbyi $75, $124, 4
-        rotqbyi $76, $124, 8
-        a       $70, $70, $124
-        a       $71, $71, $75
-        a       $72, $72, $76
-        stqd    $70, SH_STATS+SHS_GROUPS($66)
-        stqd    $71, SH_STATS+SHS_SAME($66)
-        stqd    $72, SH_STATS+SHS_TLOOK($66)
-
+        rotqbyi %ml, $71, 12
+        il      %one, 1
+        shl     %me, %one, %ml
+        ai      $105, %me, -1                 # material cache index mask
+        hbrr    .Lsh_shadows, shadow_rays
         # Here the hit points are in SH_PX, SH_PY, SH_PZ (and the materials in SH_MAT, -1
         # for no hit): the place for shadow rays to fill SH_VIS (per light, the rays'
         # visibility masks), which the irradiance below reads. Only $66, $97, $101..$103
         # and $105 need to survive up to here; the rest is set again below.
+.Lsh_shadows:
         brsl    $127, shadow_rays             # --shade shadows: SH_VIS (modules/shadow.s)
+        .endsched
 
-        # ---- 2. the lights' irradiance of every ray of the i-set, the same for every
-        # diffuse shader: once, not once per pass. Per light, four groups per step.
-        ila     $90, sh_const
-        lqd     $125, 176($90)                # 1.0
-        lqd     $126, 144($90)                # 0.5
-        lqd     $127, 160($90)                # 1.5
-        SH_ADDI $82, $66, SH_LIGHTS
-        SH_ADDI $83, $66, SH_VIS
-        ori     $84, $103, 0                  # lights left
-        il      $85, 0                        # 0: the first light (the sums start at 0)
-        brz     $84, .Lsh_dark
-.Lsh_light:
-        lqd     $70, 0($82)                   # the light's position, colour
-        lqd     $71, 16($82)
-        lqd     $72, 32($82)
-        lqd     $73, 48($82)
-        lqd     $74, 64($82)
-        lqd     $75, 80($82)
+        # ---- 2. the colour block: wait for its previous put, clear to black; what the
+        # passes and the put need over the runs (their registers are the block's pool)
+        .sched  pool=69,76-81,90,94-96,98-100,104,107-109,111-113,117-120 scratch=66-127
+        lqd     %pk, SH_STATS+SHS_PACKETS($66)
+        andi    $114, %pk, 1                  # which block
+        shli    %bo, $114, 8
+        ila     %ob, SH_OUT
+        a       %b1, %bo, %ob
+        a       $115, %b1, $66                # its address
+        ai      $116, $114, 6                 # its tag
+        il      %one, 1
+        shl     %mask, %one, $116
+        il      %two, 2
+        lqa     %black, sh_const+192
+        shli    %ea0, $97, 8
+        a       %ea, %ea0, $102
+        lqa     %plo, sh_const
+        lqa     %pfh, sh_const+32
+        shufb   %w0, %ea, $116, %plo
+        shufb   %w1, $101, $105, %plo
+        shufb   %w, %w0, %w1, %pfh
+        stqd    %w, SH_RUN+48($66)            # EA, tag, material cache EA, index mask
+        ila     %o1, SH_MAT
+        a       $68, $66, %o1
+        ila     %o2, SH_LIGHTS
+        a       $82, $66, %o2                 # the next light,
+        ila     %o3, SH_VIS
+        a       $83, $66, %o3                 # its visibility,
+        shufb   $84, $103, $103, $91          # the first pass's lights left (every lane)
+        ila     $85, sh_zero                  # the irradiance so far: none
+        wrch    $MFC_WrTagMask, %mask
+        wrch    $MFC_WrTagUpdate, %two
+        rdch    %st, $MFC_RdTagStat
+        .irp    Q, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
+        stqd    %black, \Q($115)
+        .endr
+        .endsched
+
+        # ---- 3. one pass per material still referenced, its rays' irradiance computed in
+        # the same block as their colour (runs of .Lsh_shade_g): in the first pass one run
+        # per light, each adding its light to the sums (stored for later passes), the last
+        # one shading (the ones before shade a material no ray has); a later pass is one
+        # run adding nothing (a black light), which shades from the stored sums.
+        # The first ray (group by group, lane by lane) with a material left: per 4 groups
+        # the top bytes of their "none" masks gathered (gbb), 64 bits (lane 0 of group 0
+        # the highest) in %hi and %lo.
+        .sched  pool=69-81,90,94-96,98-100,103-104,107-109,111-113,117-120 scratch=66-127
+.Lsh_pass:
+        lqa     %pa, sh_const+304
+        lqa     %pb, sh_const+320
+        .irp    Q, 0, 1, 2, 3
+        lqd     %ma\Q, 64*\Q($68)
+        lqd     %mb\Q, 64*\Q+16($68)
+        lqd     %mc\Q, 64*\Q+32($68)
+        lqd     %md\Q, 64*\Q+48($68)
+        ceqi    %ea\Q, %ma\Q, -1
+        ceqi    %eb\Q, %mb\Q, -1
+        ceqi    %ec\Q, %mc\Q, -1
+        ceqi    %ed\Q, %md\Q, -1
+        shufb   %tab\Q, %ea\Q, %eb\Q, %pa
+        shufb   %tcd\Q, %ec\Q, %ed\Q, %pb
+        or      %t\Q, %tab\Q, %tcd\Q
+        gbb     %g\Q, %t\Q
+        .endr
+        shli    %g0s, %g0, 16
+        shli    %g2s, %g2, 16
+        or      %hig, %g0s, %g1
+        or      %log, %g2s, %g3
+        xori    %hi, %hig, -1
+        clz     %hiz, %hi
+        xori    %lo, %log, -1
+        clz     %loz, %lo
+        ceqi    %hin, %hi, 0
+        ai      %lo32, %loz, 32
+        selb    %pos, %hiz, %lo32, %hin        # 64: none left
+        ceqi    %none, %pos, 64
+        andi    %pq, %pos, -4
+        shli    %go, %pq, 2                   # its group * 16
+        andi    %ln, %pos, 3
+        shli    %lb, %ln, 2                   # its lane * 4
+        lqx     %mq, $68, %go
+        rotqby  $110, %mq, %lb                # the material, preferred slot
+        brnz    %none, .Lsh_done              # none left: the packet is done
+        .endsched
+.Lsh_material:
+        .sched  pool=69,76-81,90,94-96,98-100,104,107-109,111-113,117-120 scratch=66-127
+        lqd     %run, SH_RUN+48($66)
+        lqd     %cp, SH_STATS+SHS_PASSES($66)
+        lqd     %cl, SH_STATS+SHS_MLOOK($66)
+        rotqbyi $101, %run, 8                 # the material cache's EA, index mask
+        rotqbyi %mmask, %run, 12
+        ai      %cp1, %cp, 1
+        ai      %cl1, %cl, 1
+        stqd    %cp1, SH_STATS+SHS_PASSES($66)
+        stqd    %cl1, SH_STATS+SHS_MLOOK($66)
+        and     %mi, $110, %mmask             # material cache
+        shli    %to, %mi, 4
+        ila     %tb, SH_MTAGS
+        a       %t1, %to, %tb
+        a       $72, %t1, $66
+        shli    %lo, %mi, 5
+        ila     %lb, SH_MDATA
+        a       %l1, %lo, %lb
+        a       $73, %l1, $66
+        lqd     %tag, 0($72)
+        ceq     %hit, %tag, $110
+        brz     %hit, .Lsh_mmiss
+        .endsched
+.Lsh_mhit:
+        .sched  pool=69,76-81,90,94-96,98-100,104,107-109,111-113,117-120 scratch=66-127
+        lqd     %kd, 0($73)                   # diffuse r, g, b
+        lqa     $91, sh_const+64              # (the patterns are the block's pool)
+        lqa     $92, sh_const+80
+        lqa     $93, sh_const+96
+        shufb   $121, %kd, %kd, $91
+        shufb   $122, %kd, %kd, $92
+        shufb   $123, %kd, %kd, $93
+        shufb   $110, $110, $110, $91         # the material in every lane
+        lqa     $124, sh_const+112            # ambient
+        lqa     $125, sh_const+176            # 1.0
+        lqa     $126, sh_const+144            # 0.5
+        lqa     $127, sh_const+160            # 1.5
+        lqa     $106, sh_const+128            # 255
+        lqa     $88, sh_const+272             # r, g to a colour word
+        lqa     $89, sh_const+288             # b to it
+        .endsched
+.Lsh_run:
+        .sched  pool=69,76-81,90,94-96,98-100,104,107-109,111-113,117-120 scratch=66-127
+        cgti    %notlast, $84, 1              # not the last light: shades no ray
+        il      %m2, -2
+        selb    $87, $110, %m2, %notlast      # the material shaded
+        ceqi    %black, $84, 0                # a later pass (or no light): a black light
+        ila     %zero, sh_zero
+        selb    %lp, $82, %zero, %black
+        lqd     $70, 0(%lp)                   # the light's position, colour
+        lqd     $71, 16(%lp)
+        lqd     $72, 32(%lp)
+        lqd     $73, 48(%lp)
+        lqd     $74, 64(%lp)
+        lqd     $75, 80(%lp)
+        il      $86, -1                       # every ray shaded, so far
         il      $67, 0
-        .sched  pool=68-69,76-81,86-90,94-96,98,106-124 scratch=66-127
-.Lsh_light_g:
+        stqd    $82, SH_RUN($66)              # (registers of the block's pool)
+        stqd    $84, SH_RUN+16($66)
+        stqd    $110, SH_RUN+32($66)
+        .endsched
+        .sched  pool=69,76-82,84,90-105,107-114,116-120 scratch=66-127
+.Lsh_shade_g:
         a       %gp, $66, $67
         a       %vp, $83, $67
+        a       %pp, $85, $67
+        a       %op, $115, $67
+        il      %none, -1
         .irp    H, 0, 16, 32, 48
         lqd     %nx\H, SH_NX+\H(%gp)
         lqd     %ny\H, SH_NY+\H(%gp)
@@ -519,12 +684,9 @@ shade_packet:
         lqd     %py\H, SH_PY+\H(%gp)
         lqd     %pz\H, SH_PZ+\H(%gp)
         lqd     %vis\H, \H(%vp)
-        lqd     %ir\H, SH_IRR_R+\H(%gp)
-        lqd     %ig\H, SH_IRR_G+\H(%gp)
-        lqd     %ib\H, SH_IRR_B+\H(%gp)
-        and     %ira\H, %ir\H, $85
-        and     %iga\H, %ig\H, $85
-        and     %iba\H, %ib\H, $85
+        lqd     %ir\H, \H(%pp)                # the sums so far (r, g, b 256 bytes apart)
+        lqd     %ig\H, 256+\H(%pp)
+        lqd     %ib\H, 512+\H(%pp)
         fm      %nn1\H, %nx\H, %nx\H          # dot(N, N)
         fma     %nn2\H, %ny\H, %ny\H, %nn1\H
         fma     %nn\H, %nz\H, %nz\H, %nn2\H
@@ -550,91 +712,17 @@ shade_packet:
         fcgt    %big\H, %cs1\H, $125
         selb    %cs2\H, %cs1\H, $125, %big\H
         and     %cs\H, %cs2\H, %lit\H
-        fma     %or\H, %cs\H, $73, %ira\H
-        fma     %og\H, %cs\H, $74, %iga\H
-        fma     %ob\H, %cs\H, $75, %iba\H
+        fma     %or\H, %cs\H, $73, %ir\H      # a black light adds exactly 0
+        fma     %og\H, %cs\H, $74, %ig\H
+        fma     %ob\H, %cs\H, $75, %ib\H
       ~ stqd    %or\H, SH_IRR_R+\H(%gp)
       ~ stqd    %og\H, SH_IRR_G+\H(%gp)
       ~ stqd    %ob\H, SH_IRR_B+\H(%gp)
-        .endr
-        ai      $67, $67, 64
-        ceqi    %end, $67, 256
-        hbrr    .Lsh_light_br, .Lsh_light_g
-.Lsh_light_br:
-        brz     %end, .Lsh_light_g
-        .endsched
-        il      $85, -1
-        ai      $82, $82, 96
-        ai      $83, $83, 256
-        ai      $84, $84, -1
-        brnz    $84, .Lsh_light
-
-        # ---- 3. the colour block: wait for its previous put, clear to black
-.Lsh_colour:
-        lqd     $70, SH_STATS+SHS_PACKETS($66)
-        andi    $114, $70, 1                  # which block
-        shli    $115, $114, 8
-        SH_ADDI $115, $115, SH_OUT
-        a       $115, $115, $66               # its address
-        ai      $116, $114, 6                 # its tag
-        il      $71, 1
-        shl     $71, $71, $116
-        wrch    $MFC_WrTagMask, $71
-        il      $71, 2
-        wrch    $MFC_WrTagUpdate, $71
-        rdch    $71, $MFC_RdTagStat
-        ila     $90, sh_const
-        lqd     $71, 192($90)
-        .irp    Q, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
-        stqd    $71, \Q($115)
-        .endr
-
-        # ---- 4. one pass per material still referenced
-        SH_ADDI $68, $66, SH_MAT
-        br      .Lsh_pass
-.Lsh_material:
-        SH_COUNT SHS_PASSES, $74
-        # material cache
-        and     $71, $110, $105
-        shli    $72, $71, 4
-        SH_ADDI $72, $72, SH_MTAGS
-        a       $72, $72, $66
-        shli    $73, $71, 5
-        SH_ADDI $73, $73, SH_MDATA
-        a       $73, $73, $66
-        lqd     $74, 0($72)
-        ceq     $75, $74, $110
-        SH_COUNT SHS_MLOOK, $76
-        brz     $75, .Lsh_mmiss
-.Lsh_mhit:
-        lqd     $74, 0($73)                   # diffuse r, g, b
-        shufb   $121, $74, $74, $91
-        shufb   $122, $74, $74, $92
-        shufb   $123, $74, $74, $93
-        shufb   $110, $110, $110, $91         # the material in every lane
-        ila     $90, sh_const
-        lqd     $124, 112($90)                # ambient
-        lqd     $125, 176($90)                # 1.0
-        lqd     $126, 144($90)                # 0.5
-        lqd     $127, 160($90)                # 1.5
-        lqd     $106, 128($90)                # 255
-        il      $67, 0
-        .sched  pool=69-90,94-96,98-100,103-104,108-109,111-113,117-120 scratch=66-127
-.Lsh_apply:
-        a       %gp, $66, $67
-        a       %op, $115, $67
-        il      %none, -1
-        fsmbi   %lo24, 0x7777                  # the low 24 bits of each word
-        fsmbi   %lo16, 0x3333                  # ... 16 bits
-        .irp    H, 0, 16, 32, 48
         lqd     %m\H, SH_MAT+\H(%gp)
-        ceq     %sel\H, %m\H, $110            # this shader's rays
-        lqd     %ir\H, SH_IRR_R+\H(%gp)
-        lqd     %ig\H, SH_IRR_G+\H(%gp)
-        lqd     %ib\H, SH_IRR_B+\H(%gp)
-        fa      %ra\H, %ir\H, $124         # kd * (ambient + irradiance), clamped,
-        fa      %ga\H, %ig\H, $124
-        fa      %ba\H, %ib\H, $124
+        ceq     %sel\H, %m\H, $87            # this shader's rays
+        fa      %ra\H, %or\H, $124         # kd * (ambient + irradiance), clamped,
+        fa      %ga\H, %og\H, $124
+        fa      %ba\H, %ob\H, $124
         fm      %rk\H, %ra\H, $121         # to 8 bits: (c 255 + 0.5) truncated, c at
         fm      %gk\H, %ga\H, $122         # most 1: c 255 + 0.5 in 8.24 fixed point,
         fm      %bk\H, %ba\H, $123         # which saturates at 256 (0xffffffff) and
@@ -644,138 +732,55 @@ shade_packet:
         cfltu   %gu\H, %gs\H, 24
         fma     %bs\H, %bk\H, $106, $126
         cfltu   %bu\H, %bs\H, 24
-        rotmi   %gh\H, %gu\H, -8
-        rotmi   %bh\H, %bu\H, -16
-        selb    %rg\H, %ru\H, %gh\H, %lo24   # r, then g from bit 23, b from bit 15
-        selb    %rgb\H, %rg\H, %bh\H, %lo16
-        ori     %col\H, %rgb\H, 0xff
+        shufb   %rg\H, %ru\H, %gu\H, $88     # the top bytes: r, g, -, 0xff
+        shufb   %col\H, %rg\H, %bu\H, $89    # r, g, b, 0xff
         lqd     %o\H, \H(%op)
         selb    %o2\H, %o\H, %col\H, %sel\H
       ~ stqd    %o2\H, \H(%op)
         selb    %mn\H, %m\H, %none, %sel\H    # these rays are shaded
       ~ stqd    %mn\H, SH_MAT+\H(%gp)
+        and     $86, $86, %mn\H
         .endr
         ai      $67, $67, 64
         ceqi    %end, $67, 256
-        hbrr    .Lsh_apply_br, .Lsh_apply
-.Lsh_apply_br:
-        brz     %end, .Lsh_apply
+        ila     %loop, .Lsh_shade_g
+        ila     %exit, .Lsh_shade_end
+        selb    %to, %loop, %exit, %end       # (a hinted exit: no miss at the end)
+        hbr     .Lsh_shade_br, %to
+.Lsh_shade_br:
+        bi      %to
         .endsched
-        # the first ray (group by group, lane by lane) with a material left: a 64-bit
-        # mask of the rays without one (groups 0-7 in %hi, 8-15 in %lo, lane 0 first)
-        .sched  pool=69-90,94-96,98-100,103-104,107-109,111-113,117-120 scratch=66-127
-.Lsh_pass:
-        lqd     %m0, 0($68)
-        ceqi    %e0, %m0, -1
-        gb      %b0, %e0
-        shli    %s0, %b0, 28
-        lqd     %m1, 16($68)
-        ceqi    %e1, %m1, -1
-        gb      %b1, %e1
-        shli    %s1, %b1, 24
-        lqd     %m2, 32($68)
-        ceqi    %e2, %m2, -1
-        gb      %b2, %e2
-        shli    %s2, %b2, 20
-        lqd     %m3, 48($68)
-        ceqi    %e3, %m3, -1
-        gb      %b3, %e3
-        shli    %s3, %b3, 16
-        lqd     %m4, 64($68)
-        ceqi    %e4, %m4, -1
-        gb      %b4, %e4
-        shli    %s4, %b4, 12
-        lqd     %m5, 80($68)
-        ceqi    %e5, %m5, -1
-        gb      %b5, %e5
-        shli    %s5, %b5, 8
-        lqd     %m6, 96($68)
-        ceqi    %e6, %m6, -1
-        gb      %b6, %e6
-        shli    %s6, %b6, 4
-        lqd     %m7, 112($68)
-        ceqi    %e7, %m7, -1
-        gb      %b7, %e7
-        shli    %s7, %b7, 0
-        lqd     %m8, 128($68)
-        ceqi    %e8, %m8, -1
-        gb      %b8, %e8
-        shli    %s8, %b8, 28
-        lqd     %m9, 144($68)
-        ceqi    %e9, %m9, -1
-        gb      %b9, %e9
-        shli    %s9, %b9, 24
-        lqd     %m10, 160($68)
-        ceqi    %e10, %m10, -1
-        gb      %b10, %e10
-        shli    %s10, %b10, 20
-        lqd     %m11, 176($68)
-        ceqi    %e11, %m11, -1
-        gb      %b11, %e11
-        shli    %s11, %b11, 16
-        lqd     %m12, 192($68)
-        ceqi    %e12, %m12, -1
-        gb      %b12, %e12
-        shli    %s12, %b12, 12
-        lqd     %m13, 208($68)
-        ceqi    %e13, %m13, -1
-        gb      %b13, %e13
-        shli    %s13, %b13, 8
-        lqd     %m14, 224($68)
-        ceqi    %e14, %m14, -1
-        gb      %b14, %e14
-        shli    %s14, %b14, 4
-        lqd     %m15, 240($68)
-        ceqi    %e15, %m15, -1
-        gb      %b15, %e15
-        shli    %s15, %b15, 0
-        or      %hia, %s0, %s1
-        or      %hib, %s2, %s3
-        or      %hic, %s4, %s5
-        or      %hid, %s6, %s7
-        or      %hie, %hia, %hib
-        or      %hif, %hic, %hid
-        or      %hig, %hie, %hif
-        xori    %hi, %hig, -1
-        clz     %hiz, %hi
-        or      %loa, %s8, %s9
-        or      %lob, %s10, %s11
-        or      %loc, %s12, %s13
-        or      %lod, %s14, %s15
-        or      %loe, %loa, %lob
-        or      %lof, %loc, %lod
-        or      %log, %loe, %lof
-        xori    %lo, %log, -1
-        clz     %loz, %lo
-        ceqi    %hin, %hi, 0
-        ai      %lo32, %loz, 32
-        selb    %pos, %hiz, %lo32, %hin        # 64: none left
-        ceqi    %none, %pos, 64
-        andi    %pq, %pos, -4
-        shli    %go, %pq, 2                   # its group * 16
-        andi    %ln, %pos, 3
-        shli    %lb, %ln, 2                   # its lane * 4
-        lqx     %mq, $68, %go
-        rotqby  $110, %mq, %lb                # the material, preferred slot
-        hbrr    .Lsh_pass_br, .Lsh_material
-.Lsh_pass_br:
-        brz     %none, .Lsh_material          # a material left: its pass
-        .endsched
+.Lsh_shade_end:
+        lqd     $84, SH_RUN+16($66)
+        ceqi    $77, $86, -1                  # no material left: done
+        lqd     $82, SH_RUN($66)
+        gb      $77, $77
+        lqd     $110, SH_RUN+32($66)
+        ceqi    $77, $77, 15
+        SH_ADDI $85, $66, SH_IRR_R            # the sums are stored now
+        brz     $84, 2f                       # a later pass (or no light) is one run
+        ai      $82, $82, 96
+        ai      $83, $83, 256
+        ai      $84, $84, -1
+        brnz    $84, .Lsh_run                 # the next light
+2:      brz     $77, .Lsh_pass                # a material left: its pass
 
-        # ---- 5. put the block to ea_colour + packet * 256
+        # ---- 4. put the block to ea_colour + packet * 256
 .Lsh_done:
+        lqd     $70, SH_RUN+48($66)           # the block's EA, tag
+        lqd     $74, SH_STATS+SHS_PACKETS($66)
         hbr     .Lsh_ret, $0
-        shli    $70, $97, 8
-        a       $70, $70, $102
         il      $71, 256
+        il      $72, 0x20
+        rotqbyi $116, $70, 4
+        ai      $74, $74, 1
         wrch    $MFC_LSA, $115
         wrch    $MFC_EAH, ZERO
         wrch    $MFC_EAL, $70
         wrch    $MFC_Size, $71
         wrch    $MFC_TagID, $116
-        il      $71, 0x20
-        wrch    $MFC_Cmd, $71
-        SH_COUNT SHS_PACKETS, $74
+        wrch    $MFC_Cmd, $72
+        stqd    $74, SH_STATS+SHS_PACKETS($66)
 .Lsh_ret:
         bi      $0
 
@@ -887,45 +892,7 @@ shade_packet:
         shufb   %mc, %kq0, %kq8, %psnd
         or      %mat, %mc, %miss              # no hit: no material
       ~ stqd    %mat, SH_MAT(%gp)
-        lqd     %t, CTX_RAY_T(%rp)
-        lqd     %dx, 0(%rp)
-        lqd     %dy, 256(%rp)
-        lqd     %dz, 512(%rp)
-        fma     %px, %t, %dx, $107            # the hit point
-        fma     %py, %t, %dy, $108
-        fma     %pz, %t, %dz, $109
-      ~ stqd    %px, SH_PX(%gp)
-      ~ stqd    %py, SH_PY(%gp)
-      ~ stqd    %pz, SH_PZ(%gp)
-        ceqi    %k0, %k, 0
-        ceqi    %k1, %k, 1
-        selb    %u1, %px, %pz, %k1            # u: k0 -> y, k1 -> z, k2 -> x
-        selb    %u, %u1, %py, %k0
-        selb    %v1, %py, %px, %k1            # v: k0 -> z, k1 -> x, k2 -> y
-        selb    %v, %v1, %pz, %k0
-        fm      %b1, %c0q1, %u                 # beta = (b_nu u + b_nv v) + b_d
-        fma     %b2, %c1q1, %v, %b1
-        fa      %beta, %b2, %c2q1
-        fm      %g1, %c0q2, %u                 # gamma = (c_nu u + c_nv v) + c_d
-        fma     %g2, %c1q2, %v, %g1
-        fa      %gamma, %g2, %c2q2
-        fma     %nx1, %c0d1, %beta, %c0n0       # n0 + (n1 - n0) beta + (n2 - n0) gamma
-        fma     %ny1, %c1d1, %beta, %c1n0
-        fma     %nz1, %c2d1, %beta, %c2n0
-        fma     %nx, %c0d2, %gamma, %nx1
-        fma     %ny, %c1d2, %gamma, %ny1
-        fma     %nz, %c2d2, %gamma, %nz1
-        fm      %e1, %nx, %dx                 # dot(N, d) > 0: negate N
-        fma     %e2, %ny, %dy, %e1
-        fma     %e, %nz, %dz, %e2
-        fcgt    %f1, %e, ZERO
-        and     %f, %f1, $122
-        xor     %nxo, %nx, %f
-        xor     %nyo, %ny, %f
-        xor     %nzo, %nz, %f
-      ~ stqd    %nxo, SH_NX(%gp)
-      ~ stqd    %nyo, SH_NY(%gp)
-      ~ stqd    %nzo, SH_NZ(%gp)
+        SH_GROUP_COLUMNS %k, %c0q1, %c1q1, %c2q1, %c0q2, %c1q2, %c2q2, %c0n0, %c1n0, %c2n0, %c0d1, %c1d1, %c2d1, %c0d2, %c1d2, %c2d2
         cntb    %mc1, %mb                     # counted: a group, its hit lanes
         sfi     %hits, %mc1, 4
         lqd     %cg, SH_STATS+SHS_GROUPS($66)
@@ -1001,106 +968,42 @@ shade_packet:
         .endr
         brsl    $95, sh_vertex_land
 .Lsh_fetched:
-        # the lanes' records and normals as columns
-        lqd     $70, SH_STAGE+0($66)
-        lqd     $71, SH_STAGE+64($66)
-        lqd     $72, SH_STAGE+128($66)
-        lqd     $73, SH_STAGE+192($66)
-        SH_TRANSPOSE $70, $71, $72, $73, $74, $75, $76, $77, $80, $81, $82, $83
-        ori     $120, $77, 0                  # k
-        lqd     $70, SH_STAGE+16($66)
-        lqd     $71, SH_STAGE+80($66)
-        lqd     $72, SH_STAGE+144($66)
-        lqd     $73, SH_STAGE+208($66)
-        SH_TRANSPOSE $70, $71, $72, $73, $121, $122, $123, $77, $80, $81, $82, $83
-        lqd     $70, SH_STAGE+32($66)
-        lqd     $71, SH_STAGE+96($66)
-        lqd     $72, SH_STAGE+160($66)
-        lqd     $73, SH_STAGE+224($66)
-        SH_TRANSPOSE $70, $71, $72, $73, $124, $125, $126, $77, $80, $81, $82, $83
-        lqd     $70, SH_STAGE+48($66)
-        lqd     $71, SH_STAGE+112($66)
-        lqd     $72, SH_STAGE+176($66)
-        lqd     $73, SH_STAGE+240($66)
-        SH_TRANSPOSE $70, $71, $72, $73, $74, $75, $76, $127, $80, $81, $82, $83
-        or      $127, $127, $78               # misses: no material
-        SH_ADDI $74, $66, SH_MAT
-        stqx    $127, $74, $67                # materials (-1 for misses)
-        # the hit point o + t d and its projection (u, v) by k
-        lqx     $70, $112, $67                # t
-        lqx     $71, $113, $67                # dx
-        ai      $74, $113, 256
-        lqx     $72, $74, $67                 # dy
-        SH_ADDI $74, $113, 512
-        lqx     $73, $74, $67                 # dz
-        fma     $84, $70, $71, $107           # Px
-        fma     $85, $70, $72, $108           # Py
-        fma     $86, $70, $73, $109           # Pz
-        SH_ADDI $74, $66, SH_PX
-        stqx    $84, $74, $67
-        SH_ADDI $74, $66, SH_PY
-        stqx    $85, $74, $67
-        SH_ADDI $74, $66, SH_PZ
-        stqx    $86, $74, $67
-        ceqi    $87, $120, 0
-        ceqi    $88, $120, 1
-        selb    $89, $84, $86, $88            # u: k0 -> y, k1 -> z, k2 -> x
-        selb    $89, $89, $85, $87
-        selb    $90, $85, $84, $88            # v: k0 -> z, k1 -> x, k2 -> y
-        selb    $90, $90, $86, $87
-        fm      $94, $121, $89                # beta = (b_nu u + b_nv v) + b_d
-        fma     $94, $122, $90, $94
-        fa      $94, $94, $123
-        fm      $95, $124, $89                # gamma = (c_nu u + c_nv v) + c_d
-        fma     $95, $125, $90, $95
-        fa      $95, $95, $126
-        # the normal n0 + beta (n1 - n0) + gamma (n2 - n0), turned to the eye
-        .irp    C, 0, 16, 32
-        lqd     $74, SH_NRM+\C($66)
-        lqd     $75, SH_NRM+64+\C($66)
-        lqd     $76, SH_NRM+128+\C($66)
-        lqd     $77, SH_NRM+192+\C($66)
-        SH_TRANSPOSE $74, $75, $76, $77, $80, $81, $82, $83, $84, $85, $86, $87
-        stqd    $80, SH_SCRATCH+3*\C($66)    # vertex C/16: x, y, z columns
-        stqd    $81, SH_SCRATCH+3*\C+16($66)
-        stqd    $82, SH_SCRATCH+3*\C+32($66)
+        # the lanes' records and normals as columns (4x4 transposes: $117, $118 pair the
+        # rows' words, $119, $98 take the columns); k (record word 3), b and c (words
+        # 4-6, 8-10), the material (word 15)
+        .sched  pool=70-77,79-90,94-95,120-121,123-127 scratch=66-127
+        .irp    Q, 0, 16, 32, 48, 256, 272, 288   # then the normals (SH_NRM)
+        lqd     %ra\Q, SH_STAGE+\Q($66)
+        lqd     %rb\Q, SH_STAGE+64+\Q($66)
+        lqd     %rc\Q, SH_STAGE+128+\Q($66)
+        lqd     %rd\Q, SH_STAGE+192+\Q($66)
+        shufb   %hab\Q, %ra\Q, %rb\Q, $118
+        shufb   %hcd\Q, %rc\Q, %rd\Q, $118
         .endr
-        lqd     $74, SH_SCRATCH($66)          # n0
-        lqd     $75, SH_SCRATCH+16($66)
-        lqd     $76, SH_SCRATCH+32($66)
-        lqd     $120, SH_SCRATCH+48($66)      # n1
-        lqd     $80, SH_SCRATCH+64($66)
-        lqd     $81, SH_SCRATCH+80($66)
-        lqd     $82, SH_SCRATCH+96($66)       # n2
-        lqd     $83, SH_SCRATCH+112($66)
-        lqd     $84, SH_SCRATCH+128($66)
-        fs      $85, $120, $74                # n1 - n0
-        fs      $86, $80, $75
-        fs      $87, $81, $76
-        fs      $88, $82, $74                 # n2 - n0
-        fs      $89, $83, $75
-        fs      $90, $84, $76
-        fma     $85, $85, $94, $74            # n0 + (n1 - n0) beta
-        fma     $86, $86, $94, $75
-        fma     $87, $87, $94, $76
-        fma     $85, $88, $95, $85            # + (n2 - n0) gamma
-        fma     $86, $89, $95, $86
-        fma     $87, $90, $95, $87
-        fm      $88, $85, $71                 # dot(N, d) > 0: negate N
-        fma     $88, $86, $72, $88
-        fma     $88, $87, $73, $88
-        fcgt    $88, $88, ZERO
-        ilhu    $89, 0x8000
-        and     $88, $88, $89
-        xor     $85, $85, $88
-        xor     $86, $86, $88
-        xor     $87, $87, $88
-        SH_ADDI $74, $66, SH_NX
-        stqx    $85, $74, $67
-        SH_ADDI $74, $66, SH_NY
-        stqx    $86, $74, $67
-        SH_ADDI $74, $66, SH_NZ
-        stqx    $87, $74, $67
+        .irp    Q, 16, 32, 256, 272, 288
+        shufb   %lab\Q, %ra\Q, %rb\Q, $117
+        shufb   %lcd\Q, %rc\Q, %rd\Q, $117
+        shufb   %w0\Q, %lab\Q, %lcd\Q, $119
+        shufb   %w1\Q, %lab\Q, %lcd\Q, $98
+        shufb   %w2\Q, %hab\Q, %hcd\Q, $119
+        .endr
+        .irp    Q, 0, 48
+        shufb   %w3\Q, %hab\Q, %hcd\Q, $98
+        .endr
+        a       %gp, $66, $67
+        a       %rp, $113, $67
+        or      %mat, %w348, $78              # misses: no material
+      ~ stqd    %mat, SH_MAT(%gp)
+        # the normal n0 + beta (n1 - n0) + gamma (n2 - n0) (vertex i: w0, w1, w2 of
+        # 256 + 16 i), turned to the eye
+        fs      %d1x, %w0272, %w0256          # n1 - n0
+        fs      %d1y, %w1272, %w1256
+        fs      %d1z, %w2272, %w2256
+        fs      %d2x, %w0288, %w0256          # n2 - n0
+        fs      %d2y, %w1288, %w1256
+        fs      %d2z, %w2288, %w2256
+        SH_GROUP_COLUMNS %w30, %w016, %w116, %w216, %w032, %w132, %w232, %w0256, %w1256, %w2256, %d1x, %d1y, %d1z, %d2x, %d2y, %d2z
+        .endsched
 .Lsh_slow_done:
         SH_ADDI $74, $66, SH_SAVE
         .irp    R, 0, 1, 2, 3, 4
@@ -1125,16 +1028,63 @@ shade_packet:
         stqx    $74, $75, $67
         br      .Lsh_slow_next
 
-.Lsh_dark:                                    # no light: no irradiance
-        il      $67, 0
-1:      a       $70, $66, $67
-        stqd    ZERO, SH_IRR_R($70)
-        stqd    ZERO, SH_IRR_G($70)
-        stqd    ZERO, SH_IRR_B($70)
-        ai      $67, $67, 16
-        ceqi    $71, $67, 256
-        brz     $71, 1b
-        br      .Lsh_colour
+        # ---- the first call: fetch the block, splat the lights, clear counters and caches
+.Lsh_empty:                                   # no ray hit
+        il      $70, -1
+        SH_ADDI $71, $66, SH_MAT
+        .irp    Q, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
+        stqd    $70, \Q($71)
+        .endr
+        br      .Lsh_iset_done
+
+.Lsh_first:
+        stqd    $68, SH_FLAG($66)
+        SH_ADDI $72, $66, SH_BLOCK
+        il      $73, SHADING_BLOCK_BYTES
+        SH_GET  $72, $71, $73, $74
+        SH_ADDI $71, $66, SH_DCOUNT
+        stqd    ZERO, 0($71)                  # no vertex in flight
+        il      $71, 10
+        SH_FILL ZERO, SH_STATS
+        ila     $90, sh_const
+        lqd     $91, 64($90)
+        lqd     $92, 80($90)
+        lqd     $93, 96($90)
+        lqd     $70, SH_BLOCK($66)
+        rotqbyi $71, $70, SHB_LIGHT_COUNT
+        SH_ADDI $72, $66, SH_BLOCK+SHB_LIGHTS
+        SH_ADDI $73, $66, SH_LIGHTS
+        brz     $71, 2f
+1:      lqd     $74, 0($72)
+        lqd     $75, 16($72)
+        .irp    W, 74, 75                     # position, colour: x, y, z splats
+        .irp    P, 91, 92, 93
+        shufb   $76, $\W, $\W, $\P
+        stqd    $76, (\W-74)*48+(\P-91)*16($73)
+        .endr
+        .endr
+        ai      $72, $72, SHB_LIGHT_BYTES
+        ai      $73, $73, 96
+        ai      $71, $71, -1
+        brnz    $71, 1b
+2:      il      $74, -1                       # every light visible (no shadow rays)
+        il      $71, 8 * 16
+        SH_FILL $74, SH_VIS
+        lqd     $70, SH_BLOCK+SHB_MODE($66)   # mode, early, vertex log2, material log2
+        il      $74, -1
+        il      $75, 1
+        rotqbyi $71, $70, 8
+        shl     $71, $75, $71                 # vertex entries
+        SH_FILL $74, SH_VTAGS
+        rotqbyi $71, $70, 8
+        shl     $71, $75, $71
+        ai      $71, $71, -1
+        shufb   $121, $71, $71, $91           # the vertex index mask in every lane
+        stqd    $121, SH_VMASK($66)
+        rotqbyi $71, $70, 12
+        shl     $71, $75, $71                 # material entries
+        SH_FILL $74, SH_MTAGS
+        br      .Lsh_ready
 
 .Lsh_mmiss:                                   # a material cache miss
         shli    $74, $110, 5
@@ -1152,41 +1102,62 @@ shade_packet:
 # to sh_vertex_land, which the slow path calls once the group's lanes are looked up: one
 # wait for all their misses, then in lookup order each slot's normal (the one quadword
 # of a vertex record the module reads) to its line (so a line ends up with the last
-# vertex looked up there) and to the lane. A lookup of a vertex
-# in flight is no miss: its copy comes from its line, after the slot's.
+# vertex looked up there) and to the lane, and the vertex to the line's tag (landed). A
+# lookup of a vertex in flight is no miss: its copy comes from its line, after the slot's.
+# (Uses $71-$77, $82, $85-$87, $90, $94, $125-$127.)
 sh_vertex_miss:
-        hbr     3f, $88
-        SH_ADDI $87, $66, SH_DCOUNT
-        lqd     $86, 0($87)                   # bytes of copies (32 each)
-        lqd     $85, 0($83)
-        ilhu    $90, 0x8000
-        or      $94, $81, $90                 # the vertex, in flight
-        ceq     $85, $85, $94
-        shli    $82, $86, 1
-        SH_ADDI $82, $82, SH_VSTAGE
-        a       $82, $82, $66                 # its slot
-        brnz    $85, 1f                       # in flight already: from its line
-        shli    $85, $81, 6
-        a       $85, $85, $100
-        SH_QUEUE $82, $85, 64, $85
+        .sched  pool=71-77,85-87,90,125-127 scratch=66-127
+        hbr     .Lsh_vm_ret, $88
+        ila     %o1, SH_DCOUNT
+        a       %dc, $66, %o1
+        lqd     %n, 0(%dc)                    # bytes of copies (32 each)
+        lqd     %tag, 0($83)
+        ilhu    %hb, 0x8000
+        or      $94, $81, %hb                 # the vertex, in flight
+        ceq     %inf, %tag, $94
+        shli    %n2, %n, 1
+        ila     %o2, SH_VSTAGE
+        a       %s1, %n2, %o2
+        a       $82, %s1, $66                 # its slot
+        selb    %src, $82, $84, %inf          # in flight already: from its line
+        a       %lane, $89, $66
+        lqa     %plo, sh_const
+        lqa     %pfh, sh_const+32
+        shufb   %sl, %src, %lane, %plo
+        shufb   %tv, $83, $81, %plo
+        shufb   %rec, %sl, %tv, %pfh          # the source, the lane, the tag, the vertex
+        ila     %o3, SH_DEFER
+        a       %d1, %o3, %n
+        a       %d2, %d1, $66
+        stqd    %rec, 0(%d2)
+        stqd    $84, 16(%d2)                  # the line
+        ai      %n1, %n, 32
+        stqd    %n1, 0(%dc)
+        brnz    %inf, .Lsh_vm_flight
+        .endsched
+        .sched  pool=71-77,85-87,90,125-127 scratch=66-127
+        lqd     %cnt, SH_STATS+SHS_VMISS($66)
+        shli    %ea0, $81, 6
+        a       %ea, %ea0, $100
+        il      %size, 64
+        il      %tg, SH_TAG
+        il      %cmd, 0x40
+        ai      %cnt1, %cnt, 1
+        wrch    $MFC_LSA, $82
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, %ea
+        wrch    $MFC_Size, %size
+        wrch    $MFC_TagID, %tg
+        wrch    $MFC_Cmd, %cmd
         stqd    $94, 0($83)                   # the tag: in flight
-        SH_COUNT SHS_VMISS, $85
-2:      a       $85, $89, $66
-        lqa     $90, sh_const+256
-        shufb   $85, $85, $82, $90            # the source, the destination
-        SH_ADDI $94, $66, SH_DEFER
-        a       $94, $94, $86
-        stqd    $85, 0($94)
-        stqd    $84, 16($94)                  # the line
-        ai      $86, $86, 32
-        stqd    $86, 0($87)
-3:      bi      $88
-1:      ori     $82, $84, 0
-        br      2b
+        stqd    %cnt1, SH_STATS+SHS_VMISS($66)
+.Lsh_vm_ret:
+        bi      $88
+        .endsched
+.Lsh_vm_flight:
+        bi      $88
 
-# the vertices in flight: one wait, then each copy (the source's normal to the line and
-# the destination) and the line's tag's bit 31 cleared; back to $95 (the slow path's
-# $115 tags, $116 lines; uses $81, $85-$90, $94)
+# the vertices in flight: one wait, then each copy; back to $95 (uses $81, $85-$90, $94)
 sh_vertex_land:
         SH_ADDI $87, $66, SH_DCOUNT
         lqd     $86, 0($87)
@@ -1195,23 +1166,23 @@ sh_vertex_land:
         SH_WAIT $85
         SH_ADDI $94, $66, SH_DEFER
         a       $86, $86, $94                 # the end
-1:      lqd     $85, 0($94)                   # the source, the destination
-        hbrr    3f, 1b
-        lqd     $87, 16($94)                  # the line
-        lqd     $81, 16($85)                  # the normal (all the lines are read for)
-        rotqbyi $88, $85, 4
-        sf      $89, $116, $87
-        rotmi   $89, $89, -2
-        a       $89, $89, $115                # the line's tag
-        lqd     $90, 0($89)
-        stqd    $81, 16($87)
-        stqd    $81, 0($88)
-        shli    $90, $90, 1
-        rotmi   $90, $90, -1                  # landed
-        stqd    $90, 0($89)
+        .sched  pool=81,85,87-90 scratch=66-127
+1:
+        lqd     %r0, 0($94)                   # the source, the lane, the tag, the vertex
+        lqd     %line, 16($94)
+        lqd     %nrm, 16(%r0)                 # the normal (all the lines are read for)
+        rotqbyi %lane, %r0, 4
+        rotqbyi %tag, %r0, 8
+        rotqbyi %v, %r0, 12
+        stqd    %nrm, 16(%line)
+        stqd    %nrm, 0(%lane)
+        stqd    %v, 0(%tag)                   # landed
         ai      $94, $94, 32
-        ceq     $85, $94, $86
-3:      brz     $85, 1b
+        ceq     %end, $94, $86
+        hbrr    3f, 1b
+3:
+        brz     %end, 1b
+        .endsched
 2:      bi      $95
 
 # a triangle record the traversal's cache does not hold: record $80 into $82, not waited

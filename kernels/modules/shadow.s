@@ -90,12 +90,15 @@ sv_minus1:      .float -1.0, -1.0, -1.0, -1.0
 
         .align  3
 shadow_rays:
+        hbr     2f, $127                      # (eight instructions to its branch)
         stqa    $126, sv_tmp
         lqd     $126, SH_BLOCK+SHB_MODE($66)
         ceqi    $126, $126, SHADE_SHADOWS
         brnz    $126, 1f
         lqa     $126, sv_tmp                  # not --shade shadows: every light visible
-        bi      $127
+        nop
+        lnop
+2:      bi      $127
 1:      ila     $126, SHADOW_AREA
         a       $126, $126, $66
         SV_EACH_REG stqd, $126
