@@ -897,33 +897,38 @@ impl Translator<'_> {
     /// One single-precision operation of a float run on the host's vector unit: its
     /// result and the lanes where the interpreter's fast path gives that result (operands
     /// in `ordinary` are known to pass the operand criteria).
+    ///
+    /// The lanes are the interpreter's (`sp4_truncating`: operands normal or zero, result
+    /// normal below the largest magnitude, or a zero that cannot be an underflow), checked
+    /// with fewer host instructions. An operand with exponent 255 is not looked at: the
+    /// host's sum, product or fused multiply-add of an infinity or NaN is an infinity or
+    /// NaN, which the result check declines, so only denormal operands need a check of
+    /// their own. Each range is one signed compare after a wrapping add that moves it to
+    /// the top of the signed words.
     fn single_precision(&mut self, inst: &Inst, ordinary: &[Value]) -> (Value, Value) {
         use Op::*;
         let three = matches!(inst.op, Fma | Fms | Fnms);
         let (a, b) = (self.get(inst.ra), self.get(inst.rb));
         let c = if three { Some(self.get(inst.rc)) } else { None };
-        let exp = self.splat(0x7f80_0000);
-        let step = self.splat(0x0080_0000);
-        let below = self.splat(0x00ff_ffff);
         let abs = self.splat(0x7fff_ffff);
         let zero = self.splat(0);
-        let is_zero = |t: &mut Self, v: Value| {
-            let m = t.b.ins().band(v, abs);
-            t.b.ins().icmp(IntCC::Equal, m, zero)
-        };
-        let normal_or_zero = |t: &mut Self, v: Value| {
-            let e = t.b.ins().band(v, exp);
-            let e = t.b.ins().iadd(e, step);
-            let normal = t.b.ins().icmp(IntCC::SignedGreaterThan, e, below);
-            let z = is_zero(t, v);
-            t.b.ins().bor(normal, z)
-        };
+        let (mag_a, mag_b) = (self.b.ins().band(a, abs), self.b.ins().band(b, abs));
         let mut ok: Option<Value> = None;
         for v in [Some(a), Some(b), c].into_iter().flatten() {
             if ordinary.contains(&v) {
                 continue;
             }
-            let o = normal_or_zero(self, v);
+            // Not a denormal: magnitude 0 or at least 0x0080_0000. Adding 0x7fff_ffff maps
+            // 0 to the largest signed word, denormals to the bottom of the negative words
+            // (up to 0x807f_fffe) and the rest above them.
+            let m = match v {
+                v if v == a => mag_a,
+                v if v == b => mag_b,
+                v => self.b.ins().band(v, abs),
+            };
+            let t = self.b.ins().iadd(m, abs);
+            let floor = self.splat(0x807f_fffe);
+            let o = self.b.ins().icmp(IntCC::SignedGreaterThan, t, floor);
             ok = Some(match ok {
                 Some(k) => self.b.ins().band(k, o),
                 None => o,
@@ -954,16 +959,18 @@ impl Translator<'_> {
         let v = self.b.ins().bitcast(I32X4, le, r);
         let mag = self.b.ins().band(v, abs);
         let result_zero = self.b.ins().icmp(IntCC::Equal, mag, zero);
-        let smallest = self.splat(0x007f_ffff);
-        let largest = self.splat(0x7f7f_ffff);
-        let above = self.b.ins().icmp(IntCC::SignedGreaterThan, mag, smallest);
-        let under = self.b.ins().icmp(IntCC::SignedLessThan, mag, largest);
-        let normal = self.b.ins().band(above, under);
+        // Normal below the largest magnitude: 0x0080_0000..=0x7f7f_fffe, moved by
+        // 0x0080_0001 to 0x0100_0001..=0x7fff_ffff (larger magnitudes wrap negative).
+        let shift = self.splat(0x0080_0001);
+        let shifted = self.b.ins().iadd(mag, shift);
+        let floor = self.splat(0x0100_0000);
+        let normal = self.b.ins().icmp(IntCC::SignedGreaterThan, shifted, floor);
         let zero_ok = if matches!(inst.op, Fa | Fs) {
             result_zero
         } else {
-            let (zero_a, zero_b) = (is_zero(self, a), is_zero(self, b));
-            let factor = self.b.ins().bor(zero_a, zero_b);
+            // A zero product is no underflow where a factor is zero.
+            let least = self.b.ins().umin(mag_a, mag_b);
+            let factor = self.b.ins().icmp(IntCC::Equal, least, zero);
             self.b.ins().band(result_zero, factor)
         };
         let mut good = self.b.ins().bor(normal, zero_ok);
