@@ -11,13 +11,14 @@ use cranelift_codegen::ir::{
     AbiParam, Block as IrBlock, ConstantData, Endianness, InstBuilder, MemFlagsData, Signature,
     UserFuncName, Value,
 };
+use cranelift_codegen::isa::CallConv;
 use cranelift_codegen::settings::{self, Configurable};
 use cranelift_codegen::Context;
 use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{default_libcall_names, Module};
 
-use super::helpers::{helper_for, BRANCH, TAKEN};
+use super::helpers::{exact_run_entry, helper_for, BRANCH, TAKEN};
 use crate::analysis::is_branch;
 use crate::codec::Inst;
 use crate::machine::exec::{execute_in, Core, Reg, LS_MASK, LS_SIZE};
@@ -347,6 +348,19 @@ impl Compiler {
                 s.returns.push(AbiParam::new(I64));
                 b.import_signature(s)
             },
+            exact_sig: {
+                let (_, preserving) = exact_run_entry();
+                let mut s = Signature::new(if preserving {
+                    CallConv::PreserveAll
+                } else {
+                    call_conv
+                });
+                s.params.push(AbiParam::new(I64));
+                s.params.push(AbiParam::new(I64));
+                s.params.push(AbiParam::new(I32));
+                s.params.push(AbiParam::new(I32));
+                b.import_signature(s)
+            },
             hook_sig: {
                 let mut s = Signature::new(call_conv);
                 s.params.push(AbiParam::new(I64));
@@ -418,6 +432,8 @@ struct Translator<'a> {
     cache: [Option<Value>; 128],
     helper_sig: cranelift_codegen::ir::SigRef,
     hook_sig: cranelift_codegen::ir::SigRef,
+    /// The call of a float run's exact path ([`exact_run_entry`]).
+    exact_sig: cranelift_codegen::ir::SigRef,
     hook: StoreHook,
     scratch: &'a mut Core,
     /// Inside a run of float arithmetic: the registers written so far, whose stores wait
@@ -880,12 +896,15 @@ impl Translator<'_> {
         }
         self.b.ins().jump(cont, &[]);
         self.b.switch_to_block(exact);
-        for (k, inst) in run.iter().enumerate() {
-            if matches!(inst.op, Op::Nop | Op::Lnop) {
-                continue;
-            }
-            self.emit_helper(inst, p.wrapping_add(4 * k as u32) & LS_MASK);
-        }
+        // One call for the whole run, which keeps every register where the host allows.
+        let (f, _) = exact_run_entry();
+        let callee = self.b.ins().iconst(I64, f as i64);
+        let insts = self.b.ins().iconst(I64, run.as_ptr() as usize as i64);
+        let at = self.b.ins().iconst(I32, p as i64);
+        let n = self.b.ins().iconst(I32, run.len() as i64);
+        self.b
+            .ins()
+            .call_indirect(self.exact_sig, callee, &[self.core, insts, at, n]);
         self.b.ins().jump(cont, &[]);
         self.b.switch_to_block(cont);
         // Both paths wrote the run's results to memory; every other register is as before.
