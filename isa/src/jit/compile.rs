@@ -11,13 +11,14 @@ use cranelift_codegen::ir::{
     AbiParam, Block as IrBlock, ConstantData, Endianness, InstBuilder, MemFlagsData, Signature,
     UserFuncName, Value,
 };
+use cranelift_codegen::isa::CallConv;
 use cranelift_codegen::settings::{self, Configurable};
 use cranelift_codegen::Context;
 use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{default_libcall_names, Module};
 
-use super::helpers::{helper_for, BRANCH, TAKEN};
+use super::helpers::{exact_run_entry, helper_for, BRANCH, TAKEN};
 use crate::analysis::is_branch;
 use crate::codec::Inst;
 use crate::machine::exec::{execute_in, Core, Reg, LS_MASK, LS_SIZE};
@@ -347,6 +348,19 @@ impl Compiler {
                 s.returns.push(AbiParam::new(I64));
                 b.import_signature(s)
             },
+            exact_sig: {
+                let (_, preserving) = exact_run_entry();
+                let mut s = Signature::new(if preserving {
+                    CallConv::PreserveAll
+                } else {
+                    call_conv
+                });
+                s.params.push(AbiParam::new(I64));
+                s.params.push(AbiParam::new(I64));
+                s.params.push(AbiParam::new(I32));
+                s.params.push(AbiParam::new(I32));
+                b.import_signature(s)
+            },
             hook_sig: {
                 let mut s = Signature::new(call_conv);
                 s.params.push(AbiParam::new(I64));
@@ -418,6 +432,8 @@ struct Translator<'a> {
     cache: [Option<Value>; 128],
     helper_sig: cranelift_codegen::ir::SigRef,
     hook_sig: cranelift_codegen::ir::SigRef,
+    /// The call of a float run's exact path ([`exact_run_entry`]).
+    exact_sig: cranelift_codegen::ir::SigRef,
     hook: StoreHook,
     scratch: &'a mut Core,
     /// Inside a run of float arithmetic: the registers written so far, whose stores wait
@@ -880,12 +896,15 @@ impl Translator<'_> {
         }
         self.b.ins().jump(cont, &[]);
         self.b.switch_to_block(exact);
-        for (k, inst) in run.iter().enumerate() {
-            if matches!(inst.op, Op::Nop | Op::Lnop) {
-                continue;
-            }
-            self.emit_helper(inst, p.wrapping_add(4 * k as u32) & LS_MASK);
-        }
+        // One call for the whole run, which keeps every register where the host allows.
+        let (f, _) = exact_run_entry();
+        let callee = self.b.ins().iconst(I64, f as i64);
+        let insts = self.b.ins().iconst(I64, run.as_ptr() as usize as i64);
+        let at = self.b.ins().iconst(I32, p as i64);
+        let n = self.b.ins().iconst(I32, run.len() as i64);
+        self.b
+            .ins()
+            .call_indirect(self.exact_sig, callee, &[self.core, insts, at, n]);
         self.b.ins().jump(cont, &[]);
         self.b.switch_to_block(cont);
         // Both paths wrote the run's results to memory; every other register is as before.
@@ -897,33 +916,38 @@ impl Translator<'_> {
     /// One single-precision operation of a float run on the host's vector unit: its
     /// result and the lanes where the interpreter's fast path gives that result (operands
     /// in `ordinary` are known to pass the operand criteria).
+    ///
+    /// The lanes are the interpreter's (`sp4_truncating`: operands normal or zero, result
+    /// normal below the largest magnitude, or a zero that cannot be an underflow), checked
+    /// with fewer host instructions. An operand with exponent 255 is not looked at: the
+    /// host's sum, product or fused multiply-add of an infinity or NaN is an infinity or
+    /// NaN, which the result check declines, so only denormal operands need a check of
+    /// their own. Each range is one signed compare after a wrapping add that moves it to
+    /// the top of the signed words.
     fn single_precision(&mut self, inst: &Inst, ordinary: &[Value]) -> (Value, Value) {
         use Op::*;
         let three = matches!(inst.op, Fma | Fms | Fnms);
         let (a, b) = (self.get(inst.ra), self.get(inst.rb));
         let c = if three { Some(self.get(inst.rc)) } else { None };
-        let exp = self.splat(0x7f80_0000);
-        let step = self.splat(0x0080_0000);
-        let below = self.splat(0x00ff_ffff);
         let abs = self.splat(0x7fff_ffff);
         let zero = self.splat(0);
-        let is_zero = |t: &mut Self, v: Value| {
-            let m = t.b.ins().band(v, abs);
-            t.b.ins().icmp(IntCC::Equal, m, zero)
-        };
-        let normal_or_zero = |t: &mut Self, v: Value| {
-            let e = t.b.ins().band(v, exp);
-            let e = t.b.ins().iadd(e, step);
-            let normal = t.b.ins().icmp(IntCC::SignedGreaterThan, e, below);
-            let z = is_zero(t, v);
-            t.b.ins().bor(normal, z)
-        };
+        let (mag_a, mag_b) = (self.b.ins().band(a, abs), self.b.ins().band(b, abs));
         let mut ok: Option<Value> = None;
         for v in [Some(a), Some(b), c].into_iter().flatten() {
             if ordinary.contains(&v) {
                 continue;
             }
-            let o = normal_or_zero(self, v);
+            // Not a denormal: magnitude 0 or at least 0x0080_0000. Adding 0x7fff_ffff maps
+            // 0 to the largest signed word, denormals to the bottom of the negative words
+            // (up to 0x807f_fffe) and the rest above them.
+            let m = match v {
+                v if v == a => mag_a,
+                v if v == b => mag_b,
+                v => self.b.ins().band(v, abs),
+            };
+            let t = self.b.ins().iadd(m, abs);
+            let floor = self.splat(0x807f_fffe);
+            let o = self.b.ins().icmp(IntCC::SignedGreaterThan, t, floor);
             ok = Some(match ok {
                 Some(k) => self.b.ins().band(k, o),
                 None => o,
@@ -954,16 +978,18 @@ impl Translator<'_> {
         let v = self.b.ins().bitcast(I32X4, le, r);
         let mag = self.b.ins().band(v, abs);
         let result_zero = self.b.ins().icmp(IntCC::Equal, mag, zero);
-        let smallest = self.splat(0x007f_ffff);
-        let largest = self.splat(0x7f7f_ffff);
-        let above = self.b.ins().icmp(IntCC::SignedGreaterThan, mag, smallest);
-        let under = self.b.ins().icmp(IntCC::SignedLessThan, mag, largest);
-        let normal = self.b.ins().band(above, under);
+        // Normal below the largest magnitude: 0x0080_0000..=0x7f7f_fffe, moved by
+        // 0x0080_0001 to 0x0100_0001..=0x7fff_ffff (larger magnitudes wrap negative).
+        let shift = self.splat(0x0080_0001);
+        let shifted = self.b.ins().iadd(mag, shift);
+        let floor = self.splat(0x0100_0000);
+        let normal = self.b.ins().icmp(IntCC::SignedGreaterThan, shifted, floor);
         let zero_ok = if matches!(inst.op, Fa | Fs) {
             result_zero
         } else {
-            let (zero_a, zero_b) = (is_zero(self, a), is_zero(self, b));
-            let factor = self.b.ins().bor(zero_a, zero_b);
+            // A zero product is no underflow where a factor is zero.
+            let least = self.b.ins().umin(mag_a, mag_b);
+            let factor = self.b.ins().icmp(IntCC::Equal, least, zero);
             self.b.ins().band(result_zero, factor)
         };
         let mut good = self.b.ins().bor(normal, zero_ok);

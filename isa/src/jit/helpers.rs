@@ -3,7 +3,7 @@
 //! dispatch), and the encoding of what the instruction did.
 
 use crate::codec::Inst;
-use crate::machine::exec::{execute_in, Core, Effect};
+use crate::machine::exec::{execute_in, Core, Effect, LS_MASK};
 use crate::table::Op;
 
 /// A call into the interpreter for one instruction: the core, the decoded instruction
@@ -64,4 +64,105 @@ specialised!(
     Chd, Cdd, Cwx, Cbx, Chx, Cdx, Clz, Xsbh, Xshw, Xswd, Shl, Rot, Rotm, Rotma, Shlh, Shlhi, Roth,
     Rothi, Rothm, Rothmi, Rotmah, Rotmahi, Cntb, Avgb, Absdb, Sumb, Addx, Sfx, Cg, Cgx, Bg, Bgx,
     Dfa, Dfs, Dfm, Dfma, Dfms, Dfnms, Dfnma, Fesd, Frds, Orx,
+);
+
+/// The exact path of a float run: its `n` instructions from `insts` on (at `pc`,
+/// `pc + 4`, ...) one by one by the interpreter's semantics, results and flags in the core
+/// (a run holds register-only instructions: no branch, store or channel).
+unsafe extern "C" fn exact_run(core: *mut Core, insts: *const Inst, pc: u32, n: u32) {
+    // SAFETY: the block passes its SPU's core, exclusively borrowed for the call, and
+    // `n` instructions its block owns.
+    let (core, insts) = unsafe { (&mut *core, std::slice::from_raw_parts(insts, n as usize)) };
+    for (k, inst) in insts.iter().enumerate() {
+        let _ = execute_in::<true>(core, *inst, pc.wrapping_add(4 * k as u32) & LS_MASK);
+    }
+}
+
+/// How a compiled block calls [`exact_run`]: the address to call and whether the callee
+/// keeps every register (Cranelift's `preserve_all` convention, through
+/// `spu_jit_exact_run_preserving`), so that the values a block holds in registers need not
+/// be saved around a path that is seldom taken.
+pub(crate) fn exact_run_entry() -> (usize, bool) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        extern "C" {
+            fn spu_jit_exact_run_preserving();
+        }
+        (spu_jit_exact_run_preserving as *const () as usize, true)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        (exact_run as *const () as usize, false)
+    }
+}
+
+// [`exact_run`] keeping every general and vector register the System V convention lets a
+// callee change (the arguments arrive as for it). 9 pushes after rbp leave rsp 8 below a
+// 16-byte boundary; 264 bytes more hold xmm0-15 and realign it for the call.
+#[cfg(target_arch = "x86_64")]
+std::arch::global_asm!(
+    ".pushsection .text.spu_jit_exact_run_preserving,\"ax\",@progbits",
+    ".p2align 4",
+    ".globl spu_jit_exact_run_preserving",
+    ".hidden spu_jit_exact_run_preserving",
+    "spu_jit_exact_run_preserving:",
+    "push rbp",
+    "mov rbp, rsp",
+    "push rax",
+    "push rcx",
+    "push rdx",
+    "push rsi",
+    "push rdi",
+    "push r8",
+    "push r9",
+    "push r10",
+    "push r11",
+    "sub rsp, 264",
+    "movdqu [rsp], xmm0",
+    "movdqu [rsp + 16], xmm1",
+    "movdqu [rsp + 32], xmm2",
+    "movdqu [rsp + 48], xmm3",
+    "movdqu [rsp + 64], xmm4",
+    "movdqu [rsp + 80], xmm5",
+    "movdqu [rsp + 96], xmm6",
+    "movdqu [rsp + 112], xmm7",
+    "movdqu [rsp + 128], xmm8",
+    "movdqu [rsp + 144], xmm9",
+    "movdqu [rsp + 160], xmm10",
+    "movdqu [rsp + 176], xmm11",
+    "movdqu [rsp + 192], xmm12",
+    "movdqu [rsp + 208], xmm13",
+    "movdqu [rsp + 224], xmm14",
+    "movdqu [rsp + 240], xmm15",
+    "call {run}",
+    "movdqu xmm0, [rsp]",
+    "movdqu xmm1, [rsp + 16]",
+    "movdqu xmm2, [rsp + 32]",
+    "movdqu xmm3, [rsp + 48]",
+    "movdqu xmm4, [rsp + 64]",
+    "movdqu xmm5, [rsp + 80]",
+    "movdqu xmm6, [rsp + 96]",
+    "movdqu xmm7, [rsp + 112]",
+    "movdqu xmm8, [rsp + 128]",
+    "movdqu xmm9, [rsp + 144]",
+    "movdqu xmm10, [rsp + 160]",
+    "movdqu xmm11, [rsp + 176]",
+    "movdqu xmm12, [rsp + 192]",
+    "movdqu xmm13, [rsp + 208]",
+    "movdqu xmm14, [rsp + 224]",
+    "movdqu xmm15, [rsp + 240]",
+    "add rsp, 264",
+    "pop r11",
+    "pop r10",
+    "pop r9",
+    "pop r8",
+    "pop rdi",
+    "pop rsi",
+    "pop rdx",
+    "pop rcx",
+    "pop rax",
+    "pop rbp",
+    "ret",
+    ".popsection",
+    run = sym exact_run,
 );

@@ -405,15 +405,13 @@ mod host {
             done: u64,
         ) {
             let last_pc = pc.wrapping_add(4 * (n as u32 - 1)) & LS_MASK;
-            // The block's words are in local store (the caller checked them).
-            let last = self.decoded[(last_pc as usize >> 2) & (LS_SIZE / 4 - 1)];
             let timing = self.timing.as_mut().expect("timing");
-            timing.steady_replayed(memo, loops, (last_pc, last, true, pc));
+            timing.steady_replayed(memo, loops, (last_pc, true, pc));
             if r & RESULT_PARTIAL != 0 {
                 timing.block_replayed_partly(memo, ((r >> 32) & 0xffff) as usize);
             } else if flags & KEPT_BRANCH != 0 {
                 let taken = r & RESULT_TAKEN != 0;
-                timing.block_replayed(memo, Some((last_pc, last, taken, target)));
+                timing.block_replayed(memo, Some((last_pc, taken, target)));
             } else {
                 timing.block_replayed(memo, None);
             }

@@ -687,7 +687,7 @@ impl Spu {
             match execute_in::<true>(core, inst, p) {
                 Effect::Branch { taken, target } => {
                     // Blocks end at their first branch.
-                    timing.block_replayed(id, Some((p, inst, taken, target)));
+                    timing.block_replayed(id, Some((p, taken, target)));
                     p = if taken { target } else { (p + 4) & LS_MASK };
                     done = k + 1;
                     break;

@@ -780,17 +780,17 @@ impl Timing {
     /// The core ran memo `id`'s block whole (a [`Timing::block_replay_candidate`], or the
     /// replay `issue` started): the state and counters become what issuing each of its
     /// instructions would have made them, and `branch` (its last instruction's address,
-    /// the instruction, whether it was taken and where to) resolves.
+    /// whether it was taken and where to) resolves.
     #[inline(always)]
-    pub fn block_replayed(&mut self, id: usize, branch: Option<(u32, Inst, bool, u32)>) {
+    pub fn block_replayed(&mut self, id: usize, branch: Option<(u32, bool, u32)>) {
         let mut rp = self.block_entry(id);
         let m = &mut self.memo.memos[id];
         m.hits += 1;
         rp.k = m.words.len();
         self.materialize(rp, false);
         self.chain_after(rp);
-        if let Some((pc, inst, taken, target)) = branch {
-            self.branch_resolved(pc, inst, taken, target);
+        if let Some((pc, taken, target)) = branch {
+            self.resolve_branch(pc, taken, target);
         }
     }
 
@@ -849,9 +849,9 @@ impl Timing {
 
     /// The core ran `passes` passes of memo `id`'s block in the steady state
     /// [`Timing::steady_passes`] found, each a full replay whose final branch (at
-    /// `branch.0`, the instruction `branch.1`) went back to the block's start `branch.3`:
-    /// the state and counters become what replaying them one by one would have made them.
-    pub fn steady_replayed(&mut self, id: usize, passes: u64, branch: (u32, Inst, bool, u32)) {
+    /// `branch.0`) went back to the block's start `branch.2`: the state and counters
+    /// become what replaying them one by one would have made them.
+    pub fn steady_replayed(&mut self, id: usize, passes: u64, branch: (u32, bool, u32)) {
         if passes == 0 {
             return;
         }
@@ -870,7 +870,7 @@ impl Timing {
                 .max(entry + (skip - 1) * delta + m.max_ready_rel);
             self.index += skip * m.words.len() as u64;
             self.now = entry + skip * delta;
-            self.count_branch(hinted, true, branch.3 & 0x3_ffff, skip);
+            self.count_branch(hinted, true, branch.2 & 0x3_ffff, skip);
         }
         self.block_replayed(id, Some(branch));
     }
