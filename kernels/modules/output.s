@@ -12,12 +12,14 @@
         .align  3
 packet_done:
         .ifdef  SHADE                         # --shade simple: modules/shade.s first
+        hbrr    .Lpd_shade_br, shade_packet
         lqa     $66, sv_trace                 # (a shadow packet: modules/shadow.s)
         brnz    $66, shadow_done
         lqd     $69, CTX_TILE64(RAYS)
         lqd     $70, CTX_PACKET(RAYS)
         ori     $68, RAYS, 0
         a       $69, $69, $70
+.Lpd_shade_br:
         brsl    $0, shade_packet
         nop
         .endif
@@ -37,6 +39,7 @@ packet_done:
       ! wrch    $MFC_WrTagUpdate, %two
       ! rdch    %st, $MFC_RdTagStat
         ori     %base, RAYS, 0
+        hbrr    .Lpd_next_br, packet_start
         lqa     %bg, k_bg
         lqa     %pat, k_shade
         lqa     %abs, k_abs
@@ -92,5 +95,6 @@ packet_done:
       ! wrch    $MFC_Cmd, %cmd
         xor     %os, $66, %size
       ! stqa    %os, vars+V_OUTSEL
+.Lpd_next_br:
       ! br      packet_start                  # the context's next packet (modules/frame.s)
         .endsched
