@@ -202,8 +202,7 @@ pub fn schedule(
     }
     let scratch = |r: Reg| r < VIRTUAL_BASE && opts.scratch.contains(&(r as u8));
     let deps = dependencies(&insts, &scratch);
-    let (mut slots, pair_cycles, cycles) =
-        list_schedule(&insts, &deps, opts.pool.len(), virtuals.len(), start)?;
+    let (mut slots, pair_cycles, cycles) = best_schedule(&insts, &deps, opts, &virtuals, start)?;
     place_hints(&insts, &mut slots, &pair_cycles, start);
     let assignment = allocate(&insts, &slots, &opts.pool, &virtuals)?;
     let mut out: Vec<(String, Option<usize>)> = vec![("\t.align\t3".to_string(), None)];
@@ -609,6 +608,40 @@ const LATEST_FETCH_SLOT: u32 = 8;
 /// the number of issue cycles.
 type Schedule = (Vec<Option<usize>>, Vec<u32>, u32);
 
+/// How the list scheduler picks among the ready instructions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Rank {
+    /// The longest path to the block's end first (ties: program order).
+    CriticalPath,
+    /// Program order. With many independent chains and a small pool, ranking by critical
+    /// path issues every chain's loads first, fills the pool and then waits on it.
+    ProgramOrder,
+    /// The critical path while at most half the pool is live, program order above.
+    Pressure,
+}
+
+/// The schedule with the fewest cycles of the three ranks (the earlier rank on a tie), so
+/// no block takes longer than the critical path's schedule alone gave it.
+fn best_schedule(
+    insts: &[Inst],
+    deps: &[Vec<(usize, u32)>],
+    opts: &SchedOptions,
+    virtuals: &[String],
+    start: Option<u32>,
+) -> Result<Schedule, SchedError> {
+    let mut best: Option<Result<Schedule, SchedError>> = None;
+    for rank in [Rank::CriticalPath, Rank::ProgramOrder, Rank::Pressure] {
+        let s = list_schedule(insts, deps, opts.pool.len(), virtuals.len(), start, rank);
+        best = Some(match (best, s) {
+            (None, s) => s,
+            (Some(Ok(a)), Ok(b)) => Ok(if b.2 < a.2 { b } else { a }),
+            (Some(Ok(a)), Err(_)) => Ok(a),
+            (Some(Err(_)), s) => s,
+        });
+    }
+    best.expect("three ranks")
+}
+
 /// Cycle-by-cycle list scheduling.
 fn list_schedule(
     insts: &[Inst],
@@ -616,6 +649,7 @@ fn list_schedule(
     pool: usize,
     virtual_count: usize,
     start: Option<u32>,
+    rank: Rank,
 ) -> Result<Schedule, SchedError> {
     let n = insts.len();
     // Critical path to the end of the block.
@@ -709,7 +743,14 @@ fn list_schedule(
                 .filter(|&i| !(avoid_ls && pipe == Pipe::Odd && insts[i].uses_ls()))
                 .filter(|&i| ready(i, t, issued) && pressure_ok(i, live, uses))
                 .filter(|&i| exclude.is_none_or(|e| !deps[i].iter().any(|d| d.0 == e)))
-                .min_by_key(|&i| (std::cmp::Reverse(prio[i]), i))
+                .min_by_key(|&i| {
+                    let by_order = match rank {
+                        Rank::CriticalPath => false,
+                        Rank::ProgramOrder => true,
+                        Rank::Pressure => 2 * live.iter().filter(|&&l| l).count() > pool,
+                    };
+                    (std::cmp::Reverse(if by_order { 0 } else { prio[i] }), i)
+                })
         };
         let even = best(Pipe::Even, None, &issued, &live, &uses_left);
         if let Some(e) = even {

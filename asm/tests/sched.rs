@@ -306,3 +306,24 @@ fn a_macro_called_in_a_sched_block_is_scheduled_with_it() {
     // Without the expansion the block would not assemble at all.
     assert!(asm(&with_macro.replace("SCALE %b, %a", "SCALE2 %b, %a")).is_err());
 }
+
+/// Eight independent chains (a load, a reciprocal and its Newton step, two stores) through a
+/// pool of 12: ranked by critical path alone, every chain's load goes first, the loaded
+/// values fill the pool and the chains then wait on it; the program-order and pressure
+/// ranks overlap fewer chains at once and finish sooner, and the scheduler keeps the
+/// fewest-cycle schedule.
+#[test]
+fn many_chains_through_a_small_pool_take_the_fewest_cycle_rank() {
+    let mut block = String::new();
+    for k in 0..8 {
+        let o = 16 * k;
+        block.push_str(&format!(
+            "lqd %d{k}, {o}($3)\nfrest %y{k}, %d{k}\nfi %z{k}, %d{k}, %y{k}\n\
+             fnms %e{k}, %d{k}, %z{k}, $5\nfma %r{k}, %e{k}, %z{k}, %z{k}\n\
+             fcgt %m{k}, %r{k}, $6\nselb $6, $6, %r{k}, %m{k}\n\
+             stqd %r{k}, {o}($4)\nstqd %d{k}, {o}($7)\n"
+        ));
+    }
+    let (_, cycles) = run(&block, &pool("20-31"), None);
+    assert_eq!(cycles, 129); // the critical path's rank alone: 154
+}
