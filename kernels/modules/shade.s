@@ -182,7 +182,6 @@
         rotqbyi $80, $70, 4*\lane
         ceqi    $81, $80, -1
         brnz    $81, 3f
-        SH_COUNT SHS_TLOOK, $84
         SH_ADDI $82, $66, SH_STAGE+\lane*64
         ila     $88, 3f
         .ifdef  TTAGS
@@ -932,11 +931,20 @@ shade_packet:
         gb      $72, $78
         ceqi    $73, $72, 15
         brnz    $73, .Lsh_group_empty
-        SH_COUNT SHS_GROUPS, $74
         shufb   $74, $70, $70, $91
         ceq     $75, $70, $74
         gb      $75, $75
         ceqi    $75, $75, 15                  # the same triangle in all four lanes
+        lqd     $74, SH_STATS+SHS_GROUPS($66)
+        lqd     $76, SH_STATS+SHS_TLOOK($66)
+        cntb    $79, $72                      # lanes without a hit
+        sfi     $79, $79, 4                   # the records looked up: one per hit lane,
+        il      $77, 1                        # or the group's one
+        selb    $79, $79, $77, $75
+        ai      $74, $74, 1
+        a       $76, $76, $79
+        stqd    $74, SH_STATS+SHS_GROUPS($66)
+        stqd    $76, SH_STATS+SHS_TLOOK($66)
         stqd    $75, SH_SAME($66)             # (kept over the fetches)
         SH_FETCH 0
         lqd     $75, SH_SAME($66)
