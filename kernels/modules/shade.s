@@ -157,22 +157,23 @@
         .endm
 
 # vertex I of lane LANE: the normal of vertex word I of $80 (the record's spare quad) to
-# SH_NRM + LANE*64 + I*16, through the vertex cache ($104 index mask, $115 tags, $116
-# lines); a miss calls sh_vertex_miss ($114) without a taken branch on the hit path
-        .macro  SH_VERTEX lane, i
+# SH_NRM + LANE*64 + I*16, through the vertex cache (TAG, LINE: its tag's and line's
+# addresses in the preferred word); a miss calls sh_vertex_miss ($114) without a taken
+# branch on the hit path. The normal is loaded to $90; STORE (not -) stores vertex
+# STORE's, the previous one's, before this lookup's call (which may change $90)
+        .macro  SH_VERTEX lane, i, tag, line, store
+        lqd     $85, 0(\tag)
         rotqbyi $81, $80, 4*\i
-        and     $82, $81, $104
-        shli    $83, $82, 4
-        shli    $84, $82, 6
-        a       $83, $83, $115                # tag address
-        a       $84, $84, $116                # line address
-        lqd     $85, 0($83)
+        ori     $83, \tag, 0
+        ori     $84, \line, 0
         ila     $88, 1f
         ila     $89, SH_NRM+\lane*64+\i*16
+        .ifnc   \store, -
+        stqd    $90, SH_NRM+\lane*64+\store*16($66)
+        .endif
         ceq     $86, $85, $81
         biz     $86, $114
-1:      lqd     $85, 16($84)
-        stqd    $85, SH_NRM+\lane*64+\i*16($66)
+1:      lqd     $90, 16($84)
         .endm
 
 # lane LANE of the intersection packet in $70 (ids): its record to SH_STAGE + LANE*64
@@ -203,14 +204,27 @@
         .endm
 
 # lane LANE's vertex normals to SH_NRM + LANE*64 (nothing for a miss), its record staged
+# (uses $79, $95, $101-$103, $105 besides SH_VERTEX's)
         .macro  SH_NORMALS lane
         rotqbyi $80, $70, 4*\lane
         ceqi    $81, $80, -1
         brnz    $81, 3f
         lqd     $80, SH_STAGE+\lane*64+48($66)
-        SH_VERTEX \lane, 0
-        SH_VERTEX \lane, 1
-        SH_VERTEX \lane, 2
+        and     $82, $80, $121                # the vertices' indices (words 0-2), their
+        shufb   $83, $115, $115, $91          # tags' and lines' addresses ($115 tags,
+        shufb   $84, $116, $116, $91          # $116 lines: splatted; $121 the index
+        shli    $79, $82, 4                   # mask, splatted)
+        shli    $95, $82, 6
+        a       $79, $79, $83
+        a       $95, $95, $84
+        rotqbyi $101, $79, 4
+        rotqbyi $102, $95, 4
+        rotqbyi $103, $79, 8
+        rotqbyi $105, $95, 8
+        SH_VERTEX \lane, 0, $79, $95, -
+        SH_VERTEX \lane, 1, $101, $102, 0
+        SH_VERTEX \lane, 2, $103, $105, 1
+        stqd    $90, SH_NRM+\lane*64+32($66)
 3:
         .endm
 
