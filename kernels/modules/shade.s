@@ -919,31 +919,29 @@ shade_packet:
 
         # one lane at a time
 .Lsh_slow_body:
-        SH_ADDI $74, $66, SH_SAVE
+        .sched  pool=74-77,79,90,94 scratch=66-127
+        ila     %so, SH_SAVE
+        a       %sv, $66, %so
         .irp    R, 0, 1, 2, 3, 4
-        stqd    $12\R, 16*\R($74)
+        stqd    $12\R, 16*\R(%sv)
         .endr
-        lqd     $70, SH_BLOCK($66)            # its registers (the fast path's pool)
-        ori     $100, $70, 0                  # vertices
-        lqd     $70, SH_BLOCK+SHB_MODE($66)
-        il      $75, 1
-        rotqbyi $71, $70, 8
-        shl     $104, $75, $71
-        ai      $104, $104, -1                # vertex cache index mask
-        ila     $90, sh_const
-        lqd     $117, 0($90)
-        lqd     $118, 16($90)
-        lqd     $98, 48($90)
-        SH_ADDI $111, $99, CTX_RAY_ID
-        SH_ADDI $112, $99, CTX_RAY_T
+        lqd     %blk, SH_BLOCK($66)           # its registers (the fast path's pool)
+        ori     $100, %blk, 0                 # vertices
+        lqa     $117, sh_const
+        lqa     $118, sh_const+16
+        lqa     $98, sh_const+48
+        ila     %io, CTX_RAY_ID
+        a       $111, $99, %io
         ori     $113, $99, 0
         ila     $114, sh_vertex_miss
         ila     $106, sh_tri_miss
-        SH_ADDI $116, $66, SH_VDATA
+        ila     %vo, SH_VDATA
+        a       $116, $66, %vo
         lqx     $70, $111, $67                # ids
         ceqi    $78, $70, -1                  # misses
         gb      $72, $78
         ceqi    $73, $72, 15
+        .endsched
         brnz    $73, .Lsh_group_empty
         shufb   $74, $70, $70, $91
         ceq     $75, $70, $74
