@@ -803,16 +803,16 @@ shade_packet:
 .Lsh_slow:
         ai      $67, $67, -32
 .Lsh_slow_group:                              # a group the fast path did not do
-        lqd     $74, SH_SCRATCH+144($66)
+        lqd     $77, SH_SCRATCH+144($66)
+        a       $76, $99, $67
         andi    $75, $67, 16
+        lqd     $74, CTX_RAY_ID($76)          # (its ids, while the flag loads)
         rotmi   $75, $75, -1
-        rotqby  $74, $74, $75
-        brnz    $74, .Lsh_slow_next
-        a       $74, $99, $67
-        lqd     $74, CTX_RAY_ID($74)
+        rotqby  $77, $77, $75
         ceqi    $74, $74, -1
         gb      $75, $74
         ceqi    $75, $75, 15
+        brnz    $77, .Lsh_slow_next
         brnz    $75, .Lsh_slow_empty
 
         # Rays on different triangles, every lane's record and vertices in the caches (the
