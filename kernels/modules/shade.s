@@ -1030,6 +1030,7 @@ shade_packet:
         lqd     $12\R, 16*\R($74)
         .endr
 .Lsh_slow_next:
+        hbrr    .Lsh_slow_back, .Lsh_group    # (after the pair's second group)
         lqa     $92, sh_const+80
         lqa     $93, sh_const+96
         lqa     $120, sh_const+208
@@ -1037,6 +1038,7 @@ shade_packet:
         andi    $74, $67, 16
         brnz    $74, .Lsh_slow_group
         ceqi    $74, $67, 256
+.Lsh_slow_back:
         brz     $74, .Lsh_group
         br      .Lsh_iset_done
 .Lsh_group_empty:                             # no hit: no material
