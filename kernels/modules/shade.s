@@ -157,22 +157,23 @@
         .endm
 
 # vertex I of lane LANE: the normal of vertex word I of $80 (the record's spare quad) to
-# SH_NRM + LANE*64 + I*16, through the vertex cache ($104 index mask, $115 tags, $116
-# lines); a miss calls sh_vertex_miss ($114) without a taken branch on the hit path
-        .macro  SH_VERTEX lane, i
+# SH_NRM + LANE*64 + I*16, through the vertex cache (TAG, LINE: its tag's and line's
+# addresses in the preferred word); a miss calls sh_vertex_miss ($114) without a taken
+# branch on the hit path. The normal is loaded to $90; STORE (not -) stores vertex
+# STORE's, the previous one's, before this lookup's call (which may change $90)
+        .macro  SH_VERTEX lane, i, tag, line, store
+        lqd     $85, 0(\tag)
         rotqbyi $81, $80, 4*\i
-        and     $82, $81, $104
-        shli    $83, $82, 4
-        shli    $84, $82, 6
-        a       $83, $83, $115                # tag address
-        a       $84, $84, $116                # line address
-        lqd     $85, 0($83)
+        ori     $83, \tag, 0
+        ori     $84, \line, 0
         ila     $88, 1f
         ila     $89, SH_NRM+\lane*64+\i*16
+        .ifnc   \store, -
+        stqd    $90, SH_NRM+\lane*64+\store*16($66)
+        .endif
         ceq     $86, $85, $81
         biz     $86, $114
-1:      lqd     $85, 16($84)
-        stqd    $85, SH_NRM+\lane*64+\i*16($66)
+1:      lqd     $90, 16($84)
         .endm
 
 # lane LANE of the intersection packet in $70 (ids): its record to SH_STAGE + LANE*64
@@ -182,7 +183,6 @@
         rotqbyi $80, $70, 4*\lane
         ceqi    $81, $80, -1
         brnz    $81, 3f
-        SH_COUNT SHS_TLOOK, $84
         SH_ADDI $82, $66, SH_STAGE+\lane*64
         ila     $88, 3f
         .ifdef  TTAGS
@@ -204,14 +204,27 @@
         .endm
 
 # lane LANE's vertex normals to SH_NRM + LANE*64 (nothing for a miss), its record staged
+# (uses $79, $95, $101-$103, $105 besides SH_VERTEX's)
         .macro  SH_NORMALS lane
         rotqbyi $80, $70, 4*\lane
         ceqi    $81, $80, -1
         brnz    $81, 3f
         lqd     $80, SH_STAGE+\lane*64+48($66)
-        SH_VERTEX \lane, 0
-        SH_VERTEX \lane, 1
-        SH_VERTEX \lane, 2
+        and     $82, $80, $121                # the vertices' indices (words 0-2), their
+        shufb   $83, $115, $115, $91          # tags' and lines' addresses ($115 tags,
+        shufb   $84, $116, $116, $91          # $116 lines: splatted; $121 the index
+        shli    $79, $82, 4                   # mask, splatted)
+        shli    $95, $82, 6
+        a       $79, $79, $83
+        a       $95, $95, $84
+        rotqbyi $101, $79, 4
+        rotqbyi $102, $95, 4
+        rotqbyi $103, $79, 8
+        rotqbyi $105, $95, 8
+        SH_VERTEX \lane, 0, $79, $95, -
+        SH_VERTEX \lane, 1, $101, $102, 0
+        SH_VERTEX \lane, 2, $103, $105, 1
+        stqd    $90, SH_NRM+\lane*64+32($66)
 3:
         .endm
 
@@ -790,16 +803,16 @@ shade_packet:
 .Lsh_slow:
         ai      $67, $67, -32
 .Lsh_slow_group:                              # a group the fast path did not do
-        lqd     $74, SH_SCRATCH+144($66)
+        lqd     $77, SH_SCRATCH+144($66)
+        a       $76, $99, $67
         andi    $75, $67, 16
+        lqd     $74, CTX_RAY_ID($76)          # (its ids, while the flag loads)
         rotmi   $75, $75, -1
-        rotqby  $74, $74, $75
-        brnz    $74, .Lsh_slow_next
-        a       $74, $99, $67
-        lqd     $74, CTX_RAY_ID($74)
+        rotqby  $77, $77, $75
         ceqi    $74, $74, -1
         gb      $75, $74
         ceqi    $75, $75, 15
+        brnz    $77, .Lsh_slow_next
         brnz    $75, .Lsh_slow_empty
 
         # Rays on different triangles, every lane's record and vertices in the caches (the
@@ -906,37 +919,44 @@ shade_packet:
 
         # one lane at a time
 .Lsh_slow_body:
-        SH_ADDI $74, $66, SH_SAVE
+        .sched  pool=74-77,79,90,94 scratch=66-127
+        ila     %so, SH_SAVE
+        a       %sv, $66, %so
         .irp    R, 0, 1, 2, 3, 4
-        stqd    $12\R, 16*\R($74)
+        stqd    $12\R, 16*\R(%sv)
         .endr
-        lqd     $70, SH_BLOCK($66)            # its registers (the fast path's pool)
-        ori     $100, $70, 0                  # vertices
-        lqd     $70, SH_BLOCK+SHB_MODE($66)
-        il      $75, 1
-        rotqbyi $71, $70, 8
-        shl     $104, $75, $71
-        ai      $104, $104, -1                # vertex cache index mask
-        ila     $90, sh_const
-        lqd     $117, 0($90)
-        lqd     $118, 16($90)
-        lqd     $98, 48($90)
-        SH_ADDI $111, $99, CTX_RAY_ID
-        SH_ADDI $112, $99, CTX_RAY_T
+        lqd     %blk, SH_BLOCK($66)           # its registers (the fast path's pool)
+        ori     $100, %blk, 0                 # vertices
+        lqa     $117, sh_const
+        lqa     $118, sh_const+16
+        lqa     $98, sh_const+48
+        ila     %io, CTX_RAY_ID
+        a       $111, $99, %io
         ori     $113, $99, 0
         ila     $114, sh_vertex_miss
         ila     $106, sh_tri_miss
-        SH_ADDI $116, $66, SH_VDATA
+        ila     %vo, SH_VDATA
+        a       $116, $66, %vo
         lqx     $70, $111, $67                # ids
         ceqi    $78, $70, -1                  # misses
         gb      $72, $78
         ceqi    $73, $72, 15
+        .endsched
         brnz    $73, .Lsh_group_empty
-        SH_COUNT SHS_GROUPS, $74
         shufb   $74, $70, $70, $91
         ceq     $75, $70, $74
         gb      $75, $75
         ceqi    $75, $75, 15                  # the same triangle in all four lanes
+        lqd     $74, SH_STATS+SHS_GROUPS($66)
+        lqd     $76, SH_STATS+SHS_TLOOK($66)
+        cntb    $79, $72                      # lanes without a hit
+        sfi     $79, $79, 4                   # the records looked up: one per hit lane,
+        il      $77, 1                        # or the group's one
+        selb    $79, $79, $77, $75
+        ai      $74, $74, 1
+        a       $76, $76, $79
+        stqd    $74, SH_STATS+SHS_GROUPS($66)
+        stqd    $76, SH_STATS+SHS_TLOOK($66)
         stqd    $75, SH_SAME($66)             # (kept over the fetches)
         SH_FETCH 0
         lqd     $75, SH_SAME($66)
@@ -1010,6 +1030,7 @@ shade_packet:
         lqd     $12\R, 16*\R($74)
         .endr
 .Lsh_slow_next:
+        hbrr    .Lsh_slow_back, .Lsh_group    # (after the pair's second group)
         lqa     $92, sh_const+80
         lqa     $93, sh_const+96
         lqa     $120, sh_const+208
@@ -1017,6 +1038,7 @@ shade_packet:
         andi    $74, $67, 16
         brnz    $74, .Lsh_slow_group
         ceqi    $74, $67, 256
+.Lsh_slow_back:
         brz     $74, .Lsh_group
         br      .Lsh_iset_done
 .Lsh_group_empty:                             # no hit: no material
