@@ -239,7 +239,6 @@ _start:
         stqa    ZERO, vars+V_OUTSEL
 
         stqa    ZERO, vars+V_EXH
-        stqa    ZERO, vars+V_CLAIM
         il      $66, 64
         stqa    $66, vars+V_PKT               # no tile yet
         lqa     RAYS, vars+V_CTX0             # the first packet context
@@ -254,20 +253,8 @@ new_tile:
         lqa     $66, vars+V_EXH
         brnz    $66, sched_next               # no tile left: the context stays empty
 
-# ---- take the next tile: atomic fetch-and-increment of the shared counter. A putllc's
-# outcome is readable only at the next quantum boundary (isa machine docs: up to 10,000
-# cycles), so each tile claims the one after it ahead and reads that claim's outcome when
-# it is done, long after the boundary; a claim that lost its reservation (another SPU took
-# the counter line meanwhile) is made again, waiting.
+# ---- take the next tile: atomic fetch-and-increment of the shared counter
 next_tile:
-        lqa     $66, vars+V_CLAIM
-        brz     $66, .Lnt_claim               # none ahead (the first tile): claim now
-        stqa    ZERO, vars+V_CLAIM
-        rdch    $68, $MFC_RdAtomicStat        # the claim made ahead
-        andi    $68, $68, 1
-        lqa     $71, vars+V_NEXTT
-        brz     $68, .Lnt_have                # it held
-.Lnt_claim:
         ila     $66, lockbuf
         lqa     $69, k_inc0
         lqa     $70, vars+V_EACNT
@@ -288,32 +275,10 @@ next_tile:
         rdch    $68, $MFC_RdAtomicStat
         andi    $68, $68, 1
         brnz    $68, 2b                       # reservation lost: retry
-.Lnt_have:
         lqa     $73, vars+V_NTILES
         clgt    $68, $73, $71
         brz     $68, no_tiles
         stqa    $71, vars+V_TILE
-        # the claim of the tile after it, its outcome read when this tile is done
-        ila     $66, lockbuf
-        lqa     $69, k_inc0
-        lqa     $70, vars+V_EACNT
-        wrch    $MFC_LSA, $66
-        wrch    $MFC_EAH, ZERO
-        wrch    $MFC_EAL, $70
-        il      $67, 0xd0                     # getllar
-        wrch    $MFC_Cmd, $67
-        rdch    $68, $MFC_RdAtomicStat
-        lqd     $72, 0($66)
-        stqa    $72, vars+V_NEXTT
-        a       $72, $72, $69
-        stqd    $72, 0($66)
-        wrch    $MFC_LSA, $66
-        wrch    $MFC_EAH, ZERO
-        wrch    $MFC_EAL, $70
-        il      $67, 0xb4                     # putllc, not waited for
-        wrch    $MFC_Cmd, $67
-        il      $67, 1
-        stqa    $67, vars+V_CLAIM
         # tile coordinates: TY = TILE / TILESX, TX = TILE % TILESX (few tiles per row)
         lqa     $74, vars+V_TILESX
         il      $75, 0
