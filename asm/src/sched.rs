@@ -629,17 +629,20 @@ fn best_schedule(
     virtuals: &[String],
     start: Option<u32>,
 ) -> Result<Schedule, SchedError> {
-    let mut best: Option<Result<Schedule, SchedError>> = None;
-    for rank in [Rank::CriticalPath, Rank::ProgramOrder, Rank::Pressure] {
-        let s = list_schedule(insts, deps, opts.pool.len(), virtuals.len(), start, rank);
-        best = Some(match (best, s) {
-            (None, s) => s,
-            (Some(Ok(a)), Ok(b)) => Ok(if b.2 < a.2 { b } else { a }),
-            (Some(Ok(a)), Err(_)) => Ok(a),
-            (Some(Err(_)), s) => s,
-        });
+    let schedule = |rank| list_schedule(insts, deps, opts.pool.len(), virtuals.len(), start, rank);
+    let mut best = schedule(Rank::CriticalPath);
+    for rank in [Rank::ProgramOrder, Rank::Pressure] {
+        let s = schedule(rank);
+        let better = match (&best, &s) {
+            (Err(_), _) => true,
+            (Ok(a), Ok(b)) => b.2 < a.2,
+            (Ok(_), Err(_)) => false,
+        };
+        if better {
+            best = s;
+        }
     }
-    best.expect("three ranks")
+    best
 }
 
 /// Cycle-by-cycle list scheduling.
@@ -736,6 +739,11 @@ fn list_schedule(
                     issued: &[Option<u32>],
                     live: &[bool],
                     uses: &[u32]| {
+            let by_order = match rank {
+                Rank::CriticalPath => false,
+                Rank::ProgramOrder => true,
+                Rank::Pressure => 2 * live.iter().filter(|&&l| l).count() > pool,
+            };
             remaining
                 .iter()
                 .copied()
@@ -743,14 +751,7 @@ fn list_schedule(
                 .filter(|&i| !(avoid_ls && pipe == Pipe::Odd && insts[i].uses_ls()))
                 .filter(|&i| ready(i, t, issued) && pressure_ok(i, live, uses))
                 .filter(|&i| exclude.is_none_or(|e| !deps[i].iter().any(|d| d.0 == e)))
-                .min_by_key(|&i| {
-                    let by_order = match rank {
-                        Rank::CriticalPath => false,
-                        Rank::ProgramOrder => true,
-                        Rank::Pressure => 2 * live.iter().filter(|&&l| l).count() > pool,
-                    };
-                    (std::cmp::Reverse(if by_order { 0 } else { prio[i] }), i)
-                })
+                .min_by_key(|&i| (std::cmp::Reverse(if by_order { 0 } else { prio[i] }), i))
         };
         let even = best(Pipe::Even, None, &issued, &live, &uses_left);
         if let Some(e) = even {

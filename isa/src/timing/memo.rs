@@ -556,9 +556,11 @@ impl Timing {
     /// where the previous block sets it; otherwise its view is compared.
     #[inline(always)]
     fn chained_lookup(&mut self, idx: usize, pc: u32, inst: Inst) -> Lookup {
-        let from = self.memo.chain_from.take().filter(|f| {
-            f.index == self.index && self.memo.memos[f.memo].generation == f.generation
-        });
+        let from = self
+            .memo
+            .chain_from
+            .take()
+            .filter(|f| self.chain_current(f));
         if let Some(id) = from.and_then(|f| self.chained_memo(f, pc)) {
             if self.memo.memos[id].words[0] == inst.word {
                 return Lookup::Hit(id);
@@ -593,6 +595,13 @@ impl Timing {
             }
         }
         found
+    }
+
+    /// Whether chain `f` is still that of the block whose full replay just ended: the same
+    /// slot index, its record not replaced since.
+    #[inline(always)]
+    fn chain_current(&self, f: &ChainFrom) -> bool {
+        f.index == self.index && self.memo.memos[f.memo].generation == f.generation
     }
 
     /// The memo that chain `f` (the block whose full replay just ended, still current)
@@ -676,10 +685,7 @@ impl Timing {
         if !self.memo_between_blocks() {
             return None;
         }
-        let f = self.memo.chain_from?;
-        if f.index != self.index || self.memo.memos[f.memo].generation != f.generation {
-            return None;
-        }
+        let f = self.memo.chain_from.filter(|f| self.chain_current(f))?;
         let id = self.chained_memo(f, pc)?;
         let b = &self.memo.memos[id];
         if b.verified != epoch || b.start != pc || !self.clear_of_dma(id) {
