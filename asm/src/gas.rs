@@ -1195,10 +1195,14 @@ impl<'o> Assembler<'o> {
         body
     }
 
-    /// A `.sched` block's lines with its macro calls expanded (the scheduler sees only
-    /// instructions, labels and `.irp`), so that one macro can serve several blocks.
+    /// A `.sched` block's lines with its conditionals resolved and its macro calls expanded
+    /// (the scheduler sees only instructions, labels and `.irp`), so that one macro can serve
+    /// several blocks and a block can differ by a symbol. Conditionals are resolved before
+    /// the block's `.irp`, so they cannot test its parameters.
     fn sched_macros(&mut self, body: &[Line], depth: usize) -> Vec<Line> {
         let mut out = Vec::new();
+        // Per open conditional: (this branch is assembled, some branch was taken).
+        let mut cond: Vec<(bool, bool)> = Vec::new();
         for l in body {
             let text = strip_comment(&l.text);
             let text = text.trim();
@@ -1206,12 +1210,52 @@ impl<'o> Assembler<'o> {
                 Some(p) => (&text[..p], text[p..].trim()),
                 None => (text, ""),
             };
-            match self.macros.get(&word.to_ascii_lowercase()).cloned() {
+            let word_lower = word.to_ascii_lowercase();
+            let active = cond.iter().all(|c| c.0);
+            let outer = cond.len() < 2 || cond[..cond.len() - 1].iter().all(|c| c.0);
+            match word_lower.as_str() {
+                ".if" | ".ifdef" | ".ifndef" | ".ifeq" | ".ifne" | ".ifc" | ".ifnc" => {
+                    let value = active && self.condition(&word_lower, args, l);
+                    cond.push((value, value));
+                    continue;
+                }
+                ".elseif" => {
+                    if let Some(top) = cond.last_mut() {
+                        let v = !top.1 && outer && self.condition(".if", args, l);
+                        *top = (v, top.1 || v);
+                    } else {
+                        self.diag(Severity::Error, l, 1, ".elseif without .if");
+                    }
+                    continue;
+                }
+                ".else" => {
+                    if let Some(top) = cond.last_mut() {
+                        *top = (!top.1 && outer, true);
+                    } else {
+                        self.diag(Severity::Error, l, 1, ".else without .if");
+                    }
+                    continue;
+                }
+                ".endif" => {
+                    if cond.pop().is_none() {
+                        self.diag(Severity::Error, l, 1, ".endif without .if");
+                    }
+                    continue;
+                }
+                _ if !active => continue,
+                _ => {}
+            }
+            match self.macros.get(&word_lower).cloned() {
                 Some(m) if depth < 16 => {
                     let lines = self.macro_lines(&m, args, l);
                     out.extend(self.sched_macros(&lines, depth + 1));
                 }
                 _ => out.push(l.clone()),
+            }
+        }
+        if !cond.is_empty() {
+            if let Some(l) = body.last() {
+                self.diag(Severity::Error, l, 1, "missing .endif in the .sched block");
             }
         }
         out

@@ -307,6 +307,62 @@ fn a_macro_called_in_a_sched_block_is_scheduled_with_it() {
     assert!(asm(&with_macro.replace("SCALE %b, %a", "SCALE2 %b, %a")).is_err());
 }
 
+#[test]
+fn a_conditional_in_a_sched_block_picks_its_lines_before_scheduling() {
+    // `.ifdef` / `.else` / `.endif` inside a block (nested too): only the taken branch's
+    // lines are scheduled, the same image as the block written out with them alone.
+    let block = |defined: bool| {
+        format!(
+            "{}        .sched pool=20-23
+        lqd %a, 0($3)
+        .ifdef WIDE
+        fm %b, %a, $6
+        .if 2 > 1
+        fa %b2, %b, $7
+        .else
+        fs %b2, %b, $7
+        .endif
+        stqd %b2, 0($5)
+        .else
+        stqd %a, 0($5)
+        .endif
+        .endsched
+        stop
+",
+            if defined {
+                "        .set WIDE, 1\n"
+            } else {
+                ""
+            }
+        )
+    };
+    let wide = "\
+        .set WIDE, 1
+        .sched pool=20-23
+        lqd %a, 0($3)
+        fm %b, %a, $6
+        fa %b2, %b, $7
+        stqd %b2, 0($5)
+        .endsched
+        stop
+";
+    let narrow = "\
+        .sched pool=20-23
+        lqd %a, 0($3)
+        stqd %a, 0($5)
+        .endsched
+        stop
+";
+    assert_eq!(asm(&block(true)).unwrap(), asm(wide).unwrap());
+    assert_eq!(asm(&block(false)).unwrap(), asm(narrow).unwrap());
+    assert_ne!(asm(wide).unwrap(), asm(narrow).unwrap());
+    // An unclosed conditional in a block is an error.
+    assert!(
+        asm(&block(true).replace("        .endif\n        .endsched", "        .endsched"))
+            .is_err()
+    );
+}
+
 /// Eight independent chains (a load, a reciprocal and its Newton step, two stores) through a
 /// pool of 12: ranked by critical path alone, every chain's load goes first, the loaded
 /// values fill the pool and the chains then wait on it; the program-order and pressure

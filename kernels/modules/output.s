@@ -3,6 +3,7 @@
 # Per packet the block goes to FB + (tile*64 + packet)*1024:
 #   +0 hit triangle index[64] (0xffffffff = miss), +256 distance t[64] (along the
 #   unnormalised camera ray), +512 eye-light shade 0xGGGGGGff[64], +768 reserved (zero).
+# A shaded frame (SHADE) sends the first 512 bytes only: its colours are shade.s's.
 # The rays are the current packet context's (RAYS) and so are the tile and packet numbers.
 # Two blocks alternate in outbuf so a packet's DMA overlaps the next packet's work; then
 # the context's next packet (packet_start, modules/frame.s).
@@ -40,6 +41,16 @@ packet_done:
       ! rdch    %st, $MFC_RdTagStat
         ori     %base, RAYS, 0
         hbrr    .Lpd_next_br, packet_start
+        .ifdef  SHADE
+        # a shaded frame's colours went to the colour buffer (modules/shade.s): the block
+        # carries the hits and distances only, its first 512 bytes
+        .irp    J, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
+        lqd     %id\J, \J+1792(%base)
+        lqd     %t\J, \J+1536(%base)
+      ~ stqd    %id\J, \J($80)
+      ~ stqd    %t\J, \J+256($80)
+        .endr
+        .else
         lqa     %bg, k_bg
         lqa     %pat, k_shade
         lqa     %abs, k_abs
@@ -79,13 +90,21 @@ packet_done:
       ~ stqd    %t\J, \J+256($80)
       ~ stqd    %rgba\J, \J+512($80)
         .endr
+        .endif
         lqd     %tile, CTX_TILE64(RAYS)   # tile * 64
         lqd     $93, CTX_PACKET(RAYS)
         lqa     %eafb, vars+V_EAFB
         a       %q2, %tile, $93
         shli    %q3, %q2, 10
         a       %ea, %q3, %eafb
+        .ifdef  SHADE
+        il      %size, 512
+        il      %block, 1024
+        xor     %os, $66, %block
+        .else
         il      %size, 1024
+        xor     %os, $66, %size
+        .endif
         il      %cmd, 0x20
       ! wrch    $MFC_LSA, $80
       ! wrch    $MFC_EAH, ZERO
@@ -93,7 +112,6 @@ packet_done:
       ! wrch    $MFC_Size, %size
       ! wrch    $MFC_TagID, $81
       ! wrch    $MFC_Cmd, %cmd
-        xor     %os, $66, %size
       ! stqa    %os, vars+V_OUTSEL
 .Lpd_next_br:
       ! br      packet_start                  # the context's next packet (modules/frame.s)

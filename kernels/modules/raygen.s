@@ -118,6 +118,7 @@ packet_loop:
         fi      $119, $72, $119
         fi      $120, $73, $120
         fi      $121, $74, $121
+        .ifndef SHADE                         # (the eye-light grey's 1/|d|: unshaded)
         fm      $114, $96, $96                # |d|^2
         fm      $115, $99, $99
         fma     $114, $97, $97, $114
@@ -130,6 +131,7 @@ packet_loop:
         fma     $67, $73, $73, $67
         fma     $66, $71, $71, $66
         fma     $67, $74, $74, $67
+        .endif
         fnms    $108, $96, $102, ONE
         fnms    $109, $97, $103, ONE
         fnms    $110, $98, $104, ONE
@@ -166,6 +168,7 @@ packet_loop:
         stqd    $119, 816($88)
         stqd    $120, 1072($88)
         stqd    $121, 1328($88)
+        .ifndef SHADE
         frsqest $116, $114
         frsqest $117, $115
         frsqest $68, $66
@@ -178,15 +181,18 @@ packet_loop:
         stqd    $117, 2320($88)
         stqd    $68, 2336($88)
         stqd    $86, 2352($88)
+        .endif
         .irp    K, 1536, 1552, 1568, 1584
         stqd    BIG, \K($88)
         .endr
         .irp    K, 1792, 1808, 1824, 1840
         stqd    $118, \K($88)
         .endr
+        .ifndef SHADE
         .irp    K, 2048, 2064, 2080, 2096
         stqd    ZERO, \K($88)
         .endr
+        .endif
         fa      $89, $89, ONE
         fa      $89, $89, ONE
         ai      $90, $90, -1

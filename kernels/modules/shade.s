@@ -286,7 +286,7 @@ sh_const:
         .long   AMBIENT_BITS, AMBIENT_BITS, AMBIENT_BITS, AMBIENT_BITS # +112
         .float  255.0, 255.0, 255.0, 255.0                         # +128
         .float  0.5, 0.5, 0.5, 0.5                                 # +144
-        .float  1.5, 1.5, 1.5, 1.5                                 # +160
+        .float  1.5, 1.5, 1.5, 1.5                                 # +160 (unused)
         .float  1.0, 1.0, 1.0, 1.0                                 # +176
         .long   0x000000ff, 0x000000ff, 0x000000ff, 0x000000ff     # +192 a miss: black
         .long   0x0c0d0e0f, 0x0c0d0e0f, 0x0c0d0e0f, 0x0c0d0e0f     # +208 splat word 3
@@ -657,7 +657,6 @@ shade_packet:
         lqa     $124, sh_const+112            # ambient
         lqa     $125, sh_const+176            # 1.0
         lqa     $126, sh_const+144            # 0.5
-        lqa     $127, sh_const+160            # 1.5
         lqa     $106, sh_const+128            # 255
         lqa     $88, sh_const+272             # r, g to a colour word
         lqa     $89, sh_const+288             # b to it
@@ -714,14 +713,10 @@ shade_packet:
         fma     %ll\H, %lz\H, %lz\H, %l2\H
         fcgt    %lt1\H, %c\H, ZERO            # lit: facing the light
         and     %lit\H, %lt1\H, %vis\H        # and not occluded
-        fm      %x\H, %nn\H, %ll\H            # 1 / sqrt(dot(N, N) dot(L, L)): estimate,
-        frsqest %y0\H, %x\H                   # interpolation, one Newton step
-        fi      %y1\H, %x\H, %y0\H
-        fm      %w1\H, %x\H, %y1\H
-        fm      %w2\H, %w1\H, %y1\H
-        fnms    %w3\H, %w2\H, $126, $127      # 1.5 - 0.5 x y^2
-        fm      %y\H, %y1\H, %w3\H
-        fm      %cs1\H, %c\H, %y\H            # cosine, at most 1, 0 when unlit
+        fm      %x\H, %nn\H, %ll\H            # 1 / sqrt(dot(N, N) dot(L, L)): estimate
+        frsqest %y0\H, %x\H                   # and interpolation, 12 bits: the cosine's
+        fi      %y\H, %x\H, %y0\H              # error, under 2^-11, is below an 8-bit
+        fm      %cs1\H, %c\H, %y\H            # level; cosine, at most 1, 0 when unlit
         fcgt    %big\H, %cs1\H, $125
         selb    %cs2\H, %cs1\H, $125, %big\H
         and     %cs\H, %cs2\H, %lit\H

@@ -88,11 +88,13 @@ tri_loop:
         fs      $70, $93, $94
         fnms    $70, $68, $121, $70
         fnms    $70, $69, $122, $70              # num = n_d - o_k - n_u o_u - n_v o_v
+        .ifndef SHADE                         # (the eye-light grey's n.d/|n|: unshaded)
         fm      $95, $68, $68
         fma     $95, $69, $69, $95
         fa      $95, $95, ONE
         frsqest $96, $95
         fi      $123, $95, $96                # 1/|n|, n = (1, n_u, n_v) in (k, u, v)
+        .endif
         shufb   $124, $66, $66, PAT0          # triangle index
         ori     $97, RAYS, 0
         rotqbyi $98, $91, 4
@@ -190,14 +192,16 @@ ray_loop:
         or      %o10, %o10, %o30
         andc    %hit0, %cl0, %o10
         lqd     %io0, CTX_RAY_ID+0(%tp)
-        lqd     %no0, CTX_RAY_ND+0(%tp)
-        fm      %nd0, %den0, $123
         selb    %to0, %to0, %t0, %hit0
         selb    %io0, %io0, $124, %hit0
-        selb    %no0, %no0, %nd0, %hit0
       ~ stqd    %to0, CTX_RAY_T+0(%tp)
       ~ stqd    %io0, CTX_RAY_ID+0(%tp)
+        .ifndef SHADE
+        lqd     %no0, CTX_RAY_ND+0(%tp)
+        fm      %nd0, %den0, $123
+        selb    %no0, %no0, %nd0, %hit0
       ~ stqd    %no0, CTX_RAY_ND+0(%tp)
+        .endif
         lqx     %dk1, $125, $119
         lqx     %du1, $126, $119
         lqx     %dv1, $127, $119
@@ -227,14 +231,16 @@ ray_loop:
         or      %o11, %o11, %o31
         andc    %hit1, %cl1, %o11
         lqd     %io1, CTX_RAY_ID+16(%tp)
-        lqd     %no1, CTX_RAY_ND+16(%tp)
-        fm      %nd1, %den1, $123
         selb    %to1, %to1, %t1, %hit1
         selb    %io1, %io1, $124, %hit1
-        selb    %no1, %no1, %nd1, %hit1
       ~ stqd    %to1, CTX_RAY_T+16(%tp)
       ~ stqd    %io1, CTX_RAY_ID+16(%tp)
+        .ifndef SHADE
+        lqd     %no1, CTX_RAY_ND+16(%tp)
+        fm      %nd1, %den1, $123
+        selb    %no1, %no1, %nd1, %hit1
       ~ stqd    %no1, CTX_RAY_ND+16(%tp)
+        .endif
         lqx     %dk2, $125, $119
         lqx     %du2, $126, $119
         lqx     %dv2, $127, $119
@@ -264,14 +270,16 @@ ray_loop:
         or      %o12, %o12, %o32
         andc    %hit2, %cl2, %o12
         lqd     %io2, CTX_RAY_ID+32(%tp)
-        lqd     %no2, CTX_RAY_ND+32(%tp)
-        fm      %nd2, %den2, $123
         selb    %to2, %to2, %t2, %hit2
         selb    %io2, %io2, $124, %hit2
-        selb    %no2, %no2, %nd2, %hit2
       ~ stqd    %to2, CTX_RAY_T+32(%tp)
       ~ stqd    %io2, CTX_RAY_ID+32(%tp)
+        .ifndef SHADE
+        lqd     %no2, CTX_RAY_ND+32(%tp)
+        fm      %nd2, %den2, $123
+        selb    %no2, %no2, %nd2, %hit2
       ~ stqd    %no2, CTX_RAY_ND+32(%tp)
+        .endif
         lqx     %dk3, $125, $119
         lqx     %du3, $126, $119
         lqx     %dv3, $127, $119
@@ -301,14 +309,16 @@ ray_loop:
         or      %o13, %o13, %o33
         andc    %hit3, %cl3, %o13
         lqd     %io3, CTX_RAY_ID+48(%tp)
-        lqd     %no3, CTX_RAY_ND+48(%tp)
-        fm      %nd3, %den3, $123
         selb    %to3, %to3, %t3, %hit3
         selb    %io3, %io3, $124, %hit3
-        selb    %no3, %no3, %nd3, %hit3
       ~ stqd    %to3, CTX_RAY_T+48(%tp)
       ~ stqd    %io3, CTX_RAY_ID+48(%tp)
+        .ifndef SHADE
+        lqd     %no3, CTX_RAY_ND+48(%tp)
+        fm      %nd3, %den3, $123
+        selb    %no3, %no3, %nd3, %hit3
       ~ stqd    %no3, CTX_RAY_ND+48(%tp)
+        .endif
         ceqi    $112, $119, 256
 .Lray_br:
       ! brz     $112, ray_loop

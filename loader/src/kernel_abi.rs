@@ -478,7 +478,8 @@ pub fn spu_include() -> String {
 pub struct PixelResult {
     pub triangle: u32,
     pub t: f32,
-    /// 0xRRGGBBAA.
+    /// 0xRRGGBBAA: the eye-light grey; 0 in a shaded frame (its colours are in the colour
+    /// buffer, `FrameRun::colour_buffer`).
     pub rgba: u32,
 }
 

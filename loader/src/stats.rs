@@ -91,7 +91,8 @@ pub struct Table6 {
     pub total_read_kb: f64,
     /// Written: the 32-bit colour frame buffer (4096 KB at 1024x1024).
     pub frame_buffer_written_kb: f64,
-    /// Written: the packet result blocks (hit, t, grey per ray; for validation).
+    /// Written: the packet result blocks (hit and t per ray, for validation; the eye-light
+    /// grey too in an unshaded frame).
     pub result_blocks_written_kb: f64,
 }
 

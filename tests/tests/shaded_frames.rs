@@ -171,7 +171,8 @@ fn simple_shading_of_the_room_matches_the_reference() {
     assert!(table4.material_cache_hit_pct > 90.0, "{table4:?}");
     let table6 = stats.table6.as_ref().unwrap();
     assert_eq!(table6.frame_buffer_written_kb, 64.0);
-    assert_eq!(table6.result_blocks_written_kb, 256.0);
+    // the result blocks carry hit and t only (512 of their 1024 bytes) in a shaded frame
+    assert_eq!(table6.result_blocks_written_kb, 128.0);
     assert!(table6.bvh_nodes_kb > 0.0 && table6.triangle_records_kb > 0.0);
     // every material record read is one 32-byte miss
     let material_misses: u64 = shaded.run.shade_counters.iter().map(|c| c[7]).sum();
