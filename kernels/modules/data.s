@@ -10,7 +10,7 @@
 params:         .space 128
 lockbuf:        .space 128
 statbuf:        .space 128
-vars:           .space 576
+vars:           .space 608
 nodebuf:        .space 64
 
         .align 4

@@ -6,7 +6,8 @@
 # (loader::kernel_abi::context; one per packet in flight, modules/sht.s), and picks the
 # miss handlers for the configuration. `packet_start` gives the current context the next
 # packet of the tile (`next_tile` takes 64x64 tiles from a shared counter with an atomic
-# getllar/putllc increment) and falls into ray generation (modules/raygen.s); packet output
+# getllar/putllc increment, made two packets before the tile's end by `claim_ahead` so that
+# its outcome is not waited for) and falls into ray generation (modules/raygen.s); packet output
 # (modules/output.s) comes back here for the context's next packet; a context without a
 # packet, once no tile is left, goes to sched_next. The end of the frame, `frame_done`, is
 # in modules/frame_done.s: it stays the last block of the program so the hot code keeps
@@ -253,11 +254,20 @@ new_tile:
         lqa     $66, vars+V_EXH
         brnz    $66, sched_next               # no tile left: the context stays empty
 
-# ---- take the next tile: atomic fetch-and-increment of the shared counter
+# ---- take the next tile: atomic fetch-and-increment of the shared counter. The claim
+# made ahead (claim_ahead) is taken if its putllc held; otherwise, or without one, the
+# getllar/putllc loop runs here.
 next_tile:
         ila     $66, lockbuf
         lqa     $69, k_inc0
         lqa     $70, vars+V_EACNT
+        lqa     $71, vars+V_PENDING
+        brz     $71, 2f
+        stqa    ZERO, vars+V_PENDING
+        rdch    $68, $MFC_RdAtomicStat        # the claim ahead's putllc
+        andi    $68, $68, 1
+        lqa     $71, vars+V_AHEAD
+        brz     $68, 5f                       # it held: its tile
 2:      wrch    $MFC_LSA, $66
         wrch    $MFC_EAH, ZERO
         wrch    $MFC_EAL, $70
@@ -275,6 +285,7 @@ next_tile:
         rdch    $68, $MFC_RdAtomicStat
         andi    $68, $68, 1
         brnz    $68, 2b                       # reservation lost: retry
+5:
         lqa     $73, vars+V_NTILES
         clgt    $68, $73, $71
         brz     $68, no_tiles
@@ -297,12 +308,44 @@ no_tiles:
         stqa    $66, vars+V_EXH
         br      sched_next
 
+# ---- the tile's last packets are starting: claim the next tile now, its putllc's
+# status read when the tile is done (next_tile), by when the reservation's outcome has
+# arrived instead of being waited for. Two packets ahead, not a tile, so that an SPE
+# holds no more work than it is about to do and the SPEs still finish together.
+        .set CLAIM_AHEAD_PACKET, 62
+claim_ahead:
+        lqa     $66, vars+V_EXH
+        brnz    $66, have_packet              # no tile left anyway
+        ila     $66, lockbuf
+        lqa     $69, k_inc0
+        lqa     $70, vars+V_EACNT
+        wrch    $MFC_LSA, $66
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $70
+        il      $67, 0xd0                     # getllar
+        wrch    $MFC_Cmd, $67
+        rdch    $68, $MFC_RdAtomicStat
+        lqd     $71, 0($66)
+        a       $72, $71, $69
+        stqd    $72, 0($66)
+        wrch    $MFC_LSA, $66
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $70
+        il      $67, 0xb4                     # putllc, its status not waited for
+        wrch    $MFC_Cmd, $67
+        stqa    $71, vars+V_AHEAD
+        il      $66, 1
+        stqa    $66, vars+V_PENDING
+        br      have_packet
+
 # ---- a new packet in the current context: the next of the tile, or of the next tile;
 # its rays are generated next (modules/raygen.s)
 packet_start:
         lqa     $66, vars+V_PKT
         ceqi    $67, $66, 64
         brnz    $67, new_tile                 # the tile is done
+        ceqi    $67, $66, CLAIM_AHEAD_PACKET
+        brnz    $67, claim_ahead
 have_packet:
         lqa     $66, vars+V_PKT
         lqa     $67, vars+V_TILE

@@ -3,10 +3,11 @@
 //! buffer (the address names the tile and packet) and takes each tile with an atomic
 //! update of the shared counter. A packet's cycles run from the SPU's previous packet put
 //! (or, for a tile's first packet, from the moment the tile's atomic update is known to
-//! have succeeded) to its own put. A tile's
-//! span runs from its take to the SPU's next take (or last put); with software
-//! hyperthreading the last packets of the previous tile finish inside it, and the span is
-//! named after the newest tile it completes packets of.
+//! have succeeded) to its own put. A tile's span on an SPU runs from the start of its first
+//! packet to the put of its last or the start of the next tile's first packet, whichever
+//! comes first: with software hyperthreading (and the kernel's claim of the next tile a
+//! couple of packets before the end of one) the last packets of a tile finish inside the
+//! next one's span.
 
 use crate::frame::FrameLayout;
 use crate::kernel_abi::{PACKETS_PER_TILE, PACKET_BLOCK_BYTES, PACKET_SIZE, TILE_SIZE};
@@ -80,8 +81,8 @@ impl Timeline {
         for (spu, events) in run.events.iter().enumerate() {
             let mut mark = 0u64;
             let mut waited = 0u64;
-            // the open tile span, and whether a packet completed in it
-            let mut open: Option<(TileSpan, bool)> = None;
+            // this SPU's tile spans, in the order their first packets completed
+            let mut spans: Vec<TileSpan> = Vec::new();
             for event in events {
                 match *event {
                     SpuEvent::ChannelWait {
@@ -121,23 +122,9 @@ impl Timeline {
                             });
                         }
                         if cmd == 0xd0 && ea & !127 == counter_line {
-                            // taking a tile: the wait for it belongs to no packet; a span
-                            // that completed packets closes (retries keep an empty one)
+                            // taking a tile: the wait for it belongs to no packet
                             mark = cycle;
                             waited = 0;
-                            if let Some((span, true)) = open {
-                                t.tiles.push(span);
-                                open = None;
-                            }
-                            open.get_or_insert((
-                                TileSpan {
-                                    spu,
-                                    tile: 0,
-                                    start: cycle,
-                                    end: cycle,
-                                },
-                                false,
-                            ));
                         } else if PUTS.contains(&cmd) && (fb..fb_end).contains(&ea) {
                             let block = ((ea - fb) / PACKET_BLOCK_BYTES as u64) as u32;
                             let (tile, packet) =
@@ -150,27 +137,29 @@ impl Timeline {
                                 end: cycle,
                                 wait: waited,
                             });
-                            let (span, any) = open.get_or_insert((
-                                TileSpan {
+                            match spans.iter_mut().rev().find(|s| s.tile == tile) {
+                                Some(span) => {
+                                    span.start = span.start.min(mark);
+                                    span.end = cycle;
+                                }
+                                None => spans.push(TileSpan {
                                     spu,
                                     tile,
                                     start: mark,
                                     end: cycle,
-                                },
-                                false,
-                            ));
-                            span.tile = if *any { span.tile.max(tile) } else { tile };
-                            span.end = cycle;
-                            *any = true;
+                                }),
+                            }
                             mark = cycle;
                             waited = 0;
                         }
                     }
                 }
             }
-            if let Some((span, true)) = open {
-                t.tiles.push(span);
+            // one track per SPU: a tile's span ends where the next one's begins
+            for i in 1..spans.len() {
+                spans[i - 1].end = spans[i - 1].end.min(spans[i].start);
             }
+            t.tiles.extend(spans);
         }
         t
     }
