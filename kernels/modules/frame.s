@@ -254,6 +254,25 @@ new_tile:
         lqa     $66, vars+V_EXH
         brnz    $66, sched_next               # no tile left: the context stays empty
 
+# the tile counter's line (EA $70) to lockbuf ($66) with a reservation, the counter's
+# value to $71, the value + $69 put back conditionally (putllc); its status is left unread
+        .macro  TILE_CLAIM
+        wrch    $MFC_LSA, $66
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $70
+        il      $67, 0xd0                     # getllar
+        wrch    $MFC_Cmd, $67
+        rdch    $68, $MFC_RdAtomicStat
+        lqd     $71, 0($66)
+        a       $72, $71, $69
+        stqd    $72, 0($66)
+        wrch    $MFC_LSA, $66
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $70
+        il      $67, 0xb4                     # putllc
+        wrch    $MFC_Cmd, $67
+        .endm
+
 # ---- take the next tile: atomic fetch-and-increment of the shared counter. The claim
 # made ahead (claim_ahead) is taken if its putllc held; otherwise, or without one, the
 # getllar/putllc loop runs here.
@@ -268,20 +287,7 @@ next_tile:
         andi    $68, $68, 1
         lqa     $71, vars+V_AHEAD
         brz     $68, 5f                       # it held: its tile
-2:      wrch    $MFC_LSA, $66
-        wrch    $MFC_EAH, ZERO
-        wrch    $MFC_EAL, $70
-        il      $67, 0xd0                     # getllar
-        wrch    $MFC_Cmd, $67
-        rdch    $68, $MFC_RdAtomicStat
-        lqd     $71, 0($66)
-        a       $72, $71, $69
-        stqd    $72, 0($66)
-        wrch    $MFC_LSA, $66
-        wrch    $MFC_EAH, ZERO
-        wrch    $MFC_EAL, $70
-        il      $67, 0xb4                     # putllc
-        wrch    $MFC_Cmd, $67
+2:      TILE_CLAIM
         rdch    $68, $MFC_RdAtomicStat
         andi    $68, $68, 1
         brnz    $68, 2b                       # reservation lost: retry
@@ -319,20 +325,7 @@ claim_ahead:
         ila     $66, lockbuf
         lqa     $69, k_inc0
         lqa     $70, vars+V_EACNT
-        wrch    $MFC_LSA, $66
-        wrch    $MFC_EAH, ZERO
-        wrch    $MFC_EAL, $70
-        il      $67, 0xd0                     # getllar
-        wrch    $MFC_Cmd, $67
-        rdch    $68, $MFC_RdAtomicStat
-        lqd     $71, 0($66)
-        a       $72, $71, $69
-        stqd    $72, 0($66)
-        wrch    $MFC_LSA, $66
-        wrch    $MFC_EAH, ZERO
-        wrch    $MFC_EAL, $70
-        il      $67, 0xb4                     # putllc, its status not waited for
-        wrch    $MFC_Cmd, $67
+        TILE_CLAIM                            # its putllc's status not waited for
         stqa    $71, vars+V_AHEAD
         il      $66, 1
         stqa    $66, vars+V_PENDING
