@@ -21,7 +21,7 @@
 #    the caches, two per step; mixed packets found in the caches; anything else (a cache
 #    miss, no hit) lane by lane, its vertex misses fetched without waiting into staging
 #    slots and landed together once its lanes are looked up (sh_vertex_miss,
-#    sh_vertex_land: one wait per packet of 4 rays, not one per miss; the triangle records
+#    SH_LAND: one wait per packet of 4 rays, not one per miss; the triangle records
 #    past the traversal's cache likewise, one wait before they are read). They compute the
 #    same values and counts. A packet none of whose rays hit has no i-set (its materials
 #    -1, the counters as they are).
@@ -174,6 +174,37 @@
         ceq     $86, $85, $81
         biz     $86, $114
 1:      lqd     $90, 16($84)
+        .endm
+
+# (in the slow path, once a group's lanes are looked up) the vertices in flight: one
+# wait, then each copy (uses $81, $85-$90, $94). Inline, not a call: an unhinted call and
+# return cost 37 cycles, which the beetle paid 41,000 times a frame.
+        .macro  SH_LAND
+        SH_ADDI $87, $66, SH_DCOUNT
+        lqd     $86, 0($87)
+        brz     $86, 2f
+        stqd    ZERO, 0($87)
+        SH_WAIT $85
+        SH_ADDI $94, $66, SH_DEFER
+        a       $86, $86, $94                 # the end
+        .sched  pool=81,85,87-90 scratch=66-127
+1:
+        lqd     %r0, 0($94)                   # the source, the lane, the tag, the vertex
+        lqd     %line, 16($94)
+        lqd     %nrm, 16(%r0)                 # the normal (all the lines are read for)
+        rotqbyi %lane, %r0, 4
+        rotqbyi %tag, %r0, 8
+        rotqbyi %v, %r0, 12
+        stqd    %nrm, 16(%line)
+        stqd    %nrm, 0(%lane)
+        stqd    %v, 0(%tag)                   # landed
+        ai      $94, $94, 32
+        ceq     %end, $94, $86
+        hbrr    3f, 1b
+3:
+        brz     %end, 1b
+        .endsched
+2:
         .endm
 
 # lane LANE of the intersection packet in $70 (ids): its record to SH_STAGE + LANE*64
@@ -953,12 +984,17 @@ shade_packet:
         stqd    $74, SH_STATS+SHS_GROUPS($66)
         stqd    $76, SH_STATS+SHS_TLOOK($66)
         stqd    $75, SH_SAME($66)             # (kept over the fetches)
+        ila     $77, .Lsh_lanes               # the lanes one by one, or the group's one
+        ila     $79, .Lsh_same                # triangle: a branch hinted either way
+        selb    $77, $77, $79, $75
+        hbr     .Lsh_pick, $77
         SH_FETCH 0
-        lqd     $75, SH_SAME($66)
-        brz     $75, .Lsh_lanes
+.Lsh_pick:
+        bi      $77
+.Lsh_same:
         SH_WAIT $74
         SH_NORMALS 0
-        brsl    $95, sh_vertex_land
+        SH_LAND
         SH_COUNT SHS_SAME, $74
         hbrr    .Lsh_copied, .Lsh_fetched
         .irp    L, 1, 2, 3
@@ -981,7 +1017,7 @@ shade_packet:
         .irp    L, 0, 1, 2, 3
         SH_NORMALS \L
         .endr
-        brsl    $95, sh_vertex_land
+        SH_LAND
 .Lsh_fetched:
         # the lanes' records and normals as columns (4x4 transposes: $117, $118 pair the
         # rows' words, $119, $98 take the columns); k (record word 3), b and c (words
@@ -1116,11 +1152,12 @@ shade_packet:
 # a vertex cache miss: vertex $81 into line $84, tag $83, its normal for $66 + $89; back
 # to $88. The fetch is queued, not waited for, into a staging slot of its own; the tag
 # becomes the vertex with bit 31 set (in flight) and the miss is counted. A copy is left
-# to sh_vertex_land, which the slow path calls once the group's lanes are looked up: one
+# to SH_LAND, which the slow path runs once the group's lanes are looked up: one
 # wait for all their misses, then in lookup order each slot's normal (the one quadword
 # of a vertex record the module reads) to its line (so a line ends up with the last
 # vertex looked up there) and to the lane, and the vertex to the line's tag (landed). A
-# lookup of a vertex in flight is no miss: its copy comes from its line, after the slot's.
+# lookup of a vertex in flight is no miss: its copy comes from its line, after the slot's
+# (it leaves by the hinted return, which was 43% of the calls in the beetle).
 # (Uses $71-$77, $82, $85-$87, $90, $94, $125-$127.)
 sh_vertex_miss:
         .sched  pool=71-77,85-87,90,125-127 scratch=66-127
@@ -1150,7 +1187,7 @@ sh_vertex_miss:
         stqd    $84, 16(%d2)                  # the line
         ai      %n1, %n, 32
         stqd    %n1, 0(%dc)
-        brnz    %inf, .Lsh_vm_flight
+        brnz    %inf, .Lsh_vm_ret             # (the return hinted either way)
         .endsched
         .sched  pool=71-77,85-87,90,125-127 scratch=66-127
         lqd     %cnt, SH_STATS+SHS_VMISS($66)
@@ -1171,43 +1208,14 @@ sh_vertex_miss:
 .Lsh_vm_ret:
         bi      $88
         .endsched
-.Lsh_vm_flight:
-        bi      $88
-
-# the vertices in flight: one wait, then each copy; back to $95 (uses $81, $85-$90, $94)
-sh_vertex_land:
-        SH_ADDI $87, $66, SH_DCOUNT
-        lqd     $86, 0($87)
-        brz     $86, 2f
-        stqd    ZERO, 0($87)
-        SH_WAIT $85
-        SH_ADDI $94, $66, SH_DEFER
-        a       $86, $86, $94                 # the end
-        .sched  pool=81,85,87-90 scratch=66-127
-1:
-        lqd     %r0, 0($94)                   # the source, the lane, the tag, the vertex
-        lqd     %line, 16($94)
-        lqd     %nrm, 16(%r0)                 # the normal (all the lines are read for)
-        rotqbyi %lane, %r0, 4
-        rotqbyi %tag, %r0, 8
-        rotqbyi %v, %r0, 12
-        stqd    %nrm, 16(%line)
-        stqd    %nrm, 0(%lane)
-        stqd    %v, 0(%tag)                   # landed
-        ai      $94, $94, 32
-        ceq     %end, $94, $86
-        hbrr    3f, 1b
-3:
-        brz     %end, 1b
-        .endsched
-2:      bi      $95
 
 # a triangle record the traversal's cache does not hold: record $80 into $82, not waited
 # for (SH_WAIT); back to $88
 sh_tri_miss:
+        hbr     1f, $88
         SH_COUNT SHS_TMISS, $84
         shli    $81, $80, 6
         a       $81, $81, EATRIS
         SH_QUEUE $82, $81, 64, $83
-        bi      $88
+1:      bi      $88
 shade_end:
