@@ -328,6 +328,7 @@ sh_const:
         .long   0x00011003, 0x04051407, 0x0809180b, 0x0c0d1c0f     # +288 b top byte
         .long   0x0004080c, 0x1014181c, 0x80808080, 0x80808080     # +304 top bytes of a, b
         .long   0x80808080, 0x80808080, 0x0004080c, 0x1014181c     # +320 ... to bytes 8-15
+        .long   0x00010203, 0x14151617, 0x18191a1b, 0x1c1d1e1f     # +336 a's word 0, b's 1-3
 sh_zero:                                      # no irradiance, a black light (768 bytes)
         .space  768
 
@@ -1169,20 +1170,22 @@ sh_vertex_miss:
         ilhu    %hb, 0x8000
         or      $94, $81, %hb                 # the vertex, in flight
         ceq     %inf, %tag, $94
-        shli    %n2, %n, 1
         ila     %o2, SH_VSTAGE
-        a       %s1, %n2, %o2
-        a       $82, %s1, $66                 # its slot
+        a       %sb, $66, %o2
+        shli    %n2, %n, 1
+        a       $82, %n2, %sb                 # its slot
         selb    %src, $82, $84, %inf          # in flight already: from its line
         a       %lane, $89, $66
         lqa     %plo, sh_const
         lqa     %pfh, sh_const+32
-        shufb   %sl, %src, %lane, %plo
+        lqa     %p1, sh_const+336
+        shufb   %ll, %lane, %lane, %plo
         shufb   %tv, $83, $81, %plo
-        shufb   %rec, %sl, %tv, %pfh          # the source, the lane, the tag, the vertex
+        shufb   %ltv, %ll, %tv, %pfh          # (-, the lane, the tag, the vertex), then
+        shufb   %rec, %src, %ltv, %p1         # the source in front: one shuffle after it
         ila     %o3, SH_DEFER
-        a       %d1, %o3, %n
-        a       %d2, %d1, $66
+        a       %db, $66, %o3
+        a       %d2, %db, %n
         stqd    %rec, 0(%d2)
         stqd    $84, 16(%d2)                  # the line
         ai      %n1, %n, 32
