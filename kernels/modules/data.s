@@ -9,6 +9,7 @@
         .align 7
 params:         .space 128
 lockbuf:        .space 128
+cullbuf:        .space 128      # the leaf's cull verdicts, by triangle & 7 (modules/triangle.s)
 statbuf:        .space 128
 vars:           .space 608
 nodebuf:        .space 64

@@ -160,7 +160,7 @@ leaf_resume:
         ai      $77, $77, -1
 .Lres_br:
         brnz    $77, .Lres
-        br      tri_loop
+        br      leaf_cull
 
 # ---- triangle cache miss in the test loop: another way of a 4-way set, the packet's
 # staging slot (fetched while it was suspended), or a fetch it waits for

@@ -40,7 +40,7 @@ leaf_probe:                                   # (a suspended leaf resumes here)
         ai      $77, $77, -1
 .Lpf_br:
         brnz    $77, .Lpf
-        brz     $78, tri_loop
+        brz     $78, leaf_cull
         lqa     $86, vars+V_NCTX1
         brz     $86, .Lpf_suspend
         lqd     $86, CTX_TAG(RAYS)
@@ -49,17 +49,124 @@ leaf_probe:                                   # (a suspended leaf resumes here)
         wrch    $MFC_WrTagMask, $87
         wrch    $MFC_WrTagUpdate, $86
         rdch    $86, $MFC_RdTagStat
+
+# ---- the leaf's corner-ray frustum cull, two triangles a pass, before any is tested: a
+# triangle every corner ray (0, 7, 56, 63) misses on one side, or that lies behind them
+# all, is culled. One triangle's test is a chain of ~90 cycles of latency (the record,
+# its axis, the corners' n.d, a reciprocal, the barycentrics), so two run side by side;
+# each result goes to the slot cullbuf + (triangle & 7) * 16 (a leaf's triangles are
+# consecutive, at most 8), which the test loop reads. The records are in the cache after
+# the prefetch pass; a line that holds another triangle (two of the leaf on one line)
+# is not culled, and the test loop's lookup fetches it (tri_miss). Keeps $66, $67.
+leaf_cull:
+        ori     $76, $66, 0                   # the pass's first triangle
+        ori     $77, $67, 0                   # triangles left
+        ila     $78, cullbuf
+        ai      $79, RAYS, CTX_CORNERS        # the corner rays' x, y, z
+        ila     $80, k_axoff
+        ila     $81, k_kuv
+        .sched  pool=82-127 scratch=66-127
+.Lcull:
+        .irp    T, 0, 1
+        ai      %tri\T, $76, \T
+        and     %ln\T, %tri\T, TMASK
+        shli    %lt\T, %ln\T, 4
+        lqx     %tag\T, TTAGS, %lt\T
+        shli    %ld\T, %ln\T, 6
+        a       %rec\T, %ld\T, TDATA
+        ceq     %th\T, %tag\T, %tri\T
+        lqd     %q0\T, TRI_N_U(%rec\T)         # (n_u, n_v, n_d, k)
+        lqd     %q1\T, TRI_B_NU(%rec\T)        # (b_nu, b_nv, b_d, -)
+        lqd     %q2\T, TRI_C_NU(%rec\T)        # (c_nu, c_nv, c_d, -)
+        rotqbyi %k\T, %q0\T, 12
+        shli    %k16\T, %k\T, 4
+        lqx     %ax\T, $80, %k16\T             # (k, u, v) array offsets
+        lqx     %kp\T, $81, %k16\T
+        shufb   %okuv\T, ORIG, ORIG, %kp\T     # origin in (k, u, v) order
+        shufb   %nu\T, %q0\T, %q0\T, PAT0
+        shufb   %nv\T, %q0\T, %q0\T, PAT1
+        shufb   %nd\T, %q0\T, %q0\T, PAT2
+        shufb   %bnu\T, %q1\T, %q1\T, PAT0
+        shufb   %bnv\T, %q1\T, %q1\T, PAT1
+        shufb   %bd\T, %q1\T, %q1\T, PAT2
+        shufb   %cnu\T, %q2\T, %q2\T, PAT0
+        shufb   %cnv\T, %q2\T, %q2\T, PAT1
+        shufb   %cd\T, %q2\T, %q2\T, PAT2
+        shufb   %ok\T, %okuv\T, %okuv\T, PAT0
+        shufb   %ou\T, %okuv\T, %okuv\T, PAT1
+        shufb   %ov\T, %okuv\T, %okuv\T, PAT2
+        fs      %nm1\T, %nd\T, %ok\T
+        fnms    %nm2\T, %nu\T, %ou\T, %nm1\T
+        fnms    %num\T, %nv\T, %ov\T, %nm2\T   # n_d - o_k - n_u o_u - n_v o_v
+        rotqbyi %axu\T, %ax\T, 4
+        rotqbyi %axv\T, %ax\T, 8
+        rotmi   %ck\T, %ax\T, -4
+        rotmi   %cu\T, %axu\T, -4
+        rotmi   %cv\T, %axv\T, -4
+        lqx     %dk\T, $79, %ck\T              # corner d_k, d_u, d_v
+        lqx     %du\T, $79, %cu\T
+        lqx     %dv\T, $79, %cv\T
+        fma     %dn1\T, %nu\T, %du\T, %dk\T
+        fma     %den\T, %nv\T, %dv\T, %dn1\T   # den = n.d
+        frest   %y\T, %den\T
+        fi      %y1\T, %den\T, %y\T
+        fnms    %e\T, %den\T, %y1\T, ONE
+        fma     %r\T, %e\T, %y1\T, %y1\T
+        fm      %t\T, %num\T, %r\T             # t
+        fma     %hu\T, %t\T, %du\T, %ou\T      # hit u
+        fma     %hv\T, %t\T, %dv\T, %ov\T      # hit v
+        fma     %be1\T, %bnu\T, %hu\T, %bd\T
+        fma     %be\T, %bnv\T, %hv\T, %be1\T   # beta
+        fma     %ga1\T, %cnu\T, %hu\T, %cd\T
+        fma     %ga\T, %cnv\T, %hv\T, %ga1\T   # gamma
+        fa      %bg\T, %be\T, %ga\T
+        fcgt    %fr\T, %t\T, ZERO              # in front
+        fcgt    %o1\T, ZERO, %be\T
+        fcgt    %o2\T, ZERO, %ga\T
+        fcgt    %o3\T, %bg\T, ONE
+        and     %o1f\T, %o1\T, %fr\T
+        and     %o2f\T, %o2\T, %fr\T
+        and     %o3f\T, %o3\T, %fr\T
+        gb      %gf\T, %fr\T
+        gb      %g1\T, %o1f\T
+        gb      %g2\T, %o2f\T
+        gb      %g3\T, %o3f\T
+        ceqi    %bh\T, %gf\T, 0                # every corner behind
+        ceqi    %x1\T, %g1\T, 15               # every corner outside one edge
+        ceqi    %x2\T, %g2\T, 15
+        ceqi    %x3\T, %g3\T, 15
+        or      %c1\T, %bh\T, %x1\T
+        or      %c2\T, %x2\T, %x3\T
+        or      %cl\T, %c1\T, %c2\T
+        and     %cv\T, %cl\T, %th\T             # another triangle's line: not culled
+        andi    %sl\T, %tri\T, 7
+        shli    %so\T, %sl\T, 4
+      ~ stqx    %cv\T, $78, %so\T
+        .endr
+        ai      $76, $76, 2
+        ai      $77, $77, -2
+        cgti    %more, $77, 0
+        hbrr    .Lcull_br, .Lcull
+.Lcull_br:
+        brnz    %more, .Lcull
+        .endsched
 tri_loop:
         ai      S_TLOOK, S_TLOOK, 1
         and     $80, $66, TMASK
+        andi    $100, $66, 7                  # the leaf's cull (leaf_cull)
         shli    $81, $80, 4
+        shli    $100, $100, 4
         shli    $82, $80, 6
         lqx     $83, TTAGS, $81
+        ila     $101, cullbuf
+        lqx     $113, $101, $100
         a       $84, TDATA, $82
         ceq     $85, $83, $66
+        sf      S_CULLED, $113, S_CULLED      # +1 when culled
+        brnz    $113, tri_next
         brz     $85, tri_miss                 # hits fall through
-        # (scheduled into even/odd pairs: the record's splats, the corner-ray frustum cull
-        # of the triangle, the first active group's offset)
+        # (scheduled into even/odd pairs: the record's splats, the first active group's
+        # offset)
         .sched  scratch=66-127
 .Ltri_hit:
         lqd     $86, TRI_N_U($84)              # (n_u, n_v, n_d, k)
@@ -102,48 +209,6 @@ tri_loop:
         a       $125, $97, $91                # base of d_k
         a       $126, $97, $98                # d_u
         a       $127, $97, $99                # d_v
-        # frustum culling with the packet's corner rays (0, 7, 56, 63)
-        ai      $97, RAYS, CTX_CORNERS
-        rotmi   $100, $91, -4
-        rotmi   $101, $98, -4
-        rotmi   $102, $99, -4
-        lqx     $103, $97, $100               # corner d_k
-        lqx     $104, $97, $101               # corner d_u
-        lqx     $105, $97, $102               # corner d_v
-        fma     $106, $68, $104, $103
-        fma     $106, $69, $105, $106          # den = n.d
-        frest   $107, $106
-        fi      $107, $106, $107
-        fnms    $108, $106, $107, ONE
-        fma     $107, $108, $107, $107
-        fm      $107, $70, $107                # t
-        fma     $108, $107, $104, $121        # hit u
-        fma     $109, $107, $105, $122        # hit v
-        fma     $110, $71, $108, $73
-        fma     $110, $72, $109, $110          # beta
-        fma     $111, $74, $108, $120
-        fma     $111, $75, $109, $111          # gamma
-        fa      $112, $110, $111
-        fcgt    $113, $107, ZERO              # in front
-        fcgt    $114, ZERO, $110
-        fcgt    $115, ZERO, $111
-        fcgt    $116, $112, ONE
-        and     $114, $114, $113
-        and     $115, $115, $113
-        and     $116, $116, $113
-        gb      $113, $113
-        gb      $114, $114
-        gb      $115, $115
-        gb      $116, $116
-        ceqi    $113, $113, 0                 # every corner behind
-        ceqi    $114, $114, 15                # every corner outside one edge
-        ceqi    $115, $115, 15
-        ceqi    $116, $116, 15
-        or      $113, $113, $114
-        or      $115, $115, $116
-        or      $113, $113, $115
-        sf      S_CULLED, $113, S_CULLED      # +1 when culled
-      ! brnz    $113, tri_next
         ai      S_TRIS, S_TRIS, 1
 
         # the active rays, four vectors (16 rays) per pass, from FIRST's group on
