@@ -226,7 +226,18 @@ tri_loop:
         .align  6                     # early in a fetch line: the loop refills no line while it runs
         .sched  pool=59,65,78-111,113-118 scratch=66-127
 ray_loop:
-        hbrr    .Lray_br, ray_loop
+        ceqi    %last, $119, 192              # the last pass: the leaf's next triangle
+        il      %one, 1                       # (tri_next's work, branch-free) and the
+        and     %inc, %last, %one             # branch hinted to the next triangle's
+        a       $66, $66, %inc                # test or, after the leaf's last, to its
+        sf      $67, %inc, $67                # end: no miss at the end of a test
+        ceqi    %done, $67, 0
+        ila     %back, ray_loop
+        ila     %next, tri_loop
+        ila     %end, .Lleaf_end
+        selb    %out, %next, %end, %done
+        selb    %to, %back, %out, %last
+        hbr     .Lray_br, %to
         a       %tp, RAYS, $119
         lqx     %dk0, $125, $119
         lqx     %du0, $126, $119
@@ -384,16 +395,16 @@ ray_loop:
         selb    %no3, %no3, %nd3, %hit3
       ~ stqd    %no3, CTX_RAY_ND+48(%tp)
         .endif
-        ceqi    $112, $119, 256
 .Lray_br:
-      ! brz     $112, ray_loop
+      ! bi      %to
         .endsched
 
 
-tri_next:
+tri_next:                                     # (a culled triangle)
         ai      $66, $66, 1
         ai      $67, $67, -1
         brnz    $67, tri_loop
+.Lleaf_end:
         .ifdef  SHADE                         # --shadow-early on: occluded rays stop
         lqa     $80, sv_early                 # (modules/shadow.s)
         brnz    $80, shadow_leaf
