@@ -60,7 +60,8 @@
 # several contexts: a triangle staged while the packet was suspended is installed now;
 # others are fetched into the packet's staging slots
 .Lpf_stage:
-        sf      $88, $66, $76                 # the slot
+        hbrr    .Lpf_stage_br, .Lpf_next      # (the way back hinted; the pass's own
+        sf      $88, $66, $76                 # the slot           hint is lost)
         shli    $89, $88, 4
         a       $89, $89, RAYS
         lqd     $90, CTX_STAGE_TAGS($89)
@@ -85,6 +86,7 @@
         il      $78, 1
         ai      $88, $88, 1
         stqa    $88, vars+V_TMISS
+.Lpf_stage_br:
         br      .Lpf_next
 .Lpf_install:                                 # (4-way, when the pass runs again)
         il      $90, -1

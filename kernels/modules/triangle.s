@@ -146,9 +146,12 @@ leaf_cull:
         ai      $76, $76, 2
         ai      $77, $77, -2
         cgti    %more, $77, 0
-        hbrr    .Lcull_br, .Lcull
+        ila     %back, .Lcull                 # the branch hinted where it goes: another
+        ila     %out, tri_loop                # pass or the test loop
+        selb    %to, %out, %back, %more
+        hbr     .Lcull_br, %to
 .Lcull_br:
-        brnz    %more, .Lcull
+        bi      %to
         .endsched
 tri_loop:
         ai      S_TLOOK, S_TLOOK, 1
