@@ -20,55 +20,6 @@
 # the triangle test (modules/triangle.s), which pops the next state when it is done.
 
         .text
-# the first ray's data from FIRST (splat): inline in first_changed, a call (set_first)
-# elsewhere (uses $100-$112)
-        .macro  SET_FIRST
-        rotmi   $100, FIRST, -2
-        shli    $100, $100, 4                 # its vector's byte offset
-        andi    $101, FIRST, 3
-        shli    $101, $101, 4                 # its lane * 16
-        ori     $102, RAYS, 0
-        a       $102, $102, $100
-        lqd     $103, CTX_RAY_RX($102)
-        lqd     $104, CTX_RAY_RX+256($102)
-        lqd     $105, CTX_RAY_RX+512($102)
-        ila     $106, k_pat
-        lqx     $107, $106, $101
-        ila     $106, k_tpat
-        lqx     FT_PAT, $106, $101
-        ori     $106, RAYS, 0
-        a       FT_ADDR, $106, $100
-        shufb   $103, $103, $103, $107        # 1/d splats
-        shufb   $104, $104, $104, $107
-        shufb   $105, $105, $105, $107
-        lqa     $106, k_eps
-        fm      RX1, $103, $106
-        fm      RY1, $104, $106
-        fm      RZ1, $105, $106
-        fcgt    $108, ZERO, $103              # points down the axis
-        fcgt    $109, ZERO, $104
-        fcgt    $110, ZERO, $105
-        lqa     $111, k_ident
-        selb    PERMX, $111, SWAP, $108
-        selb    PERMY, $111, SWAP, $109
-        selb    PERMZ, $111, SWAP, $110
-        stqd    $108, 0(NEGTAB)               # near child is child 1 when negative
-        stqd    $109, 16(NEGTAB)
-        stqd    $110, 32(NEGTAB)
-        # OR1 = origin * RX1 + |origin * RX1| * 2^-20: plane * RX1 - OR1 is the slab
-        # distance less a margin that covers the rounding of the product it replaces
-        lqa     $111, k_eps20
-        lqa     $112, k_abs
-        fm      $103, OXS, RX1
-        fm      $104, OYS, RY1
-        fm      $105, OZS, RZ1
-        and     $106, $103, $112
-        and     $107, $104, $112
-        and     $108, $105, $112
-        fma     OR1X, $106, $111, $103
-        fma     OR1Y, $107, $111, $104
-        fma     OR1Z, $108, $111, $105
-        .endm
 # ---- one traversal step: test both children of CUR (an inner node the packet enters)
 # $68/$70/$71: the pair's x/y/z planes, $73: (link', meta) of both children, $76: near
 # child's table offset, $77: the entry a pop takes, $112: first-ray miss mask
@@ -325,7 +276,7 @@ find_first:
         a       $97, $117, $103
         bi      $0
 
-# ---- set_first: the first ray's data from FIRST (splat), as a call (SET_FIRST above)
+# ---- set_first: the first ray's data from FIRST (splat), as a call (SET_FIRST, regs.inc)
 set_first:
         SET_FIRST
         bi      $0
