@@ -16,7 +16,7 @@
 # ray that reaches a triangle. The decision (descend to the near child and push the far
 # one, take the one that is entered, or pop) is made with masks, without branches; only
 # the third case (first ray misses a child the frustum does not rule out) branches, to
-# find_first. A stack entry is a state: (link', meta, first active ray). A leaf goes to
+# FIND_FIRST. A stack entry is a state: (link', meta, first active ray). A leaf goes to
 # the triangle test (modules/triangle.s), which pops the next state when it is done.
 
         .text
@@ -115,82 +115,11 @@ trav:
       ! br      trav
         .endsched
 
-# a new state from a pop or a changed first ray: the step's own checks sort it out
-        .set    .Lnewcur, trav
-
-first_changed:
-        hbrr    .Lfc_br, trav                 # (set_first inline: no call and return
-        shufb   FIRST, CUR, CUR, PAT2         # to mispredict, and the way back hinted)
-        SET_FIRST
-.Lfc_br:
-        br      trav
-
-# ---- the third case: the first ray misses a child the frustum does not rule out. Find the
-# first ray from FIRST on that enters it; none means the child is skipped.
-slow:
-        ori     $126, FIRST, 0                # the children's first active rays
-        brz     $125, .Lslow1
-        shufb   $80, $68, $68, PAT0           # child 0: min, max planes
-        shufb   $81, $68, $68, PAT1
-        shufb   $82, $70, $70, PAT0
-        shufb   $83, $70, $70, PAT1
-        shufb   $84, $71, $71, PAT0
-        shufb   $85, $71, $71, PAT1
-        brsl    $0, find_first
-        ceqi    $98, $97, -1
-        brnz    $98, .Lslow1
-        lqa     $98, k_child0
-        andc    $112, $112, $98
-        shufb   $99, $97, $97, PAT0
-        lqa     $98, k_word0
-        selb    $126, $126, $99, $98
-.Lslow1:
-        rotqbyi $90, $125, 8
-        brz     $90, .Lslow_done
-        shufb   $80, $68, $68, PAT2           # child 1
-        shufb   $81, $68, $68, PAT3
-        shufb   $82, $70, $70, PAT2
-        shufb   $83, $70, $70, PAT3
-        shufb   $84, $71, $71, PAT2
-        shufb   $85, $71, $71, PAT3
-        brsl    $0, find_first
-        ceqi    $98, $97, -1
-        brnz    $98, .Lslow_done
-        lqa     $98, k_child1
-        andc    $112, $112, $98
-        shufb   $99, $97, $97, PAT0
-        lqa     $98, k_word1
-        selb    $126, $126, $99, $98
-.Lslow_done:
-        # the step's decision again, with the children's own first rays
-        hbrr    .Lslow_br, .Lnewcur
-        shufb   $116, $112, $112, PAT0
-        shufb   $117, $112, $112, PAT2
-        lqa     $78, k_pc0
-        lqa     $79, k_pc1
-        or      $118, $116, $76
-        andc    $118, $118, $117
-        selb    $119, $78, $79, $118
-        selb    $120, $79, $78, $118
-        and     $121, $116, $117
-        shufb   $122, $73, $126, $119
-        shufb   $123, $73, $126, $120
-        a       $124, $116, $117
-        shli    $124, $124, 4
-        ceq     $93, STK, STKBASE
-        and     $93, $93, $121
-        selb    CUR, $122, $77, $121
-        stqd    $123, 0(STK)
-        brnz    $93, packet_done
-        a       STK, STK, $124
-        ai      STK, STK, 16
-.Lslow_br:
-        br      .Lnewcur
-
-# find_first: the first ray from FIRST on whose slab intervals with the box ($80/$81 min/max
+# FIND_FIRST: the first ray from FIRST on whose slab intervals with the box ($80/$81 min/max
 # x, $82/$83 y, $84/$85 z planes, splats) overlap within [0, t], widened by 1 -/+ 2^-16;
-# its index in $97, or -1. Uses $80..$111, $113..$124, $127.
-find_first:
+# its index in $97, or -1. Uses $80..$111, $113..$124, $127. Inline in `slow`, twice: a
+# call and its return were two more branches to mispredict per search.
+        .macro  FIND_FIRST
         fs      $80, $80, OXS
         fs      $81, $81, OXS
         fs      $82, $82, OYS
@@ -263,18 +192,91 @@ find_first:
         ai      $86, $86, 32
         ai      $117, $117, 8
         ceqi    $104, $86, 256
-        hbrr    .Lff_br, 1b                   # (most calls take a few passes)
+        hbrr    .Lff_br\@, 1b                 # (most searches take a few passes)
       ! brnz    $103, 2f
-.Lff_br:
+.Lff_br\@:
       ! brz     $104, 1b
         .endsched
-
         il      $97, -1
-        bi      $0
+        br      3f
 2:      clz     $103, $103                    # 8 lanes: the first = clz - 24
         ai      $103, $103, -32               # (less the 8 rays $117 has moved on)
         a       $97, $117, $103
-        bi      $0
+3:
+        .endm
+
+# a new state from a pop or a changed first ray: the step's own checks sort it out
+        .set    .Lnewcur, trav
+
+first_changed:
+        hbrr    .Lfc_br, trav                 # (set_first inline: no call and return
+        shufb   FIRST, CUR, CUR, PAT2         # to mispredict, and the way back hinted)
+        SET_FIRST
+.Lfc_br:
+        br      trav
+
+# ---- the third case: the first ray misses a child the frustum does not rule out. Find the
+# first ray from FIRST on that enters it; none means the child is skipped.
+slow:
+        ori     $126, FIRST, 0                # the children's first active rays
+        brz     $125, .Lslow1
+        shufb   $80, $68, $68, PAT0           # child 0: min, max planes
+        shufb   $81, $68, $68, PAT1
+        shufb   $82, $70, $70, PAT0
+        shufb   $83, $70, $70, PAT1
+        shufb   $84, $71, $71, PAT0
+        shufb   $85, $71, $71, PAT1
+        FIND_FIRST
+        ceqi    $98, $97, -1
+        brnz    $98, .Lslow1
+        lqa     $98, k_child0
+        andc    $112, $112, $98
+        shufb   $99, $97, $97, PAT0
+        lqa     $98, k_word0
+        selb    $126, $126, $99, $98
+.Lslow1:
+        rotqbyi $90, $125, 8
+        brz     $90, .Lslow_done
+        shufb   $80, $68, $68, PAT2           # child 1
+        shufb   $81, $68, $68, PAT3
+        shufb   $82, $70, $70, PAT2
+        shufb   $83, $70, $70, PAT3
+        shufb   $84, $71, $71, PAT2
+        shufb   $85, $71, $71, PAT3
+        FIND_FIRST
+        ceqi    $98, $97, -1
+        brnz    $98, .Lslow_done
+        lqa     $98, k_child1
+        andc    $112, $112, $98
+        shufb   $99, $97, $97, PAT0
+        lqa     $98, k_word1
+        selb    $126, $126, $99, $98
+.Lslow_done:
+        # the step's decision again, with the children's own first rays
+        hbrr    .Lslow_br, .Lnewcur
+        shufb   $116, $112, $112, PAT0
+        shufb   $117, $112, $112, PAT2
+        lqa     $78, k_pc0
+        lqa     $79, k_pc1
+        or      $118, $116, $76
+        andc    $118, $118, $117
+        selb    $119, $78, $79, $118
+        selb    $120, $79, $78, $118
+        and     $121, $116, $117
+        shufb   $122, $73, $126, $119
+        shufb   $123, $73, $126, $120
+        a       $124, $116, $117
+        shli    $124, $124, 4
+        ceq     $93, STK, STKBASE
+        and     $93, $93, $121
+        selb    CUR, $122, $77, $121
+        stqd    $123, 0(STK)
+        brnz    $93, packet_done
+        a       STK, STK, $124
+        ai      STK, STK, 16
+.Lslow_br:
+        br      .Lnewcur
+
 
 # ---- set_first: the first ray's data from FIRST (splat), as a call (SET_FIRST, regs.inc)
 set_first:

@@ -60,8 +60,13 @@
 # several contexts: a triangle staged while the packet was suspended is installed now;
 # others are fetched into the packet's staging slots
 .Lpf_stage:
-        hbrr    .Lpf_stage_br, .Lpf_next      # (the way back hinted; the pass's own
-        sf      $88, $66, $76                 # the slot           hint is lost)
+        ai      $95, $77, -1                  # the pass's step taken here, and its
+        ila     $96, .Lpf                     # branch hinted to where it goes: the
+        ila     $97, .Lpf_done                # next triangle or the pass's end (the
+        ceqi    $95, $95, 0                   # pass's own hint is lost)
+        selb    $96, $96, $97, $95
+        hbr     .Lpf_stage_br, $96
+        sf      $88, $66, $76                 # the slot
         shli    $89, $88, 4
         a       $89, $89, RAYS
         lqd     $90, CTX_STAGE_TAGS($89)
@@ -86,8 +91,10 @@
         il      $78, 1
         ai      $88, $88, 1
         stqa    $88, vars+V_TMISS
+        ai      $76, $76, 1
+        ai      $77, $77, -1
 .Lpf_stage_br:
-        br      .Lpf_next
+        bi      $96
 .Lpf_install:                                 # (4-way, when the pass runs again)
         il      $90, -1
         stqd    $90, CTX_STAGE_TAGS($89)

@@ -40,6 +40,7 @@ leaf_probe:                                   # (a suspended leaf resumes here)
         ai      $77, $77, -1
 .Lpf_br:
         brnz    $77, .Lpf
+.Lpf_done:
         brz     $78, leaf_cull
         lqa     $86, vars+V_NCTX1
         brz     $86, .Lpf_suspend
