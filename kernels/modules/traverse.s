@@ -215,42 +215,36 @@ first_changed:
 .Lfc_br:
         br      trav
 
+# one child of the third case: its min and max planes (patterns LO, HI), its first ray
+# (FIND_FIRST); none: on to SKIP; else the child is no longer missed (MISS: its lanes of
+# $112) and its first ray goes to its word (WORD) of $126
+        .macro  SLOW_CHILD lo, hi, skip, miss, word
+        shufb   $80, $68, $68, \lo
+        shufb   $81, $68, $68, \hi
+        shufb   $82, $70, $70, \lo
+        shufb   $83, $70, $70, \hi
+        shufb   $84, $71, $71, \lo
+        shufb   $85, $71, $71, \hi
+        FIND_FIRST
+        ceqi    $98, $97, -1
+        brnz    $98, \skip
+        lqa     $98, \miss
+        andc    $112, $112, $98
+        shufb   $99, $97, $97, PAT0
+        lqa     $98, \word
+        selb    $126, $126, $99, $98
+        .endm
+
 # ---- the third case: the first ray misses a child the frustum does not rule out. Find the
 # first ray from FIRST on that enters it; none means the child is skipped.
 slow:
         ori     $126, FIRST, 0                # the children's first active rays
         brz     $125, .Lslow1
-        shufb   $80, $68, $68, PAT0           # child 0: min, max planes
-        shufb   $81, $68, $68, PAT1
-        shufb   $82, $70, $70, PAT0
-        shufb   $83, $70, $70, PAT1
-        shufb   $84, $71, $71, PAT0
-        shufb   $85, $71, $71, PAT1
-        FIND_FIRST
-        ceqi    $98, $97, -1
-        brnz    $98, .Lslow1
-        lqa     $98, k_child0
-        andc    $112, $112, $98
-        shufb   $99, $97, $97, PAT0
-        lqa     $98, k_word0
-        selb    $126, $126, $99, $98
+        SLOW_CHILD PAT0, PAT1, .Lslow1, k_child0, k_word0
 .Lslow1:
         rotqbyi $90, $125, 8
         brz     $90, .Lslow_done
-        shufb   $80, $68, $68, PAT2           # child 1
-        shufb   $81, $68, $68, PAT3
-        shufb   $82, $70, $70, PAT2
-        shufb   $83, $70, $70, PAT3
-        shufb   $84, $71, $71, PAT2
-        shufb   $85, $71, $71, PAT3
-        FIND_FIRST
-        ceqi    $98, $97, -1
-        brnz    $98, .Lslow_done
-        lqa     $98, k_child1
-        andc    $112, $112, $98
-        shufb   $99, $97, $97, PAT0
-        lqa     $98, k_word1
-        selb    $126, $126, $99, $98
+        SLOW_CHILD PAT2, PAT3, .Lslow_done, k_child1, k_word1
 .Lslow_done:
         # the step's decision again, with the children's own first rays
         hbrr    .Lslow_br, .Lnewcur
