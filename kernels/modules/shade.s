@@ -941,8 +941,10 @@ shade_packet:
         a       %ct1, %ct, %hits
         stqd    %cg1, SH_STATS+SHS_GROUPS($66)
         stqd    %ct1, SH_STATS+SHS_TLOOK($66)
-        .endsched
+        hbrr    .Lsh_mixed_br, .Lsh_slow_next
+.Lsh_mixed_br:
         br      .Lsh_slow_next
+        .endsched
 
         # one lane at a time
 .Lsh_slow_body:
