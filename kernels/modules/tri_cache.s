@@ -62,8 +62,9 @@
 .Lpf_stage:
         ai      $95, $77, -1                  # the pass's step taken here, and its
         ila     $96, .Lpf                     # branch hinted to where it goes: the
-        ila     $97, .Lpf_done                # next triangle or the pass's end (the
-        ceqi    $95, $95, 0                   # pass's own hint is lost)
+        ila     $97, suspend                  # next triangle or, after the last, the
+        ceqi    $95, $95, 0                   # suspension (.Lpf_suspend's, as the pass
+                                              # would: a fetch is in flight)
         selb    $96, $96, $97, $95
         hbr     .Lpf_stage_br, $96
         sf      $88, $66, $76                 # the slot
@@ -93,6 +94,7 @@
         stqa    $88, vars+V_TMISS
         ai      $76, $76, 1
         ai      $77, $77, -1
+        ila     $80, leaf_resume
 .Lpf_stage_br:
         bi      $96
 .Lpf_install:                                 # (4-way, when the pass runs again)

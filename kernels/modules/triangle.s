@@ -415,6 +415,7 @@ tri_next:                                     # (a culled triangle)
 .Lleaf_refresh:
         .endif
         # the packet's largest t shrinks as rays hit: refresh the IA exit bound
+        hbrr    .Lpop_br, .Lnewcur            # (pop's way back to traversal)
         .irp    J, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
         lqd     (\J+81), CTX_RAY_T+\J*16(RAYS)
         .endr
@@ -453,4 +454,5 @@ pop:
         lqd     CUR, -16(STK)
         ai      STK, STK, -16
         brnz    $126, packet_done
+.Lpop_br:
         br      .Lnewcur
