@@ -794,48 +794,12 @@ impl<'o> Assembler<'o> {
                 .unwrap_or("");
             let rest_of_line = &trimmed[word.len()..];
             let first_word = block_word(word, &self.macros);
-            let active = cond.iter().all(|c| c.0);
             // Conditionals are tracked even while inactive.
-            match first_word.as_str() {
-                ".if" | ".ifdef" | ".ifndef" | ".ifeq" | ".ifne" | ".ifc" | ".ifnc" => {
-                    let value = if active {
-                        self.condition(&first_word, rest_of_line.trim(), line)
-                    } else {
-                        false
-                    };
-                    cond.push((active && value, value));
-                    i += 1;
-                    continue;
-                }
-                ".elseif" => {
-                    let outer = cond.len() < 2 || cond[..cond.len() - 1].iter().all(|c| c.0);
-                    if let Some(top) = cond.last_mut() {
-                        let taken = top.1;
-                        let v = !taken && outer && self.condition(".if", rest_of_line.trim(), line);
-                        *top = (v, taken || v);
-                    }
-                    i += 1;
-                    continue;
-                }
-                ".else" => {
-                    let outer = cond.len() < 2 || cond[..cond.len() - 1].iter().all(|c| c.0);
-                    if let Some(top) = cond.last_mut() {
-                        *top = (!top.1 && outer, true);
-                    } else {
-                        self.diag(Severity::Error, line, 1, ".else without .if");
-                    }
-                    i += 1;
-                    continue;
-                }
-                ".endif" => {
-                    if cond.pop().is_none() {
-                        self.diag(Severity::Error, line, 1, ".endif without .if");
-                    }
-                    i += 1;
-                    continue;
-                }
-                _ => {}
+            if self.conditional(&mut cond, &first_word, rest_of_line.trim(), line) {
+                i += 1;
+                continue;
             }
+            let active = cond.iter().all(|c| c.0);
             if !active {
                 i += 1;
                 continue;
@@ -1195,6 +1159,43 @@ impl<'o> Assembler<'o> {
         body
     }
 
+    /// Applies `word` to the open conditionals `cond` (per level: this branch is assembled,
+    /// some branch was taken) if it is `.if*`, `.elseif`, `.else` or `.endif`; whether it
+    /// was one.
+    fn conditional(
+        &mut self,
+        cond: &mut Vec<(bool, bool)>,
+        word: &str,
+        args: &str,
+        line: &Line,
+    ) -> bool {
+        let outer = cond.len() < 2 || cond[..cond.len() - 1].iter().all(|c| c.0);
+        match word {
+            ".if" | ".ifdef" | ".ifndef" | ".ifeq" | ".ifne" | ".ifc" | ".ifnc" => {
+                let value = cond.iter().all(|c| c.0) && self.condition(word, args, line);
+                cond.push((value, value));
+            }
+            ".elseif" => {
+                if let Some((_, taken)) = cond.last().copied() {
+                    let v = !taken && outer && self.condition(".if", args, line);
+                    cond.pop();
+                    cond.push((v, taken || v));
+                }
+            }
+            ".else" => match cond.last_mut() {
+                Some(top) => *top = (!top.1 && outer, true),
+                None => self.diag(Severity::Error, line, 1, ".else without .if"),
+            },
+            ".endif" => {
+                if cond.pop().is_none() {
+                    self.diag(Severity::Error, line, 1, ".endif without .if");
+                }
+            }
+            _ => return false,
+        }
+        true
+    }
+
     /// A `.sched` block's lines with its conditionals resolved and its macro calls expanded
     /// (the scheduler sees only instructions, labels and `.irp`), so that one macro can serve
     /// several blocks and a block can differ by a symbol. Conditionals are resolved before
@@ -1211,39 +1212,11 @@ impl<'o> Assembler<'o> {
                 None => (text, ""),
             };
             let word_lower = word.to_ascii_lowercase();
-            let active = cond.iter().all(|c| c.0);
-            let outer = cond.len() < 2 || cond[..cond.len() - 1].iter().all(|c| c.0);
-            match word_lower.as_str() {
-                ".if" | ".ifdef" | ".ifndef" | ".ifeq" | ".ifne" | ".ifc" | ".ifnc" => {
-                    let value = active && self.condition(&word_lower, args, l);
-                    cond.push((value, value));
-                    continue;
-                }
-                ".elseif" => {
-                    if let Some(top) = cond.last_mut() {
-                        let v = !top.1 && outer && self.condition(".if", args, l);
-                        *top = (v, top.1 || v);
-                    } else {
-                        self.diag(Severity::Error, l, 1, ".elseif without .if");
-                    }
-                    continue;
-                }
-                ".else" => {
-                    if let Some(top) = cond.last_mut() {
-                        *top = (!top.1 && outer, true);
-                    } else {
-                        self.diag(Severity::Error, l, 1, ".else without .if");
-                    }
-                    continue;
-                }
-                ".endif" => {
-                    if cond.pop().is_none() {
-                        self.diag(Severity::Error, l, 1, ".endif without .if");
-                    }
-                    continue;
-                }
-                _ if !active => continue,
-                _ => {}
+            if self.conditional(&mut cond, &word_lower, args, l) {
+                continue;
+            }
+            if !cond.iter().all(|c| c.0) {
+                continue;
             }
             match self.macros.get(&word_lower).cloned() {
                 Some(m) if depth < 16 => {
