@@ -197,8 +197,8 @@ fn deferred_writes_survive_a_replayed_block_that_writes_other_registers() {
 /// loops whose blocks cross instruction lines (fetch probes) and start in several states
 /// (a data-dependent trip count, a double-precision block before the first loop on every
 /// other pass): blocks are recorded while DMA cycles are pending, and some of their
-/// probes meet one (the recording must end unfinished); blocks replay with DMA cycles
-/// ahead that miss every probe, or go the long way when one meets a probe.
+/// probes meet one (the record then ends before that instruction); blocks replay with
+/// DMA cycles ahead that miss every probe, or go the long way when one meets a probe.
 #[test]
 fn blocks_record_and_replay_around_dma_cycles_exactly() {
     const OPS: [&str; 9] = [
@@ -235,4 +235,68 @@ fn blocks_record_and_replay_around_dma_cycles_exactly() {
     let (b, p) = same_both_ways(&src);
     assert_eq!(b.reg(9)[0], 0);
     assert!(p.totals.dma_contention > 0, "{:?}", p.totals);
+}
+
+/// A loop like the ray tracer's: a register-form hint (`hbr`) predicts a computed branch
+/// (`bi`) to one of four entries, a different one each pass, whose unhinted branches all
+/// miss into one joining block, entered after each of them with other registers still in
+/// flight. The block after the `hbr` must replay although the hint names another target
+/// each time (the target only decides whether the branch resolving after it was
+/// predicted), and so must the joining block although the branch-miss wait at its entry
+/// goes to another branch each time (and it starts in more states than two): the same
+/// registers, cycles and counters as timing every instruction, and every block start
+/// keeps its records.
+#[test]
+fn computed_hinted_branches_and_their_misses_replay_exactly() {
+    let src = "
+        .text
+        .global _start
+_start: ila     $11, e0
+        il      $9, 400
+        ilhu    $21, 0x3f80
+loop:   andi    $8, $9, 3
+        shli    $8, $8, 4
+        a       $10, $11, $8
+        hbr     jump, $10
+        a       $20, $20, $9
+        xor     $23, $23, $20
+        fa      $22, $22, $21
+        ai      $25, $25, 3
+        mpy     $26, $20, $9
+        fm      $27, $22, $21
+        ai      $28, $28, 1
+jump:   bi      $10
+        .align  4
+e0:     ai      $30, $30, 1
+        br      join
+        nop
+        lnop
+e1:     fm      $24, $22, $21
+        br      join
+        nop
+        lnop
+e2:     mpy     $31, $9, $9
+        br      join
+        nop
+        lnop
+e3:     ai      $32, $32, 2
+        br      join
+        nop
+        lnop
+join:   fa      $24, $24, $21
+        a       $33, $33, $31
+        ai      $9, $9, -1
+        brnz    $9, loop
+        stop    0x2000
+";
+    let (b, p) = same_both_ways(src);
+    assert_eq!(b.reg(30)[0], 100);
+    assert_eq!(b.reg(32)[0], 200);
+    // The four entries' branches miss into `join` every pass and so does the unhinted
+    // branch back to `loop`; the computed branch is predicted every time.
+    assert_eq!(p.totals.branch_misses, 400 + 399, "{:?}", p.totals);
+    assert_eq!(p.totals.hint_hits, 400, "{:?}", p.totals);
+    let (_, replays, given_up) = b.timing().expect("timing").memo_stats();
+    assert_eq!(given_up, 0, "no block start given up on");
+    assert!(replays > 4 * 350, "{replays} replays");
 }

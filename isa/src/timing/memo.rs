@@ -60,13 +60,22 @@ pub(super) struct Memo {
     pub probes: Vec<u32>,
     /// The block sets the hint entry (so after a replay it follows from the record).
     pub sets_hint: bool,
+    /// Cycles its first instruction waits for a branch miss just before the block (R4),
+    /// charged to that branch, whichever it was: so the record leaves them out and each
+    /// replay charges them to the branch of its own entry.
+    pub entry_miss_stall: u64,
     /// Distinguishes this record from an earlier one in the same place.
     pub generation: u64,
     /// The blocks that followed a full replay, not taken and taken (see [`Chain`]).
     pub chain: [Chain; 2],
     /// What the core keeps with the record (its compiled code), zeros for nothing.
     pub code: [u64; 3],
+    /// The next record for the same start (another entry state): memo index + 1, 0 none.
+    pub next: u32,
 }
+
+/// Records kept for one block start, each for another recurring entry state.
+pub(super) const MEMO_WAYS: usize = 8;
 
 /// A register's state after a block, relative to the block's entry (a result is never
 /// ready before its block starts).
@@ -88,7 +97,7 @@ pub(super) struct Chain {
     pub generation: u64,
     /// What B's signature saw of the hint entry (`Timing::hint_view`); the hint entry
     /// is the one part of B's entry state A's record may leave open, so it is compared.
-    pub hint: [i64; 3],
+    pub hint: [i64; 2],
     /// B's live registers that A does not write: they must have been ready before B's
     /// entry (as they were when the chain formed). Ended by 128; `UNLISTED` when
     /// there were too many to list (then every register must have been ready).
@@ -102,7 +111,7 @@ pub(super) const NO_CHAIN: Chain = Chain {
     pc: NEVER,
     memo: 0,
     generation: 0,
-    hint: [0; 3],
+    hint: [0; 2],
     open: [UNLISTED; OPEN_MAX],
 };
 
@@ -128,6 +137,8 @@ pub(super) struct Recording {
     pub steps: Vec<Step>,
     /// The cycles the fetch model probed for a free local-store cycle (absolute).
     pub probes: Vec<u64>,
+    /// How many of them the recorded steps made (the rest are the current one's).
+    pub probes_done: usize,
 }
 
 /// The state a block's timing depends on, at its entry.
@@ -156,7 +167,6 @@ pub(super) struct EntryRef<'a> {
     pub unit: &'a [Unit; 128],
     pub last: Last,
     pub redirect: u64,
-    pub miss_pc: u32,
     pub dp_until: u64,
     pub hint: HintEntry,
     pub fetch: (u32, bool, u64, u64),
@@ -172,7 +182,6 @@ impl Entry {
             unit: &self.unit,
             last: self.last,
             redirect: self.redirect,
-            miss_pc: self.miss_pc,
             dp_until: self.dp_until,
             hint: self.hint,
             fetch: self.fetch,
@@ -193,9 +202,6 @@ pub(super) struct Replay {
 pub(super) struct Memos {
     /// Per word address: 0 none, `NEVER`, or memo index + 1.
     pub slots: Vec<u32>,
-    /// Per word address, a second record for the same start in another entry state
-    /// (0 none, or memo index + 1): a block entered in two recurring states keeps both.
-    pub second: Vec<u32>,
     pub fails: Vec<u8>,
     pub memos: Vec<Memo>,
     pub rec: Option<Box<Recording>>,
@@ -260,6 +266,33 @@ pub(super) fn is_terminator(inst: Inst) -> bool {
         Hbr => !is_hbrp(inst),
         _ => false,
     }
+}
+
+/// Takes out of a block's record the branch-miss wait of its first instruction (the
+/// profile's stall and cycles at the missed branch `miss_pc`, the first two notes of that
+/// cause in the first step's log) and returns its cycles.
+fn take_entry_miss_stall(steps: &mut [Step], log: &mut Vec<LogEntry>, miss_pc: u32) -> u64 {
+    let field = 3 + StallCause::BranchMiss.index() as u8;
+    let end = steps[0].log_end.min(log.len());
+    let Some(at) = log[..end]
+        .iter()
+        .position(|e| e.field == field && e.pc == miss_pc)
+    else {
+        return 0;
+    };
+    let n = log[at].n;
+    let cycles = log
+        .get(at + 1)
+        .filter(|e| e.field == 1 && e.pc == miss_pc && e.n == n);
+    if at + 1 >= end || cycles.is_none() {
+        return 0;
+    }
+    log.drain(at..at + 2);
+    for st in steps.iter_mut() {
+        st.log_end -= 2;
+        st.totals.stall[StallCause::BranchMiss.index()] -= n;
+    }
+    n
 }
 
 /// What the memo table says of a block start.
@@ -327,26 +360,16 @@ impl Timing {
         if !emit(redirect) {
             return false;
         }
-        if redirect > 0 {
-            if !emit(e.miss_pc as i64) {
-                return false;
-            }
-        }
         if !emit((e.dp_until as i64 - now).max(0)) {
             return false;
         }
         if let Some((bpc, k)) = branch_at {
-            let [bits, window, target] = self.hint_view(&e.hint, e.index, e.now, bpc, k);
+            let [bits, window] = self.hint_view(&e.hint, e.index, e.now, bpc, k);
             if !emit(bits) {
                 return false;
             }
-            if bits == 3 {
-                if !emit(window) {
-                    return false;
-                }
-                if !emit(target) {
-                    return false;
-                }
+            if bits == 3 && !emit(window) {
+                return false;
             }
         }
         if self.config.model_fetch {
@@ -373,28 +396,30 @@ impl Timing {
     /// What a block whose branch is at `bpc`, `k` instructions after its start, sees of the
     /// hint entry `h` at its entry (instruction count `index`, cycle `now`): whether the
     /// entry names the branch and is far enough ahead (bits 0 and 1), and if both, how
-    /// long its window still runs and its target (else 0).
+    /// long its window still runs (else 0). Not its target: that only decides whether the
+    /// branch, resolving after the block, was predicted, and a replay takes it from the
+    /// entry as it is then (see [`Timing::materialize`]), so a register-target hint
+    /// (`hbr`) naming a different target each time still replays the block.
     #[inline(always)]
-    fn hint_view(&self, h: &HintEntry, index: u64, now: u64, bpc: u32, k: u64) -> [i64; 3] {
+    fn hint_view(&self, h: &HintEntry, index: u64, now: u64, bpc: u32, k: u64) -> [i64; 2] {
         let m = h.valid && h.branch == bpc;
         let close = index + k - h.index >= self.config.hint_min_distance as u64;
         if m && close {
             [
                 3,
                 (h.issued as i64 + self.config.hint_window as i64 - now as i64).max(-1),
-                h.target as i64,
             ]
         } else {
-            [m as i64 | (close as i64) << 1, 0, 0]
+            [m as i64 | (close as i64) << 1, 0]
         }
     }
 
     /// [`Timing::hint_view`] of the current state for memo `id`'s branch.
     #[inline]
-    fn hint_view_now(&self, id: usize) -> [i64; 3] {
+    fn hint_view_now(&self, id: usize) -> [i64; 2] {
         let m = &self.memo.memos[id];
         if m.branch_pc == NO_PC {
-            return [0; 3];
+            return [0; 2];
         }
         self.hint_view(
             &self.hint,
@@ -448,7 +473,6 @@ impl Timing {
         let idx = Self::slot_index(pc);
         if idx >= self.memo.slots.len() {
             self.memo.slots.resize(0x1_0000, 0);
-            self.memo.second.resize(0x1_0000, 0);
             self.memo.fails.resize(0x1_0000, 0);
         }
         // While DMA holds local-store cycles, blocks replay only clear of them, and a
@@ -463,9 +487,11 @@ impl Timing {
                 if self.memo.memos[id].hits < 2 {
                     self.memo.fails[idx] = self.memo.fails[idx].saturating_add(1);
                     if self.memo.fails[idx] >= 8 {
-                        self.memo.flush(id, &mut self.profile);
-                        if let Some(other) = self.second_memo(idx) {
-                            self.memo.flush(other, &mut self.profile);
+                        let mut at = self.memo.slots[idx];
+                        while at != 0 {
+                            let id = (at - 1) as usize;
+                            self.memo.flush(id, &mut self.profile);
+                            at = self.memo.memos[id].next;
                         }
                         self.memo.slots[idx] = NEVER;
                         return self.issue_slow(pc, inst);
@@ -483,6 +509,7 @@ impl Timing {
             hint_changed: false,
             steps: Vec::new(),
             probes: Vec::new(),
+            probes_done: 0,
         }));
         self.profile.log = Some(Vec::new());
         let t = self.issue_slow(pc, inst);
@@ -504,26 +531,24 @@ impl Timing {
         if slot == 0 {
             return Lookup::Absent;
         }
-        let first = (slot - 1) as usize;
-        if self.entry_matches(first, pc, inst) {
-            return Lookup::Hit(first);
-        }
-        match self.second_memo(idx) {
-            Some(second) if self.entry_matches(second, pc, inst) => Lookup::Hit(second),
-            // Record again over the one replayed less.
-            Some(second) if self.memo.memos[second].hits <= self.memo.memos[first].hits => {
-                Lookup::Differs(second)
+        // The records for this start, each for another entry state; when they are all
+        // taken, a new one replaces the one replayed least.
+        let (mut at, mut ways, mut victim) = (slot, 0, (slot - 1) as usize);
+        while at != 0 {
+            let id = (at - 1) as usize;
+            if self.entry_matches(id, pc, inst) {
+                return Lookup::Hit(id);
             }
-            _ => Lookup::Differs(first),
+            if self.memo.memos[id].hits < self.memo.memos[victim].hits {
+                victim = id;
+            }
+            ways += 1;
+            at = self.memo.memos[id].next;
         }
-    }
-
-    /// The second record for word address `idx`, if any.
-    #[inline]
-    fn second_memo(&self, idx: usize) -> Option<usize> {
-        match self.memo.second.get(idx) {
-            Some(&s) if s != 0 => Some((s - 1) as usize),
-            _ => None,
+        if ways < MEMO_WAYS && self.memo.memos[victim].words[0] == inst.word {
+            Lookup::Absent
+        } else {
+            Lookup::Differs(victim)
         }
     }
 
@@ -639,6 +664,7 @@ impl Timing {
     /// Starts replaying memo `id` with its first instruction (`pc`, `inst`); returns that
     /// instruction's issue cycle.
     fn begin_replay(&mut self, id: usize, pc: u32, inst: Inst) -> u64 {
+        self.charge_entry_miss(id);
         self.memo.replay = Some(Replay {
             memo: id,
             k: 0,
@@ -773,13 +799,26 @@ impl Timing {
     fn block_entry(&mut self, id: usize) -> Replay {
         match self.memo.replay.take() {
             Some(rp) if rp.memo == id => rp,
-            _ => Replay {
-                memo: id,
-                k: 0,
-                entry_now: self.now,
-                entry_index: self.index,
-                entry_max_ready: self.max_ready,
-            },
+            _ => {
+                self.charge_entry_miss(id);
+                Replay {
+                    memo: id,
+                    k: 0,
+                    entry_now: self.now,
+                    entry_index: self.index,
+                    entry_max_ready: self.max_ready,
+                }
+            }
+        }
+    }
+
+    /// A replay of memo `id` starts: the branch-miss wait of its first instruction goes
+    /// to the branch that missed, as issuing it would have charged it.
+    #[inline(always)]
+    fn charge_entry_miss(&mut self, id: usize) {
+        let n = self.memo.memos[id].entry_miss_stall;
+        if n > 0 {
+            self.profile.stall(self.miss_pc, StallCause::BranchMiss, n);
         }
     }
 
@@ -863,20 +902,29 @@ impl Timing {
         }
         let skip = passes - 1;
         if skip > 0 {
-            let m = &mut self.memo.memos[id];
-            m.hits += skip;
+            self.memo.memos[id].hits += skip;
+            let m = &self.memo.memos[id];
             let last = m.steps.last().expect("steps");
             let delta = last.last_issue_rel as u64 + 1;
-            let hinted = last.last.hinted();
+            let hinted = self.entry_hinted(id, last.last);
+            let max_ready_rel = m.max_ready_rel;
+            let len = m.words.len() as u64;
             let entry = self.now;
             // The state at the last pass's entry: every pass sets the same parts (the
             // last pass sets them again), the rest is left alone.
             self.max_ready = self
                 .max_ready
-                .max(entry + (skip - 1) * delta + m.max_ready_rel);
-            self.index += skip * m.words.len() as u64;
+                .max(entry + (skip - 1) * delta + max_ready_rel);
+            self.index += skip * len;
             self.now = entry + skip * delta;
             self.count_branch(hinted, true, branch.2 & 0x3_ffff, skip);
+            // Each pass but the last (charged by its replay below) after the miss of
+            // the same branch.
+            let n = self.memo.memos[id].entry_miss_stall;
+            if n > 0 {
+                self.profile
+                    .stall(self.miss_pc, StallCause::BranchMiss, n * skip);
+            }
         }
         self.block_replayed(id, Some(branch));
     }
@@ -897,7 +945,6 @@ impl Timing {
             unit: &self.producer_unit,
             last: self.last,
             redirect: self.redirect,
-            miss_pc: self.miss_pc,
             dp_until: self.dp_until,
             hint: self.hint,
             fetch: (
@@ -914,6 +961,7 @@ impl Timing {
         let Some(rec) = self.memo.rec.as_mut() else {
             return;
         };
+        rec.probes_done = rec.probes.len();
         let e = &rec.entry;
         let now = e.now as i64;
         let class = self.classes[inst.op as usize];
@@ -964,16 +1012,33 @@ impl Timing {
         rec.steps.push(step);
     }
 
+    /// The fetch model of the instruction being recorded met a local-store cycle DMA
+    /// holds: the record must not depend on DMA, so it ends with the instructions before
+    /// (whose probes all found their cycles free), and this one issues unrecorded.
+    pub(super) fn cut_recording(&mut self) {
+        let Some(rec) = self.memo.rec.as_deref_mut() else {
+            return;
+        };
+        rec.probes.truncate(rec.probes_done);
+        let log_end = rec.steps.last().map_or(0, |st| st.log_end);
+        if let Some(log) = self.profile.log.as_mut() {
+            log.truncate(log_end);
+        }
+        self.finish_recording();
+    }
+
     fn finish_recording(&mut self) {
         // The record may replace the deferred block's memo.
         self.apply_deferred_writes();
         let Some(rec) = self.memo.rec.take() else {
             return;
         };
-        let log = self.profile.log.take().unwrap_or_default();
+        let mut log = self.profile.log.take().unwrap_or_default();
         if rec.steps.is_empty() {
             return;
         }
+        let mut rec = rec;
+        let entry_miss_stall = take_entry_miss_stall(&mut rec.steps, &mut log, rec.entry.miss_pc);
         // Live-in registers: read before the block writes them.
         let mut written = [false; 128];
         let mut live = Vec::new();
@@ -1035,8 +1100,10 @@ impl Timing {
             probes: Vec::new(),
             generation: self.memo.generations,
             sets_hint: rec.hint_changed,
+            entry_miss_stall,
             chain: [NO_CHAIN; 2],
             code: [0; 3],
+            next: 0,
         };
         self.memo.generations += 1;
         let mut memo = memo;
@@ -1076,24 +1143,35 @@ impl Timing {
             self.memo.slots[idx] = self.memo.memos.len() as u32;
             return;
         }
+        // A block at the same start with other words (the code changed) replaces the
+        // records there; another entry state takes a place of its own, or replaces the
+        // record replayed least.
         let first = (slot - 1) as usize;
-        // A block at the same start with other words (the code changed) replaces the first
-        // record; another entry state takes the second place, or replaces the record
-        // replayed less.
-        let same_words = self.memo.memos[first].words == memo.words;
-        let victim = match self.second_memo(idx) {
-            None if same_words => {
-                self.memo.memos.push(memo);
-                self.memo.second[idx] = self.memo.memos.len() as u32;
-                return;
+        if self.memo.memos[first].words != memo.words {
+            let mut at = self.memo.memos[first].next;
+            while at != 0 {
+                let id = (at - 1) as usize;
+                self.memo.flush(id, &mut self.profile);
+                at = self.memo.memos[id].next;
             }
-            Some(second)
-                if same_words && self.memo.memos[second].hits <= self.memo.memos[first].hits =>
-            {
-                second
+            self.memo.flush(first, &mut self.profile);
+            self.memo.memos[first] = memo;
+            return;
+        }
+        let (mut last, mut ways, mut victim) = (first, 1, first);
+        while self.memo.memos[last].next != 0 {
+            last = (self.memo.memos[last].next - 1) as usize;
+            ways += 1;
+            if self.memo.memos[last].hits < self.memo.memos[victim].hits {
+                victim = last;
             }
-            _ => first,
-        };
+        }
+        if ways < MEMO_WAYS {
+            self.memo.memos.push(memo);
+            self.memo.memos[last].next = self.memo.memos.len() as u32;
+            return;
+        }
+        memo.next = self.memo.memos[victim].next;
         self.memo.flush(victim, &mut self.profile);
         self.memo.memos[victim] = memo;
     }
@@ -1173,6 +1251,9 @@ impl Timing {
         }
         let st = &m.steps[k - 1];
         self.last = st.last;
+        if !m.sets_hint && st.last.hinted().is_some() {
+            self.last.branch_hint = Some(self.hint.target);
+        }
         self.last.issue = at(st.last_issue_rel);
         self.now = self.last.issue + 1;
         if let Some(d) = st.dp_rel {
@@ -1276,6 +1357,16 @@ impl Timing {
 }
 
 impl Timing {
+    /// The target a replayed block's final branch (recorded as `last`) was predicted to:
+    /// the hint entry's as it is now when the block does not set the entry itself.
+    #[inline]
+    fn entry_hinted(&self, id: usize, last: Last) -> Option<u32> {
+        match last.hinted() {
+            Some(_) if !self.memo.memos[id].sets_hint => Some(self.hint.target),
+            h => h,
+        }
+    }
+
     /// Memoization statistics: (blocks recorded, replays, addresses given up on).
     pub fn memo_stats(&self) -> (usize, u64, usize) {
         let hits = self.memo.memos.iter().map(|m| m.hits).sum();

@@ -634,8 +634,8 @@ impl Timing {
             if c < from {
                 self.fetch.dma.pop_front();
             } else if c == from {
-                // A block's record must not depend on DMA: a recording ends here.
-                self.memo.abort_recording(&mut self.profile);
+                // A block's record must not depend on DMA: a recording ends before this.
+                self.cut_recording();
                 self.fetch.dma.pop_front();
                 self.profile.totals.dma_contention += 1;
                 from += 1;
