@@ -24,8 +24,8 @@ use crate::codec::Inst;
 use crate::machine::exec::{execute_in, Core, Reg, LS_MASK, LS_SIZE};
 use crate::table::Op;
 
-/// The longest block compiled (the timing memo's limit).
-pub(crate) const MAX_BLOCK: usize = 64;
+/// The longest block compiled: the timing memo's limit.
+pub(crate) use crate::timing::MAX_BLOCK;
 
 /// What a compiled block reads and writes. Offsets are fixed: the block loads them.
 #[repr(C)]

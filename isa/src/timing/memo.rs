@@ -12,7 +12,8 @@
 use super::*;
 use crate::profile::LogEntry;
 
-pub(super) const MAX_BLOCK: usize = 64;
+/// The longest block recorded (and compiled).
+pub(crate) const MAX_BLOCK: usize = 256;
 pub(super) const NEVER: u32 = u32::MAX;
 
 #[derive(Clone, Debug)]

@@ -21,6 +21,7 @@ mod memo;
 
 pub use crate::stall::{StallCause, STALL_CLASSES};
 pub use memo::ends_block;
+pub(crate) use memo::MAX_BLOCK;
 
 /// Settings of the timing model.
 #[derive(Clone, Debug)]
