@@ -23,6 +23,7 @@ use crate::analysis::is_branch;
 use crate::codec::Inst;
 use crate::machine::exec::{execute_in, Core, Reg, LS_MASK, LS_SIZE};
 use crate::table::Op;
+use crate::timing::may_fall_through;
 
 /// The longest block compiled: the timing memo's limit.
 pub(crate) use crate::timing::MAX_BLOCK;
@@ -193,7 +194,9 @@ impl CodeCache {
         let n = insts.len();
         if n == 0
             || n > MAX_BLOCK
-            || insts[..n - 1].iter().any(|i| is_branch(i.op))
+            || insts[..n - 1]
+                .iter()
+                .any(|&i| is_branch(i.op) && !may_fall_through(i))
             || insts.iter().any(|i| i.op == Op::Bisled)
         {
             return None;
@@ -388,7 +391,9 @@ impl Compiler {
             let inst = &insts[k];
             let p = pc.wrapping_add(4 * k as u32) & LS_MASK;
             let more = k + 1 < n;
-            if is_branch(inst.op) {
+            if is_branch(inst.op) && more {
+                t.inner_branch(inst, p, k as u64);
+            } else if is_branch(inst.op) {
                 t.branch(inst, p, n as u64, self_loop.then_some(body));
                 done = true;
             } else if let Some(end) = float_run(insts, k) {
@@ -1204,6 +1209,40 @@ impl Translator<'_> {
             .b
             .ins()
             .iconst(I64, (next as u64 | (k + 1) << 32 | RESULT_PARTIAL) as i64);
+        self.b.ins().return_(&[r]);
+        self.b.switch_to_block(cont);
+    }
+
+    /// Emits an inner conditional branch (the `k`th instruction, at `p`): taken, the
+    /// block returns there, its `k + 1` instructions done ([`RESULT_PARTIAL`] and
+    /// [`RESULT_TAKEN`], the target also in the context); untaken, it goes on.
+    fn inner_branch(&mut self, inst: &Inst, p: u32, k: u64) {
+        use Op::*;
+        debug_assert!(may_fall_through(*inst));
+        let target = p.wrapping_add((inst.imm << 2) as u32) & LS_MASK & !3;
+        let rt = self.get(inst.rt);
+        let v = self.preferred(rt);
+        let v = if matches!(inst.op, Brhz | Brhnz) {
+            self.b.ins().band_imm_u(v, 0xffff)
+        } else {
+            v
+        };
+        let cc = if matches!(inst.op, Brz | Brhz) {
+            IntCC::Equal
+        } else {
+            IntCC::NotEqual
+        };
+        let taken = self.b.ins().icmp_imm_u(cc, v, 0);
+        let exit = self.b.create_block();
+        let cont = self.b.create_block();
+        self.b.ins().brif(taken, exit, &[], cont, &[]);
+        self.b.switch_to_block(exit);
+        let t = self.b.ins().iconst(I32, target as i64);
+        self.b
+            .ins()
+            .store(MemFlagsData::trusted(), t, self.ctx, CTX_TARGET);
+        let r = (target as u64 | (k + 1) << 32 | RESULT_TAKEN | RESULT_PARTIAL) as i64;
+        let r = self.b.ins().iconst(I64, r);
         self.b.ins().return_(&[r]);
         self.b.switch_to_block(cont);
     }

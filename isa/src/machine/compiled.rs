@@ -298,7 +298,8 @@ mod host {
                     let n = self.compiled.as_ref().expect("blocks").blocks[id].code.n as u64;
                     if n <= budget {
                         let (r, _, _, done) = self.call_block(id, budget);
-                        self.block_cut = r & RESULT_PARTIAL != 0;
+                        // (Left at an inner branch, taken: not cut.)
+                        self.block_cut = r & (RESULT_PARTIAL | RESULT_TAKEN) == RESULT_PARTIAL;
                         self.pc = r as u32;
                         self.instructions += done;
                         self.cycle += done;
@@ -407,7 +408,12 @@ mod host {
             let last_pc = pc.wrapping_add(4 * (n as u32 - 1)) & LS_MASK;
             let timing = self.timing.as_mut().expect("timing");
             timing.steady_replayed(memo, loops, (last_pc, true, pc));
-            if r & RESULT_PARTIAL != 0 {
+            if r & (RESULT_PARTIAL | RESULT_TAKEN) == RESULT_PARTIAL | RESULT_TAKEN {
+                // Left at an inner branch, taken.
+                let k = ((r >> 32) & 0xffff) as usize;
+                let at = pc.wrapping_add(4 * (k as u32 - 1)) & LS_MASK;
+                timing.block_left_at_branch(memo, k, at, target);
+            } else if r & RESULT_PARTIAL != 0 {
                 timing.block_replayed_partly(memo, ((r >> 32) & 0xffff) as usize);
             } else if flags & KEPT_BRANCH != 0 {
                 let taken = r & RESULT_TAKEN != 0;

@@ -685,8 +685,16 @@ impl Spu {
         for k in 0..n {
             let inst = decoded[((p >> 2) as usize) & (LS_SIZE / 4 - 1)];
             match execute_in::<true>(core, inst, p) {
+                // An inner branch not taken: the record goes on past it.
+                Effect::Branch { taken: false, .. } if k + 1 < n => p = (p + 4) & LS_MASK,
+                Effect::Branch { taken, target } if k + 1 < n => {
+                    debug_assert!(taken);
+                    timing.block_left_at_branch(id, k + 1, p, target);
+                    p = target;
+                    done = k + 1;
+                    break;
+                }
                 Effect::Branch { taken, target } => {
-                    // Blocks end at their first branch.
                     timing.block_replayed(id, Some((p, taken, target)));
                     p = if taken { target } else { (p + 4) & LS_MASK };
                     done = k + 1;

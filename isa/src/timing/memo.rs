@@ -40,10 +40,17 @@ pub(super) struct Memo {
     pub words: Vec<u32>,
     pub live: Vec<u8>,
     pub branch_pc: u32,
+    /// The conditional branches inside the block (before its last instruction): the
+    /// record went on past each, untaken and named by no hint. A replay that finds one
+    /// taken stops there.
+    pub inner: Vec<u32>,
     pub sig: Vec<i64>,
     pub steps: Vec<Step>,
     pub log: Vec<LogEntry>,
     pub hits: u64,
+    /// Replays that stopped after step `k` (an inner branch taken, a hook), by `k`:
+    /// their counters are added with the full replays' (empty until the first).
+    pub partial_hits: Vec<u64>,
     /// The core's code epoch at which it last found local store holding `words`.
     pub verified: u64,
     /// The last write of each register the block writes (for the end of a replay).
@@ -98,7 +105,7 @@ pub(super) struct Chain {
     pub generation: u64,
     /// What B's signature saw of the hint entry (`Timing::hint_view`); the hint entry
     /// is the one part of B's entry state A's record may leave open, so it is compared.
-    pub hint: [i64; 2],
+    pub hint: [i64; 3],
     /// B's live registers that A does not write: they must have been ready before B's
     /// entry (as they were when the chain formed). Ended by 128; `UNLISTED` when
     /// there were too many to list (then every register must have been ready).
@@ -112,7 +119,7 @@ pub(super) const NO_CHAIN: Chain = Chain {
     pc: NEVER,
     memo: 0,
     generation: 0,
-    hint: [0; 2],
+    hint: [0; 3],
     open: [UNLISTED; OPEN_MAX],
 };
 
@@ -140,6 +147,26 @@ pub(super) struct Recording {
     pub probes: Vec<u64>,
     /// How many of them the recorded steps made (the rest are the current one's).
     pub probes_done: usize,
+    /// Where the record stands after its last step, when that is a conditional branch.
+    pub after_branch: AfterBranch,
+}
+
+/// A recording whose last step is a conditional branch: it goes on past the branch
+/// only when the branch resolved untaken and no hint named it (then its timing is the
+/// record's whatever the branch reads), else the block ends with it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum AfterBranch {
+    NoBranch,
+    Unresolved,
+    GoesOn,
+    Ends,
+}
+
+/// Conditional branches a block (its record, its compiled code) may go on past into
+/// the next instruction: relative ones, whose taken way leaves the block.
+#[inline]
+pub(crate) fn may_fall_through(inst: Inst) -> bool {
+    matches!(inst.op, Op::Brz | Op::Brnz | Op::Brhz | Op::Brhnz)
 }
 
 /// The state a block's timing depends on, at its entry.
@@ -226,6 +253,7 @@ impl Memos {
     pub fn clear_hits(&mut self) {
         for m in &mut self.memos {
             m.hits = 0;
+            m.partial_hits.clear();
         }
     }
 
@@ -236,6 +264,7 @@ impl Memos {
                 p.apply_log(&m.log, m.hits);
                 p.totals.add_scaled(&m.steps.last().unwrap().totals, m.hits);
             }
+            add_partial_hits(m, p);
         }
         if let Some((id, k)) = partial {
             let m = &self.memos[id];
@@ -253,6 +282,8 @@ impl Memos {
             p.totals.add_scaled(&m.steps.last().unwrap().totals, m.hits);
             m.hits = 0;
         }
+        add_partial_hits(m, p);
+        m.partial_hits.clear();
     }
 }
 
@@ -296,6 +327,22 @@ fn take_entry_miss_stall(steps: &mut [Step], log: &mut Vec<LogEntry>, miss_pc: u
     n
 }
 
+/// Adds the counters of memo `m`'s replays that stopped inside the block.
+fn add_partial_hits(m: &Memo, p: &mut Profile) {
+    for (st, &n) in m.steps.iter().zip(&m.partial_hits) {
+        if n > 0 {
+            p.apply_log(&m.log[..st.log_end], n);
+            p.totals.add_scaled(&st.totals, n);
+        }
+    }
+}
+
+/// Whether hint entry `h` names one of the branches `inner`.
+#[inline]
+fn names_inner(h: &HintEntry, inner: &[u32]) -> bool {
+    h.valid && inner.contains(&h.branch)
+}
+
 /// What the memo table says of a block start.
 enum Lookup {
     /// Never memoized here (its state kept changing).
@@ -328,6 +375,7 @@ impl Timing {
         live: &[u8],
         start: u32,
         branch_at: Option<(u32, u64)>,
+        inner: &[u32],
         emit: &mut F,
     ) -> bool {
         let now = e.now as i64;
@@ -362,6 +410,9 @@ impl Timing {
             return false;
         }
         if !emit((e.dp_until as i64 - now).max(0)) {
+            return false;
+        }
+        if !inner.is_empty() && !emit(names_inner(&e.hint, inner) as i64) {
             return false;
         }
         if let Some((bpc, k)) = branch_at {
@@ -415,20 +466,23 @@ impl Timing {
         }
     }
 
-    /// [`Timing::hint_view`] of the current state for memo `id`'s branch.
+    /// [`Timing::hint_view`] of the current state for memo `id`'s branch, and whether
+    /// the hint entry names one of its inner branches.
     #[inline]
-    fn hint_view_now(&self, id: usize) -> [i64; 2] {
+    fn hint_view_now(&self, id: usize) -> [i64; 3] {
         let m = &self.memo.memos[id];
+        let inner = names_inner(&self.hint, &m.inner) as i64;
         if m.branch_pc == NO_PC {
-            return [0; 2];
+            return [0, 0, inner];
         }
-        self.hint_view(
+        let [bits, window] = self.hint_view(
             &self.hint,
             self.index,
             self.now,
             m.branch_pc,
             m.words.len() as u64 - 1,
-        )
+        );
+        [bits, window, inner]
     }
 
     fn entry(&self) -> Entry {
@@ -457,13 +511,26 @@ impl Timing {
         self.apply_deferred_writes();
         if let Some(rec) = &self.memo.rec {
             let k = rec.words.len();
-            if pc != rec.start.wrapping_add(4 * k as u32) || is_terminator(inst) || k >= MAX_BLOCK {
+            let after = rec.after_branch;
+            if pc != rec.start.wrapping_add(4 * k as u32)
+                || is_terminator(inst)
+                || k >= MAX_BLOCK
+                || !matches!(after, AfterBranch::NoBranch | AfterBranch::GoesOn)
+            {
                 self.finish_recording();
             } else {
                 let t = self.issue_slow(pc, inst);
                 self.record_step(inst);
                 if self.classes[inst.op as usize].flags & F_BRANCH != 0 {
-                    self.finish_recording();
+                    if may_fall_through(inst) {
+                        if let Some(rec) = self.memo.rec.as_deref_mut() {
+                            rec.after_branch = AfterBranch::Unresolved;
+                        }
+                    } else {
+                        self.finish_recording();
+                    }
+                } else if let Some(rec) = self.memo.rec.as_deref_mut() {
+                    rec.after_branch = AfterBranch::NoBranch;
                 }
                 return t;
             }
@@ -511,14 +578,46 @@ impl Timing {
             steps: Vec::new(),
             probes: Vec::new(),
             probes_done: 0,
+            after_branch: AfterBranch::NoBranch,
         }));
         self.profile.log = Some(Vec::new());
         let t = self.issue_slow(pc, inst);
         self.record_step(inst);
         if self.classes[inst.op as usize].flags & F_BRANCH != 0 {
-            self.finish_recording();
+            if may_fall_through(inst) {
+                if let Some(rec) = self.memo.rec.as_deref_mut() {
+                    rec.after_branch = AfterBranch::Unresolved;
+                }
+            } else {
+                self.finish_recording();
+            }
         }
         t
+    }
+
+    /// A branch at `pc` resolved (`taken` or not) while a block is recorded or replayed
+    /// per instruction. Returns true when that is all: an untaken inner branch of the
+    /// block being replayed (the record holds what it did).
+    #[inline]
+    pub(super) fn inner_branch_resolved(&mut self, pc: u32, taken: bool) -> bool {
+        if let Some(rp) = &self.memo.replay {
+            let m = &self.memo.memos[rp.memo];
+            return !taken
+                && rp.k > 0
+                && rp.k < m.words.len()
+                && pc == m.start.wrapping_add(4 * (rp.k as u32 - 1));
+        }
+        if let Some(rec) = self.memo.rec.as_deref_mut() {
+            if rec.after_branch == AfterBranch::Unresolved && self.last.pc == pc {
+                let named = self.hint.valid && self.hint.branch == pc & 0x3_ffff;
+                rec.after_branch = if taken || named {
+                    AfterBranch::Ends
+                } else {
+                    AfterBranch::GoesOn
+                };
+            }
+        }
+        false
     }
 
     /// The memo for a block starting at `pc` with first instruction `inst` (slot `idx`),
@@ -565,7 +664,7 @@ impl Timing {
         let e = self.entry_ref();
         let mut pos = 0usize;
         let sig = &m.sig[..];
-        self.signature(&e, &m.live, pc, branch_at, &mut |v| {
+        self.signature(&e, &m.live, pc, branch_at, &m.inner, &mut |v| {
             let same = sig.get(pos) == Some(&v);
             pos += 1;
             same
@@ -840,6 +939,13 @@ impl Timing {
         }
     }
 
+    /// The core ran the first `k` instructions of memo `id`'s block, the last of them an
+    /// inner branch at `pc`, which was taken (to `target`).
+    pub fn block_left_at_branch(&mut self, id: usize, k: usize, pc: u32, target: u32) {
+        self.block_replayed_partly(id, k);
+        self.resolve_branch(pc, true, target);
+    }
+
     /// The core ran the first `k` instructions of memo `id`'s block and stopped (the rest
     /// go through `issue`).
     pub fn block_replayed_partly(&mut self, id: usize, k: usize) {
@@ -1044,6 +1150,7 @@ impl Timing {
         let mut written = [false; 128];
         let mut live = Vec::new();
         let mut branch_pc = NO_PC;
+        let mut inner = Vec::new();
         for (k, &word) in rec.words.iter().enumerate() {
             let inst = crate::codec::decode(word);
             let c = self.classes[inst.op as usize];
@@ -1069,7 +1176,12 @@ impl Timing {
                 written[(inst.rt & 127) as usize] = true;
             }
             if c.flags & F_BRANCH != 0 {
-                branch_pc = rec.start.wrapping_add(4 * k as u32);
+                let at = rec.start.wrapping_add(4 * k as u32) & 0x3_ffff;
+                if k + 1 == rec.words.len() {
+                    branch_pc = at;
+                } else {
+                    inner.push(at);
+                }
             }
         }
         let branch_at = (branch_pc != NO_PC).then(|| (branch_pc, rec.words.len() as u64 - 1));
@@ -1079,6 +1191,7 @@ impl Timing {
             &live,
             rec.start,
             branch_at,
+            &inner,
             &mut |v| {
                 sig.push(v);
                 true
@@ -1089,10 +1202,12 @@ impl Timing {
             words: rec.words,
             live,
             branch_pc,
+            inner,
             sig,
             steps: rec.steps,
             log,
             hits: 0,
+            partial_hits: Vec::new(),
             verified: u64::MAX,
             final_writes: Vec::new(),
             max_ready_rel: 0,
@@ -1274,10 +1389,11 @@ impl Timing {
         self.record.base = at(st.record_base_rel);
         self.index = rp.entry_index + k as u64;
         if eager {
-            let (log_end, totals) = (st.log_end, st.totals.clone());
-            let log: Vec<_> = m.log[..log_end].to_vec();
-            self.profile.apply_log(&log, 1);
-            self.profile.totals.add_scaled(&totals, 1);
+            let m = &mut self.memo.memos[rp.memo];
+            if m.partial_hits.is_empty() {
+                m.partial_hits = vec![0; m.steps.len()];
+            }
+            m.partial_hits[k - 1] += 1;
         }
     }
 

@@ -21,7 +21,7 @@ mod memo;
 
 pub use crate::stall::{StallCause, STALL_CLASSES};
 pub use memo::ends_block;
-pub(crate) use memo::MAX_BLOCK;
+pub(crate) use memo::{may_fall_through, MAX_BLOCK};
 
 /// Settings of the timing model.
 #[derive(Clone, Debug)]
@@ -657,6 +657,11 @@ impl Timing {
     /// [`Timing::branch_resolved`] (which needs no more than the branch's address).
     #[inline]
     fn resolve_branch(&mut self, pc: u32, taken: bool, target: u32) {
+        if (self.memo.replay.is_some() || self.memo.rec.is_some())
+            && self.inner_branch_resolved(pc, taken)
+        {
+            return;
+        }
         self.sync();
         if self.last.pc != pc {
             self.memo.chain_from = None;
