@@ -108,3 +108,53 @@ pub fn assemble_with_kernels(src: &str, name: &str) -> spu_asm::Output {
         panic!("{name} does not assemble:\n{}", text.join("\n"))
     })
 }
+
+/// A program whose blocks go on past untaken conditional branches (`brz`, `brnz`,
+/// `brhz`, `brhnz`): a loop of 300 passes whose inner branches are taken now and then
+/// (`$24` counts one of them: 38 passes), one of them named by a hint on some passes,
+/// then a self-loop of 200 passes (`$27`) whose inner branch leaves it every 16th pass
+/// (`$29`: 12 times). Ends with `stop 0x2000`.
+pub const UNTAKEN_BRANCHES: &str = "
+        .text
+        .global _start
+_start: ila     $3, data
+        il      $9, 300
+        ilhu    $10, 0x3f80
+loop:   andi    $8, $9, 7
+        ceqi    $12, $8, 3
+        a       $20, $20, $9
+.Lin1:  brnz    $12, side1
+        fa      $21, $21, $10
+        ceqi    $13, $8, 5
+        xor     $22, $22, $20
+        brhnz   $13, side2
+        andi    $14, $9, 1
+        mpy     $23, $20, $9
+        lqd     $5, 0($3)
+        brz     $14, even
+back:   ai      $9, $9, -1
+        brnz    $9, loop
+        il      $27, 0
+        hbrr    .Lt, tight
+tight:  ai      $27, $27, 1
+        andi    $15, $27, 15
+        brz     $15, tick
+        a       $28, $28, $27
+        ceqi    $16, $27, 200
+.Lt:    brz     $16, tight
+        stop    0x2000
+tick:   ai      $29, $29, 1
+        br      tight
+side1:  ai      $24, $24, 1
+        br      back
+side2:  ai      $25, $25, 1
+        hbrr    .Lin1, side1
+        br      back
+even:   ai      $26, $26, 1
+        fm      $30, $21, $10
+        brhz    $26, back
+        br      back
+        .data
+        .align  4
+data:   .float  1.5, 2.0, 0.5, 3.0
+";

@@ -586,56 +586,12 @@ fn a_kernel_frame_is_the_same_compiled() {
 }
 
 /// Blocks that go on past untaken conditional branches, compiled with an exit at each
-/// (the program of `timing_memo_core`'s `blocks_past_untaken_branches_time_exactly`):
-/// inner branches taken now and then, one named by a hint on some passes, a self-loop
-/// left by an inner branch every 16th pass. Everything the same as interpreted, with
-/// the timing model on and off.
+/// ([`spu_tests::UNTAKEN_BRANCHES`]: inner branches taken now and then, one named by a
+/// hint on some passes, a self-loop left by an inner branch every 16th pass).
+/// Everything the same as interpreted, with the timing model on and off.
 #[test]
 fn blocks_past_untaken_branches_run_the_same_compiled() {
-    let src = "
-        .text
-        .global _start
-_start: ila     $3, data
-        il      $9, 300
-        ilhu    $10, 0x3f80
-loop:   andi    $8, $9, 7
-        ceqi    $12, $8, 3
-        a       $20, $20, $9
-.Lin1:  brnz    $12, side1
-        fa      $21, $21, $10
-        ceqi    $13, $8, 5
-        xor     $22, $22, $20
-        brhnz   $13, side2
-        andi    $14, $9, 1
-        mpy     $23, $20, $9
-        lqd     $5, 0($3)
-        brz     $14, even
-back:   ai      $9, $9, -1
-        brnz    $9, loop
-        il      $27, 0
-        hbrr    .Lt, tight
-tight:  ai      $27, $27, 1
-        andi    $15, $27, 15
-        brz     $15, tick
-        a       $28, $28, $27
-        ceqi    $16, $27, 200
-.Lt:    brz     $16, tight
-        stop    0x2000
-tick:   ai      $29, $29, 1
-        br      tight
-side1:  ai      $24, $24, 1
-        br      back
-side2:  ai      $25, $25, 1
-        hbrr    .Lin1, side1
-        br      back
-even:   ai      $26, $26, 1
-        fm      $30, $21, $10
-        brhz    $26, back
-        br      back
-        .data
-        .align  4
-data:   .float  1.5, 2.0, 0.5, 3.0
-";
+    let src = spu_tests::UNTAKEN_BRANCHES;
     let [off, on] = same_with_both_engines(src);
     assert_eq!(on.reg(27)[0], 200);
     assert!(off.jit_stats().compiled_instructions > off.instructions() / 2);

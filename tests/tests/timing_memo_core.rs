@@ -309,55 +309,9 @@ join:   fa      $24, $24, $21
 /// instruction.
 #[test]
 fn blocks_past_untaken_branches_time_exactly() {
-    let (b, p) = same_both_ways(SUPERBLOCKS);
+    let (b, p) = same_both_ways(spu_tests::UNTAKEN_BRANCHES);
     assert_eq!(b.reg(24)[0], 38, "side1 passes");
     assert_eq!(b.reg(27)[0], 200);
     assert_eq!(b.reg(29)[0], 12, "tick passes");
     assert!(p.totals.branches_not_taken > 800, "{:?}", p.totals);
 }
-
-/// The program of [`blocks_past_untaken_branches_time_exactly`].
-pub const SUPERBLOCKS: &str = "
-        .text
-        .global _start
-_start: ila     $3, data
-        il      $9, 300
-        ilhu    $10, 0x3f80
-loop:   andi    $8, $9, 7
-        ceqi    $12, $8, 3
-        a       $20, $20, $9
-.Lin1:  brnz    $12, side1
-        fa      $21, $21, $10
-        ceqi    $13, $8, 5
-        xor     $22, $22, $20
-        brhnz   $13, side2
-        andi    $14, $9, 1
-        mpy     $23, $20, $9
-        lqd     $5, 0($3)
-        brz     $14, even
-back:   ai      $9, $9, -1
-        brnz    $9, loop
-        il      $27, 0
-        hbrr    .Lt, tight
-tight:  ai      $27, $27, 1
-        andi    $15, $27, 15
-        brz     $15, tick
-        a       $28, $28, $27
-        ceqi    $16, $27, 200
-.Lt:    brz     $16, tight
-        stop    0x2000
-tick:   ai      $29, $29, 1
-        br      tight
-side1:  ai      $24, $24, 1
-        br      back
-side2:  ai      $25, $25, 1
-        hbrr    .Lin1, side1
-        br      back
-even:   ai      $26, $26, 1
-        fm      $30, $21, $10
-        brhz    $26, back
-        br      back
-        .data
-        .align  4
-data:   .float  1.5, 2.0, 0.5, 3.0
-";
