@@ -226,9 +226,7 @@ impl Spu {
                         incoming: vec![(lsa, data)],
                     });
                 } else {
-                    let data: Vec<u8> = (0..size)
-                        .map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize])
-                        .collect();
+                    let data = self.ls_bytes(lsa, size);
                     self.log_write(complete, ea as u32, data, WriteKind::Put);
                     self.queue.push(DmaCommand {
                         tag,
@@ -388,9 +386,7 @@ impl Spu {
             if cmd & 0x40 != 0 {
                 incoming.push((lsa, self.read_main(memory, range)));
             } else {
-                let data: Vec<u8> = (0..size)
-                    .map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize])
-                    .collect();
+                let data = self.ls_bytes(lsa, size);
                 self.log_write(last, e1, data, WriteKind::Put);
             }
             lsa = (lsa + size.div_ceil(16) * 16) & LS_MASK;
@@ -432,6 +428,17 @@ impl Spu {
                 data[s - range.start..e - range.start].copy_from_slice(&w.data[s - ws..e - ws]);
             }
         }
+        data
+    }
+
+    /// `size` bytes of local store from `lsa` on (wrapping at its end), for a put.
+    fn ls_bytes(&self, lsa: u32, size: u32) -> Vec<u8> {
+        let (from, size) = ((lsa & LS_MASK) as usize, size as usize);
+        let ls = &self.core.ls;
+        let first = size.min(ls.len() - from);
+        let mut data = Vec::with_capacity(size);
+        data.extend_from_slice(&ls[from..from + first]);
+        data.extend_from_slice(&ls[..size - first]);
         data
     }
 
