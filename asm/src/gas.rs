@@ -7,6 +7,7 @@
 //! and emits bytes. Both passes run the same expansion of `.include`, `.macro`, `.irp`,
 //! `.rept` and `.if`, so they see the same statements.
 
+use crate::sched::{SchedError, Scheduled};
 use spu_isa::table::{forms_named, FormInfo, Format, OperandKind};
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -249,7 +250,14 @@ struct Assembler<'o> {
     /// Macro expansions under way, and whether `.exitm` asked the innermost one to stop.
     macro_depth: usize,
     exitm: bool,
+    /// `.sched` blocks already scheduled in an earlier pass: the same lines, options and
+    /// start give the same schedule when every register name the scheduler resolved
+    /// still resolves the same (layout passes repeat each block unchanged).
+    schedules: HashMap<SchedKey, (Vec<(String, Option<u8>)>, Result<Scheduled, SchedError>)>,
 }
+
+/// What a `.sched` block's schedule is made from: its lines, options and start address.
+type SchedKey = (Vec<String>, String, u32);
 
 use crate::expr::{is_ident, Env, Eval, Val};
 
@@ -872,7 +880,32 @@ impl<'o> Assembler<'o> {
         };
         let here = self.offsets.get(&self.sect).copied().unwrap_or(0);
         let start = (here + 7) & !7;
-        match crate::sched::schedule(&texts, &opts, Some(start), &resolve) {
+        let key: SchedKey = (
+            texts.iter().map(|t| t.to_string()).collect(),
+            format!("{opts:?}"),
+            start,
+        );
+        let cached = self.schedules.get(&key).filter(|(asked, _)| {
+            asked
+                .iter()
+                .all(|(text, reg)| resolve(text.as_str()) == *reg)
+        });
+        let result = match cached {
+            Some((_, result)) => result.clone(),
+            None => {
+                let asked = std::cell::RefCell::new(Vec::new());
+                let logged = |text: &str| {
+                    let reg = resolve(text);
+                    asked.borrow_mut().push((text.to_string(), reg));
+                    reg
+                };
+                let result = crate::sched::schedule(&texts, &opts, Some(start), &logged);
+                self.schedules
+                    .insert(key, (asked.into_inner(), result.clone()));
+                result
+            }
+        };
+        match result {
             Ok(scheduled) => {
                 let lines: Vec<Line> = scheduled
                     .lines
@@ -2857,6 +2890,7 @@ impl<'o> Assembler<'o> {
             depth: 0,
             macro_depth: 0,
             exitm: false,
+            schedules: HashMap::new(),
         };
         // gas always has .text, .data and .bss, in that order.
         for name in [".text", ".data", ".bss"] {

@@ -383,3 +383,25 @@ fn many_chains_through_a_small_pool_take_the_fewest_cycle_rank() {
     let (_, cycles) = run(&block, &pool("20-31"), None);
     assert_eq!(cycles, 129); // the critical path's rank alone: 154
 }
+
+#[test]
+fn a_register_named_after_the_block_is_scheduled_with_its_value() {
+    // The layout passes schedule each block again; the first pass reads the not yet
+    // defined BASE as 0, so there the load does not wait for the `ai` on $3 and could go
+    // first. The assembled block must be the one scheduled with BASE = 3, as if BASE
+    // were set before it.
+    let block = |set_before: bool| {
+        let set = ".set BASE, 3\n";
+        format!(
+            "{}        .sched pool=20-23\n        ai $3, $3, 16\n        lqd %a, 0(BASE)\n\
+             fa %b, %a, $6\n        stqd %b, 0($5)\n        .endsched\n        stop\n{}",
+            if set_before { set } else { "" },
+            if set_before { "" } else { set },
+        )
+    };
+    let (after, before) = (asm(&block(false)).unwrap(), asm(&block(true)).unwrap());
+    assert_eq!(after, before);
+    // And with BASE = 0 from the start the load does go first: the two schedules differ.
+    let zero = asm(&block(true).replace(".set BASE, 3", ".set BASE, 0")).unwrap();
+    assert_ne!(zero[..8], before[..8]);
+}
