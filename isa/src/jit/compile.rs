@@ -8,8 +8,8 @@ use std::time::Instant;
 use cranelift_codegen::ir::condcodes::IntCC;
 use cranelift_codegen::ir::types::{F32X4, I32, I32X4, I64, I8, I8X16};
 use cranelift_codegen::ir::{
-    AbiParam, Block as IrBlock, ConstantData, Endianness, InstBuilder, MemFlagsData, Signature,
-    UserFuncName, Value,
+    AbiParam, Block as IrBlock, BlockArg, ConstantData, Endianness, InstBuilder, MemFlagsData,
+    Signature, UserFuncName, Value,
 };
 use cranelift_codegen::isa::CallConv;
 use cranelift_codegen::settings::{self, Configurable};
@@ -376,13 +376,37 @@ impl Compiler {
             hook,
             scratch: &mut self.scratch,
             deferred: None,
+            carried: Vec::new(),
             b,
         };
         // The block's instructions start in a block of their own, so that a self-loop can
-        // jump back to them (registers are then loaded again).
+        // jump back to them. A self-loop carries the registers it reads from one pass to
+        // the next as values (the register file in memory stays up to date too): the
+        // next pass reads them without loading them again.
         let body = t.b.create_block();
-        t.b.ins().jump(body, &[]);
+        if self_loop {
+            let mut read: Vec<u8> = insts
+                .iter()
+                .flat_map(|&i| crate::analysis::operands(i).reads)
+                .flatten()
+                .map(|r| r & 127)
+                .collect();
+            read.sort_unstable();
+            read.dedup();
+            t.carried = read;
+        }
+        let first: Vec<BlockArg> = (0..t.carried.len())
+            .map(|i| {
+                t.b.append_block_param(body, I32X4);
+                BlockArg::Value(t.get(t.carried[i]))
+            })
+            .collect();
+        t.b.ins().jump(body, &first);
         t.b.switch_to_block(body);
+        t.cache = [None; 128];
+        for (i, &r) in t.carried.iter().enumerate() {
+            t.cache[r as usize] = Some(t.b.block_params(body)[i]);
+        }
         let n = insts.len();
         let block_end = pc.wrapping_add(4 * n as u32);
         let mut done = false;
@@ -444,6 +468,8 @@ struct Translator<'a> {
     /// Inside a run of float arithmetic: the registers written so far, whose stores wait
     /// until the run's one check has chosen the fast or the exact path.
     deferred: Option<Vec<usize>>,
+    /// A self-loop's registers carried from pass to pass as the body's parameters.
+    carried: Vec<u8>,
 }
 
 /// Whether the host has fused multiply-add (Cranelift's `fma` is one instruction there).
@@ -1317,7 +1343,10 @@ impl Translator<'_> {
             let loops = self.b.ins().load(I64, flags, self.ctx, CTX_LOOPS);
             let loops = self.b.ins().iadd_imm_s(loops, 1);
             self.b.ins().store(flags, loops, self.ctx, CTX_LOOPS);
-            self.b.ins().jump(again, &[]);
+            let carried: Vec<BlockArg> = (0..self.carried.len())
+                .map(|i| BlockArg::Value(self.get(self.carried[i])))
+                .collect();
+            self.b.ins().jump(again, &carried);
             self.b.switch_to_block(out);
         }
         self.b
