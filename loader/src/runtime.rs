@@ -341,7 +341,7 @@ pub fn render_frame_with(
     }
     let layout = &layout;
     let regions = traffic_regions(staged, layout);
-    let mut memory = MainMemory::new(layout.memory_image(staged));
+    let memory = MainMemory::new(layout.memory_image(staged));
     // The SPEs run the same kernel: each block is compiled once for all of them.
     let code = spu_isa::jit::CodeCache::new();
     let mut spus: Vec<Spu> = (0..spes)
@@ -364,67 +364,110 @@ pub fn render_frame_with(
         .collect();
     let mut finished: Vec<Option<u64>> = vec![None; spes];
     let threads = threads.clamp(1, spes);
-    let mut until = 0u64;
-    while finished.iter().any(|f| f.is_none()) {
-        until = until.saturating_add(QUANTUM_CYCLES);
-        if until > max_cycles {
-            return Err(FrameError::CycleLimit(max_cycles));
-        }
-        let memory_view = &memory;
-        let mut outcomes: Vec<Option<StopReason>> = vec![None; spes];
-        let per_thread = spes.div_ceil(threads);
-        if threads == 1 {
-            for ((spu, out), done) in spus.iter_mut().zip(outcomes.iter_mut()).zip(&finished) {
-                if done.is_none() {
-                    *out = spu.run_quantum(memory_view, until);
-                }
-            }
-        } else {
-            std::thread::scope(|scope| {
-                for (spu_chunk, (out_chunk, done_chunk)) in spus.chunks_mut(per_thread).zip(
-                    outcomes
-                        .chunks_mut(per_thread)
-                        .zip(finished.chunks(per_thread)),
-                ) {
-                    scope.spawn(move || {
-                        for ((spu, out), done) in
-                            spu_chunk.iter_mut().zip(out_chunk).zip(done_chunk)
-                        {
-                            if done.is_none() {
-                                *out = spu.run_quantum(memory_view, until);
-                            }
-                        }
-                    });
+    let memory_lock = std::sync::RwLock::new(memory);
+    // With more than one host thread, the threads live for the whole frame (spawning
+    // them for every quantum cost more than many quanta's work): each quantum the SPEs
+    // still running go to them in chunks, in index order, and come back before main
+    // memory takes the quantum's writes.
+    std::thread::scope(|scope| -> Result<(), FrameError> {
+        type Chunk = Vec<(usize, Spu)>;
+        type Done = (Chunk, Vec<Option<StopReason>>);
+        let (done_tx, done_rx) = std::sync::mpsc::channel::<Done>();
+        let mut workers = Vec::new();
+        for _ in 0..if threads > 1 { threads } else { 0 } {
+            let (tx, rx) = std::sync::mpsc::channel::<(u64, Chunk)>();
+            workers.push(tx);
+            let (done_tx, memory_lock) = (done_tx.clone(), &memory_lock);
+            scope.spawn(move || {
+                while let Ok((until, mut chunk)) = rx.recv() {
+                    let memory = memory_lock.read().unwrap_or_else(|e| e.into_inner());
+                    let outcomes = chunk
+                        .iter_mut()
+                        .map(|(_, spu)| spu.run_quantum(&memory, until))
+                        .collect();
+                    drop(memory);
+                    if done_tx.send((chunk, outcomes)).is_err() {
+                        break;
+                    }
                 }
             });
         }
-        apply_quantum(&mut spus, &mut memory);
-        for (i, outcome) in outcomes.into_iter().enumerate() {
-            match outcome {
-                None => {}
-                Some(StopReason::Stop(code)) if code == STOP_DONE => {
-                    if spus[i].read_outbound_mailbox() != Some(1) {
+        drop(done_tx);
+        let mut until = 0u64;
+        while finished.iter().any(|f| f.is_none()) {
+            until = until.saturating_add(QUANTUM_CYCLES);
+            if until > max_cycles {
+                return Err(FrameError::CycleLimit(max_cycles));
+            }
+            let mut outcomes: Vec<Option<StopReason>> = vec![None; spes];
+            if workers.is_empty() {
+                let memory = memory_lock.read().unwrap_or_else(|e| e.into_inner());
+                for ((spu, out), done) in spus.iter_mut().zip(outcomes.iter_mut()).zip(&finished) {
+                    if done.is_none() {
+                        *out = spu.run_quantum(&memory, until);
+                    }
+                }
+            } else {
+                let running: Vec<usize> = (0..spes).filter(|&i| finished[i].is_none()).collect();
+                let per_thread = running.len().div_ceil(workers.len());
+                let mut slots: Vec<Option<Spu>> =
+                    std::mem::take(&mut spus).into_iter().map(Some).collect();
+                let mut sent = 0;
+                for (tx, part) in workers.iter().zip(running.chunks(per_thread)) {
+                    let chunk: Chunk = part
+                        .iter()
+                        .map(|&i| (i, slots[i].take().expect("each SPE once")))
+                        .collect();
+                    if tx.send((until, chunk)).is_err() {
+                        return Err(FrameError::Setup("a host thread ended early".into()));
+                    }
+                    sent += 1;
+                }
+                for _ in 0..sent {
+                    let Ok((chunk, outs)) = done_rx.recv() else {
+                        return Err(FrameError::Setup("a host thread ended early".into()));
+                    };
+                    for ((i, spu), out) in chunk.into_iter().zip(outs) {
+                        slots[i] = Some(spu);
+                        outcomes[i] = out;
+                    }
+                }
+                spus = slots
+                    .into_iter()
+                    .map(|s| s.expect("every SPE back"))
+                    .collect();
+            }
+            let mut memory = memory_lock.write().unwrap_or_else(|e| e.into_inner());
+            apply_quantum(&mut spus, &mut memory);
+            for (i, outcome) in outcomes.into_iter().enumerate() {
+                match outcome {
+                    None => {}
+                    Some(StopReason::Stop(code)) if code == STOP_DONE => {
+                        if spus[i].read_outbound_mailbox() != Some(1) {
+                            return Err(FrameError::SpuStopped {
+                                spu: i,
+                                reason: "without its end-of-frame message".into(),
+                            });
+                        }
+                        finished[i] = Some(spus[i].cycles());
+                    }
+                    Some(StopReason::Blocked { .. }) => {}
+                    Some(other) => {
                         return Err(FrameError::SpuStopped {
                             spu: i,
-                            reason: "without its end-of-frame message".into(),
-                        });
+                            reason: other.to_string(),
+                        })
                     }
-                    finished[i] = Some(spus[i].cycles());
-                }
-                Some(StopReason::Blocked { .. }) => {}
-                Some(other) => {
-                    return Err(FrameError::SpuStopped {
-                        spu: i,
-                        reason: other.to_string(),
-                    })
                 }
             }
+            let taken = memory
+                .read_u32(layout.counter_addr)
+                .min(layout.params.num_tiles);
+            progress(taken, layout.params.num_tiles);
         }
-        let taken = memory
-            .read_u32(layout.counter_addr)
-            .min(layout.params.num_tiles);
-        progress(taken, layout.params.num_tiles);
-    }
+        Ok(())
+    })?;
+    let memory = memory_lock.into_inner().unwrap_or_else(|e| e.into_inner());
     let stats_base = layout.stats_addr as usize;
     let spus_report = spus
         .iter()
