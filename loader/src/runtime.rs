@@ -374,7 +374,9 @@ pub fn render_frame_with(
         type Done = (Chunk, Vec<Option<StopReason>>);
         let (done_tx, done_rx) = std::sync::mpsc::channel::<Done>();
         let mut workers = Vec::new();
-        for _ in 0..if threads > 1 { threads } else { 0 } {
+        // One host thread runs the SPEs itself, without workers.
+        let worker_threads = if threads > 1 { threads } else { 0 };
+        for _ in 0..worker_threads {
             let (tx, rx) = std::sync::mpsc::channel::<(u64, Chunk)>();
             workers.push(tx);
             let (done_tx, memory_lock) = (done_tx.clone(), &memory_lock);

@@ -1243,8 +1243,27 @@ impl Translator<'_> {
     /// block returns there, its `k + 1` instructions done ([`RESULT_PARTIAL`] and
     /// [`RESULT_TAKEN`], the target also in the context); untaken, it goes on.
     fn inner_branch(&mut self, inst: &Inst, p: u32, k: u64) {
-        use Op::*;
         debug_assert!(may_fall_through(*inst));
+        let (target, taken) = self.relative_condition(inst, p);
+        let exit = self.b.create_block();
+        let cont = self.b.create_block();
+        self.b.ins().brif(taken, exit, &[], cont, &[]);
+        self.b.switch_to_block(exit);
+        let t = self.b.ins().iconst(I32, target as i64);
+        self.b
+            .ins()
+            .store(MemFlagsData::trusted(), t, self.ctx, CTX_TARGET);
+        let r = (target as u64 | (k + 1) << 32 | RESULT_TAKEN | RESULT_PARTIAL) as i64;
+        let r = self.b.ins().iconst(I64, r);
+        self.b.ins().return_(&[r]);
+        self.b.switch_to_block(cont);
+    }
+
+    /// The target of the conditional relative branch `inst` at `p` (`brz`, `brnz`, `brhz`,
+    /// `brhnz`) and whether it is taken: its register's preferred word (halfword) zero or
+    /// not.
+    fn relative_condition(&mut self, inst: &Inst, p: u32) -> (u32, Value) {
+        use Op::*;
         let target = p.wrapping_add((inst.imm << 2) as u32) & LS_MASK & !3;
         let rt = self.get(inst.rt);
         let v = self.preferred(rt);
@@ -1258,19 +1277,7 @@ impl Translator<'_> {
         } else {
             IntCC::NotEqual
         };
-        let taken = self.b.ins().icmp_imm_u(cc, v, 0);
-        let exit = self.b.create_block();
-        let cont = self.b.create_block();
-        self.b.ins().brif(taken, exit, &[], cont, &[]);
-        self.b.switch_to_block(exit);
-        let t = self.b.ins().iconst(I32, target as i64);
-        self.b
-            .ins()
-            .store(MemFlagsData::trusted(), t, self.ctx, CTX_TARGET);
-        let r = (target as u64 | (k + 1) << 32 | RESULT_TAKEN | RESULT_PARTIAL) as i64;
-        let r = self.b.ins().iconst(I64, r);
-        self.b.ins().return_(&[r]);
-        self.b.switch_to_block(cont);
+        (target, self.b.ins().icmp_imm_u(cc, v, 0))
     }
 
     /// Emits the block's final branch and its return; with `again`, a taken branch (back
@@ -1298,20 +1305,7 @@ impl Translator<'_> {
                 (t, one)
             }
             Brz | Brnz | Brhz | Brhnz => {
-                let target = p.wrapping_add((imm << 2) as u32) & LS_MASK & !3;
-                let rt = self.get(inst.rt);
-                let v = self.preferred(rt);
-                let v = if matches!(inst.op, Brhz | Brhnz) {
-                    self.b.ins().band_imm_u(v, 0xffff)
-                } else {
-                    v
-                };
-                let cc = if matches!(inst.op, Brz | Brhz) {
-                    IntCC::Equal
-                } else {
-                    IntCC::NotEqual
-                };
-                let taken = self.b.ins().icmp_imm_u(cc, v, 0);
+                let (target, taken) = self.relative_condition(inst, p);
                 let t = self.b.ins().iconst(I32, target as i64);
                 (t, taken)
             }

@@ -519,20 +519,7 @@ impl Timing {
             {
                 self.finish_recording();
             } else {
-                let t = self.issue_slow(pc, inst);
-                self.record_step(inst);
-                if self.classes[inst.op as usize].flags & F_BRANCH != 0 {
-                    if may_fall_through(inst) {
-                        if let Some(rec) = self.memo.rec.as_deref_mut() {
-                            rec.after_branch = AfterBranch::Unresolved;
-                        }
-                    } else {
-                        self.finish_recording();
-                    }
-                } else if let Some(rec) = self.memo.rec.as_deref_mut() {
-                    rec.after_branch = AfterBranch::NoBranch;
-                }
-                return t;
+                return self.issue_recorded(pc, inst);
             }
         }
         if is_terminator(inst) {
@@ -544,7 +531,7 @@ impl Timing {
             self.memo.fails.resize(0x1_0000, 0);
         }
         // While DMA holds local-store cycles, blocks replay only clear of them, and a
-        // recording ends unfinished when the fetch model meets one (a record must not
+        // recording ends before an instruction whose fetch meets one (a record must not
         // depend on them).
         match self.chained_lookup(idx, pc, inst) {
             Lookup::Never => return self.issue_slow(pc, inst),
@@ -581,16 +568,23 @@ impl Timing {
             after_branch: AfterBranch::NoBranch,
         }));
         self.profile.log = Some(Vec::new());
+        self.issue_recorded(pc, inst)
+    }
+
+    /// Issues `inst` at `pc` as the next step of the recording: a branch ends it, unless
+    /// the record may go on past it (then it waits for how the branch resolves).
+    fn issue_recorded(&mut self, pc: u32, inst: Inst) -> u64 {
         let t = self.issue_slow(pc, inst);
         self.record_step(inst);
-        if self.classes[inst.op as usize].flags & F_BRANCH != 0 {
-            if may_fall_through(inst) {
-                if let Some(rec) = self.memo.rec.as_deref_mut() {
-                    rec.after_branch = AfterBranch::Unresolved;
-                }
+        let branch = self.classes[inst.op as usize].flags & F_BRANCH != 0;
+        if branch && !may_fall_through(inst) {
+            self.finish_recording();
+        } else if let Some(rec) = self.memo.rec.as_deref_mut() {
+            rec.after_branch = if branch {
+                AfterBranch::Unresolved
             } else {
-                self.finish_recording();
-            }
+                AfterBranch::NoBranch
+            };
         }
         t
     }
