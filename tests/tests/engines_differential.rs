@@ -4,7 +4,7 @@
 //! give the same registers, local store, main memory, instructions, cycles, counters,
 //! profiles and images, with the timing model off and on.
 
-use spu_isa::jit::Engine;
+use spu_isa::jit::{CodeCache, Compiling, Engine};
 use spu_isa::machine::{MainMemory, Spu, StopReason};
 use spu_isa::timing::TimingConfig;
 use spu_tests::{looping_program, LoopShape, XorShift as Rng};
@@ -23,10 +23,23 @@ struct Outcome {
 /// Runs `src` on one SPU with `engine`, the timing model on or off; main memory of
 /// 64 KiB filled with a pattern.
 fn run(src: &str, engine: Engine, timing: bool) -> (Outcome, Spu, MainMemory) {
+    run_sharing(src, engine, timing, None)
+}
+
+/// [`run`] with the SPU compiling into `cache`, if given.
+fn run_sharing(
+    src: &str,
+    engine: Engine,
+    timing: bool,
+    cache: Option<&CodeCache>,
+) -> (Outcome, Spu, MainMemory) {
     let program = spu_asm::assemble(src, "engines.s", &Default::default())
         .unwrap_or_else(|d| panic!("{d:?}\n{src}"));
     let mut spu = Spu::new(0);
     spu.set_engine(engine);
+    if let Some(cache) = cache {
+        spu.share_code(cache);
+    }
     spu.load_image(&program.image);
     spu.set_pc(program.entry);
     if timing {
@@ -191,6 +204,47 @@ fn random_programs_run_the_same_compiled() {
         compiled > 10_000,
         "only {compiled} instructions ran compiled"
     );
+}
+
+/// A code cache compiling on a thread of its own: while a block waits in its queue the
+/// SPU interprets it, and the results are the same whatever ran compiled; once the
+/// compiler finished, a program run again sharing the cache runs mostly compiled.
+#[test]
+fn a_background_compiler_gives_the_same_results() {
+    if !Engine::SUPPORTED {
+        return;
+    }
+    let shape = LoopShape {
+        trips: 600,
+        prologue: " il $5, 80\n",
+        before: 16,
+        after: 8,
+        conditions: &["brnz", "brz"],
+        calls: true,
+        raw_words: false,
+    };
+    let mut rng = Rng(0x5eed_0b5e_55ed);
+    let src = looping_program(&mut rng, &shape, &mut random_op);
+    for timing in [false, true] {
+        let (reference, _, memory) = run(&src, Engine::Interp, timing);
+        let cache = CodeCache::with(Compiling::Background);
+        let (first, _, first_memory) = run_sharing(&src, Engine::Jit, timing, Some(&cache));
+        assert_eq!(reference, first, "timing {timing}");
+        assert!(memory.bytes() == first_memory.bytes());
+        // The blocks asked for are compiled by now, or soon.
+        let asked = cache.stats();
+        let started = std::time::Instant::now();
+        while cache.completed() == 0 && started.elapsed().as_secs() < 60 {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        assert!(cache.completed() > 0, "nothing compiled ({asked:?})");
+        let (again, spu, _) = run_sharing(&src, Engine::Jit, timing, Some(&cache));
+        assert_eq!(reference, again, "timing {timing}");
+        assert!(
+            spu.jit_stats().compiled_instructions > 0,
+            "timing {timing}: nothing ran compiled"
+        );
+    }
 }
 
 /// Stores that rewrite code: an instruction later in the same block (the block must end

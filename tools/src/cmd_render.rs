@@ -23,6 +23,12 @@ pub struct Args {
     /// only host speed differs.
     #[arg(long, default_value_t = spu_isa::jit::Engine::host_default())]
     engine: spu_isa::jit::Engine,
+    /// When the block compiler compiles a block that turned hot: on a host thread of its
+    /// own while the SPU goes on interpreting the block (background) or at once while the
+    /// SPU waits (inline: the share of instructions run compiled is then the same at
+    /// every run). Results are the same either way.
+    #[arg(long, default_value_t = spu_isa::jit::Compiling::Background)]
+    compile: spu_isa::jit::Compiling,
     /// A built-in scene (room, conference, beetle) or an OBJ/PLY file (optionally .gz).
     #[arg(long, default_value = "room")]
     scene: String,
@@ -283,6 +289,7 @@ fn check_options(args: &Args) -> exit::Result<Option<Camera>> {
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
     spu_isa::jit::Engine::set_default(args.engine);
+    spu_isa::jit::Compiling::set_default(args.compile);
     let camera = check_options(&args)?;
     let started = Instant::now();
     let mut scene = load_scene(&args.scene)?;

@@ -2,7 +2,8 @@
 //! machine share, and each SPU's table of the blocks it runs compiled.
 
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{mpsc, Arc, Mutex};
 use std::time::Instant;
 
 use cranelift_codegen::ir::condcodes::IntCC;
@@ -19,6 +20,7 @@ use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{default_libcall_names, Module};
 
 use super::helpers::{exact_run_entry, helper_for, BRANCH, TAKEN};
+use super::Compiling;
 use crate::analysis::is_branch;
 use crate::codec::Inst;
 use crate::machine::exec::{execute_in, Core, Reg, LS_MASK, LS_SIZE};
@@ -138,13 +140,12 @@ impl Drop for CodeMemory {
 /// relative branches, loads and links) and its words.
 type Key = (u32, Box<[u32]>);
 
-/// The compiler and the blocks it made, for all SPUs of a machine.
+/// The compiler, for all SPUs of a machine (one block at a time).
 struct Compiler {
     memory: Arc<CodeMemory>,
     ctx: Context,
     fctx: FunctionBuilderContext,
     scratch: Box<Core>,
-    made: HashMap<Key, Arc<Code>>,
     /// Functions declared in `memory`'s module (their names).
     functions: u32,
     stats: super::JitStats,
@@ -153,13 +154,55 @@ struct Compiler {
 // SAFETY: as for `CodeMemory`: used only under the cache's mutex.
 unsafe impl Send for Compiler {}
 
+/// What the cache holds for a block.
+#[derive(Clone)]
+enum Made {
+    Code(Arc<Code>),
+    /// The compiler declined it (an instruction it cannot translate).
+    Declined,
+    /// Asked of the background compiler, not done yet.
+    Queued,
+}
+
+/// What an SPU asking for a block's code gets.
+pub(crate) enum Lookup {
+    Ready(Arc<Code>),
+    /// The block cannot be compiled.
+    Declined,
+    /// The background compiler has it in its queue: interpret the block meanwhile and ask
+    /// again once [`CodeCache::completed`] moved.
+    Pending,
+}
+
+/// A block for the background compiler.
+struct Request {
+    pc: u32,
+    insts: Box<[Inst]>,
+    hook: StoreHook,
+}
+
+struct Shared {
+    /// The blocks made, looked up without waiting for a compile in progress.
+    made: Mutex<HashMap<Key, Made>>,
+    compiler: Mutex<Compiler>,
+    /// Blocks the background compiler finished (made or declined).
+    completed: AtomicU64,
+    /// The background compiler's queue; `None`: the asking SPU compiles the block itself.
+    requests: Option<mpsc::Sender<Request>>,
+}
+
 /// The compile cache of a machine: every SPU given the same cache (with
 /// [`crate::machine::Spu::share_code`]) compiles each block once, whichever SPU gets there
 /// first. What an SPU runs, and so every cycle and counter, does not depend on it: each
 /// SPU decides by its own counts which of its blocks to run compiled, and a block's code
 /// depends only on its address and words.
+///
+/// A cache made while [`Compiling::Background`] is the default compiles on a host thread
+/// of its own: SPUs asking for a block not compiled yet go on interpreting it meanwhile,
+/// so compiling takes no time from the simulation (on a host with a core to spare), and
+/// what runs compiled, only that, depends on the host's timing.
 #[derive(Clone)]
-pub struct CodeCache(Arc<Mutex<Compiler>>);
+pub struct CodeCache(Arc<Shared>);
 
 impl Default for CodeCache {
     fn default() -> Self {
@@ -168,29 +211,78 @@ impl Default for CodeCache {
 }
 
 impl CodeCache {
+    /// A cache compiling as [`Compiling::default`] says.
     pub fn new() -> CodeCache {
+        CodeCache::with(Compiling::default())
+    }
+
+    pub fn with(compiling: Compiling) -> CodeCache {
         let module = new_module();
         let ctx = module.make_context();
-        CodeCache(Arc::new(Mutex::new(Compiler {
+        let compiler = Mutex::new(Compiler {
             memory: Arc::new(CodeMemory(Mutex::new(Some(module)))),
             ctx,
             fctx: FunctionBuilderContext::new(),
             scratch: Box::new(Core::new()),
-            made: HashMap::new(),
             functions: 0,
             stats: Default::default(),
-        })))
+        });
+        let made = Mutex::new(HashMap::new());
+        let completed = AtomicU64::new(0);
+        if compiling == Compiling::Inline {
+            return CodeCache(Arc::new(Shared {
+                made,
+                compiler,
+                completed,
+                requests: None,
+            }));
+        }
+        let (tx, rx) = mpsc::channel::<Request>();
+        let shared = Arc::new(Shared {
+            made,
+            compiler,
+            completed,
+            requests: Some(tx),
+        });
+        let weak = Arc::downgrade(&shared);
+        // The thread holds the cache only while it compiles: it ends when the last SPU
+        // dropped the cache (and with it the queue's sender).
+        let spawned = std::thread::Builder::new()
+            .name("spu-jit".into())
+            .spawn(move || {
+                while let Ok(r) = rx.recv() {
+                    let Some(shared) = weak.upgrade() else {
+                        return;
+                    };
+                    shared.compile(r.pc, &r.insts, r.hook);
+                    shared.completed.fetch_add(1, Ordering::Release);
+                }
+            });
+        match spawned {
+            Ok(_) => CodeCache(shared),
+            // No thread to be had: compile inline.
+            Err(_) => CodeCache::with(Compiling::Inline),
+        }
     }
 
     /// Blocks compiled, their instructions and the host seconds spent (for all SPUs of
     /// the cache; `compiled_instructions` is left 0).
     pub fn stats(&self) -> super::JitStats {
-        self.0.lock().unwrap_or_else(|e| e.into_inner()).stats
+        self.0
+            .compiler
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .stats
     }
 
-    /// The code for `insts` at `pc`, compiled now unless some SPU already did; `None` if
-    /// the block cannot be compiled (a branch before its end).
-    fn code(&self, pc: u32, insts: &[Inst], hook: StoreHook) -> Option<Arc<Code>> {
+    /// How many blocks the background compiler finished (compiled or declined) so far.
+    pub fn completed(&self) -> u64 {
+        self.0.completed.load(Ordering::Acquire)
+    }
+
+    /// The code for `insts` at `pc`: made by some SPU already, else compiled now (or put
+    /// in the background compiler's queue).
+    pub(crate) fn code(&self, pc: u32, insts: &[Inst], hook: StoreHook) -> Lookup {
         let n = insts.len();
         if n == 0
             || n > MAX_BLOCK
@@ -199,41 +291,84 @@ impl CodeCache {
                 .any(|&i| is_branch(i.op) && !may_fall_through(i))
             || insts.iter().any(|i| i.op == Op::Bisled)
         {
-            return None;
+            return Lookup::Declined;
         }
         let key: Key = (pc, insts.iter().map(|i| i.word).collect());
-        let mut guard = self.0.lock().unwrap_or_else(|e| e.into_inner());
-        let c = &mut *guard;
-        if let Some(code) = c.made.get(&key) {
-            return Some(code.clone());
+        let Some(requests) = &self.0.requests else {
+            return self.0.compile(pc, insts, hook);
+        };
+        let mut made = self.0.made.lock().unwrap_or_else(|e| e.into_inner());
+        match made.get(&key) {
+            Some(Made::Code(code)) => Lookup::Ready(code.clone()),
+            Some(Made::Declined) => Lookup::Declined,
+            Some(Made::Queued) => Lookup::Pending,
+            None => {
+                made.insert(key, Made::Queued);
+                let request = Request {
+                    pc,
+                    insts: insts.into(),
+                    hook,
+                };
+                match requests.send(request) {
+                    Ok(()) => Lookup::Pending,
+                    Err(_) => Lookup::Declined,
+                }
+            }
         }
-        if c.made.len() >= MAX_BLOCKS {
-            // Code memory is only freed whole: a new module; the old one goes when the
-            // last SPU drops its blocks.
-            let module = new_module();
-            c.ctx = module.make_context();
-            c.memory = Arc::new(CodeMemory(Mutex::new(Some(module))));
-            c.made.clear();
-            c.functions = 0;
+    }
+}
+
+impl Shared {
+    /// The code for `insts` at `pc` (checked by [`CodeCache::code`]), compiled now unless
+    /// it was made already.
+    fn compile(&self, pc: u32, insts: &[Inst], hook: StoreHook) -> Lookup {
+        let n = insts.len();
+        let key: Key = (pc, insts.iter().map(|i| i.word).collect());
+        let mut guard = self.compiler.lock().unwrap_or_else(|e| e.into_inner());
+        let c = &mut *guard;
+        {
+            let mut made = self.made.lock().unwrap_or_else(|e| e.into_inner());
+            match made.get(&key) {
+                Some(Made::Code(code)) => return Lookup::Ready(code.clone()),
+                Some(Made::Declined) => return Lookup::Declined,
+                _ => {}
+            }
+            if made.len() >= MAX_BLOCKS {
+                // Code memory is only freed whole: a new module; the old one goes when
+                // the last SPU drops its blocks.
+                let module = new_module();
+                c.ctx = module.make_context();
+                c.memory = Arc::new(CodeMemory(Mutex::new(Some(module))));
+                made.clear();
+                c.functions = 0;
+            }
         }
         let started = Instant::now();
         let owned: Box<[Inst]> = insts.into();
         let self_loop = self_loop(pc, &owned[n - 1], pc.wrapping_add(4 * (n as u32 - 1)));
-        let entry = c.translate(pc, &owned, hook, self_loop)?;
-        c.stats.blocks += 1;
-        c.stats.block_instructions += n as u64;
-        c.stats.compile_seconds += started.elapsed().as_secs_f64();
-        let code = Arc::new(Code {
-            entry,
-            n: n as u32,
-            words: key.1.clone(),
-            last: owned[n - 1],
-            self_loop,
-            _insts: owned,
-            _memory: c.memory.clone(),
-        });
-        c.made.insert(key, code.clone());
-        Some(code)
+        let made = match c.translate(pc, &owned, hook, self_loop) {
+            Some(entry) => {
+                c.stats.blocks += 1;
+                c.stats.block_instructions += n as u64;
+                c.stats.compile_seconds += started.elapsed().as_secs_f64();
+                Made::Code(Arc::new(Code {
+                    entry,
+                    n: n as u32,
+                    words: key.1.clone(),
+                    last: owned[n - 1],
+                    self_loop,
+                    _insts: owned,
+                    _memory: c.memory.clone(),
+                }))
+            }
+            None => Made::Declined,
+        };
+        let mut all = self.made.lock().unwrap_or_else(|e| e.into_inner());
+        all.insert(key, made.clone());
+        match made {
+            Made::Code(code) => Lookup::Ready(code),
+            _ => Lookup::Declined,
+        }
     }
 }
 
@@ -264,6 +399,9 @@ pub(crate) struct Blocks {
     /// Per local-store word: how often a block started there without compiled code.
     pub heat: Vec<u8>,
     pub blocks: Vec<Block>,
+    /// Blocks waiting for the background compiler, by their first word's index: the
+    /// cache's [`CodeCache::completed`] when last asked (asked again once it moved).
+    pub pending: HashMap<usize, u64>,
     /// Distinguishes this table (and each time it starts over) from every other: what a
     /// caller kept of a block (its entry) holds while this stays the same.
     pub generation: u64,
@@ -283,6 +421,7 @@ impl Blocks {
             slots: vec![0; LS_SIZE / 4],
             heat: vec![0; LS_SIZE / 4],
             blocks: Vec::new(),
+            pending: HashMap::new(),
             generation: next_generation(),
         }
     }
@@ -292,9 +431,12 @@ impl Blocks {
     }
 
     /// Compiles `insts` (starting at `pc`), or takes the machine's code for them, and
-    /// makes it the block at `pc`; `None` if the block cannot be compiled.
-    pub fn compile(&mut self, pc: u32, insts: &[Inst], hook: StoreHook) -> Option<usize> {
-        let code = self.cache.code(pc, insts, hook)?;
+    /// makes it the block at `pc`; else why not (yet).
+    pub fn compile(&mut self, pc: u32, insts: &[Inst], hook: StoreHook) -> Result<usize, Lookup> {
+        let code = match self.cache.code(pc, insts, hook) {
+            Lookup::Ready(code) => code,
+            other => return Err(other),
+        };
         if self.blocks.len() >= MAX_BLOCKS {
             self.blocks.clear();
             self.generation = next_generation();
@@ -306,7 +448,7 @@ impl Blocks {
             verified: u64::MAX,
         });
         self.slots[(pc as usize >> 2) & (LS_SIZE / 4 - 1)] = id as u32 + 1;
-        Some(id)
+        Ok(id)
     }
 }
 

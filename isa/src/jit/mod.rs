@@ -34,7 +34,7 @@ mod helpers;
 #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 pub use compile::CodeCache;
 #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
-pub(crate) use compile::{Blocks, Ctx, Entry, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN};
+pub(crate) use compile::{Blocks, Ctx, Entry, Lookup, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN};
 
 /// No block compiler on this host: nothing to share.
 #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
@@ -45,6 +45,14 @@ pub struct CodeCache;
 impl CodeCache {
     pub fn new() -> CodeCache {
         CodeCache
+    }
+
+    pub fn with(_compiling: Compiling) -> CodeCache {
+        CodeCache
+    }
+
+    pub fn completed(&self) -> u64 {
+        0
     }
 
     pub fn stats(&self) -> JitStats {
@@ -119,6 +127,66 @@ impl FromStr for Engine {
             "interp" => Ok(Engine::Interp),
             "jit" => Ok(Engine::Jit),
             other => Err(format!("unknown engine `{other}` (interp or jit)")),
+        }
+    }
+}
+
+/// When a block that turned hot is compiled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum Compiling {
+    /// At once, by the SPU that found it hot, which waits: what runs compiled is the same
+    /// at every run (the library's default, so tests can count it).
+    Inline,
+    /// By a host thread of the code cache's own while the SPUs go on interpreting it: no
+    /// wait, but how much runs compiled depends on the host's timing (the `spu` commands'
+    /// default). Results are the same either way.
+    Background,
+}
+
+/// How code caches made from now on compile: 0 inline, else 1 + `Compiling as u8`.
+static COMPILING: AtomicU8 = AtomicU8::new(0);
+
+impl Compiling {
+    /// Sets how every code cache made from now on compiles (the `--compile` option of the
+    /// `spu` commands).
+    pub fn set_default(compiling: Compiling) {
+        COMPILING.store(1 + compiling as u8, Ordering::Relaxed);
+    }
+
+    pub const fn name(self) -> &'static str {
+        match self {
+            Compiling::Inline => "inline",
+            Compiling::Background => "background",
+        }
+    }
+}
+
+impl Default for Compiling {
+    /// The way set by [`Compiling::set_default`], else inline.
+    fn default() -> Self {
+        match COMPILING.load(Ordering::Relaxed) {
+            2 => Compiling::Background,
+            _ => Compiling::Inline,
+        }
+    }
+}
+
+impl fmt::Display for Compiling {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.pad(self.name())
+    }
+}
+
+impl FromStr for Compiling {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Compiling, String> {
+        match s {
+            "inline" => Ok(Compiling::Inline),
+            "background" => Ok(Compiling::Background),
+            other => Err(format!(
+                "unknown way of compiling `{other}` (inline or background)"
+            )),
         }
     }
 }

@@ -83,7 +83,9 @@ mod host {
     use super::super::spu::{invalidate_quad, Spu};
     use crate::analysis::is_branch;
     use crate::codec::Inst;
-    use crate::jit::{Blocks, CodeCache, Ctx, Entry, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN};
+    use crate::jit::{
+        Blocks, CodeCache, Ctx, Entry, Lookup, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN,
+    };
     use crate::machine::exec::{TruncatingFloats, LS_MASK, LS_SIZE};
     use crate::table::Op;
     use crate::timing::ends_block;
@@ -208,7 +210,12 @@ mod host {
             if blocks.heat[w] < HOT {
                 return None;
             }
-            blocks.heat[w] = 0;
+            // Queued for the background compiler: asked again once it finished a block.
+            if let Some(&asked) = blocks.pending.get(&w) {
+                if asked == blocks.cache().completed() {
+                    return None;
+                }
+            }
             let mut insts = Vec::new();
             match n {
                 Some(n) => {
@@ -222,12 +229,21 @@ mod host {
             }
             let epoch = self.code_epoch;
             let blocks = self.compiled.as_mut().expect("blocks");
+            let completed = blocks.cache().completed();
             match blocks.compile(pc, &insts, store_hook) {
-                Some(id) => {
+                Ok(id) => {
+                    blocks.heat[w] = 0;
+                    blocks.pending.remove(&w);
                     blocks.blocks[id].verified = epoch;
                     Some(id)
                 }
-                None => {
+                Err(Lookup::Pending) => {
+                    blocks.pending.insert(w, completed);
+                    None
+                }
+                Err(_) => {
+                    blocks.heat[w] = 0;
+                    blocks.pending.remove(&w);
                     if n.is_none() {
                         blocks.slots[w] = DECLINED;
                     }
