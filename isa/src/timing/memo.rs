@@ -1246,6 +1246,10 @@ impl Timing {
                 memo.writes_mask |= 1u128 << st.write;
             }
         }
+        // Latest first: applying them stops at the first already past (see
+        // `apply_deferred_writes`).
+        memo.final_writes
+            .sort_by_key(|w| std::cmp::Reverse(w.ready_rel));
         let idx = Self::slot_index(memo.start);
         let slot = self.memo.slots[idx];
         if slot == 0 || slot == NEVER {
@@ -1312,13 +1316,24 @@ impl Timing {
         }
     }
 
-    /// Applies the register writes of the block in `deferred_writes`.
+    /// Applies the register writes of the block in `deferred_writes`, latest first. A
+    /// register ready at or before both the last issue and the cycle before now acts the
+    /// same however long ago that was (no stall, dual issue allowed, a signature of -1,
+    /// a chain's open register ready), and those only grow: once every register was
+    /// ready that long ago at the block's entry, the writes that are past too are left
+    /// out.
     #[inline]
     pub(super) fn apply_deferred_writes(&mut self) {
-        if let Some((id, entry)) = self.deferred_writes.take() {
+        if let Some((id, entry, entry_max_ready)) = self.deferred_writes.take() {
+            let past = self.last.issue.min(self.now.saturating_sub(1));
+            let all_past = entry_max_ready <= past;
             for w in &self.memo.memos[id].final_writes {
+                let ready = entry + w.ready_rel;
+                if all_past && ready <= past {
+                    break;
+                }
                 let r = (w.reg & 127) as usize;
-                self.ready[r] = entry + w.ready_rel;
+                self.ready[r] = ready;
                 self.producer[r] = w.producer;
                 self.producer_unit[r] = w.unit;
             }
@@ -1333,14 +1348,14 @@ impl Timing {
         if k == self.memo.memos[rp.memo].steps.len() {
             // The registers wait in `deferred_writes`; the previous deferred block's are
             // applied first unless this block overwrites them all.
-            if let Some((d, _)) = self.deferred_writes {
+            if let Some((d, _, _)) = self.deferred_writes {
                 let covered =
                     self.memo.memos[d].writes_mask & !self.memo.memos[rp.memo].writes_mask;
                 if covered != 0 {
                     self.apply_deferred_writes();
                 }
             }
-            self.deferred_writes = Some((rp.memo, rp.entry_now));
+            self.deferred_writes = Some((rp.memo, rp.entry_now, rp.entry_max_ready));
             let m = &self.memo.memos[rp.memo];
             self.max_ready = self.max_ready.max(rp.entry_now + m.max_ready_rel);
         } else {

@@ -287,11 +287,11 @@ pub struct Timing {
     ready: [u64; 128],
     /// At least the latest of `ready` (the latest ever written).
     max_ready: u64,
-    /// A fully replayed block (memo, entry cycle) whose final register writes are not in
-    /// `ready`, `producer` and `producer_unit` yet: they are applied when something reads
-    /// or writes those ([`Timing::apply_deferred_writes`]), or dropped when the next
+    /// A fully replayed block (memo, entry cycle, `max_ready` at its entry) whose final
+    /// register writes are not in `ready`, `producer` and `producer_unit` yet: they are
+    /// applied when something reads or writes those ([`Timing::apply_deferred_writes`]), or dropped when the next
     /// replayed block writes all the same registers. Every other register is up to date.
-    deferred_writes: Option<(usize, u64)>,
+    deferred_writes: Option<(usize, u64, u64)>,
     producer: [u32; 128],
     producer_unit: [Unit; 128],
     /// Nothing issues before this cycle after a branch miss (R4), charged to `miss_pc`.
