@@ -39,11 +39,16 @@ pub(super) struct Memo {
     pub start: u32,
     pub words: Vec<u32>,
     pub live: Vec<u8>,
+    /// The live registers ready before the entry when the block was recorded (their part
+    /// of the signature: each ready before now), and the others, whose part is in `sig`.
+    pub live_past: Vec<u8>,
+    pub live_exact: Vec<u8>,
     pub branch_pc: u32,
     /// The conditional branches inside the block (before its last instruction): the
     /// record went on past each, untaken and named by no hint. A replay that finds one
     /// taken stops there.
     pub inner: Vec<u32>,
+    /// The signature of the state the block was recorded in, but for `live_past`.
     pub sig: Vec<i64>,
     pub steps: Vec<Step>,
     pub log: Vec<LogEntry>,
@@ -655,10 +660,19 @@ impl Timing {
             return false;
         }
         let branch_at = (m.branch_pc != NO_PC).then(|| (m.branch_pc, m.words.len() as u64 - 1));
+        // Branch-free: these registers are many, and all ready long ago as a rule.
+        let now = self.now;
+        let past = m
+            .live_past
+            .iter()
+            .fold(true, |all, &r| all & (self.ready[(r & 127) as usize] < now));
+        if !past {
+            return false;
+        }
         let e = self.entry_ref();
         let mut pos = 0usize;
         let sig = &m.sig[..];
-        self.signature(&e, &m.live, pc, branch_at, &m.inner, &mut |v| {
+        self.signature(&e, &m.live_exact, pc, branch_at, &m.inner, &mut |v| {
             let same = sig.get(pos) == Some(&v);
             pos += 1;
             same
@@ -1179,10 +1193,13 @@ impl Timing {
             }
         }
         let branch_at = (branch_pc != NO_PC).then(|| (branch_pc, rec.words.len() as u64 - 1));
+        let (live_past, live_exact): (Vec<u8>, Vec<u8>) = live
+            .iter()
+            .partition(|&&r| rec.entry.ready[r as usize] < rec.entry.now);
         let mut sig = Vec::new();
         self.signature(
             &Entry::as_ref(&rec.entry),
-            &live,
+            &live_exact,
             rec.start,
             branch_at,
             &inner,
@@ -1195,6 +1212,8 @@ impl Timing {
             start: rec.start,
             words: rec.words,
             live,
+            live_past,
+            live_exact,
             branch_pc,
             inner,
             sig,
