@@ -181,8 +181,16 @@ impl Fpscr {
 
     /// Set the divide-by-zero flag of word slot `slot` (0..3).
     pub fn raise_dbz(&mut self, slot: usize) {
-        self.words[3] |= 1 << (11 - (slot & 3));
+        self.words[3] |= Fpscr::dbz_bit(slot);
     }
+
+    /// The divide-by-zero flag of word slot `slot` (0..3) in the word that holds them.
+    pub(crate) const fn dbz_bit(slot: usize) -> u32 {
+        1 << (11 - (slot & 3))
+    }
+
+    /// Where in an `Fpscr` the word with the divide-by-zero flags is (for compiled code).
+    pub(crate) const DBZ_WORD_OFFSET: usize = std::mem::offset_of!(Fpscr, words) + 3 * 4;
 
     /// Double-precision flags (`dp_flag::*`) of doubleword slot `slot` (0 or 1).
     pub fn dp_flags(&self, slot: usize) -> u32 {
@@ -596,7 +604,7 @@ pub const FRSQEST_FRACTION: [u32; 64] = [
 ];
 
 /// Result exponent field of `frest` for operand exponent field `e`.
-fn frest_exponent(e: u32) -> u32 {
+pub(crate) fn frest_exponent(e: u32) -> u32 {
     if e == 0 {
         255
     } else {
@@ -605,7 +613,7 @@ fn frest_exponent(e: u32) -> u32 {
 }
 
 /// Result exponent field of `frsqest` for operand exponent field `e`.
-fn frsqest_exponent(e: u32) -> u32 {
+pub(crate) fn frsqest_exponent(e: u32) -> u32 {
     if e == 0 {
         255
     } else {

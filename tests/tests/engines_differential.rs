@@ -14,6 +14,7 @@ use spu_tests::{looping_program, LoopShape, XorShift as Rng};
 struct Outcome {
     stop: StopReason,
     regs: Vec<[u32; 4]>,
+    fpscr: String,
     instructions: u64,
     cycles: u64,
     totals: Option<String>,
@@ -54,6 +55,7 @@ fn run_sharing(
     let outcome = Outcome {
         stop,
         regs: (0..128).map(|r| spu.reg(r)).collect(),
+        fpscr: format!("{:?}", spu.fpscr()),
         instructions: spu.instructions(),
         cycles: spu.cycles(),
         totals: profile.as_ref().map(|p| format!("{:?}", p.totals)),
@@ -155,7 +157,7 @@ fn random_op(rng: &mut Rng) -> String {
             "{} ${t}, ${a}, ${b}",
             ["fcgt", "fceq", "fcmgt", "fcmeq"][rng.below(4) as usize]
         ),
-        36 => format!("frest ${t}, ${a}"),
+        36 => format!("{} ${t}, ${a}", ["frest", "frsqest"][rng.below(2) as usize]),
         37 => format!("fi ${t}, ${a}, ${b}"),
         38 => format!(
             "{} ${t}, ${a}, {}",
@@ -463,6 +465,12 @@ fn float_compares_and_conversions_run_the_same_compiled() {
         push(&mut src, format!("{op} $30, $11, $10"));
         push(&mut src, format!("{op} $30, $10, $10"));
     }
+    // The estimates and the divide-by-zero flags they raise, and gathered bits.
+    for op in ["frest", "frsqest", "gb"] {
+        push(&mut src, format!("{op} $30, $10"));
+        push(&mut src, format!("{op} $30, $11"));
+    }
+    push(&mut src, "fscrrd $30".into());
     push(&mut src, "fi $30, $10, $12".into());
     push(&mut src, "fi $30, $11, $12".into());
     for scale in [0, 1, 20, 31, 32, 100, 127] {

@@ -706,6 +706,25 @@ fn float_run(insts: &[Inst], k: usize) -> Option<usize> {
     Some(end)
 }
 
+/// For each 4-bit `m` (word `i` in bit `i`): word `i` moved to bit `3 - i` (`gb`) and to
+/// bit `11 - i` (the divide-by-zero flags).
+static REVERSED_LANES: [[u32; 16]; 2] = {
+    let mut t = [[0; 16]; 2];
+    let mut m = 0;
+    while m < 16 {
+        let mut i = 0;
+        while i < 4 {
+            if m & (1 << i) != 0 {
+                t[0][m] |= 1 << (3 - i);
+                t[1][m] |= 1 << (11 - i);
+            }
+            i += 1;
+        }
+        m += 1;
+    }
+    t
+};
+
 /// Host byte position of each big-endian byte of a register (words are host-order).
 const fn host(j: usize) -> u8 {
     (j ^ 3) as u8
@@ -986,6 +1005,21 @@ impl Translator<'_> {
                 let v = self.b.ins().icmp(cc, ka, kb);
                 self.set(inst.rt, v)
             }
+            Frest | Frsqest => {
+                let a = self.get(inst.ra);
+                let v = self.estimate(a, inst.op == Frsqest);
+                self.set(inst.rt, v)
+            }
+            Gb => {
+                // Bit 0 of each word, word 0 the highest of four, in the preferred word.
+                let a = self.get(inst.ra);
+                let k = self.b.ins().iconst(I32, 31);
+                let low = self.b.ins().ishl(a, k);
+                let lanes = self.b.ins().vhigh_bits(I32, low);
+                let bits = self.reverse_lane_bits(lanes, 3);
+                let v = self.b.ins().scalar_to_vector(I32X4, bits);
+                self.set(inst.rt, v)
+            }
             Fi => {
                 let (x, est) = (self.get(inst.ra), self.get(inst.rb));
                 let v = self.fi(x, est);
@@ -1190,6 +1224,96 @@ impl Translator<'_> {
         let sign = self.b.ins().sshr(v, thirty_one);
         let flipped = self.b.ins().bxor(mag, sign);
         self.b.ins().isub(flipped, sign)
+    }
+
+    /// `frest` (or `frsqest`) lane by lane, as `float::frest_flags`: the exponent from
+    /// the operand's, the fraction from the table by the operand's top fraction bits; a
+    /// zero exponent raises the word slot's divide-by-zero flag.
+    fn estimate(&mut self, a: Value, sqrt: bool) -> Value {
+        let e_mask = self.splat(0xff);
+        let k23 = self.b.ins().iconst(I32, 23);
+        let e = self.b.ins().ushr(a, k23);
+        let e = self.b.ins().band(e, e_mask);
+        let zero = self.splat(0);
+        let tiny = self.b.ins().icmp(IntCC::Equal, e, zero);
+        // The exponent for a nonzero `e`: 253 - e floored at 0, or 190 - ceil(e / 2).
+        let exp = if sqrt {
+            debug_assert_eq!(crate::float::frsqest_exponent(3), 190 - 2);
+            let one = self.splat(1);
+            let up = self.b.ins().iadd(e, one);
+            let k1 = self.b.ins().iconst(I32, 1);
+            let half = self.b.ins().ushr(up, k1);
+            let top = self.splat(190);
+            self.b.ins().isub(top, half)
+        } else {
+            debug_assert_eq!(crate::float::frest_exponent(254), 0);
+            let top = self.splat(253);
+            let least = self.b.ins().umin(e, top);
+            self.b.ins().isub(top, least)
+        };
+        let most = self.splat(255);
+        let exp = self.b.ins().bitselect(tiny, most, exp);
+        let exp = self.b.ins().ishl(exp, k23);
+        let (table, bits): (&[u32], u32) = if sqrt {
+            (&crate::float::FRSQEST_FRACTION, 0x3f)
+        } else {
+            (&crate::float::FREST_FRACTION, 0x1f)
+        };
+        let k18 = self.b.ins().iconst(I32, 18);
+        let index = self.b.ins().ushr(a, k18);
+        let index_mask = self.splat(bits);
+        let index = self.b.ins().band(index, index_mask);
+        let base = self.b.ins().iconst(I64, table.as_ptr() as usize as i64);
+        let mut fraction = index;
+        for lane in 0..4u8 {
+            let i = self.b.ins().extractlane(index, lane);
+            let i = self.b.ins().uextend(I64, i);
+            let offset = self.b.ins().ishl_imm_u(i, 2);
+            let at = self.b.ins().iadd(base, offset);
+            let f = self
+                .b
+                .ins()
+                .load(I32, MemFlagsData::trusted().with_readonly(), at, 0);
+            fraction = self.b.ins().insertlane(fraction, f, lane);
+        }
+        let mut v = self.b.ins().bor(exp, fraction);
+        if !sqrt {
+            let sign = self.splat(0x8000_0000);
+            let sign = self.b.ins().band(a, sign);
+            v = self.b.ins().bor(v, sign);
+        }
+        // The flags: lane i's divide-by-zero bit is `Fpscr::dbz_bit(i)`, 11 - i.
+        debug_assert_eq!(crate::float::Fpscr::dbz_bit(0), 1 << 11);
+        let lanes = self.b.ins().vhigh_bits(I32, tiny);
+        let flags = self.reverse_lane_bits(lanes, 11);
+        let at = (std::mem::offset_of!(Core, fpscr) + crate::float::Fpscr::DBZ_WORD_OFFSET) as i32;
+        let word = self
+            .b
+            .ins()
+            .load(I32, MemFlagsData::trusted(), self.core, at);
+        let word = self.b.ins().bor(word, flags);
+        self.b
+            .ins()
+            .store(MemFlagsData::trusted(), word, self.core, at);
+        v
+    }
+
+    /// Bits 0..3 of `lanes` (one per word, word 0 in bit 0, as `vhigh_bits` gives them)
+    /// with word `i`'s bit moved to bit `top - i`: a load from a table of the 16 cases.
+    fn reverse_lane_bits(&mut self, lanes: Value, top: u32) -> Value {
+        let table: &'static [u32; 16] = match top {
+            3 => &REVERSED_LANES[0],
+            11 => &REVERSED_LANES[1],
+            _ => unreachable!("no table for bit {top}"),
+        };
+        let base = self.b.ins().iconst(I64, table.as_ptr() as usize as i64);
+        let i = self.b.ins().uextend(I64, lanes);
+        let i = self.b.ins().band_imm_u(i, 15);
+        let offset = self.b.ins().ishl_imm_u(i, 2);
+        let at = self.b.ins().iadd(base, offset);
+        self.b
+            .ins()
+            .load(I32, MemFlagsData::trusted().with_readonly(), at, 0)
     }
 
     /// `fi` lane by lane, as `float::fi`: the estimate's base less its step times the
