@@ -38,7 +38,8 @@ pub struct LoopShape {
 }
 
 /// A random looping program: 3 to 7 blocks of `op`'s instructions on `$10..$21` (loaded
-/// from `data`, which `$3` points at), each with a hint that is right, wrong or absent, a
+/// from `data`, which `$3` points at), each with a hint (`hbrr`, or `hbr` through `$22`)
+/// that is right, wrong or absent, a
 /// countdown that stops the program after `trips` passes, and a data-dependent branch to
 /// a random block; `stop 0x2000` at the end.
 pub fn looping_program(
@@ -57,9 +58,17 @@ pub fn looping_program(
     for i in 0..blocks {
         let target = rng.below(blocks as u64);
         src += &format!("b{i}:\n");
-        match rng.below(3) {
+        match rng.below(5) {
             0 => src += &format!(" hbrr .Lbr{i}, b{target}\n"),
             1 => src += &format!(" hbrr .Lbr{i}, b{}\n", (target + 1) % blocks as u64),
+            // Register-form hints, right or wrong: their target is no part of a record.
+            2 => src += &format!(" ila $22, b{target}\n hbr .Lbr{i}, $22\n"),
+            3 => {
+                src += &format!(
+                    " ila $22, b{}\n hbr .Lbr{i}, $22\n",
+                    (target + 1) % blocks as u64
+                )
+            }
             _ => {}
         }
         for _ in 0..rng.below(shape.before) {

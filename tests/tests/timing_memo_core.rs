@@ -240,12 +240,12 @@ fn blocks_record_and_replay_around_dma_cycles_exactly() {
 /// A loop like the ray tracer's: a register-form hint (`hbr`) predicts a computed branch
 /// (`bi`) to one of four entries, a different one each pass, whose unhinted branches all
 /// miss into one joining block, entered after each of them with other registers still in
-/// flight. The block after the `hbr` must replay although the hint names another target
+/// flight. The block holding the `hbr` must replay although the hint names another target
 /// each time (the target only decides whether the branch resolving after it was
-/// predicted), and so must the joining block although the branch-miss wait at its entry
-/// goes to another branch each time (and it starts in more states than two): the same
-/// registers, cycles and counters as timing every instruction, and every block start
-/// keeps its records.
+/// predicted, and a replay takes it from the core), and so must the joining block
+/// although the branch-miss wait at its entry goes to another branch each time (and it
+/// starts in more states than two): the same registers, cycles and counters as timing
+/// every instruction, and every block start keeps its records.
 #[test]
 fn computed_hinted_branches_and_their_misses_replay_exactly() {
     let src = "
@@ -298,7 +298,8 @@ join:   fa      $24, $24, $21
     assert_eq!(p.totals.hint_hits, 400, "{:?}", p.totals);
     let (_, replays, given_up) = b.timing().expect("timing").memo_stats();
     assert_eq!(given_up, 0, "no block start given up on");
-    assert!(replays > 4 * 350, "{replays} replays");
+    // Three blocks a pass: the loop with its hint, an entry, the joining block.
+    assert!(replays > 3 * 350, "{replays} replays");
 }
 
 /// Blocks that go on past untaken conditional branches (`brz`, `brnz`, `brhz`,

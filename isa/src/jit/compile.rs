@@ -902,7 +902,18 @@ impl Translator<'_> {
             }};
         }
         match inst.op {
-            Nop | Lnop | Hbra | Hbrr | Hbr => {}
+            Nop | Lnop | Hbra | Hbrr => {}
+            // The timing model takes the hint entry's target from the core.
+            Hbr if inst.feature_bits() & 0x40 == 0 => {
+                let ra = self.get(inst.ra);
+                let t = self.preferred(ra);
+                let t = self.b.ins().band_imm_u(t, (LS_MASK & !3) as i64);
+                let at = std::mem::offset_of!(Core, hint_target) as i32;
+                self.b
+                    .ins()
+                    .store(MemFlagsData::trusted(), t, self.core, at);
+            }
+            Hbr => {}
             Il | Ilh | Ilhu | Ila | Fsmbi => {
                 let v = self.constant_of(inst, p);
                 self.set(inst.rt, v)

@@ -423,6 +423,7 @@ mod host {
         ) {
             let last_pc = pc.wrapping_add(4 * (n as u32 - 1)) & LS_MASK;
             let timing = self.timing.as_mut().expect("timing");
+            timing.note_hint_target(self.core.hint_target);
             timing.steady_replayed(memo, loops, (last_pc, true, pc));
             if r & (RESULT_PARTIAL | RESULT_TAKEN) == RESULT_PARTIAL | RESULT_TAKEN {
                 // Left at an inner branch, taken.

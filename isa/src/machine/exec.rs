@@ -115,6 +115,9 @@ pub struct Core {
     /// `event_pending_known` is set by the SPU around that one instruction.
     pub event_pending: bool,
     pub event_pending_known: bool,
+    /// The target of the last register-form hint (`hbr`) executed: blocks run whole hold
+    /// such hints, and the timing model takes the hint entry's target from here.
+    pub hint_target: u32,
 }
 
 /// Local store size and the mask that wraps addresses into it.
@@ -155,6 +158,7 @@ impl Core {
             srr0: 0,
             event_pending: false,
             event_pending_known: false,
+            hint_target: 0,
         }
     }
 
@@ -964,6 +968,9 @@ pub(crate) fn execute_in<const TRUNCATING: bool>(core: &mut Core, inst: Inst, pc
                 _ => pc.wrapping_add((imm << 2) as u32),
             } & LS_MASK
                 & !3;
+            if inst.op == Hbr {
+                core.hint_target = target;
+            }
             return Effect::Hint { branch, target };
         }
         // ---- halts and stops

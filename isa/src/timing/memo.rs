@@ -26,7 +26,10 @@ pub(super) struct Step {
     pub last: Last,
     pub last_issue_rel: i64,
     pub dp_rel: Option<i64>,
-    pub hint: Option<(HintEntry, i64, u64)>,
+    /// The hint entry once the block set it (issue and instruction count relative to the
+    /// entry), and whether an `hbr` set it last: its target is then the one the core
+    /// last noted ([`Timing::note_hint_target`]), not the recorded one.
+    pub hint: Option<(HintEntry, i64, u64, bool)>,
     pub fetch: (u32, bool, i64, i64),
     pub record: IssueRecord,
     pub record_base_rel: i64,
@@ -147,6 +150,8 @@ pub(super) struct Recording {
     pub entry: Box<Entry>,
     pub dp_changed: bool,
     pub hint_changed: bool,
+    /// The last hint recorded was an `hbr`.
+    pub hint_dynamic: bool,
     pub steps: Vec<Step>,
     /// The cycles the fetch model probed for a free local-store cycle (absolute).
     pub probes: Vec<u64>,
@@ -293,16 +298,29 @@ impl Memos {
 }
 
 /// Instructions that end a block before them and are never recorded: channel and SPR
-/// access (channel stalls), `hbr` (its target comes through a hook), halts, stops and
-/// syncs, unknown words.
+/// access (channel stalls), halts, stops and syncs, unknown words. A register-form hint
+/// (`hbr`) does not: its target, different from pass to pass, is no part of a record
+/// (see [`Timing::note_hint_target`]).
 pub(super) fn is_terminator(inst: Inst) -> bool {
     use Op::*;
-    match inst.op {
-        Rdch | Wrch | Rchcnt | Mfspr | Mtspr | Stop | Stopd | Sync | Dsync | Heq | Hgt | Hlgt
-        | Heqi | Hgti | Hlgti | Unknown => true,
-        Hbr => !is_hbrp(inst),
-        _ => false,
-    }
+    matches!(
+        inst.op,
+        Rdch | Wrch
+            | Rchcnt
+            | Mfspr
+            | Mtspr
+            | Stop
+            | Stopd
+            | Sync
+            | Dsync
+            | Heq
+            | Hgt
+            | Hlgt
+            | Heqi
+            | Hgti
+            | Hlgti
+            | Unknown
+    )
 }
 
 /// Takes out of a block's record the branch-miss wait of its first instruction (the
@@ -567,6 +585,7 @@ impl Timing {
             entry: Box::new(self.entry()),
             dp_changed: false,
             hint_changed: false,
+            hint_dynamic: false,
             steps: Vec::new(),
             probes: Vec::new(),
             probes_done: 0,
@@ -1085,6 +1104,7 @@ impl Timing {
         }
         if class.flags & F_HINT != 0 && !is_hbrp(inst) {
             rec.hint_changed = true;
+            rec.hint_dynamic = inst.op == Op::Hbr;
         }
         let w = self.last.writes;
         let (ready_rel, producer, unit) = if w < 128 {
@@ -1110,6 +1130,7 @@ impl Timing {
                     self.hint,
                     self.hint.issued as i64 - now,
                     self.hint.index - e.index,
+                    rec.hint_dynamic,
                 )
             }),
             fetch: (
@@ -1395,18 +1416,25 @@ impl Timing {
         }
         let st = &m.steps[k - 1];
         self.last = st.last;
-        if !m.sets_hint && st.last.hinted().is_some() {
-            self.last.branch_hint = Some(self.hint.target);
-        }
         self.last.issue = at(st.last_issue_rel);
         self.now = self.last.issue + 1;
         if let Some(d) = st.dp_rel {
             self.dp_until = at(d);
         }
-        if let Some((h, issued, index)) = st.hint {
+        let mut dynamic = false;
+        if let Some((h, issued, index, from_hbr)) = st.hint {
             self.hint = h;
             self.hint.issued = at(issued);
             self.hint.index = rp.entry_index + index;
+            if from_hbr {
+                self.hint.target = self.hint_target;
+                dynamic = true;
+            }
+        }
+        // The final branch was predicted to the hint entry's target as it is now, when
+        // that is not the record's own.
+        if (!m.sets_hint || dynamic) && st.last.hinted().is_some() {
+            self.last.branch_hint = Some(self.hint.target);
         }
         self.fetch.line = st.fetch.0;
         self.fetch.pending = st.fetch.1;
@@ -1490,7 +1518,7 @@ impl Timing {
         if rp.k == 0 || pc != m.start.wrapping_add(4 * (rp.k as u32 - 1)) {
             return false;
         }
-        matches!(m.steps[rp.k - 1].hint, Some((h, _, _)) if h.branch == branch & 0x3_ffff && h.target == target & 0x3_ffff)
+        matches!(m.steps[rp.k - 1].hint, Some((h, _, _, from_hbr)) if h.branch == branch & 0x3_ffff && (from_hbr || h.target == target & 0x3_ffff))
     }
 
     pub(super) fn replay_done_counts(&self) -> Option<(usize, usize)> {

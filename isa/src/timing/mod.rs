@@ -292,6 +292,8 @@ pub struct Timing {
     /// applied when something reads or writes those ([`Timing::apply_deferred_writes`]), or dropped when the next
     /// replayed block writes all the same registers. Every other register is up to date.
     deferred_writes: Option<(usize, u64, u64)>,
+    /// The target of the last `hbr` the core ran ([`Timing::note_hint_target`]).
+    hint_target: u32,
     producer: [u32; 128],
     producer_unit: [Unit; 128],
     /// Nothing issues before this cycle after a branch miss (R4), charged to `miss_pc`.
@@ -358,6 +360,7 @@ impl Timing {
             ready: [0; 128],
             max_ready: 0,
             deferred_writes: None,
+            hint_target: 0,
             producer: [NO_PC; 128],
             producer_unit: [Unit::NOP; 128],
             redirect: 0,
@@ -712,7 +715,16 @@ impl Timing {
 
     /// After a hint executed: the branch address it names and the target it predicts
     /// (for `hbr` the target comes from a register, so the core supplies it).
+    /// Before the core reports a block it ran whole (or in part) without the `hint` hook:
+    /// the target of the last `hbr` it ran (`Core::hint_target`), which a replayed
+    /// record whose hint entry an `hbr` set last takes as the entry's target.
+    #[inline(always)]
+    pub fn note_hint_target(&mut self, target: u32) {
+        self.hint_target = target & 0x3_ffff;
+    }
+
     pub fn hint(&mut self, pc: u32, branch: u32, target: u32) {
+        self.hint_target = target & 0x3_ffff;
         self.memo.chain_from = None;
         if self.replay_hint_matches(pc, branch, target) {
             return;
