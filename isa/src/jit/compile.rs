@@ -399,12 +399,18 @@ pub(crate) struct Blocks {
     /// Per local-store word: how often a block started there without compiled code.
     pub heat: Vec<u8>,
     pub blocks: Vec<Block>,
-    /// Blocks waiting for the background compiler, by their first word's index: the
-    /// cache's [`CodeCache::completed`] when last asked (asked again once it moved).
-    pub pending: HashMap<usize, u64>,
+    /// Per local-store word: 0, or for a block waiting for the background compiler, the
+    /// cache's [`CodeCache::completed`] when last asked, as [`asked`] keeps it (asked
+    /// again once it moved).
+    pub pending: Vec<u32>,
     /// Distinguishes this table (and each time it starts over) from every other: what a
     /// caller kept of a block (its entry) holds while this stays the same.
     pub generation: u64,
+}
+
+/// [`CodeCache::completed`] as [`Blocks::pending`] keeps it: never 0.
+pub(crate) fn asked(completed: u64) -> u32 {
+    (completed % u32::MAX as u64) as u32 + 1
 }
 
 /// The next [`Blocks::generation`].
@@ -421,7 +427,7 @@ impl Blocks {
             slots: vec![0; LS_SIZE / 4],
             heat: vec![0; LS_SIZE / 4],
             blocks: Vec::new(),
-            pending: HashMap::new(),
+            pending: vec![0; LS_SIZE / 4],
             generation: next_generation(),
         }
     }

@@ -34,7 +34,9 @@ mod helpers;
 #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 pub use compile::CodeCache;
 #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
-pub(crate) use compile::{Blocks, Ctx, Entry, Lookup, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN};
+pub(crate) use compile::{
+    asked, Blocks, Ctx, Entry, Lookup, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN,
+};
 
 /// No block compiler on this host: nothing to share.
 #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]

@@ -84,7 +84,7 @@ mod host {
     use crate::analysis::is_branch;
     use crate::codec::Inst;
     use crate::jit::{
-        Blocks, CodeCache, Ctx, Entry, Lookup, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN,
+        asked, Blocks, CodeCache, Ctx, Entry, Lookup, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN,
     };
     use crate::machine::exec::{TruncatingFloats, LS_MASK, LS_SIZE};
     use crate::table::Op;
@@ -211,10 +211,8 @@ mod host {
                 return None;
             }
             // Queued for the background compiler: asked again once it finished a block.
-            if let Some(&asked) = blocks.pending.get(&w) {
-                if asked == blocks.cache().completed() {
-                    return None;
-                }
+            if blocks.pending[w] == asked(blocks.cache().completed()) {
+                return None;
             }
             let mut insts = Vec::new();
             match n {
@@ -233,17 +231,17 @@ mod host {
             match blocks.compile(pc, &insts, store_hook) {
                 Ok(id) => {
                     blocks.heat[w] = 0;
-                    blocks.pending.remove(&w);
+                    blocks.pending[w] = 0;
                     blocks.blocks[id].verified = epoch;
                     Some(id)
                 }
                 Err(Lookup::Pending) => {
-                    blocks.pending.insert(w, completed);
+                    blocks.pending[w] = asked(completed);
                     None
                 }
                 Err(_) => {
                     blocks.heat[w] = 0;
-                    blocks.pending.remove(&w);
+                    blocks.pending[w] = 0;
                     if n.is_none() {
                         blocks.slots[w] = DECLINED;
                     }
