@@ -547,13 +547,18 @@ pub fn render_frame_with(
             (name.clone(), read, written)
         })
         .collect();
+    // The frame buffer ends main memory: taken out of it, moved down rather than copied
+    // into fresh pages (a 1024x1024 frame's is 12 MB).
+    let mut frame_buffer = memory.into_bytes();
+    frame_buffer.truncate(fb + layout.frame_buffer_len);
+    frame_buffer.drain(..fb);
     Ok(FrameRun {
         traffic,
         colour_buffer,
         shade_counters,
         shadow_rays,
         events,
-        frame_buffer: memory.bytes()[fb..fb + layout.frame_buffer_len].to_vec(),
+        frame_buffer,
         frame_cycles: spus_report.iter().map(|s| s.cycles).max().unwrap_or(0),
         profile,
         symbols: program.symbols.clone(),

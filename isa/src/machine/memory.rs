@@ -27,6 +27,11 @@ impl MainMemory {
         MainMemory::new(vec![0; len])
     }
 
+    /// The bytes, given up (a large result taken out without a copy).
+    pub fn into_bytes(self) -> Vec<u8> {
+        self.bytes
+    }
+
     /// The cycle at which the memory interface has drained the traffic published so far.
     pub fn bus_busy_until(&self) -> u64 {
         self.bus_busy_until.ceil() as u64
