@@ -212,6 +212,14 @@ fn numeric_options_are_checked_before_any_work() {
             &["as", &src, "--format", "hex"],
             "--format hex: expected elf or bin",
         ),
+        (
+            &["render", "--compile", "sometimes"],
+            "unknown way of compiling `sometimes` (inline or background)",
+        ),
+        (
+            &["run", &src, "--compile", "lazily"],
+            "unknown way of compiling `lazily`",
+        ),
     ];
     for (args, message) in cases {
         let out = spu(args);

@@ -4,7 +4,8 @@
 //!
 //! A block is what the timing model's memo calls one: straight-line instructions up to and
 //! including the first branch, ending before anything that needs the SPU around the core
-//! (channels, stops, halts, `sync`, register-target hints, `bisled`, undecodable words).
+//! (channels, stops, halts, `sync`, `bisled`, undecodable words); a register-form hint
+//! (`hbr`) only leaves its target in the core for the timing model.
 //! Registers live in the core's register file as 128-bit vectors; the common operations
 //! (loads, stores, integer and logical word operations, compares, `selb`, `shufb`, constant
 //! shifts and rotates, immediate loads, the simple branches) become host vector code, and

@@ -389,7 +389,7 @@ enum Lookup {
 }
 
 /// Whether `inst` ends a memoized block (it needs the core around the pipeline: channels,
-/// stops, halts, `sync`, register-target hints, undecodable words).
+/// stops, halts, `sync`, undecodable words).
 #[inline]
 pub fn ends_block(inst: Inst) -> bool {
     is_terminator(inst)
