@@ -465,11 +465,15 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     );
         if run.jit.blocks > 0 {
             outln!(
-                "block compiler: {:.1}% ran compiled; {} blocks ({} instructions) compiled in {:.2} s",
+                "block compiler: {:.1}% ran compiled; {} blocks ({} instructions) compiled in {:.2} s{}",
                 100.0 * run.jit.compiled_instructions as f64 / instructions.max(1) as f64,
                 run.jit.blocks,
                 run.jit.block_instructions,
-                run.jit.compile_seconds
+                run.jit.compile_seconds,
+                match args.compile {
+                    spu_isa::jit::Compiling::Background => " on a thread of its own",
+                    spu_isa::jit::Compiling::Inline => "",
+                }
             );
         }
     }
