@@ -17,12 +17,8 @@ pub struct Args {
     /// Measure only this engine (interp or jit); both by default.
     #[arg(long)]
     engine: Option<Engine>,
-    /// When the block compiler compiles a block that turned hot: on a host thread of its
-    /// own while the SPU goes on interpreting the block (background) or at once while the
-    /// SPU waits (inline: the share of instructions run compiled is then the same at
-    /// every run). Results are the same either way.
-    #[arg(long, default_value_t = spu_isa::jit::Compiling::Background)]
-    compile: spu_isa::jit::Compiling,
+    #[command(flatten)]
+    compile: crate::options::CompileOption,
 }
 
 /// The benchmark loop, assembled from source so it reads like SPU code.
@@ -82,7 +78,7 @@ fn measure(iterations: u32, timing: bool, engine: Engine) -> exit::Result<(u64, 
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
     options::count("--iterations", args.iterations, 1..=u32::MAX)?;
-    spu_isa::jit::Compiling::set_default(args.compile);
+    args.compile.apply();
     let engines = match args.engine {
         Some(e) => vec![e],
         None if Engine::SUPPORTED => vec![Engine::Interp, Engine::Jit],

@@ -15,12 +15,8 @@ pub struct Args {
     /// interpreter (interp). Results are the same; only host speed differs.
     #[arg(long, default_value_t = spu_isa::jit::Engine::host_default())]
     engine: spu_isa::jit::Engine,
-    /// When the block compiler compiles a block that turned hot: on a host thread of its
-    /// own while the SPU goes on interpreting the block (background) or at once while the
-    /// SPU waits (inline: the share of instructions run compiled is then the same at
-    /// every run). Results are the same either way.
-    #[arg(long, default_value_t = spu_isa::jit::Compiling::Background)]
-    compile: spu_isa::jit::Compiling,
+    #[command(flatten)]
+    compile: crate::options::CompileOption,
     /// Program: SPU assembly (.s), an SPU ELF or a flat image.
     file: PathBuf,
     /// Print JSON for tools.
@@ -39,7 +35,7 @@ pub struct Args {
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
     spu_isa::jit::Engine::set_default(args.engine);
-    spu_isa::jit::Compiling::set_default(args.compile);
+    args.compile.apply();
     options::max_cycles(args.max_cycles)?;
     let memory_bytes = options::memory(args.memory)?;
     let (mut spu, symbols) = crate::cmd_run::load(&args.file)?;

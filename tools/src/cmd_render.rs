@@ -23,12 +23,8 @@ pub struct Args {
     /// only host speed differs.
     #[arg(long, default_value_t = spu_isa::jit::Engine::host_default())]
     engine: spu_isa::jit::Engine,
-    /// When the block compiler compiles a block that turned hot: on a host thread of its
-    /// own while the SPU goes on interpreting the block (background) or at once while the
-    /// SPU waits (inline: the share of instructions run compiled is then the same at
-    /// every run). Results are the same either way.
-    #[arg(long, default_value_t = spu_isa::jit::Compiling::Background)]
-    compile: spu_isa::jit::Compiling,
+    #[command(flatten)]
+    compile: crate::options::CompileOption,
     /// A built-in scene (room, conference, beetle) or an OBJ/PLY file (optionally .gz).
     #[arg(long, default_value = "room")]
     scene: String,
@@ -289,7 +285,7 @@ fn check_options(args: &Args) -> exit::Result<Option<Camera>> {
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
     spu_isa::jit::Engine::set_default(args.engine);
-    spu_isa::jit::Compiling::set_default(args.compile);
+    args.compile.apply();
     let camera = check_options(&args)?;
     let started = Instant::now();
     let mut scene = load_scene(&args.scene)?;
@@ -470,7 +466,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
                 run.jit.blocks,
                 run.jit.block_instructions,
                 run.jit.compile_seconds,
-                match args.compile {
+                match args.compile.compile {
                     spu_isa::jit::Compiling::Background => " on a thread of its own",
                     spu_isa::jit::Compiling::Inline => "",
                 }

@@ -13,12 +13,8 @@ pub struct Args {
     /// interpreter (interp). Results are the same; only host speed differs.
     #[arg(long, default_value_t = spu_isa::jit::Engine::host_default())]
     engine: spu_isa::jit::Engine,
-    /// When the block compiler compiles a block that turned hot: on a host thread of its
-    /// own while the SPU goes on interpreting the block (background) or at once while the
-    /// SPU waits (inline: the share of instructions run compiled is then the same at
-    /// every run). Results are the same either way.
-    #[arg(long, default_value_t = spu_isa::jit::Compiling::Background)]
-    compile: spu_isa::jit::Compiling,
+    #[command(flatten)]
+    compile: crate::options::CompileOption,
     /// An SPU ELF, a raw image loaded at 0, or an assembly source (.s).
     file: PathBuf,
     /// Stop after this many cycles.
@@ -126,7 +122,7 @@ fn dump_range(spec: &str) -> exit::Result<std::ops::Range<usize>> {
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
     spu_isa::jit::Engine::set_default(args.engine);
-    spu_isa::jit::Compiling::set_default(args.compile);
+    args.compile.apply();
     options::max_cycles(args.max_cycles)?;
     let memory_bytes = options::memory(args.memory)?;
     let dumps = args

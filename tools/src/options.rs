@@ -32,6 +32,24 @@ pub fn read_input(path: &Path, limit: u64) -> Result<Vec<u8>, String> {
     Ok(bytes)
 }
 
+/// `--compile`, for the commands that run SPUs.
+#[derive(clap::Args)]
+pub struct CompileOption {
+    /// When the block compiler compiles a block that turned hot: on a host thread of its
+    /// own while the SPU goes on interpreting the block (background) or at once while the
+    /// SPU waits (inline: the share of instructions run compiled is then the same at
+    /// every run). Results are the same either way.
+    #[arg(long, default_value_t = spu_isa::jit::Compiling::Background)]
+    pub compile: spu_isa::jit::Compiling,
+}
+
+impl CompileOption {
+    /// Makes it the way every code cache made from now on compiles.
+    pub fn apply(&self) {
+        spu_isa::jit::Compiling::set_default(self.compile);
+    }
+}
+
 /// `--max-cycles`: at least 1.
 pub fn max_cycles(cycles: u64) -> exit::Result<()> {
     if cycles == 0 {

@@ -176,6 +176,7 @@ pub(crate) enum Lookup {
 
 /// A block for the background compiler.
 struct Request {
+    key: Key,
     pc: u32,
     insts: Box<[Inst]>,
     hook: StoreHook,
@@ -254,7 +255,7 @@ impl CodeCache {
                     let Some(shared) = weak.upgrade() else {
                         return;
                     };
-                    shared.compile(r.pc, &r.insts, r.hook);
+                    shared.compile(r.key, r.pc, &r.insts, r.hook);
                     shared.completed.fetch_add(1, Ordering::Release);
                 }
             });
@@ -295,7 +296,7 @@ impl CodeCache {
         }
         let key: Key = (pc, insts.iter().map(|i| i.word).collect());
         let Some(requests) = &self.0.requests else {
-            return self.0.compile(pc, insts, hook);
+            return self.0.compile(key, pc, insts, hook);
         };
         let mut made = self.0.made.lock().unwrap_or_else(|e| e.into_inner());
         match made.get(&key) {
@@ -303,8 +304,9 @@ impl CodeCache {
             Some(Made::Declined) => Lookup::Declined,
             Some(Made::Queued) => Lookup::Pending,
             None => {
-                made.insert(key, Made::Queued);
+                made.insert(key.clone(), Made::Queued);
                 let request = Request {
+                    key,
                     pc,
                     insts: insts.into(),
                     hook,
@@ -319,11 +321,10 @@ impl CodeCache {
 }
 
 impl Shared {
-    /// The code for `insts` at `pc` (checked by [`CodeCache::code`]), compiled now unless
-    /// it was made already.
-    fn compile(&self, pc: u32, insts: &[Inst], hook: StoreHook) -> Lookup {
+    /// The code for `insts` at `pc` (`key`; checked by [`CodeCache::code`]), compiled now
+    /// unless it was made already.
+    fn compile(&self, key: Key, pc: u32, insts: &[Inst], hook: StoreHook) -> Lookup {
         let n = insts.len();
-        let key: Key = (pc, insts.iter().map(|i| i.word).collect());
         let mut guard = self.compiler.lock().unwrap_or_else(|e| e.into_inner());
         let c = &mut *guard;
         {
@@ -712,17 +713,15 @@ fn float_run(insts: &[Inst], k: usize) -> Option<usize> {
     Some(end)
 }
 
-/// For each 4-bit `m` (word `i` in bit `i`): word `i` moved to bit `3 - i` (`gb`) and to
-/// bit `11 - i` (the divide-by-zero flags).
-static REVERSED_LANES: [[u32; 16]; 2] = {
-    let mut t = [[0; 16]; 2];
+/// For each 4-bit `m` (word `i` in bit `i`): word `i` moved to bit `3 - i`.
+static REVERSED_LANES: [u32; 16] = {
+    let mut t = [0; 16];
     let mut m = 0;
     while m < 16 {
         let mut i = 0;
         while i < 4 {
             if m & (1 << i) != 0 {
-                t[0][m] |= 1 << (3 - i);
-                t[1][m] |= 1 << (11 - i);
+                t[m] |= 1 << (3 - i);
             }
             i += 1;
         }
@@ -910,7 +909,7 @@ impl Translator<'_> {
         match inst.op {
             Nop | Lnop | Hbra | Hbrr => {}
             // The timing model takes the hint entry's target from the core.
-            Hbr if inst.feature_bits() & 0x40 == 0 => {
+            Hbr if !crate::timing::is_hbrp(*inst) => {
                 let ra = self.get(inst.ra);
                 let t = self.preferred(ra);
                 let t = self.b.ins().band_imm_u(t, (LS_MASK & !3) as i64);
@@ -1033,7 +1032,7 @@ impl Translator<'_> {
                 let k = self.b.ins().iconst(I32, 31);
                 let low = self.b.ins().ishl(a, k);
                 let lanes = self.b.ins().vhigh_bits(I32, low);
-                let bits = self.reverse_lane_bits(lanes, 3);
+                let bits = self.reverse_lane_bits(lanes);
                 let v = self.b.ins().scalar_to_vector(I32X4, bits);
                 self.set(inst.rt, v)
             }
@@ -1299,10 +1298,12 @@ impl Translator<'_> {
             let sign = self.b.ins().band(a, sign);
             v = self.b.ins().bor(v, sign);
         }
-        // The flags: lane i's divide-by-zero bit is `Fpscr::dbz_bit(i)`, 11 - i.
+        // The flags: lane i's divide-by-zero bit is `Fpscr::dbz_bit(i)`, 11 - i, gb's order
+        // moved up by 8.
         debug_assert_eq!(crate::float::Fpscr::dbz_bit(0), 1 << 11);
         let lanes = self.b.ins().vhigh_bits(I32, tiny);
-        let flags = self.reverse_lane_bits(lanes, 11);
+        let flags = self.reverse_lane_bits(lanes);
+        let flags = self.b.ins().ishl_imm_u(flags, 8);
         let at = (std::mem::offset_of!(Core, fpscr) + crate::float::Fpscr::DBZ_WORD_OFFSET) as i32;
         let word = self
             .b
@@ -1316,14 +1317,12 @@ impl Translator<'_> {
     }
 
     /// Bits 0..3 of `lanes` (one per word, word 0 in bit 0, as `vhigh_bits` gives them)
-    /// with word `i`'s bit moved to bit `top - i`: a load from a table of the 16 cases.
-    fn reverse_lane_bits(&mut self, lanes: Value, top: u32) -> Value {
-        let table: &'static [u32; 16] = match top {
-            3 => &REVERSED_LANES[0],
-            11 => &REVERSED_LANES[1],
-            _ => unreachable!("no table for bit {top}"),
-        };
-        let base = self.b.ins().iconst(I64, table.as_ptr() as usize as i64);
+    /// with word `i`'s bit moved to bit `3 - i`: a load from a table of the 16 cases.
+    fn reverse_lane_bits(&mut self, lanes: Value) -> Value {
+        let base = self
+            .b
+            .ins()
+            .iconst(I64, REVERSED_LANES.as_ptr() as usize as i64);
         let i = self.b.ins().uextend(I64, lanes);
         let i = self.b.ins().band_imm_u(i, 15);
         let offset = self.b.ins().ishl_imm_u(i, 2);

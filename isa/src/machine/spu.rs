@@ -689,14 +689,12 @@ impl Spu {
                 Effect::Branch { taken: false, .. } if k + 1 < n => p = (p + 4) & LS_MASK,
                 Effect::Branch { taken, target } if k + 1 < n => {
                     debug_assert!(taken);
-                    timing.note_hint_target(core.hint_target);
                     timing.block_left_at_branch(id, k + 1, p, target);
                     p = target;
                     done = k + 1;
                     break;
                 }
                 Effect::Branch { taken, target } => {
-                    timing.note_hint_target(core.hint_target);
                     timing.block_replayed(id, Some((p, taken, target)));
                     p = if taken { target } else { (p + 4) & LS_MASK };
                     done = k + 1;
@@ -708,18 +706,20 @@ impl Spu {
                     // A store into the rest of the block: the rest goes the long way.
                     let line = addr & LS_MASK & !15;
                     if k + 1 < n && line < block_end && line + 16 > p {
-                        timing.note_hint_target(core.hint_target);
                         timing.block_replayed_partly(id, k + 1);
                         done = k + 1;
                         break;
                     }
                 }
                 // The replayed steps hold what the hook would record, but for an
-                // `hbr`'s target, which the core keeps for `note_hint_target`.
+                // `hbr`'s target.
+                Effect::Hint { target, .. } => {
+                    timing.note_hint_target(target);
+                    p = (p + 4) & LS_MASK;
+                }
                 _ => p = (p + 4) & LS_MASK,
             }
             if k + 1 == n {
-                timing.note_hint_target(core.hint_target);
                 timing.block_replayed(id, None);
             }
         }

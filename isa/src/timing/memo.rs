@@ -63,9 +63,6 @@ pub(super) struct Memo {
     pub verified: u64,
     /// The last write of each register the block writes (for the end of a replay).
     pub final_writes: Vec<FinalWrite>,
-    /// Each step's register write (`reg` 128: none), the steps' own fields packed
-    /// small: a partial replay applies those of its steps.
-    pub step_writes: Vec<StepWrite>,
     /// The latest of those ready cycles, relative to the entry (0 without writes).
     pub max_ready_rel: u64,
     /// The registers in `final_writes`, one bit each.
@@ -101,15 +98,6 @@ pub(super) const MEMO_WAYS: usize = 8;
 #[derive(Clone, Copy, Debug)]
 pub(super) struct FinalWrite {
     pub ready_rel: u64,
-    pub producer: u32,
-    pub reg: u8,
-    pub unit: Unit,
-}
-
-/// One step's register write, relative to the block's entry.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct StepWrite {
-    pub ready_rel: i64,
     pub producer: u32,
     pub reg: u8,
     pub unit: Unit,
@@ -1256,7 +1244,6 @@ impl Timing {
             partial_hits: Vec::new(),
             verified: u64::MAX,
             final_writes: Vec::new(),
-            step_writes: Vec::new(),
             max_ready_rel: 0,
             writes_mask: 0,
             dma_horizon_rel: 0,
@@ -1299,16 +1286,6 @@ impl Timing {
                 memo.writes_mask |= 1u128 << st.write;
             }
         }
-        memo.step_writes = memo
-            .steps
-            .iter()
-            .map(|st| StepWrite {
-                ready_rel: st.ready_rel,
-                producer: st.producer,
-                reg: st.write,
-                unit: st.unit,
-            })
-            .collect();
         // Latest first: applying them stops at the first already past (see
         // `apply_deferred_writes`).
         memo.final_writes
@@ -1428,12 +1405,12 @@ impl Timing {
         let base = rp.entry_now as i64;
         let at = |rel: i64| (base + rel).max(0) as u64;
         if k < m.steps.len() {
-            for w in &m.step_writes[..k] {
-                if w.reg < 128 {
-                    self.ready[w.reg as usize] = at(w.ready_rel);
-                    self.max_ready = self.max_ready.max(at(w.ready_rel));
-                    self.producer[w.reg as usize] = w.producer;
-                    self.producer_unit[w.reg as usize] = w.unit;
+            for st in &m.steps[..k] {
+                if st.write < 128 {
+                    self.ready[st.write as usize] = at(st.ready_rel);
+                    self.max_ready = self.max_ready.max(at(st.ready_rel));
+                    self.producer[st.write as usize] = st.producer;
+                    self.producer_unit[st.write as usize] = st.unit;
                 }
             }
         }

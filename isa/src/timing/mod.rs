@@ -289,8 +289,9 @@ pub struct Timing {
     max_ready: u64,
     /// A fully replayed block (memo, entry cycle, `max_ready` at its entry) whose final
     /// register writes are not in `ready`, `producer` and `producer_unit` yet: they are
-    /// applied when something reads or writes those ([`Timing::apply_deferred_writes`]), or dropped when the next
-    /// replayed block writes all the same registers. Every other register is up to date.
+    /// applied when something reads or writes those ([`Timing::apply_deferred_writes`]),
+    /// or dropped when the next replayed block writes all the same registers. Every other
+    /// register is up to date.
     deferred_writes: Option<(usize, u64, u64)>,
     /// The target of the last `hbr` the core ran ([`Timing::note_hint_target`]).
     hint_target: u32,
@@ -713,16 +714,16 @@ impl Timing {
         miss
     }
 
-    /// After a hint executed: the branch address it names and the target it predicts
-    /// (for `hbr` the target comes from a register, so the core supplies it).
-    /// Before the core reports a block it ran whole (or in part) without the `hint` hook:
-    /// the target of the last `hbr` it ran (`Core::hint_target`), which a replayed
-    /// record whose hint entry an `hbr` set last takes as the entry's target.
+    /// The target of the last `hbr` the core ran in a block it reports whole (or in part)
+    /// without the `hint` hook (`Core::hint_target`): a replayed record whose hint entry
+    /// an `hbr` set last takes it as the entry's target.
     #[inline(always)]
     pub fn note_hint_target(&mut self, target: u32) {
         self.hint_target = target & 0x3_ffff;
     }
 
+    /// After a hint executed: the branch address it names and the target it predicts
+    /// (for `hbr` the target comes from a register, so the core supplies it).
     pub fn hint(&mut self, pc: u32, branch: u32, target: u32) {
         self.hint_target = target & 0x3_ffff;
         self.memo.chain_from = None;
