@@ -32,6 +32,7 @@ pub use error::LoadError;
 pub use layout::StagedScene;
 pub use scene::{Material, Scene, Triangle};
 pub mod frame;
+mod gang;
 pub mod kernel_abi;
 pub mod kernels;
 pub mod runtime;

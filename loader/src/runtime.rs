@@ -317,6 +317,7 @@ pub fn render_frame_with(
     options: &FrameOptions,
     progress: &mut dyn FnMut(u32, u32),
 ) -> Result<FrameRun, FrameError> {
+    use crate::gang::Next;
     use spu_isa::machine::{apply_quantum, MainMemory, Spu, StopReason};
     let (source, name) = crate::kernels::frame_program(fill);
     let shaded = layout.shading.is_some() && !fill;
@@ -363,84 +364,11 @@ pub fn render_frame_with(
         })
         .collect();
     let mut finished: Vec<Option<u64>> = vec![None; spes];
-    let threads = threads.clamp(1, spes);
-    let memory_lock = std::sync::RwLock::new(memory);
-    // With more than one host thread, the threads live for the whole frame (spawning
-    // them for every quantum cost more than many quanta's work): each quantum the SPEs
-    // still running go to them in chunks, in index order, and come back before main
-    // memory takes the quantum's writes.
-    std::thread::scope(|scope| -> Result<(), FrameError> {
-        type Chunk = Vec<(usize, Spu)>;
-        type Done = (Chunk, Vec<Option<StopReason>>);
-        let (done_tx, done_rx) = std::sync::mpsc::channel::<Done>();
-        let mut workers = Vec::new();
-        // One host thread runs the SPEs itself, without workers.
-        let worker_threads = if threads > 1 { threads } else { 0 };
-        for _ in 0..worker_threads {
-            let (tx, rx) = std::sync::mpsc::channel::<(u64, Chunk)>();
-            workers.push(tx);
-            let (done_tx, memory_lock) = (done_tx.clone(), &memory_lock);
-            scope.spawn(move || {
-                while let Ok((until, mut chunk)) = rx.recv() {
-                    let memory = memory_lock.read().unwrap_or_else(|e| e.into_inner());
-                    let outcomes = chunk
-                        .iter_mut()
-                        .map(|(_, spu)| spu.run_quantum(&memory, until))
-                        .collect();
-                    drop(memory);
-                    if done_tx.send((chunk, outcomes)).is_err() {
-                        break;
-                    }
-                }
-            });
-        }
-        drop(done_tx);
-        let mut until = 0u64;
-        while finished.iter().any(|f| f.is_none()) {
-            until = until.saturating_add(QUANTUM_CYCLES);
-            if until > max_cycles {
-                return Err(FrameError::CycleLimit(max_cycles));
-            }
-            let mut outcomes: Vec<Option<StopReason>> = vec![None; spes];
-            if workers.is_empty() {
-                let memory = memory_lock.read().unwrap_or_else(|e| e.into_inner());
-                for ((spu, out), done) in spus.iter_mut().zip(outcomes.iter_mut()).zip(&finished) {
-                    if done.is_none() {
-                        *out = spu.run_quantum(&memory, until);
-                    }
-                }
-            } else {
-                let running: Vec<usize> = (0..spes).filter(|&i| finished[i].is_none()).collect();
-                let per_thread = running.len().div_ceil(workers.len());
-                let mut slots: Vec<Option<Spu>> =
-                    std::mem::take(&mut spus).into_iter().map(Some).collect();
-                let mut sent = 0;
-                for (tx, part) in workers.iter().zip(running.chunks(per_thread)) {
-                    let chunk: Chunk = part
-                        .iter()
-                        .map(|&i| (i, slots[i].take().expect("each SPE once")))
-                        .collect();
-                    if tx.send((until, chunk)).is_err() {
-                        return Err(FrameError::Setup("a host thread ended early".into()));
-                    }
-                    sent += 1;
-                }
-                for _ in 0..sent {
-                    let Ok((chunk, outs)) = done_rx.recv() else {
-                        return Err(FrameError::Setup("a host thread ended early".into()));
-                    };
-                    for ((i, spu), out) in chunk.into_iter().zip(outs) {
-                        slots[i] = Some(spu);
-                        outcomes[i] = out;
-                    }
-                }
-                spus = slots
-                    .into_iter()
-                    .map(|s| s.expect("every SPE back"))
-                    .collect();
-            }
-            let mut memory = memory_lock.write().unwrap_or_else(|e| e.into_inner());
-            apply_quantum(&mut spus, &mut memory);
+    let mut memory = memory;
+    let mut until = 0u64;
+    crate::gang::run_quanta(&mut spus, &mut memory, threads, |spus, memory, outcomes| {
+        if let Some(outcomes) = outcomes {
+            apply_quantum(spus, memory);
             for (i, outcome) in outcomes.into_iter().enumerate() {
                 match outcome {
                     None => {}
@@ -467,9 +395,16 @@ pub fn render_frame_with(
                 .min(layout.params.num_tiles);
             progress(taken, layout.params.num_tiles);
         }
-        Ok(())
+        if finished.iter().all(|f| f.is_some()) {
+            return Ok(Next::Done);
+        }
+        until = until.saturating_add(QUANTUM_CYCLES);
+        if until > max_cycles {
+            return Err(FrameError::CycleLimit(max_cycles));
+        }
+        let running = finished.iter().map(|f| f.is_none()).collect();
+        Ok(Next::Run { until, running })
     })?;
-    let memory = memory_lock.into_inner().unwrap_or_else(|e| e.into_inner());
     let stats_base = layout.stats_addr as usize;
     let spus_report = spus
         .iter()

@@ -97,6 +97,36 @@ fn frames_are_identical_for_any_thread_count() {
     }
 }
 
+/// A frame that runs out of cycles on several host threads returns the error (the
+/// threads sharing the SPUs end with it) and the same error on one.
+#[test]
+fn a_frame_out_of_cycles_ends_on_every_thread_count() {
+    let scene = procedural::room();
+    let bvh = Bvh::build(&scene, &BvhConfig::default());
+    let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
+    let basis = scene.camera.basis(128, 128);
+    let layout = FrameLayout::new(&staged, &basis, 128, 128, 4, 256, 256).unwrap();
+    for threads in [1, 2, 4] {
+        let mut quanta = 0;
+        let result = render_frame(
+            &staged,
+            &layout,
+            4,
+            threads,
+            &TimingConfig::default(),
+            false,
+            95_000,
+            &mut |_, _| quanta += 1,
+        );
+        assert_eq!(
+            result.err(),
+            Some(spu_loader::runtime::FrameError::CycleLimit(95_000)),
+            "{threads} threads"
+        );
+        assert_eq!(quanta, 9, "{threads} threads: quanta run");
+    }
+}
+
 /// The kernel's hits agree with the host reference on every pixel of a 128x128 room.
 #[test]
 fn raytrace_kernel_matches_the_reference_on_the_room() {
