@@ -23,6 +23,17 @@ pub(super) struct Step {
     pub ready_rel: i64,
     pub producer: u32,
     pub unit: Unit,
+    pub exit: Exit,
+    pub log_end: usize,
+    pub totals: Totals,
+}
+
+/// The state after a step that is not in the registers' readiness (times relative to the
+/// block's entry): what a replay that ends after the step sets. A record keeps its last
+/// step's apart ([`Memo::exit`]), next to the rest a full replay reads, so that a replay
+/// does not reach into its steps.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Exit {
     pub last: Last,
     pub last_issue_rel: i64,
     pub dp_rel: Option<i64>,
@@ -33,8 +44,6 @@ pub(super) struct Step {
     pub fetch: (u32, bool, i64, i64),
     pub record: IssueRecord,
     pub record_base_rel: i64,
-    pub log_end: usize,
-    pub totals: Totals,
 }
 
 #[derive(Clone, Debug)]
@@ -54,6 +63,11 @@ pub(super) struct Memo {
     /// The signature of the state the block was recorded in, but for `live_past`.
     pub sig: Vec<i64>,
     pub steps: Vec<Step>,
+    /// The last step's [`Exit`].
+    pub exit: Exit,
+    /// Each step's register write, packed: a partial replay applies those of its steps
+    /// without reaching into them.
+    pub step_writes: Vec<StepWrite>,
     pub log: Vec<LogEntry>,
     pub hits: u64,
     /// Replays that stopped after step `k` (an inner branch taken, a hook), by `k`:
@@ -92,6 +106,15 @@ pub(super) struct Memo {
 
 /// Records kept for one block start, each for another recurring entry state.
 pub(super) const MEMO_WAYS: usize = 8;
+
+/// A step's register write (`reg` 128: none), as in [`Step`].
+#[derive(Clone, Copy, Debug)]
+pub(super) struct StepWrite {
+    pub ready_rel: i64,
+    pub producer: u32,
+    pub reg: u8,
+    pub unit: Unit,
+}
 
 /// A register's state after a block, relative to the block's entry (a result is never
 /// ready before its block starts).
@@ -1013,7 +1036,7 @@ impl Timing {
         if !m.sets_hint && self.hint_view_now(id)[0] & 2 == 0 {
             return 0;
         }
-        let delta = m.steps.last().expect("steps").last_issue_rel as u64 + 1;
+        let delta = m.exit.last_issue_rel as u64 + 1;
         // Passes start at now + k * delta, each before `until` ...
         let mut last_start = until.saturating_sub(1);
         // ... and with its use of the local store ending before the first DMA cycle.
@@ -1038,9 +1061,8 @@ impl Timing {
         if skip > 0 {
             self.memo.memos[id].hits += skip;
             let m = &self.memo.memos[id];
-            let last = m.steps.last().expect("steps");
-            let delta = last.last_issue_rel as u64 + 1;
-            let hinted = self.entry_hinted(id, last.last);
+            let delta = m.exit.last_issue_rel as u64 + 1;
+            let hinted = self.entry_hinted(id, m.exit.last);
             let max_ready_rel = m.max_ready_rel;
             let len = m.words.len() as u64;
             let entry = self.now;
@@ -1122,25 +1144,27 @@ impl Timing {
             ready_rel,
             producer,
             unit,
-            last: self.last,
-            last_issue_rel: self.last.issue as i64 - now,
-            dp_rel: rec.dp_changed.then(|| self.dp_until as i64 - now),
-            hint: rec.hint_changed.then(|| {
-                (
-                    self.hint,
-                    self.hint.issued as i64 - now,
-                    self.hint.index - e.index,
-                    rec.hint_dynamic,
-                )
-            }),
-            fetch: (
-                self.fetch.line,
-                self.fetch.pending,
-                self.fetch.probe as i64 - now,
-                self.fetch.next_ready as i64 - now,
-            ),
-            record: self.record,
-            record_base_rel: self.record.base as i64 - now,
+            exit: Exit {
+                last: self.last,
+                last_issue_rel: self.last.issue as i64 - now,
+                dp_rel: rec.dp_changed.then(|| self.dp_until as i64 - now),
+                hint: rec.hint_changed.then(|| {
+                    (
+                        self.hint,
+                        self.hint.issued as i64 - now,
+                        self.hint.index - e.index,
+                        rec.hint_dynamic,
+                    )
+                }),
+                fetch: (
+                    self.fetch.line,
+                    self.fetch.pending,
+                    self.fetch.probe as i64 - now,
+                    self.fetch.next_ready as i64 - now,
+                ),
+                record: self.record,
+                record_base_rel: self.record.base as i64 - now,
+            },
             log_end: self.profile.log.as_ref().map_or(0, |l| l.len()),
             totals: self.profile.totals.since(&e.totals),
         };
@@ -1238,6 +1262,17 @@ impl Timing {
             branch_pc,
             inner,
             sig,
+            exit: rec.steps.last().expect("a step").exit,
+            step_writes: rec
+                .steps
+                .iter()
+                .map(|st| StepWrite {
+                    ready_rel: st.ready_rel,
+                    producer: st.producer,
+                    reg: st.write,
+                    unit: st.unit,
+                })
+                .collect(),
             steps: rec.steps,
             log,
             hits: 0,
@@ -1260,7 +1295,7 @@ impl Timing {
         memo.dma_horizon_rel = memo
             .steps
             .iter()
-            .map(|st| st.issue_rel.max(st.fetch.2).max(0) as u64)
+            .map(|st| st.issue_rel.max(st.exit.fetch.2).max(0) as u64)
             .max()
             .unwrap_or(0)
             + 2;
@@ -1405,16 +1440,20 @@ impl Timing {
         let base = rp.entry_now as i64;
         let at = |rel: i64| (base + rel).max(0) as u64;
         if k < m.steps.len() {
-            for st in &m.steps[..k] {
-                if st.write < 128 {
-                    self.ready[st.write as usize] = at(st.ready_rel);
-                    self.max_ready = self.max_ready.max(at(st.ready_rel));
-                    self.producer[st.write as usize] = st.producer;
-                    self.producer_unit[st.write as usize] = st.unit;
+            for w in &m.step_writes[..k] {
+                if w.reg < 128 {
+                    self.ready[w.reg as usize] = at(w.ready_rel);
+                    self.max_ready = self.max_ready.max(at(w.ready_rel));
+                    self.producer[w.reg as usize] = w.producer;
+                    self.producer_unit[w.reg as usize] = w.unit;
                 }
             }
         }
-        let st = &m.steps[k - 1];
+        let st = if k == m.steps.len() {
+            &m.exit
+        } else {
+            &m.steps[k - 1].exit
+        };
         self.last = st.last;
         self.last.issue = at(st.last_issue_rel);
         self.now = self.last.issue + 1;
@@ -1518,7 +1557,7 @@ impl Timing {
         if rp.k == 0 || pc != m.start.wrapping_add(4 * (rp.k as u32 - 1)) {
             return false;
         }
-        matches!(m.steps[rp.k - 1].hint, Some((h, _, _, from_hbr)) if h.branch == branch & 0x3_ffff && (from_hbr || h.target == target & 0x3_ffff))
+        matches!(m.steps[rp.k - 1].exit.hint, Some((h, _, _, from_hbr)) if h.branch == branch & 0x3_ffff && (from_hbr || h.target == target & 0x3_ffff))
     }
 
     pub(super) fn replay_done_counts(&self) -> Option<(usize, usize)> {
