@@ -681,19 +681,20 @@ fn list_schedule(
         v.dedup();
         v
     };
-    for inst in insts {
-        for v in virtual_regs(inst) {
+    let regs_of: Vec<Vec<usize>> = insts.iter().map(virtual_regs).collect();
+    for regs in &regs_of {
+        for &v in regs {
             uses_left[v] += 1;
         }
     }
     let mut live = vec![false; virtual_count];
     let limited = virtual_count > 0;
-    let pressure_ok = |i: usize, live: &[bool], uses_left: &[u32]| -> bool {
+    // `live_now`: how many of `live` are set.
+    let pressure_ok = |i: usize, live: &[bool], uses_left: &[u32], live_now: usize| -> bool {
         if !limited {
             return true;
         }
-        let regs = virtual_regs(&insts[i]);
-        let live_now = live.iter().filter(|&&l| l).count();
+        let regs = &regs_of[i];
         let new = regs.iter().filter(|&&v| !live[v]).count();
         let freed = regs
             .iter()
@@ -707,7 +708,7 @@ fn list_schedule(
         new <= freed || live_now + new + margin <= pool
     };
     let retire = |i: usize, live: &mut [bool], uses_left: &mut [u32]| {
-        for v in virtual_regs(&insts[i]) {
+        for &v in &regs_of[i] {
             uses_left[v] -= 1;
             live[v] = uses_left[v] > 0;
         }
@@ -739,17 +740,18 @@ fn list_schedule(
                     issued: &[Option<u32>],
                     live: &[bool],
                     uses: &[u32]| {
+            let live_now = live.iter().filter(|&&l| l).count();
             let by_order = match rank {
                 Rank::CriticalPath => false,
                 Rank::ProgramOrder => true,
-                Rank::Pressure => 2 * live.iter().filter(|&&l| l).count() > pool,
+                Rank::Pressure => 2 * live_now > pool,
             };
             remaining
                 .iter()
                 .copied()
                 .filter(|&i| insts[i].pipe == pipe && Some(i) != exclude)
                 .filter(|&i| !(avoid_ls && pipe == Pipe::Odd && insts[i].uses_ls()))
-                .filter(|&i| ready(i, t, issued) && pressure_ok(i, live, uses))
+                .filter(|&i| ready(i, t, issued) && pressure_ok(i, live, uses, live_now))
                 .filter(|&i| exclude.is_none_or(|e| !deps[i].iter().any(|d| d.0 == e)))
                 .min_by_key(|&i| (std::cmp::Reverse(if by_order { 0 } else { prio[i] }), i))
         };

@@ -480,7 +480,19 @@ pub const OP_COUNT: usize = Op::ALL.len();
 
 /// Looks up every form spelled `mnemonic`, in table order (alternate forms follow).
 pub fn forms_named(mnemonic: &str) -> impl Iterator<Item = &'static FormInfo> + '_ {
-    FORMS.iter().filter(move |f| f.mnemonic == mnemonic)
+    // The assembler asks for every instruction it reads: an index by name, made once,
+    // rather than a scan of the whole table.
+    static BY_NAME: std::sync::OnceLock<
+        std::collections::HashMap<&'static str, Vec<&'static FormInfo>>,
+    > = std::sync::OnceLock::new();
+    let by_name = BY_NAME.get_or_init(|| {
+        let mut map = std::collections::HashMap::<_, Vec<_>>::new();
+        for f in FORMS {
+            map.entry(f.mnemonic).or_default().push(f);
+        }
+        map
+    });
+    by_name.get(mnemonic).into_iter().flatten().copied()
 }
 
 /// The form the disassembler prints for an operation: its first listed form.
