@@ -34,6 +34,7 @@ pub use scene::{Material, Scene, Triangle};
 pub mod frame;
 mod gang;
 pub mod kernel_abi;
+pub mod kernel_image;
 pub mod kernels;
 pub mod runtime;
 pub mod stats;

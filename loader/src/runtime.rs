@@ -118,8 +118,18 @@ pub fn assemble_kernel_with(
     name: &str,
     defines: &[(&str, i64)],
 ) -> Result<Program, String> {
+    let includes = crate::kernels::include_files();
+    if let Some((image, entry, symbols)) =
+        crate::kernels::prebuilt(source, name, defines, &includes)
+    {
+        return Ok(Program {
+            image,
+            entry,
+            symbols,
+        });
+    }
     let opts = spu_asm::Options {
-        virtual_files: crate::kernels::include_files(),
+        virtual_files: includes,
         defines: defines.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
         ..Default::default()
     };

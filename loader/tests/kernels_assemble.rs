@@ -50,3 +50,52 @@ fn every_module_file_is_embedded() {
         "loader::kernels::MODULES lists kernels/modules/"
     );
 }
+
+/// The frame programs assembled at build time are exactly what the assembler makes of the
+/// embedded sources (image, entry, symbols), and the runtime finds them (the sources it
+/// would assemble hash the same); other sources are not served from the build.
+#[test]
+fn prebuilt_kernels_are_what_the_assembler_makes() {
+    let includes = kernels::include_files();
+    let programs: [(bool, &[(&str, i64)]); 3] =
+        [(false, &[]), (false, &[("SHADE", 1)]), (true, &[])];
+    for (fill, defines) in programs {
+        let (source, name) = kernels::frame_program(fill);
+        let prebuilt = kernels::prebuilt(source, name, defines, &includes)
+            .unwrap_or_else(|| panic!("{name} {defines:?}: no prebuilt program for these sources"));
+        let opts = spu_asm::Options {
+            virtual_files: includes.clone(),
+            defines: defines.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
+            ..Default::default()
+        };
+        let fresh = spu_asm::assemble(source, name, &opts).expect("assembles");
+        assert!(
+            prebuilt == (fresh.image, fresh.entry, fresh.symbols),
+            "{name} {defines:?}: the prebuilt program differs"
+        );
+    }
+    let (source, name) = kernels::frame_program(false);
+    let edited = format!("{source}\n\tnop\n");
+    assert!(kernels::prebuilt(&edited, name, &[], &includes).is_none());
+    assert!(kernels::prebuilt(source, name, &[("SHADE", 2)], &includes).is_none());
+}
+
+/// A malformed or truncated encoded program is refused, not misread.
+#[test]
+fn kernel_images_decode_only_whole() {
+    use spu_loader::kernel_image::{decode, encode};
+    let image = (
+        vec![1, 2, 3, 4],
+        8,
+        vec![("_start".to_string(), 0), ("x".to_string(), 16)],
+    );
+    let bytes = encode(42, &image);
+    assert_eq!(decode(&bytes), Some((42, image)));
+    for n in 0..bytes.len() {
+        assert_eq!(decode(&bytes[..n]), None, "{n} bytes");
+    }
+    let mut longer = bytes.clone();
+    longer.push(0);
+    assert_eq!(decode(&longer), None);
+    assert_eq!(decode(&[]), None);
+}

@@ -27,24 +27,24 @@ use std::fmt;
 use std::str::FromStr;
 use std::sync::atomic::{AtomicU8, Ordering};
 
-#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+#[cfg(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64")))]
 mod compile;
-#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+#[cfg(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64")))]
 mod helpers;
 
-#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+#[cfg(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64")))]
 pub use compile::CodeCache;
-#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+#[cfg(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64")))]
 pub(crate) use compile::{
     asked, Blocks, Ctx, Entry, Lookup, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN,
 };
 
 /// No block compiler on this host: nothing to share.
-#[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+#[cfg(not(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64"))))]
 #[derive(Clone, Default)]
 pub struct CodeCache;
 
-#[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+#[cfg(not(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64"))))]
 impl CodeCache {
     pub fn new() -> CodeCache {
         CodeCache
@@ -75,7 +75,10 @@ pub enum Engine {
 
 impl Engine {
     /// Whether this host has the block compiler (x86_64 and aarch64, Cranelift's targets).
-    pub const SUPPORTED: bool = cfg!(any(target_arch = "x86_64", target_arch = "aarch64"));
+    pub const SUPPORTED: bool = cfg!(all(
+        feature = "jit",
+        any(target_arch = "x86_64", target_arch = "aarch64")
+    ));
 
     /// The compiler where the host has one, the interpreter elsewhere.
     pub const fn host_default() -> Engine {
