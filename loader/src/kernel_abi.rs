@@ -501,6 +501,27 @@ pub fn pixel_location(x: u32, y: u32, tiles_x: u32) -> (usize, usize) {
 
 /// Decodes the frame buffer into row-major pixels.
 pub fn decode_frame_buffer(fb: &[u8], width: u32, height: u32) -> Vec<PixelResult> {
+    decode_pixels(fb, width, height, |word| PixelResult {
+        triangle: word(0),
+        t: f32::from_bits(word(256)),
+        rgba: word(512),
+    })
+}
+
+/// The colours alone of [`decode_frame_buffer`] (`rgba`, row by row): what the image needs
+/// when nothing else of the pixels is looked at, a third of the memory.
+pub fn decode_frame_buffer_colours(fb: &[u8], width: u32, height: u32) -> Vec<u32> {
+    decode_pixels(fb, width, height, |word| word(512))
+}
+
+/// Each pixel of a frame buffer, row by row, made by `pixel` from the pixel's words (by
+/// their offset in its packet block's arrays: 0 triangle, 256 distance, 512 colour).
+fn decode_pixels<T>(
+    fb: &[u8],
+    width: u32,
+    height: u32,
+    pixel: impl Fn(&dyn Fn(usize) -> u32) -> T,
+) -> Vec<T> {
     let tiles_x = width.div_ceil(TILE_SIZE);
     let word = |off: usize| {
         fb.get(off..off + 4)
@@ -511,11 +532,7 @@ pub fn decode_frame_buffer(fb: &[u8], width: u32, height: u32) -> Vec<PixelResul
     for y in 0..height {
         for x in 0..width {
             let (block, i) = pixel_location(x, y, tiles_x);
-            out.push(PixelResult {
-                triangle: word(block + 4 * i),
-                t: f32::from_bits(word(block + 256 + 4 * i)),
-                rgba: word(block + 512 + 4 * i),
-            });
+            out.push(pixel(&|array| word(block + array + 4 * i)));
         }
     }
     out
@@ -524,6 +541,23 @@ pub fn decode_frame_buffer(fb: &[u8], width: u32, height: u32) -> Vec<PixelResul
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The colours alone are the full decoding's, pixel by pixel (a frame of two tiles
+    /// across and one down, every word distinct, and a buffer one block short).
+    #[test]
+    fn colours_alone_decode_as_the_full_pixels() {
+        let (width, height) = (2 * TILE_SIZE, TILE_SIZE);
+        let words = (width * height) as usize * PACKET_BLOCK_BYTES as usize / 64 / 4;
+        let fb: Vec<u8> = (0..words as u32)
+            .flat_map(|w| (w * 7 + 1).to_be_bytes())
+            .collect();
+        for fb in [&fb[..], &fb[..fb.len() - PACKET_BLOCK_BYTES as usize]] {
+            let full = decode_frame_buffer(fb, width, height);
+            let colours = decode_frame_buffer_colours(fb, width, height);
+            assert_eq!(colours, full.iter().map(|p| p.rgba).collect::<Vec<_>>());
+            assert!(colours.iter().filter(|&&c| c != 0).count() > colours.len() / 2);
+        }
+    }
 
     #[test]
     fn param_block_bytes() {

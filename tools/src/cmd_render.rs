@@ -7,7 +7,7 @@ use crate::options;
 use spu_loader::camera::Camera;
 use spu_loader::frame::{FrameLayout, SCENE_BASE};
 use spu_loader::kernel_abi::{decode_colour_buffer, ShadingBlock, SHADE_SHADOWS, SHADE_SIMPLE};
-use spu_loader::kernel_abi::{decode_frame_buffer, PixelResult, MISS};
+use spu_loader::kernel_abi::{decode_frame_buffer, decode_frame_buffer_colours, PixelResult, MISS};
 use spu_loader::reference::Reference;
 use spu_loader::runtime::FrameError;
 use spu_loader::shading::{self, Light, ShadeMode};
@@ -375,10 +375,17 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         FrameError::SpuStopped { .. } => Error::new(Status::AbnormalStop, e.to_string()),
     })?;
     let host_seconds = sim_started.elapsed().as_secs_f64();
-    let pixels = decode_frame_buffer(&run.frame_buffer, args.width, args.height);
+    // The hits are only looked at to validate them.
+    let validating = args.validate && !args.fill;
+    let pixels = if validating {
+        decode_frame_buffer(&run.frame_buffer, args.width, args.height)
+    } else {
+        Vec::new()
+    };
     let colours: Vec<u32> = match &run.colour_buffer {
         Some(buffer) => decode_colour_buffer(buffer, args.width, args.height),
-        None => pixels.iter().map(|p| p.rgba).collect(),
+        None if validating => pixels.iter().map(|p| p.rgba).collect(),
+        None => decode_frame_buffer_colours(&run.frame_buffer, args.width, args.height),
     };
     write_png(&args.output, &colours, args.width, args.height)?;
 
@@ -386,7 +393,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     let mut colour_validation = None;
     let mut shadow_edges = None;
     let mut edge_ties = 0;
-    let validation = if args.validate && !args.fill {
+    let validation = if validating {
         let reference = Reference::from_staged(&staged);
         let hits = reference.render(&scene.camera, args.width, args.height, threads);
         if run.colour_buffer.is_some() {
