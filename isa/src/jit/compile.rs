@@ -148,7 +148,6 @@ struct Compiler {
     scratch: Box<Core>,
     /// Functions declared in `memory`'s module (their names).
     functions: u32,
-    stats: super::JitStats,
 }
 
 // SAFETY: as for `CodeMemory`: used only under the cache's mutex.
@@ -186,6 +185,9 @@ struct Shared {
     /// The blocks made, looked up without waiting for a compile in progress.
     made: Mutex<HashMap<Key, Made>>,
     compiler: Mutex<Compiler>,
+    /// What was compiled so far, apart from the compiler so that reading it does not wait
+    /// for a compile in progress.
+    stats: Mutex<super::JitStats>,
     /// Blocks the background compiler finished (made or declined).
     completed: AtomicU64,
     /// The background compiler's queue; `None`: the asking SPU compiles the block itself.
@@ -226,7 +228,6 @@ impl CodeCache {
             fctx: FunctionBuilderContext::new(),
             scratch: Box::new(Core::new()),
             functions: 0,
-            stats: Default::default(),
         });
         let made = Mutex::new(HashMap::new());
         let completed = AtomicU64::new(0);
@@ -234,6 +235,7 @@ impl CodeCache {
             return CodeCache(Arc::new(Shared {
                 made,
                 compiler,
+                stats: Mutex::default(),
                 completed,
                 requests: None,
             }));
@@ -242,6 +244,7 @@ impl CodeCache {
         let shared = Arc::new(Shared {
             made,
             compiler,
+            stats: Mutex::default(),
             completed,
             requests: Some(tx),
         });
@@ -269,11 +272,7 @@ impl CodeCache {
     /// Blocks compiled, their instructions and the host seconds spent (for all SPUs of
     /// the cache; `compiled_instructions` is left 0).
     pub fn stats(&self) -> super::JitStats {
-        self.0
-            .compiler
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .stats
+        *self.0.stats.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// How many blocks the background compiler finished (compiled or declined) so far.
@@ -349,9 +348,10 @@ impl Shared {
         let self_loop = self_loop(pc, &owned[n - 1], pc.wrapping_add(4 * (n as u32 - 1)));
         let made = match c.translate(pc, &owned, hook, self_loop) {
             Some(entry) => {
-                c.stats.blocks += 1;
-                c.stats.block_instructions += n as u64;
-                c.stats.compile_seconds += started.elapsed().as_secs_f64();
+                let mut stats = self.stats.lock().unwrap_or_else(|e| e.into_inner());
+                stats.blocks += 1;
+                stats.block_instructions += n as u64;
+                stats.compile_seconds += started.elapsed().as_secs_f64();
                 Made::Code(Arc::new(Code {
                     entry,
                     n: n as u32,
