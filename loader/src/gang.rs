@@ -5,10 +5,14 @@
 //! between quanta, has every SPU and main memory to itself.
 //!
 //! Each SPU reads main memory and keeps its writes during a quantum, so how the SPUs are
-//! spread over threads changes no result.
+//! spread over threads changes no result. A panic on any thread ends every thread and goes
+//! on from the caller, as with one thread, rather than leaving the others waiting.
 
+use std::any::Any;
 use std::cell::UnsafeCell;
+use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::thread::Thread;
 use std::time::{Duration, Instant};
 
@@ -74,6 +78,7 @@ pub fn run_quanta<E>(
         quit: AtomicBool::new(false),
         pending: AtomicUsize::new(0),
         main: std::thread::current(),
+        panicked: Mutex::new(None),
     };
     std::thread::scope(|scope| {
         let handles: Vec<Thread> = (0..helpers)
@@ -85,7 +90,7 @@ pub fn run_quanta<E>(
                     .clone()
             })
             .collect();
-        let result = (|| {
+        let result = catch_unwind(AssertUnwindSafe(|| {
             while let Next::Run { until, running } = plan {
                 let outcomes = shared.quantum(until, &running, helpers + 1, &handles);
                 // SAFETY: every helper finished the quantum; until the next one the
@@ -94,12 +99,12 @@ pub fn run_quanta<E>(
                 plan = next(spus, memory, Some(outcomes))?;
             }
             Ok(())
-        })();
+        }));
         shared.quit.store(true, Ordering::Release);
         for t in &handles {
             t.unpark();
         }
-        result
+        result.unwrap_or_else(|panic| resume_unwind(panic))
     })
 }
 
@@ -125,6 +130,8 @@ struct Shared {
     /// Helpers still running the current quantum.
     pending: AtomicUsize,
     main: Thread,
+    /// A helper's panic, for the caller to go on with.
+    panicked: Mutex<Option<Box<dyn Any + Send>>>,
 }
 
 // SAFETY: the raw SPU pointer and the cells are only used under the phase protocol above.
@@ -156,6 +163,14 @@ impl Shared {
         // SAFETY: thread 0's share, during the quantum.
         unsafe { self.run_share(0, threads, until) };
         wait_until(|| self.pending.load(Ordering::Acquire) == 0);
+        if let Some(panic) = self
+            .panicked
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .take()
+        {
+            resume_unwind(panic);
+        }
         self.slots
             .iter()
             // SAFETY: the quantum is over.
@@ -194,7 +209,12 @@ impl Shared {
             seen = self.quantum.load(Ordering::Acquire);
             let until = self.until.load(Ordering::Relaxed);
             // SAFETY: a quantum is open and this is thread `t`.
-            unsafe { self.run_share(t, threads, until) };
+            let run = catch_unwind(AssertUnwindSafe(|| unsafe {
+                self.run_share(t, threads, until)
+            }));
+            if let Err(panic) = run {
+                *self.panicked.lock().unwrap_or_else(|e| e.into_inner()) = Some(panic);
+            }
             if self.pending.fetch_sub(1, Ordering::AcqRel) == 1 {
                 self.main.unpark();
             }
@@ -238,5 +258,44 @@ fn wait_until(done: impl Fn() -> bool) {
         } else {
             std::thread::park_timeout(Duration::from_millis(1));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A panic between quanta (here in `next`) ends the helper threads and reaches the
+    /// caller, instead of leaving them waiting for the next quantum.
+    #[test]
+    fn a_panic_between_quanta_ends_every_thread() {
+        let (done, finished) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut spus: Vec<Spu> = (0..3).map(Spu::new).collect();
+            let mut memory = MainMemory::zeroed(4096);
+            let mut quanta = 0;
+            let result = catch_unwind(AssertUnwindSafe(|| {
+                run_quanta(&mut spus, &mut memory, 3, |_, _, outcomes| {
+                    if outcomes.is_some() {
+                        quanta += 1;
+                        if quanta == 2 {
+                            panic!("between quanta");
+                        }
+                    }
+                    Ok::<_, ()>(Next::Run {
+                        until: 100 * (quanta + 1),
+                        running: vec![true; 3],
+                    })
+                })
+            }));
+            let message = result
+                .err()
+                .and_then(|p| p.downcast_ref::<&str>().map(|s| s.to_string()));
+            let _ = done.send((message, quanta));
+        });
+        let got = finished
+            .recv_timeout(Duration::from_secs(30))
+            .expect("run_quanta returned (no thread left waiting)");
+        assert_eq!(got, (Some("between quanta".to_string()), 2));
     }
 }
