@@ -49,6 +49,7 @@ fn main() {
         ),
         ("fill.s", "kernels/fill.s", &[], "fill.bin"),
     ];
+    let mut table = String::from("&[\n");
     for (file, name, defines, out) in programs {
         let source = read(&kernels.join(file));
         let opts = spu_asm::Options {
@@ -65,5 +66,10 @@ fn main() {
         };
         let path = Path::new(&out_dir).join(out);
         std::fs::write(&path, bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        table += &format!("    include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{out}\")),\n");
     }
+    // The runtime's list of them (`kernels::PREBUILT`).
+    table += "]\n";
+    let path = Path::new(&out_dir).join("prebuilt.rs");
+    std::fs::write(&path, table).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
 }

@@ -68,46 +68,24 @@ pub fn layout_include() -> String {
     crate::layout::spu_layout_include() + &crate::kernel_abi::spu_include()
 }
 
-/// A kernel's name, its defines and its program as the build encoded it.
-type Prebuilt = (&'static str, &'static [(&'static str, i64)], &'static [u8]);
-
-/// The frame programs assembled at build time (`build.rs`): name, defines, encoded program
-/// ([`crate::kernel_image`]; empty where the kernel did not assemble then).
-const PREBUILT: &[Prebuilt] = &[
-    (
-        "kernels/primary.s",
-        &[],
-        include_bytes!(concat!(env!("OUT_DIR"), "/primary.bin")),
-    ),
-    (
-        "kernels/primary.s",
-        &[("SHADE", 1)],
-        include_bytes!(concat!(env!("OUT_DIR"), "/primary-shade.bin")),
-    ),
-    (
-        "kernels/fill.s",
-        &[],
-        include_bytes!(concat!(env!("OUT_DIR"), "/fill.bin")),
-    ),
-];
+/// The frame programs assembled at build time (`build.rs`), encoded
+/// ([`crate::kernel_image`]; empty where a kernel did not assemble then).
+const PREBUILT: &[&[u8]] = include!(concat!(env!("OUT_DIR"), "/prebuilt.rs"));
 
 /// The program the build assembled from exactly these sources (`source` named `name`,
-/// `defines`, the include files `includes`), if it did.
+/// `defines`, the include files `includes`), if it did: the one whose sources hash the
+/// same.
 pub fn prebuilt(
     source: &str,
     name: &str,
     defines: &[(&str, i64)],
     includes: &[(String, String)],
 ) -> Option<crate::kernel_image::Image> {
-    let mut wanted: Vec<(&str, i64)> = defines.to_vec();
-    wanted.sort();
-    let (_, _, bytes) = PREBUILT.iter().find(|(n, d, _)| {
-        let mut d = d.to_vec();
-        d.sort();
-        *n == name && d == wanted
-    })?;
-    let (hash, image) = crate::kernel_image::decode(bytes)?;
-    (hash == crate::kernel_image::sources_hash(name, source, defines, includes)).then_some(image)
+    let wanted = crate::kernel_image::sources_hash(name, source, defines, includes);
+    PREBUILT
+        .iter()
+        .filter_map(|bytes| crate::kernel_image::decode(bytes))
+        .find_map(|(hash, image)| (hash == wanted).then_some(image))
 }
 
 /// The in-memory files a kernel's `.include`s resolve to: `layout.inc` and the modules.

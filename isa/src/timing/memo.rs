@@ -19,10 +19,7 @@ pub(super) const NEVER: u32 = u32::MAX;
 #[derive(Clone, Debug)]
 pub(super) struct Step {
     pub issue_rel: i64,
-    pub write: u8,
-    pub ready_rel: i64,
-    pub producer: u32,
-    pub unit: Unit,
+    pub write: StepWrite,
     pub exit: Exit,
     pub log_end: usize,
     pub totals: Totals,
@@ -65,8 +62,8 @@ pub(super) struct Memo {
     pub steps: Vec<Step>,
     /// The last step's [`Exit`].
     pub exit: Exit,
-    /// Each step's register write, packed: a partial replay applies those of its steps
-    /// without reaching into them.
+    /// Each step's register write (the steps', packed): a partial replay applies those
+    /// of its steps without reaching into them.
     pub step_writes: Vec<StepWrite>,
     pub log: Vec<LogEntry>,
     pub hits: u64,
@@ -107,7 +104,7 @@ pub(super) struct Memo {
 /// Records kept for one block start, each for another recurring entry state.
 pub(super) const MEMO_WAYS: usize = 8;
 
-/// A step's register write (`reg` 128: none), as in [`Step`].
+/// A step's register write (`reg` 128: none).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct StepWrite {
     pub ready_rel: i64,
@@ -1140,10 +1137,12 @@ impl Timing {
         };
         let step = Step {
             issue_rel: self.last.issue as i64 - now,
-            write: w,
-            ready_rel,
-            producer,
-            unit,
+            write: StepWrite {
+                ready_rel,
+                producer,
+                reg: w,
+                unit,
+            },
             exit: Exit {
                 last: self.last,
                 last_issue_rel: self.last.issue as i64 - now,
@@ -1263,16 +1262,7 @@ impl Timing {
             inner,
             sig,
             exit: rec.steps.last().expect("a step").exit,
-            step_writes: rec
-                .steps
-                .iter()
-                .map(|st| StepWrite {
-                    ready_rel: st.ready_rel,
-                    producer: st.producer,
-                    reg: st.write,
-                    unit: st.unit,
-                })
-                .collect(),
+            step_writes: rec.steps.iter().map(|st| st.write).collect(),
             steps: rec.steps,
             log,
             hits: 0,
@@ -1308,17 +1298,17 @@ impl Timing {
             .collect();
         memo.probes.sort_unstable();
         memo.probes.dedup();
-        for st in memo.steps.iter().rev() {
-            if st.write < 128 && !memo.final_writes.iter().any(|w| w.reg == st.write) {
-                let ready_rel = st.ready_rel.max(0) as u64;
+        for w in memo.step_writes.iter().rev() {
+            if w.reg < 128 && !memo.final_writes.iter().any(|f| f.reg == w.reg) {
+                let ready_rel = w.ready_rel.max(0) as u64;
                 memo.final_writes.push(FinalWrite {
                     ready_rel,
-                    producer: st.producer,
-                    reg: st.write,
-                    unit: st.unit,
+                    producer: w.producer,
+                    reg: w.reg,
+                    unit: w.unit,
                 });
                 memo.max_ready_rel = memo.max_ready_rel.max(ready_rel);
-                memo.writes_mask |= 1u128 << st.write;
+                memo.writes_mask |= 1u128 << w.reg;
             }
         }
         // Latest first: applying them stops at the first already past (see
