@@ -119,10 +119,11 @@ pub fn assemble_with_kernels(src: &str, name: &str) -> spu_asm::Output {
 }
 
 /// A program whose blocks go on past untaken conditional branches (`brz`, `brnz`,
-/// `brhz`, `brhnz`): a loop of 300 passes whose inner branches are taken now and then
-/// (`$24` counts one of them: 38 passes), one of them named by a hint on some passes,
-/// then a self-loop of 200 passes (`$27`) whose inner branch leaves it every 16th pass
-/// (`$29`: 12 times). Ends with `stop 0x2000`.
+/// `brhz`, `brhnz`, and the indirect `biz`, `bihnz`): a loop of 300 passes whose inner
+/// branches are taken now and then (`$24` counts one of them: 38 passes; `$31` the
+/// `biz`: 18; `$6` the `bihnz`: 37), two of them named by a hint on some passes, then a
+/// self-loop of 200 passes (`$27`) whose inner branch leaves it every 16th pass (`$29`:
+/// 12 times). Ends with `stop 0x2000`.
 pub const UNTAKEN_BRANCHES: &str = "
         .text
         .global _start
@@ -137,6 +138,12 @@ loop:   andi    $8, $9, 7
         ceqi    $13, $8, 5
         xor     $22, $22, $20
         brhnz   $13, side2
+        andi    $18, $9, 15
+        ila     $17, side3
+.Lin3:  biz     $18, $17
+        ceqi    $19, $8, 6
+        ila     $11, side4
+        bihnz   $19, $11
         andi    $14, $9, 1
         mpy     $23, $20, $9
         lqd     $5, 0($3)
@@ -158,6 +165,11 @@ side1:  ai      $24, $24, 1
         br      back
 side2:  ai      $25, $25, 1
         hbrr    .Lin1, side1
+        br      back
+side3:  ai      $31, $31, 1
+        br      back
+side4:  ai      $6, $6, 1
+        hbr     .Lin3, $17
         br      back
 even:   ai      $26, $26, 1
         fm      $30, $21, $10

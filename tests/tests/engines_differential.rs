@@ -656,6 +656,11 @@ fn blocks_past_untaken_branches_run_the_same_compiled() {
     let src = spu_tests::UNTAKEN_BRANCHES;
     let [off, on] = same_with_both_engines(src);
     assert_eq!(on.reg(27)[0], 200);
+    assert_eq!(
+        [on.reg(31)[0], on.reg(6)[0]],
+        [18, 37],
+        "indirect inner branches taken"
+    );
     assert!(off.jit_stats().compiled_instructions > off.instructions() / 2);
     assert!(on.jit_stats().compiled_instructions > on.instructions() / 2);
 }

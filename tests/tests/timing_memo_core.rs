@@ -312,7 +312,40 @@ join:   fa      $24, $24, $21
 fn blocks_past_untaken_branches_time_exactly() {
     let (b, p) = same_both_ways(spu_tests::UNTAKEN_BRANCHES);
     assert_eq!(b.reg(24)[0], 38, "side1 passes");
+    assert_eq!(b.reg(31)[0], 18, "side3 passes (biz)");
+    assert_eq!(b.reg(6)[0], 37, "side4 passes (bihnz)");
     assert_eq!(b.reg(27)[0], 200);
     assert_eq!(b.reg(29)[0], 12, "tick passes");
     assert!(p.totals.branches_not_taken > 800, "{:?}", p.totals);
+}
+
+/// An indirect conditional branch (`biz`) that stays untaken until the last pass does not
+/// end its block: each pass of the loop replays as one record (two blocks a pass would
+/// double the replays), exactly as timing every instruction; one that enables interrupts
+/// (`bize`) still ends its block.
+#[test]
+fn untaken_indirect_branches_stay_inside_their_block() {
+    let src = "
+        .text
+        .global _start
+_start: il      $9, 100
+        ila     $17, done
+loop:   ai      $9, $9, -1
+        a       $20, $20, $9
+        biz     $9, $17
+        a       $21, $21, $9
+        br      loop
+done:   stop    0x2000
+";
+    let (b, _) = same_both_ways(src);
+    assert_eq!([b.reg(20)[0], b.reg(21)[0]], [4950, 4950]);
+    let (records, replays, _) = b.timing().expect("timing").memo_stats();
+    assert!(
+        (95..=100).contains(&replays),
+        "{records} records, {replays} replays"
+    );
+    let with_e = src.replace("biz     $9, $17", "bizd    $9, $17");
+    let (b, _) = same_both_ways(&with_e);
+    let (_, replays, _) = b.timing().expect("timing").memo_stats();
+    assert!(replays > 150, "{replays} replays: a `bizd` ends its block");
 }

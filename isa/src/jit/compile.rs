@@ -599,6 +599,13 @@ impl Compiler {
     }
 }
 
+/// Where a conditional branch goes when taken.
+enum Target {
+    Known(u32),
+    /// From a register, at run time (an `i32`).
+    Register(Value),
+}
+
 struct Translator<'a> {
     b: FunctionBuilder<'a>,
     ctx: Value,
@@ -1526,40 +1533,81 @@ impl Translator<'_> {
     /// [`RESULT_TAKEN`], the target also in the context); untaken, it goes on.
     fn inner_branch(&mut self, inst: &Inst, p: u32, k: u64) {
         debug_assert!(may_fall_through(*inst));
-        let (target, taken) = self.relative_condition(inst, p);
+        let (target, taken) = self.condition(inst, p);
         let exit = self.b.create_block();
         let cont = self.b.create_block();
         self.b.ins().brif(taken, exit, &[], cont, &[]);
         self.b.switch_to_block(exit);
-        let t = self.b.ins().iconst(I32, target as i64);
-        self.b
-            .ins()
-            .store(MemFlagsData::trusted(), t, self.ctx, CTX_TARGET);
-        let r = (target as u64 | (k + 1) << 32 | RESULT_TAKEN | RESULT_PARTIAL) as i64;
-        let r = self.b.ins().iconst(I64, r);
+        let done = ((k + 1) << 32 | RESULT_TAKEN | RESULT_PARTIAL) as i64;
+        let r = match target {
+            Target::Known(target) => {
+                let t = self.b.ins().iconst(I32, target as i64);
+                self.b
+                    .ins()
+                    .store(MemFlagsData::trusted(), t, self.ctx, CTX_TARGET);
+                self.b.ins().iconst(I64, target as i64 | done)
+            }
+            Target::Register(t) => {
+                self.b
+                    .ins()
+                    .store(MemFlagsData::trusted(), t, self.ctx, CTX_TARGET);
+                let t = self.b.ins().uextend(I64, t);
+                self.b.ins().bor_imm_u(t, done)
+            }
+        };
         self.b.ins().return_(&[r]);
         self.b.switch_to_block(cont);
     }
 
+    /// The target of the conditional branch `inst` at `p` ([`may_fall_through`]) and
+    /// whether it is taken: for an indirect one, the target is its address register's
+    /// preferred word within local store, word-aligned, as the interpreter takes it.
+    fn condition(&mut self, inst: &Inst, p: u32) -> (Target, Value) {
+        use Op::*;
+        if !matches!(inst.op, Biz | Binz | Bihz | Bihnz) {
+            let (target, taken) = self.relative_condition(inst, p);
+            return (Target::Known(target), taken);
+        }
+        let taken = self.zero_test(
+            inst,
+            matches!(inst.op, Bihz | Bihnz),
+            matches!(inst.op, Biz | Bihz),
+        );
+        let ra = self.get(inst.ra);
+        let a = self.preferred(ra);
+        let target = self.b.ins().band_imm_u(a, (LS_MASK & !3) as i64);
+        (Target::Register(target), taken)
+    }
+
     /// The target of the conditional relative branch `inst` at `p` (`brz`, `brnz`, `brhz`,
-    /// `brhnz`) and whether it is taken: its register's preferred word (halfword) zero or
-    /// not.
+    /// `brhnz`) and whether it is taken.
     fn relative_condition(&mut self, inst: &Inst, p: u32) -> (u32, Value) {
         use Op::*;
         let target = p.wrapping_add((inst.imm << 2) as u32) & LS_MASK & !3;
+        let taken = self.zero_test(
+            inst,
+            matches!(inst.op, Brhz | Brhnz),
+            matches!(inst.op, Brz | Brhz),
+        );
+        (target, taken)
+    }
+
+    /// Whether a conditional branch's register `inst.rt` has its preferred word (or, with
+    /// `halfword`, its low halfword) zero (`if_zero`) or nonzero.
+    fn zero_test(&mut self, inst: &Inst, halfword: bool, if_zero: bool) -> Value {
         let rt = self.get(inst.rt);
         let v = self.preferred(rt);
-        let v = if matches!(inst.op, Brhz | Brhnz) {
+        let v = if halfword {
             self.b.ins().band_imm_u(v, 0xffff)
         } else {
             v
         };
-        let cc = if matches!(inst.op, Brz | Brhz) {
+        let cc = if if_zero {
             IntCC::Equal
         } else {
             IntCC::NotEqual
         };
-        (target, self.b.ins().icmp_imm_u(cc, v, 0))
+        self.b.ins().icmp_imm_u(cc, v, 0)
     }
 
     /// Emits the block's final branch and its return; with `again`, a taken branch (back

@@ -193,10 +193,17 @@ pub(super) enum AfterBranch {
 }
 
 /// Conditional branches a block (its record, its compiled code) may go on past into
-/// the next instruction: relative ones, whose taken way leaves the block.
+/// the next instruction, whose taken way leaves the block: the relative ones, and the
+/// indirect ones that leave the interrupt enable alone (an untaken branch that no hint
+/// names times the same wherever its register points; one that enables or disables
+/// interrupts changes what the run loops may do after it).
 #[inline]
 pub(crate) fn may_fall_through(inst: Inst) -> bool {
-    matches!(inst.op, Op::Brz | Op::Brnz | Op::Brhz | Op::Brhnz)
+    match inst.op {
+        Op::Brz | Op::Brnz | Op::Brhz | Op::Brhnz => true,
+        Op::Biz | Op::Binz | Op::Bihz | Op::Bihnz => inst.feature_bits() & 0x30 == 0,
+        _ => false,
+    }
 }
 
 /// The state a block's timing depends on, at its entry.
