@@ -8,6 +8,14 @@
 use crate::codec::Inst;
 use crate::table::{Op, OperandKind};
 
+/// Whether `inst` writes one of the MFC command parameters (`wrch` of channels 16 to 20:
+/// MFC_LSA, MFC_EAH, MFC_EAL, MFC_Size, MFC_TagID): a latch that never waits, which the
+/// core does itself (`machine::exec::MfcParams`), unlike the other channel instructions.
+#[inline(always)]
+pub fn is_mfc_param_write(inst: Inst) -> bool {
+    inst.op == Op::Wrch && (16..=20).contains(&inst.ra)
+}
+
 /// Register usage of one operation's fields.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RegUse {

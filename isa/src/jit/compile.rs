@@ -926,6 +926,16 @@ impl Translator<'_> {
                     .store(MemFlagsData::trusted(), t, self.core, at);
             }
             Hbr => {}
+            // An MFC command parameter's latch (other channel instructions end blocks).
+            Wrch if crate::analysis::is_mfc_param_write(*inst) => {
+                let rt = self.get(inst.rt);
+                let v = self.preferred(rt);
+                let field = 4 * (inst.ra - 16) as usize;
+                let at = (std::mem::offset_of!(Core, mfc) + field) as i32;
+                self.b
+                    .ins()
+                    .store(MemFlagsData::trusted(), v, self.core, at);
+            }
             Il | Ilh | Ilhu | Ila | Fsmbi => {
                 let v = self.constant_of(inst, p);
                 self.set(inst.rt, v)

@@ -340,11 +340,8 @@ impl Spu {
                 self.dec_event_at = Some(now.saturating_add((v as u64 + 1).saturating_mul(tick)));
             }
             WR_SRR0 => self.core.srr0 = v,
-            LSA => self.lsa = v,
-            EAH => self.eah = v,
-            EAL => self.eal = v,
-            SIZE => self.size = v,
-            TAG_ID => self.tag_id = v,
+            // (The core latches these itself: `execute` does not hand them over.)
+            LSA..=TAG_ID => self.core.mfc.set(channel, v),
             WR_TAG_MASK => self.tag_mask = v,
             WR_TAG_UPDATE => self.tag_update = Some(v & 3),
             WR_LIST_STALL_ACK => {

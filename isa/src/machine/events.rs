@@ -41,7 +41,7 @@ impl Spu {
         if !matches!(outcome, ChannelOutcome::Done) {
             return;
         }
-        let tag = (self.tag_id & 31) as u8;
+        let tag = (self.core.mfc.tag_id & 31) as u8;
         let complete = self
             .queue
             .iter()
@@ -54,9 +54,9 @@ impl Spu {
             cycle: now,
             complete,
             cmd,
-            lsa: self.lsa,
-            ea: ((self.eah as u64) << 32) | self.eal as u64,
-            size: self.size,
+            lsa: self.core.mfc.lsa,
+            ea: ((self.core.mfc.eah as u64) << 32) | self.core.mfc.eal as u64,
+            size: self.core.mfc.size,
             tag,
         };
         if let Some(log) = &mut self.events {

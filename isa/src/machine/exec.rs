@@ -1,5 +1,6 @@
 //! Bit-exact semantics of every SPU operation, as one `match` over the decoded operation.
 
+use crate::analysis::is_mfc_param_write;
 use crate::codec::Inst;
 use crate::float;
 use crate::table::Op;
@@ -104,7 +105,36 @@ fn splat_b(v: u8) -> Reg {
     splat(u32::from_ne_bytes([v; 4]))
 }
 
-/// Architectural state the semantics act on (the channels and the MFC live outside).
+/// The MFC command parameters, in the order of their channels (MFC_LSA 16, MFC_EAH 17,
+/// MFC_EAL 18, MFC_Size 19, MFC_TagID 20). Writing one only latches a value that the next
+/// command (MFC_Cmd) takes: it never waits and has no other effect, so the core does it
+/// like a register move, and blocks hold such writes (compiled code stores the field).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
+pub struct MfcParams {
+    pub lsa: u32,
+    pub eah: u32,
+    pub eal: u32,
+    pub size: u32,
+    pub tag_id: u32,
+}
+
+impl MfcParams {
+    /// Latches `v` into the parameter of `channel` (16..=20).
+    #[inline(always)]
+    pub fn set(&mut self, channel: u8, v: u32) {
+        match channel {
+            16 => self.lsa = v,
+            17 => self.eah = v,
+            18 => self.eal = v,
+            19 => self.size = v,
+            _ => self.tag_id = v,
+        }
+    }
+}
+
+/// Architectural state the semantics act on (the channels and the MFC live outside, but
+/// for the command parameters' latches).
 pub struct Core {
     pub regs: [Reg; 128],
     pub ls: Box<[u8; LS_SIZE]>,
@@ -118,6 +148,7 @@ pub struct Core {
     /// The target of the last register-form hint (`hbr`) executed: blocks run whole hold
     /// such hints, and the timing model takes the hint entry's target from here.
     pub hint_target: u32,
+    pub mfc: MfcParams,
 }
 
 /// Local store size and the mask that wraps addresses into it.
@@ -143,7 +174,8 @@ pub enum Effect {
     },
     Stop(u16),
     Halt,
-    /// Channel instructions are carried out by the SPU, not here.
+    /// Channel instructions are carried out by the SPU, not here (but for the writes of
+    /// the MFC command parameters, [`MfcParams`]).
     Channel,
     Illegal,
 }
@@ -159,6 +191,7 @@ impl Core {
             event_pending: false,
             event_pending_known: false,
             hint_target: 0,
+            mfc: MfcParams::default(),
         }
     }
 
@@ -300,7 +333,8 @@ pub fn put(regs: &mut [Reg; 128], rt: u8, v: Reg) {
     }
 }
 
-/// Executes `inst` at `pc` on `core`. Channel instructions return [`Effect::Channel`].
+/// Executes `inst` at `pc` on `core`. Channel instructions return [`Effect::Channel`], but
+/// for the writes of the MFC command parameters, which the core latches ([`MfcParams`]).
 #[inline(always)]
 pub fn execute(core: &mut Core, inst: Inst, pc: u32) -> Effect {
     execute_in::<false>(core, inst, pc)
@@ -992,6 +1026,7 @@ pub(crate) fn execute_in<const TRUNCATING: bool>(core: &mut Core, inst: Inst, pc
         Nop | Lnop | Sync | Dsync => {}
         Mfspr => w!([0; 4]),
         Mtspr => {}
+        Wrch if is_mfc_param_write(inst) => core.mfc.set(inst.ra, rt_old!()[0]),
         Rdch | Wrch | Rchcnt => return Effect::Channel,
         Unknown => return Effect::Illegal,
     }

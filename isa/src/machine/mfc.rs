@@ -196,23 +196,23 @@ impl Spu {
         now: u64,
         memory: &MainMemory,
     ) -> ChannelOutcome {
-        let tag = self.tag_id;
+        let tag = self.core.mfc.tag_id;
         self.dma_ctx = (
             cmd as u8,
-            self.lsa,
-            ((self.eah as u64) << 32) | self.eal as u64,
-            self.size,
+            self.core.mfc.lsa,
+            ((self.core.mfc.eah as u64) << 32) | self.core.mfc.eal as u64,
+            self.core.mfc.size,
             tag,
         );
         if tag > 31 && !matches!(cmd, 0xd0 | 0xb4 | 0xb0 | 0xb8) {
             return ChannelOutcome::Error(format!("tag {tag} is out of range 0..31"));
         }
         let tag = (tag & 31) as u8;
-        let lsa = self.lsa & LS_MASK;
-        let ea = ((self.eah as u64) << 32) | self.eal as u64;
+        let lsa = self.core.mfc.lsa & LS_MASK;
+        let ea = ((self.core.mfc.eah as u64) << 32) | self.core.mfc.eal as u64;
         match cmd {
             0x40..=0x42 | 0x20..=0x22 => {
-                let size = self.size;
+                let size = self.core.mfc.size;
                 if let Err(e) = self.check_transfer(lsa, ea, size, memory) {
                     return ChannelOutcome::Error(e);
                 }
@@ -237,16 +237,16 @@ impl Spu {
                 ChannelOutcome::Done
             }
             0x44..=0x46 | 0x24..=0x26 => {
-                let list = self.eal & LS_MASK;
+                let list = self.core.mfc.eal & LS_MASK;
                 if list & 7 != 0 {
                     return ChannelOutcome::Error(format!(
                         "DMA list address {list:#x} is not 8-byte aligned"
                     ));
                 }
-                if self.size % 8 != 0 || self.size / 8 > 2048 {
+                if self.core.mfc.size % 8 != 0 || self.core.mfc.size / 8 > 2048 {
                     return ChannelOutcome::Error(format!(
                         "DMA list size {} is not a multiple of 8 up to 16384",
-                        self.size
+                        self.core.mfc.size
                     ));
                 }
                 self.run_list(
@@ -254,15 +254,15 @@ impl Spu {
                     tag,
                     lsa,
                     list,
-                    self.size / 8,
-                    self.eah,
+                    self.core.mfc.size / 8,
+                    self.core.mfc.eah,
                     now,
                     memory,
                 )
             }
             0xd0 => {
-                let line = self.eal & !127;
-                let ea = ((self.eah as u64) << 32) | line as u64;
+                let line = self.core.mfc.eal & !127;
+                let ea = ((self.core.mfc.eah as u64) << 32) | line as u64;
                 if lsa & 127 != 0 {
                     return ChannelOutcome::Error(format!(
                         "getllar LS {lsa:#x} not 128-byte aligned"
@@ -284,7 +284,7 @@ impl Spu {
                 ChannelOutcome::Done
             }
             0xb4 | 0xb0 | 0xb8 => {
-                let line = self.eal & !127;
+                let line = self.core.mfc.eal & !127;
                 if lsa & 127 != 0 {
                     return ChannelOutcome::Error(format!(
                         "putllc/putlluc LS {lsa:#x} not 128-byte aligned"
@@ -322,10 +322,10 @@ impl Spu {
                         "sndsig to EA {ea:#x}, which is no SPU's signal-notification register"
                     ));
                 };
-                if self.size != 4 {
+                if self.core.mfc.size != 4 {
                     return ChannelOutcome::Error(format!(
                         "sndsig of {} bytes (a signal is 4 bytes)",
-                        self.size
+                        self.core.mfc.size
                     ));
                 }
                 if lsa & 15 != (ea as u32) & 15 {

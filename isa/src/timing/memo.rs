@@ -325,11 +325,15 @@ impl Memos {
 }
 
 /// Instructions that end a block before them and are never recorded: channel and SPR
-/// access (channel stalls), halts, stops and syncs, unknown words. A register-form hint
+/// access (channel stalls; not the MFC command parameters' latches, which never wait),
+/// halts, stops and syncs, unknown words. A register-form hint
 /// (`hbr`) does not: its target, different from pass to pass, is no part of a record
 /// (see [`Timing::note_hint_target`]).
 pub(super) fn is_terminator(inst: Inst) -> bool {
     use Op::*;
+    if analysis::is_mfc_param_write(inst) {
+        return false;
+    }
     matches!(
         inst.op,
         Rdch | Wrch
