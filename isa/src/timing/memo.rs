@@ -272,6 +272,10 @@ pub(super) struct Memos {
     pub rec: Option<Box<Recording>>,
     pub replay: Option<Replay>,
     pub chain_from: Option<ChainFrom>,
+    /// A [`Timing::block_replay_candidate`] at this address and instruction count found
+    /// this record, not clear of DMA: `issue` right after it issues the instruction alone
+    /// without looking the record up again.
+    pub dma_blocked: Option<(u32, u64)>,
     pub generations: u64,
 }
 
@@ -579,6 +583,10 @@ impl Timing {
         if is_terminator(inst) {
             return self.issue_slow(pc, inst);
         }
+        // The lookup just made for this instruction found its record blocked by DMA.
+        if self.memo.dma_blocked.take() == Some((pc, self.index)) {
+            return self.issue_slow(pc, inst);
+        }
         let idx = Self::slot_index(pc);
         if idx >= self.memo.slots.len() {
             self.memo.slots.resize(0x1_0000, 0);
@@ -848,6 +856,10 @@ impl Timing {
         }
         match self.chained_lookup(idx, pc, inst) {
             Lookup::Hit(id) if self.clear_of_dma(id) => Some((id, self.memo.memos[id].words.len())),
+            Lookup::Hit(_) => {
+                self.memo.dma_blocked = Some((pc, self.index));
+                None
+            }
             _ => None,
         }
     }
