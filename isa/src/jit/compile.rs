@@ -74,6 +74,12 @@ pub(crate) type Entry = unsafe extern "C" fn(*mut Ctx) -> u64;
 pub(crate) const RESULT_TAKEN: u64 = 1 << 48;
 pub(crate) const RESULT_PARTIAL: u64 = 1 << 49;
 
+/// The most registers a self-loop carries from pass to pass as values: beyond the host's
+/// vector registers they are spilled, and the loop's back edge moves every one of them,
+/// which costs more (in compiling above all) than loading them again from the register
+/// file, which the block keeps up to date anyway.
+const MAX_CARRIED: usize = 12;
+
 /// Cranelift's optimisation level for blocks: "none" compiles a room frame's blocks about a
 /// third faster but its code runs slower, a net loss (docs/timing.md, "Block compiler").
 const OPT_LEVEL: &str = "speed";
@@ -542,7 +548,9 @@ impl Compiler {
                 .collect();
             read.sort_unstable();
             read.dedup();
-            t.carried = read;
+            if read.len() <= MAX_CARRIED {
+                t.carried = read;
+            }
         }
         let first: Vec<BlockArg> = (0..t.carried.len())
             .map(|i| {
