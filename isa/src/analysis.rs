@@ -13,8 +13,12 @@ use crate::table::{Op, OperandKind};
 /// core does itself (`machine::exec::MfcParams`), unlike the other channel instructions.
 #[inline(always)]
 pub fn is_mfc_param_write(inst: Inst) -> bool {
-    inst.op == Op::Wrch && (16..=20).contains(&inst.ra)
+    inst.op == Op::Wrch && MFC_PARAM_CHANNELS.contains(&inst.ra)
 }
+
+/// The channels of the MFC command parameters, in the order `machine::exec::MfcParams`
+/// holds them.
+pub const MFC_PARAM_CHANNELS: std::ops::RangeInclusive<u8> = 16..=20;
 
 /// Register usage of one operation's fields.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

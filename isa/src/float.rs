@@ -190,7 +190,7 @@ impl Fpscr {
     }
 
     /// Where in an `Fpscr` the word with the divide-by-zero flags is (for compiled code).
-    #[cfg_attr(not(feature = "jit"), allow(dead_code))]
+    #[cfg_attr(not(block_compiler), allow(dead_code))]
     pub(crate) const DBZ_WORD_OFFSET: usize = std::mem::offset_of!(Fpscr, words) + 3 * 4;
 
     /// Double-precision flags (`dp_flag::*`) of doubleword slot `slot` (0 or 1).

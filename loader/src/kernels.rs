@@ -82,10 +82,11 @@ pub fn prebuilt(
     includes: &[(String, String)],
 ) -> Option<crate::kernel_image::Image> {
     let wanted = crate::kernel_image::sources_hash(name, source, defines, includes);
-    PREBUILT
+    // The hash leads each encoding: only the program found is decoded.
+    let bytes = PREBUILT
         .iter()
-        .filter_map(|bytes| crate::kernel_image::decode(bytes))
-        .find_map(|(hash, image)| (hash == wanted).then_some(image))
+        .find(|bytes| bytes.get(..8) == Some(&wanted.to_le_bytes()[..]))?;
+    crate::kernel_image::decode(bytes).map(|(_, image)| image)
 }
 
 /// The in-memory files a kernel's `.include`s resolve to: `layout.inc` and the modules.

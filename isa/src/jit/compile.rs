@@ -938,7 +938,7 @@ impl Translator<'_> {
             Wrch if crate::analysis::is_mfc_param_write(*inst) => {
                 let rt = self.get(inst.rt);
                 let v = self.preferred(rt);
-                let field = 4 * (inst.ra - 16) as usize;
+                let field = crate::machine::exec::MfcParams::offset(inst.ra);
                 let at = (std::mem::offset_of!(Core, mfc) + field) as i32;
                 self.b
                     .ins()

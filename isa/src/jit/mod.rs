@@ -27,24 +27,24 @@ use std::fmt;
 use std::str::FromStr;
 use std::sync::atomic::{AtomicU8, Ordering};
 
-#[cfg(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64")))]
+#[cfg(block_compiler)]
 mod compile;
-#[cfg(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64")))]
+#[cfg(block_compiler)]
 mod helpers;
 
-#[cfg(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64")))]
+#[cfg(block_compiler)]
 pub use compile::CodeCache;
-#[cfg(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64")))]
+#[cfg(block_compiler)]
 pub(crate) use compile::{
     asked, Blocks, Ctx, Entry, Lookup, MAX_BLOCK, RESULT_PARTIAL, RESULT_TAKEN,
 };
 
 /// No block compiler on this host: nothing to share.
-#[cfg(not(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64"))))]
+#[cfg(not(block_compiler))]
 #[derive(Clone, Default)]
 pub struct CodeCache;
 
-#[cfg(not(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64"))))]
+#[cfg(not(block_compiler))]
 impl CodeCache {
     pub fn new() -> CodeCache {
         CodeCache
@@ -75,10 +75,7 @@ pub enum Engine {
 
 impl Engine {
     /// Whether this host has the block compiler (x86_64 and aarch64, Cranelift's targets).
-    pub const SUPPORTED: bool = cfg!(all(
-        feature = "jit",
-        any(target_arch = "x86_64", target_arch = "aarch64")
-    ));
+    pub const SUPPORTED: bool = cfg!(block_compiler);
 
     /// The compiler where the host has one, the interpreter elsewhere.
     pub const fn host_default() -> Engine {

@@ -8,11 +8,11 @@
 use super::spu::Spu;
 use crate::jit::{CodeCache, Engine, JitStats};
 
-#[cfg(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64")))]
+#[cfg(block_compiler)]
 pub(super) type CompiledBlocks = crate::jit::Blocks;
 
 /// No block compiler on this host.
-#[cfg(not(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64"))))]
+#[cfg(not(block_compiler))]
 pub(super) struct CompiledBlocks;
 
 impl Spu {
@@ -33,11 +33,11 @@ impl Spu {
     /// share is compiled once); drops the blocks compiled so far. Results do not depend on
     /// it, only host time.
     pub fn share_code(&mut self, cache: &CodeCache) {
-        #[cfg(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64")))]
+        #[cfg(block_compiler)]
         {
             self.compiled = Some(Box::new(crate::jit::Blocks::new(cache.clone())));
         }
-        #[cfg(not(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64"))))]
+        #[cfg(not(block_compiler))]
         let _ = cache;
     }
 
@@ -45,13 +45,13 @@ impl Spu {
     /// those of the SPU's code cache (shared by the SPUs given the same one), the
     /// instructions run compiled this SPU's own.
     pub fn jit_stats(&self) -> JitStats {
-        #[cfg(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64")))]
+        #[cfg(block_compiler)]
         let base = self
             .compiled
             .as_ref()
             .map(|b| b.cache().stats())
             .unwrap_or_default();
-        #[cfg(not(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64"))))]
+        #[cfg(not(block_compiler))]
         let base = JitStats::default();
         JitStats {
             compiled_instructions: self.compiled_instructions,
@@ -61,7 +61,7 @@ impl Spu {
     }
 }
 
-#[cfg(not(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64"))))]
+#[cfg(not(block_compiler))]
 impl Spu {
     pub(super) fn run_compiled(&mut self, until: u64) {
         self.run_fast(until)
@@ -78,7 +78,7 @@ impl Spu {
     }
 }
 
-#[cfg(all(feature = "jit", any(target_arch = "x86_64", target_arch = "aarch64")))]
+#[cfg(block_compiler)]
 mod host {
     use super::super::spu::{invalidate_quad, Spu};
     use crate::analysis::is_branch;

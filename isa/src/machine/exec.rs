@@ -1,6 +1,6 @@
 //! Bit-exact semantics of every SPU operation, as one `match` over the decoded operation.
 
-use crate::analysis::is_mfc_param_write;
+use crate::analysis::{is_mfc_param_write, MFC_PARAM_CHANNELS};
 use crate::codec::Inst;
 use crate::float;
 use crate::table::Op;
@@ -120,18 +120,34 @@ pub struct MfcParams {
 }
 
 impl MfcParams {
-    /// Latches `v` into the parameter of `channel` (16..=20).
+    /// Latches `v` into the parameter of `channel` ([`MFC_PARAM_CHANNELS`]).
     #[inline(always)]
     pub fn set(&mut self, channel: u8, v: u32) {
-        match channel {
-            16 => self.lsa = v,
-            17 => self.eah = v,
-            18 => self.eal = v,
-            19 => self.size = v,
+        match Self::index(channel) {
+            0 => self.lsa = v,
+            1 => self.eah = v,
+            2 => self.eal = v,
+            3 => self.size = v,
             _ => self.tag_id = v,
         }
     }
+
+    /// Where in the parameters the one of `channel` lies (for compiled code): the fields
+    /// follow the channels' order.
+    #[cfg_attr(not(block_compiler), allow(dead_code))]
+    pub(crate) const fn offset(channel: u8) -> usize {
+        std::mem::offset_of!(MfcParams, lsa) + 4 * Self::index(channel)
+    }
+
+    const fn index(channel: u8) -> usize {
+        (channel - *MFC_PARAM_CHANNELS.start()) as usize
+    }
 }
+
+const _: () = assert!(
+    MfcParams::offset(*MFC_PARAM_CHANNELS.end()) == std::mem::offset_of!(MfcParams, tag_id)
+        && MfcParams::offset(19) == std::mem::offset_of!(MfcParams, size)
+);
 
 /// Architectural state the semantics act on (the channels and the MFC live outside, but
 /// for the command parameters' latches).

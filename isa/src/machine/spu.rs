@@ -105,7 +105,7 @@ pub struct Spu {
     pub(super) code_quads: Box<[u8]>,
     pub(super) engine: Engine,
     /// Compiled blocks (made on first use with [`Engine::Jit`]).
-    #[cfg_attr(not(feature = "jit"), allow(dead_code))]
+    #[cfg_attr(not(block_compiler), allow(dead_code))]
     pub(super) compiled: Option<Box<CompiledBlocks>>,
     /// Instructions executed by compiled code.
     pub(super) compiled_instructions: u64,
@@ -113,7 +113,7 @@ pub struct Spu {
     /// pass (their timing record applied once for them all).
     pub(super) steady_passes: u64,
     /// The last block ran only in part (timing off, compiled engine).
-    #[cfg_attr(not(feature = "jit"), allow(dead_code))]
+    #[cfg_attr(not(block_compiler), allow(dead_code))]
     pub(super) block_cut: bool,
     pub(super) pc: u32,
     pub(super) instructions: u64,

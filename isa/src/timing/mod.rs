@@ -21,7 +21,7 @@ mod memo;
 
 pub use crate::stall::{StallCause, STALL_CLASSES};
 pub use memo::ends_block;
-#[cfg_attr(not(feature = "jit"), allow(unused_imports))]
+#[cfg_attr(not(block_compiler), allow(unused_imports))]
 pub(crate) use memo::{may_fall_through, MAX_BLOCK};
 
 /// Settings of the timing model.
