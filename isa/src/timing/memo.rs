@@ -620,17 +620,17 @@ impl Timing {
         // Record this block.
         self.memo.rec = Some(Box::new(Recording {
             start: pc,
-            words: Vec::new(),
+            words: Vec::with_capacity(MAX_BLOCK),
             entry: Box::new(self.entry()),
             dp_changed: false,
             hint_changed: false,
             hint_dynamic: false,
-            steps: Vec::new(),
+            steps: Vec::with_capacity(MAX_BLOCK),
             probes: Vec::new(),
             probes_done: 0,
             after_branch: AfterBranch::NoBranch,
         }));
-        self.profile.log = Some(Vec::new());
+        self.profile.log = Some(Vec::with_capacity(MAX_BLOCK));
         self.issue_recorded(pc, inst)
     }
 
@@ -1220,6 +1220,10 @@ impl Timing {
             return;
         }
         let mut rec = rec;
+        // Recorded into room for the longest block, kept at their size.
+        rec.steps.shrink_to_fit();
+        rec.words.shrink_to_fit();
+        log.shrink_to_fit();
         let entry_miss_stall = take_entry_miss_stall(&mut rec.steps, &mut log, rec.entry.miss_pc);
         // Live-in registers: read before the block writes them.
         let mut written = [false; 128];
