@@ -277,6 +277,9 @@ pub(super) struct Memos {
     /// without looking the record up again.
     pub dma_blocked: Option<(u32, u64)>,
     pub generations: u64,
+    /// The buffer the next recording's steps go into: room for the longest block, kept
+    /// from recording to recording (each record keeps a copy of its own size).
+    pub spare_steps: Vec<Step>,
 }
 
 impl Memos {
@@ -625,7 +628,12 @@ impl Timing {
             dp_changed: false,
             hint_changed: false,
             hint_dynamic: false,
-            steps: Vec::with_capacity(MAX_BLOCK),
+            steps: {
+                let mut steps = std::mem::take(&mut self.memo.spare_steps);
+                steps.clear();
+                steps.reserve(MAX_BLOCK);
+                steps
+            },
             probes: Vec::new(),
             probes_done: 0,
             after_branch: AfterBranch::NoBranch,
@@ -1216,12 +1224,14 @@ impl Timing {
             return;
         };
         let mut log = self.profile.log.take().unwrap_or_default();
+        let mut rec = rec;
         if rec.steps.is_empty() {
+            self.memo.spare_steps = std::mem::take(&mut rec.steps);
             return;
         }
-        let mut rec = rec;
         // Recorded into room for the longest block, kept at their size.
-        rec.steps.shrink_to_fit();
+        let steps: Vec<Step> = rec.steps.drain(..).collect();
+        self.memo.spare_steps = std::mem::replace(&mut rec.steps, steps);
         rec.words.shrink_to_fit();
         log.shrink_to_fit();
         let entry_miss_stall = take_entry_miss_stall(&mut rec.steps, &mut log, rec.entry.miss_pc);
