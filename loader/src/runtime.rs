@@ -55,11 +55,16 @@ pub struct FrameRun {
     pub jit: spu_isa::jit::JitStats,
 }
 
-/// What a frame records beyond its image and statistics.
-#[derive(Clone, Copy, Debug, Default)]
+/// What a frame records beyond its image and statistics, and what it may take over from
+/// earlier frames.
+#[derive(Clone, Default)]
 pub struct FrameOptions {
     /// Log every SPU's MFC commands and channel waits (for heat maps and timelines).
     pub event_log: bool,
+    /// Blocks compiled by earlier frames of the process, to use and add to (`spu paper`);
+    /// `None`: the frame's SPEs start a cache of their own. The frame's results do not
+    /// depend on it, only how much runs compiled and how soon.
+    pub code: Option<spu_isa::jit::CodeCache>,
 }
 
 /// The kernel configuration of a frame, as `--stats` reports it.
@@ -354,7 +359,8 @@ pub fn render_frame_with(
     let regions = traffic_regions(staged, layout);
     let memory = MainMemory::new(layout.memory_image(staged));
     // The SPEs run the same kernel: each block is compiled once for all of them.
-    let code = spu_isa::jit::CodeCache::new();
+    let code = options.code.clone().unwrap_or_default();
+    let compiled_before = code.stats();
     let mut spus: Vec<Spu> = (0..spes)
         .map(|i| {
             let mut spu = Spu::new(i as u32);
@@ -509,9 +515,18 @@ pub fn render_frame_with(
         symbols: program.symbols.clone(),
         kernel_image: program.image.clone(),
         config: KernelConfig::new(layout, timing),
-        jit: spu_isa::jit::JitStats {
-            compiled_instructions: spus_report.iter().map(|s| s.compiled_instructions).sum(),
-            ..code.stats()
+        jit: {
+            // This frame's compiling only, where the cache is older than the frame.
+            let all = code.stats();
+            spu_isa::jit::JitStats {
+                blocks: all.blocks.saturating_sub(compiled_before.blocks),
+                block_instructions: all
+                    .block_instructions
+                    .saturating_sub(compiled_before.block_instructions),
+                compile_seconds: all.compile_seconds - compiled_before.compile_seconds,
+                compiled_instructions: spus_report.iter().map(|s| s.compiled_instructions).sum(),
+                ..all
+            }
         },
         spus: spus_report,
     })

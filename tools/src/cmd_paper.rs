@@ -259,6 +259,13 @@ fn run_jobs(jobs: &[Job], dir: &Path, threads: usize) {
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let next = AtomicUsize::new(0);
+    // Each scene is prepared once and kept while runs of it remain.
+    crate::prepared::keep();
+    let mut left: BTreeMap<&str, usize> = BTreeMap::new();
+    for job in jobs {
+        *left.entry(job.scene_arg.as_str()).or_default() += 1;
+    }
+    let left = Mutex::new(left);
     let running: Mutex<BTreeSet<String>> = Mutex::new(BTreeSet::new());
     let failures: Mutex<Vec<String>> = Mutex::new(Vec::new());
     let show = |running: &BTreeSet<String>| {
@@ -277,6 +284,13 @@ fn run_jobs(jobs: &[Job], dir: &Path, threads: usize) {
                 if let Err(e) = run_job(job, dir) {
                     if let Ok(mut f) = failures.lock() {
                         f.push(format!("{name}: {e}"));
+                    }
+                }
+                if let Ok(mut left) = left.lock() {
+                    let n = left.entry(job.scene_arg.as_str()).or_default();
+                    *n = n.saturating_sub(1);
+                    if *n == 0 {
+                        crate::prepared::forget(&job.scene_arg);
                     }
                 }
                 if let Ok(mut r) = running.lock() {

@@ -5,13 +5,12 @@
 use crate::exit::{self, Error, Status};
 use crate::options;
 use spu_loader::camera::Camera;
-use spu_loader::frame::{FrameLayout, SCENE_BASE};
+use spu_loader::frame::FrameLayout;
 use spu_loader::kernel_abi::{decode_colour_buffer, ShadingBlock, SHADE_SHADOWS, SHADE_SIMPLE};
 use spu_loader::kernel_abi::{decode_frame_buffer, decode_frame_buffer_colours, PixelResult, MISS};
 use spu_loader::reference::Reference;
 use spu_loader::runtime::FrameError;
 use spu_loader::shading::{self, Light, ShadeMode};
-use spu_loader::{procedural, Bvh, BvhConfig, Scene, StagedScene};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -160,14 +159,6 @@ fn latency_ns(text: &str) -> Result<f64, String> {
     Ok(ns)
 }
 
-/// Loads a built-in scene by name, or a file.
-pub fn load_scene(name: &str) -> Result<Scene, String> {
-    if let Some(scene) = procedural::by_name(name) {
-        return Ok(scene);
-    }
-    Scene::load(name).map_err(|e| e.to_string())
-}
-
 /// Per-pixel comparison with the reference: (pixels, mismatches); the first few
 /// mismatches are printed.
 fn validate(
@@ -288,15 +279,11 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     args.compile.apply();
     let camera = check_options(&args)?;
     let started = Instant::now();
-    let mut scene = load_scene(&args.scene)?;
-    if let Some(camera) = camera {
-        scene.camera = camera;
-    }
-    let bvh = Bvh::build(&scene, &BvhConfig::default());
-    let staged = StagedScene::new(&scene, &bvh, SCENE_BASE)?;
+    let prepared = crate::prepared::prepare(&args.scene, args.camera.as_deref(), camera)?;
+    let (scene, staged) = (&prepared.scene, &prepared.staged);
     let basis = scene.camera.basis(args.width, args.height);
     let layout = FrameLayout::new(
-        &staged,
+        staged,
         &basis,
         args.width,
         args.height,
@@ -306,14 +293,14 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     )?
     .with_kernel_options(args.assoc, args.sht)?;
     let lights = if args.lights.is_empty() {
-        shading::default_lights(&scene)
+        shading::default_lights(scene)
     } else {
         args.lights.clone()
     };
     let layout = match args.shade {
         ShadeMode::None => layout,
         mode => layout.with_shading(
-            &staged,
+            staged,
             ShadingBlock {
                 mode: if mode == ShadeMode::Shadows {
                     SHADE_SHADOWS
@@ -352,7 +339,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     }
     let sim_started = Instant::now();
     let run = spu_loader::runtime::render_frame_with(
-        &staged,
+        staged,
         &layout,
         args.spes,
         threads,
@@ -365,6 +352,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         args.max_cycles,
         &spu_loader::runtime::FrameOptions {
             event_log: args.heatmap.is_some() || args.trace.is_some(),
+            code: crate::prepared::code(),
         },
         &mut |taken, _| bar.set_position(taken as u64),
     );
@@ -394,7 +382,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     let mut shadow_edges = None;
     let mut edge_ties = 0;
     let validation = if validating {
-        let reference = Reference::from_staged(&staged);
+        let reference = Reference::from_staged(staged);
         let hits = reference.render(&scene.camera, args.width, args.height, threads);
         if run.colour_buffer.is_some() {
             let expected = reference.shade_image(

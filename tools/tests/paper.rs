@@ -41,6 +41,18 @@ fn ours(t: &serde_json::Value) -> Vec<f64> {
         .collect()
 }
 
+/// Removes what depends on the host rather than the simulation: how much ran compiled.
+fn drop_host_figures(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(map) => {
+            map.retain(|k, _| !k.contains("compiled") && !k.contains("jit"));
+            map.values_mut().for_each(drop_host_figures);
+        }
+        serde_json::Value::Array(items) => items.iter_mut().for_each(drop_host_figures),
+        _ => {}
+    }
+}
+
 /// The quick report on the built-in scenes (at a smaller size, to keep CI short).
 #[test]
 fn quick_report_has_every_table_and_the_figure() {
@@ -163,6 +175,49 @@ fn quick_report_has_every_table_and_the_figure() {
             .expect("--stats FILE");
         assert!(Path::new(stats).is_file(), "{stats}");
         assert!(line.contains(" render ") && line.contains("--width 128"));
+    }
+    // The run's frames shared prepared scenes and compiled blocks; a frame of each scene
+    // rendered on its own, as the listed command, gives the same statistics and image.
+    let alone = dir.join("alone");
+    std::fs::create_dir_all(&alone).unwrap();
+    for scene in ["room", "conference", "beetle"] {
+        let line = lines
+            .iter()
+            .find(|l| l.contains(&format!("--scene {scene} ")) && l.contains("--shade shadows"))
+            .unwrap_or_else(|| panic!("a {scene} frame with shadows is listed"));
+        let mut words: Vec<String> = line.split_whitespace().skip(1).map(String::from).collect();
+        // (the run's file, this frame's) for the statistics and the image
+        let mut stats = (PathBuf::new(), PathBuf::new());
+        let mut image = (PathBuf::new(), PathBuf::new());
+        for i in 1..words.len() {
+            let file = alone.join(Path::new(&words[i]).file_name().unwrap_or_default());
+            let own = file.display().to_string();
+            match words[i - 1].as_str() {
+                "--stats" => stats = (std::mem::replace(&mut words[i], own).into(), file),
+                "-o" | "--output" => image = (std::mem::replace(&mut words[i], own).into(), file),
+                "--heatmap" | "--trace" | "--profile" => words[i] = own,
+                _ => {}
+            }
+        }
+        let args: Vec<&str> = words.iter().map(String::as_str).collect();
+        let run = spu(&args);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        assert_eq!(
+            std::fs::read(&image.0).unwrap(),
+            std::fs::read(&image.1).unwrap(),
+            "{scene}: the image"
+        );
+        let read = |path: &Path| {
+            let mut v: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+            drop_host_figures(&mut v);
+            v
+        };
+        assert_eq!(read(&stats.0), read(&stats.1), "{scene}: the statistics");
     }
     // ... and makes the jobs folder, so the listed commands run in a fresh --out
     let fresh = dir.join("fresh");
