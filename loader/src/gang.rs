@@ -38,7 +38,8 @@ const YIELD: Duration = Duration::from_micros(500);
 /// Runs quanta until `next` says done. `next` gets the SPUs, main memory and each SPU's
 /// outcome of the quantum just run (`None` before the first), applies the quantum and
 /// says what comes next. `threads` host threads (the caller's among them) share the
-/// running SPUs, in index order.
+/// running SPUs: each takes the next SPU not taken yet in the quantum until none is left,
+/// so a thread whose SPUs ran fast takes more of them.
 pub fn run_quanta<E>(
     spus: &mut [Spu],
     memory: &mut MainMemory,
@@ -77,22 +78,20 @@ pub fn run_quanta<E>(
         until: AtomicU64::new(0),
         quit: AtomicBool::new(false),
         pending: AtomicUsize::new(0),
+        next_spu: AtomicUsize::new(0),
         main: std::thread::current(),
         panicked: Mutex::new(None),
     };
     std::thread::scope(|scope| {
         let handles: Vec<Thread> = (0..helpers)
-            .map(|h| {
+            .map(|_| {
                 let shared = &shared;
-                scope
-                    .spawn(move || shared.helper(h + 1, helpers + 1))
-                    .thread()
-                    .clone()
+                scope.spawn(move || shared.helper()).thread().clone()
             })
             .collect();
         let result = catch_unwind(AssertUnwindSafe(|| {
             while let Next::Run { until, running } = plan {
-                let outcomes = shared.quantum(until, &running, helpers + 1, &handles);
+                let outcomes = shared.quantum(until, &running, &handles);
                 // SAFETY: every helper finished the quantum; until the next one the
                 // SPUs and memory are this thread's alone.
                 let (spus, memory) = unsafe { shared.all() };
@@ -115,9 +114,8 @@ struct Slot {
     outcome: UnsafeCell<Option<StopReason>>,
 }
 
-/// What the threads share. Phases alternate: during a quantum, thread `t` of `n` touches
-/// only the SPUs of index `t` modulo `n` that run (and their slots), and memory only to
-/// read it; between quanta, only the caller touches anything. The `quantum` counter
+/// What the threads share. Phases alternate: during a quantum, a thread touches only the
+/// SPUs it took from `next_spu` (and their slots), and memory only to read it; between quanta, only the caller touches anything. The `quantum` counter
 /// (release, acquire) opens a quantum, `pending` reaching 0 (release, acquire) closes it.
 struct Shared {
     spus: *mut Spu,
@@ -129,6 +127,8 @@ struct Shared {
     quit: AtomicBool,
     /// Helpers still running the current quantum.
     pending: AtomicUsize,
+    /// The next SPU a thread takes in the current quantum.
+    next_spu: AtomicUsize,
     main: Thread,
     /// A helper's panic, for the caller to go on with.
     panicked: Mutex<Option<Box<dyn Any + Send>>>,
@@ -140,13 +140,7 @@ unsafe impl Send for Shared {}
 
 impl Shared {
     /// Runs one quantum on all threads; the outcomes of the SPUs that ran.
-    fn quantum(
-        &self,
-        until: u64,
-        running: &[bool],
-        threads: usize,
-        helpers: &[Thread],
-    ) -> Vec<Option<StopReason>> {
+    fn quantum(&self, until: u64, running: &[bool], helpers: &[Thread]) -> Vec<Option<StopReason>> {
         for (slot, &run) in self.slots.iter().zip(running) {
             // SAFETY: between quanta the caller alone touches the slots.
             unsafe {
@@ -156,12 +150,13 @@ impl Shared {
         }
         self.until.store(until, Ordering::Relaxed);
         self.pending.store(helpers.len(), Ordering::Relaxed);
+        self.next_spu.store(0, Ordering::Relaxed);
         self.quantum.fetch_add(1, Ordering::Release);
         for t in helpers {
             t.unpark();
         }
         // SAFETY: thread 0's share, during the quantum.
-        unsafe { self.run_share(0, threads, until) };
+        unsafe { self.run_share(until) };
         wait_until(|| self.pending.load(Ordering::Acquire) == 0);
         if let Some(panic) = self
             .panicked
@@ -178,16 +173,21 @@ impl Shared {
             .collect()
     }
 
-    /// Runs thread `t`'s share of the quantum (of `threads`).
+    /// Runs SPUs not taken yet in the quantum until none is left.
     ///
     /// # Safety
-    /// Only during a quantum, by thread `t`.
-    unsafe fn run_share(&self, t: usize, threads: usize, until: u64) {
+    /// Only during a quantum.
+    unsafe fn run_share(&self, until: u64) {
         // SAFETY: during a quantum memory is only read.
         let memory = unsafe { &*self.memory };
-        for i in (t..self.count).step_by(threads) {
+        loop {
+            let i = self.next_spu.fetch_add(1, Ordering::Relaxed);
+            if i >= self.count {
+                break;
+            }
             let slot = &self.slots[i];
-            // SAFETY: SPU `i` and its slot are thread `t`'s during the quantum.
+            // SAFETY: SPU `i` and its slot are this thread's during the quantum: it took
+            // `i` from `next_spu`, which hands each index out once per quantum.
             unsafe {
                 if *slot.run.get() {
                     *slot.outcome.get() = (*self.spus.add(i)).run_quantum(memory, until);
@@ -196,8 +196,8 @@ impl Shared {
         }
     }
 
-    /// A helper thread (`t` of `threads`): each quantum, its share.
-    fn helper(&self, t: usize, threads: usize) {
+    /// A helper thread: each quantum, its share.
+    fn helper(&self) {
         let mut seen = 0;
         loop {
             wait_until(|| {
@@ -208,10 +208,8 @@ impl Shared {
             }
             seen = self.quantum.load(Ordering::Acquire);
             let until = self.until.load(Ordering::Relaxed);
-            // SAFETY: a quantum is open and this is thread `t`.
-            let run = catch_unwind(AssertUnwindSafe(|| unsafe {
-                self.run_share(t, threads, until)
-            }));
+            // SAFETY: a quantum is open.
+            let run = catch_unwind(AssertUnwindSafe(|| unsafe { self.run_share(until) }));
             if let Err(panic) = run {
                 *self.panicked.lock().unwrap_or_else(|e| e.into_inner()) = Some(panic);
             }
