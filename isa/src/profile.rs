@@ -66,7 +66,7 @@ fn add_dep(
 }
 
 /// Whole-run counters, as IBM's full-system simulator reported them per SPU.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Totals {
     /// Instructions executed, including no-ops.
     pub instructions: u64,
@@ -131,7 +131,7 @@ impl Totals {
 
     /// `self - earlier` for the counters the timing model increments.
     pub(crate) fn since(&self, earlier: &Totals) -> Totals {
-        let mut d = self.clone();
+        let mut d = *self;
         d.scale_sub(earlier);
         d.spus = 0;
         d

@@ -16,7 +16,7 @@ use crate::profile::LogEntry;
 pub(crate) const MAX_BLOCK: usize = 256;
 pub(super) const NEVER: u32 = u32::MAX;
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Copy, Debug)]
 pub(super) struct Step {
     pub issue_rel: i64,
     pub write: StepWrite,
@@ -564,7 +564,7 @@ impl Timing {
                 self.fetch.probe,
                 self.fetch.next_ready,
             ),
-            totals: self.profile.totals.clone(),
+            totals: self.profile.totals,
         }
     }
 
@@ -1230,7 +1230,8 @@ impl Timing {
             return;
         }
         // Recorded into room for the longest block, kept at their size.
-        let steps: Vec<Step> = rec.steps.drain(..).collect();
+        let steps = rec.steps.to_vec();
+        rec.steps.clear();
         self.memo.spare_steps = std::mem::replace(&mut rec.steps, steps);
         rec.words.shrink_to_fit();
         log.shrink_to_fit();
