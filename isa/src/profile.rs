@@ -65,6 +65,43 @@ fn add_dep(
     }
 }
 
+/// The counters of `Totals` `$t` (all but `spus`) as an array, each read as `$($r)* $t.field`
+/// (values, or `&mut` places): the one list of them.
+macro_rules! counter_list {
+    ($t:ident) => {
+        counter_list!(@ $t [])
+    };
+    ($t:ident, &mut) => {
+        counter_list!(@ $t [&mut])
+    };
+    (@ $t:ident [$($r:tt)*]) => {{
+        let [s0, s1, s2, s3, s4, s5] = $($r)* $t.stall;
+        let [d0, d1, d2, d3, d4, d5, d6, d7, d8, d9, d10, d11] = $($r)* $t.dep_by_unit;
+        [
+            $($r)* $t.instructions,
+            $($r)* $t.nops,
+            $($r)* $t.cycles,
+            $($r)* $t.dual_cycles,
+            $($r)* $t.branches_taken,
+            $($r)* $t.branches_not_taken,
+            $($r)* $t.branch_misses,
+            $($r)* $t.hints,
+            $($r)* $t.hint_hits,
+            s0, s1, s2, s3, s4, s5,
+            d0, d1, d2, d3, d4, d5, d6, d7, d8, d9, d10, d11,
+            $($r)* $t.pair_dependency,
+            $($r)* $t.ls_contention,
+            $($r)* $t.dma_contention,
+            $($r)* $t.idle_cycles,
+        ]
+    }};
+}
+
+/// How many counters [`Totals::counters`] lists.
+pub(crate) const COUNTERS: usize = 9 + STALL_CLASSES + 12 + 4;
+/// Where [`Totals::counters`] lists `stall[0]`.
+pub(crate) const STALL_COUNTERS_AT: usize = 9;
+
 /// Whole-run counters, as IBM's full-system simulator reported them per SPU.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Totals {
@@ -129,80 +166,39 @@ impl Totals {
         }
     }
 
-    /// `self - earlier` for the counters the timing model increments.
-    pub(crate) fn since(&self, earlier: &Totals) -> Totals {
-        let mut d = *self;
-        d.scale_sub(earlier);
-        d.spus = 0;
-        d
+    /// `self - earlier` for the counters the timing model increments, in the order of
+    /// [`Totals::counters`], when each fits 32 bits (as within one block it does).
+    pub(crate) fn counters_since(&self, earlier: &Totals) -> Option<[u32; COUNTERS]> {
+        let (now, then) = (self.counters(), earlier.counters());
+        let mut d = [0u32; COUNTERS];
+        for i in 0..COUNTERS {
+            d[i] = u32::try_from(now[i] - then[i]).ok()?;
+        }
+        Some(d)
     }
 
-    fn scale_sub(&mut self, o: &Totals) {
-        self.instructions -= o.instructions;
-        self.nops -= o.nops;
-        self.cycles -= o.cycles;
-        self.dual_cycles -= o.dual_cycles;
-        self.branches_taken -= o.branches_taken;
-        self.branches_not_taken -= o.branches_not_taken;
-        self.branch_misses -= o.branch_misses;
-        self.hints -= o.hints;
-        self.hint_hits -= o.hint_hits;
-        for i in 0..STALL_CLASSES {
-            self.stall[i] -= o.stall[i];
+    /// Adds `times` × `d` (counters in the order of [`Totals::counters`]).
+    pub(crate) fn add_counters(&mut self, d: &[u32; COUNTERS], times: u64) {
+        for (c, &v) in self.counters_mut().into_iter().zip(d) {
+            *c += v as u64 * times;
         }
-        for i in 0..12 {
-            self.dep_by_unit[i] -= o.dep_by_unit[i];
-        }
-        self.pair_dependency -= o.pair_dependency;
-        self.ls_contention -= o.ls_contention;
-        self.dma_contention -= o.dma_contention;
-        self.idle_cycles -= o.idle_cycles;
-    }
-
-    /// Adds `times` × `d`.
-    pub(crate) fn add_scaled(&mut self, d: &Totals, times: u64) {
-        self.instructions += d.instructions * times;
-        self.nops += d.nops * times;
-        self.cycles += d.cycles * times;
-        self.dual_cycles += d.dual_cycles * times;
-        self.branches_taken += d.branches_taken * times;
-        self.branches_not_taken += d.branches_not_taken * times;
-        self.branch_misses += d.branch_misses * times;
-        self.hints += d.hints * times;
-        self.hint_hits += d.hint_hits * times;
-        for i in 0..STALL_CLASSES {
-            self.stall[i] += d.stall[i] * times;
-        }
-        for i in 0..12 {
-            self.dep_by_unit[i] += d.dep_by_unit[i] * times;
-        }
-        self.pair_dependency += d.pair_dependency * times;
-        self.ls_contention += d.ls_contention * times;
-        self.dma_contention += d.dma_contention * times;
-        self.idle_cycles += d.idle_cycles * times;
     }
 
     fn merge(&mut self, o: &Totals) {
-        self.instructions += o.instructions;
-        self.nops += o.nops;
-        self.cycles += o.cycles;
-        self.dual_cycles += o.dual_cycles;
-        self.branches_taken += o.branches_taken;
-        self.branches_not_taken += o.branches_not_taken;
-        self.branch_misses += o.branch_misses;
-        self.hints += o.hints;
-        self.hint_hits += o.hint_hits;
-        for i in 0..STALL_CLASSES {
-            self.stall[i] += o.stall[i];
+        for (c, v) in self.counters_mut().into_iter().zip(o.counters()) {
+            *c += v;
         }
-        for i in 0..12 {
-            self.dep_by_unit[i] += o.dep_by_unit[i];
-        }
-        self.pair_dependency += o.pair_dependency;
-        self.ls_contention += o.ls_contention;
-        self.dma_contention += o.dma_contention;
-        self.idle_cycles += o.idle_cycles;
         self.spus += o.spus;
+    }
+
+    /// Every counter the timing model increments (all but `spus`), in one order.
+    pub(crate) fn counters(&self) -> [u64; COUNTERS] {
+        counter_list!(self)
+    }
+
+    /// [`Totals::counters`], to change them.
+    fn counters_mut(&mut self) -> [&mut u64; COUNTERS] {
+        counter_list!(self, &mut)
     }
 
     /// The totals in the layout of IBM's simulator (`spu stats`).
@@ -957,5 +953,56 @@ mod listing {
             "instructions": insts,
         });
         format!("{report}\n")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Totals whose every counter differs: counter `i` (in [`Totals::counters`]' order)
+    /// holds `base + i`.
+    fn numbered(base: u64) -> Totals {
+        let mut t = Totals::default();
+        for (i, c) in t.counters_mut().into_iter().enumerate() {
+            *c = base + i as u64;
+        }
+        t.spus = 1;
+        t
+    }
+
+    #[test]
+    fn counters_list_every_field_once_in_one_order() {
+        let t = numbered(100);
+        assert_eq!(t.counters(), std::array::from_fn(|i| 100 + i as u64));
+        // each field is in the list: a field left out would still be 0
+        assert_eq!(
+            (t.instructions, t.hint_hits, t.idle_cycles, t.spus),
+            (100, 108, 130, 1)
+        );
+        assert_eq!(t.stall, std::array::from_fn(|i| 109 + i as u64));
+        assert_eq!(t.dep_by_unit, std::array::from_fn(|i| 115 + i as u64));
+        assert_eq!(t.counters()[STALL_COUNTERS_AT], t.stall[0]);
+    }
+
+    #[test]
+    fn a_steps_counters_add_back_to_the_later_totals() {
+        let (earlier, later) = (numbered(5), numbered(1000));
+        let d = later.counters_since(&earlier).expect("fits 32 bits");
+        assert_eq!(d, [995; COUNTERS]);
+        let mut t = earlier;
+        t.add_counters(&d, 1);
+        assert_eq!(t, later);
+        t.add_counters(&d, 2);
+        assert_eq!(t.counters(), std::array::from_fn(|i| 1000 + i as u64 + 2 * 995));
+        // a difference beyond 32 bits is not a step's
+        let mut far = later;
+        far.cycles += 1 << 32;
+        assert_eq!(far.counters_since(&earlier), None);
+        // merging adds every counter and the SPUs
+        let mut m = earlier;
+        m.merge(&later);
+        assert_eq!(m.counters(), std::array::from_fn(|i| 1005 + 2 * i as u64));
+        assert_eq!(m.spus, 2);
     }
 }

@@ -10,7 +10,7 @@
 //! address, a hook) first brings the state up to date at that point, so the result is exact.
 
 use super::*;
-use crate::profile::LogEntry;
+use crate::profile::{LogEntry, COUNTERS, STALL_COUNTERS_AT};
 
 /// The longest block recorded (and compiled).
 pub(crate) const MAX_BLOCK: usize = 256;
@@ -22,7 +22,9 @@ pub(super) struct Step {
     pub write: StepWrite,
     pub exit: Exit,
     pub log_end: usize,
-    pub totals: Totals,
+    /// The profile's counters since the block's entry ([`Totals::counters`]), in 32 bits:
+    /// a record holds one such step per instruction.
+    pub totals: [u32; COUNTERS],
 }
 
 /// The state after a step that is not in the registers' readiness (times relative to the
@@ -179,6 +181,8 @@ pub(super) struct Recording {
     pub probes_done: usize,
     /// Where the record stands after its last step, when that is a conditional branch.
     pub after_branch: AfterBranch,
+    /// A counter since the entry outgrew a step's 32 bits: the record is not kept.
+    pub overflowed: bool,
 }
 
 /// A recording whose last step is a conditional branch: it goes on past the branch
@@ -306,7 +310,8 @@ impl Memos {
         for m in &self.memos {
             if m.hits > 0 {
                 p.apply_log(&m.log, m.hits);
-                p.totals.add_scaled(&m.steps.last().unwrap().totals, m.hits);
+                p.totals
+                    .add_counters(&m.steps.last().unwrap().totals, m.hits);
             }
             add_partial_hits(m, p);
         }
@@ -314,7 +319,7 @@ impl Memos {
             let m = &self.memos[id];
             let st = &m.steps[k - 1];
             p.apply_log(&m.log[..st.log_end], 1);
-            p.totals.add_scaled(&st.totals, 1);
+            p.totals.add_counters(&st.totals, 1);
         }
     }
 
@@ -323,7 +328,8 @@ impl Memos {
         let m = &mut self.memos[id];
         if m.hits > 0 {
             p.apply_log(&m.log, m.hits);
-            p.totals.add_scaled(&m.steps.last().unwrap().totals, m.hits);
+            p.totals
+                .add_counters(&m.steps.last().unwrap().totals, m.hits);
             m.hits = 0;
         }
         add_partial_hits(m, p);
@@ -383,7 +389,7 @@ fn take_entry_miss_stall(steps: &mut [Step], log: &mut Vec<LogEntry>, miss_pc: u
     log.drain(at..at + 2);
     for st in steps.iter_mut() {
         st.log_end -= 2;
-        st.totals.stall[StallCause::BranchMiss.index()] -= n;
+        st.totals[STALL_COUNTERS_AT + StallCause::BranchMiss.index()] -= n as u32;
     }
     n
 }
@@ -393,7 +399,7 @@ fn add_partial_hits(m: &Memo, p: &mut Profile) {
     for (st, &n) in m.steps.iter().zip(&m.partial_hits) {
         if n > 0 {
             p.apply_log(&m.log[..st.log_end], n);
-            p.totals.add_scaled(&st.totals, n);
+            p.totals.add_counters(&st.totals, n);
         }
     }
 }
@@ -637,6 +643,7 @@ impl Timing {
             probes: Vec::new(),
             probes_done: 0,
             after_branch: AfterBranch::NoBranch,
+            overflowed: false,
         }));
         self.profile.log = Some(Vec::with_capacity(MAX_BLOCK));
         self.issue_recorded(pc, inst)
@@ -1146,6 +1153,8 @@ impl Timing {
             return;
         };
         rec.probes_done = rec.probes.len();
+        let totals = self.profile.totals.counters_since(&rec.entry.totals);
+        rec.overflowed |= totals.is_none();
         let e = &rec.entry;
         let now = e.now as i64;
         let class = self.classes[inst.op as usize];
@@ -1196,7 +1205,7 @@ impl Timing {
                 record_base_rel: self.record.base as i64 - now,
             },
             log_end: self.profile.log.as_ref().map_or(0, |l| l.len()),
-            totals: self.profile.totals.since(&e.totals),
+            totals: totals.unwrap_or([0; COUNTERS]),
         };
         rec.words.push(inst.word);
         rec.steps.push(step);
@@ -1225,7 +1234,8 @@ impl Timing {
         };
         let mut log = self.profile.log.take().unwrap_or_default();
         let mut rec = rec;
-        if rec.steps.is_empty() {
+        if rec.steps.is_empty() || rec.overflowed {
+            rec.steps.clear();
             self.memo.spare_steps = std::mem::take(&mut rec.steps);
             return;
         }
