@@ -994,7 +994,10 @@ mod tests {
         t.add_counters(&d, 1);
         assert_eq!(t, later);
         t.add_counters(&d, 2);
-        assert_eq!(t.counters(), std::array::from_fn(|i| 1000 + i as u64 + 2 * 995));
+        assert_eq!(
+            t.counters(),
+            std::array::from_fn(|i| 1000 + i as u64 + 2 * 995)
+        );
         // a difference beyond 32 bits is not a step's
         let mut far = later;
         far.cycles += 1 << 32;
