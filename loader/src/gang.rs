@@ -115,8 +115,9 @@ struct Slot {
 }
 
 /// What the threads share. Phases alternate: during a quantum, a thread touches only the
-/// SPUs it took from `next_spu` (and their slots), and memory only to read it; between quanta, only the caller touches anything. The `quantum` counter
-/// (release, acquire) opens a quantum, `pending` reaching 0 (release, acquire) closes it.
+/// SPUs it took from `next_spu` (and their slots), and memory only to read it; between
+/// quanta, only the caller touches anything. The `quantum` counter (release, acquire)
+/// opens a quantum, `pending` reaching 0 (release, acquire) closes it.
 struct Shared {
     spus: *mut Spu,
     count: usize,

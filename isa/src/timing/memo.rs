@@ -635,8 +635,8 @@ impl Timing {
             hint_changed: false,
             hint_dynamic: false,
             steps: {
+                // Empty: a recording hands its buffer back cleared.
                 let mut steps = std::mem::take(&mut self.memo.spare_steps);
-                steps.clear();
                 steps.reserve(MAX_BLOCK);
                 steps
             },
