@@ -14,6 +14,7 @@
 //!   kernel output.
 //! - [`stats`]: a frame's statistics as typed JSON (`spu render --stats`).
 //! - [`timeline`]: when each tile and packet was traced, from the SPUs' event logs.
+//! - [`ppe`]: how `spu run` starts a program and serves its PPE-assisted library calls.
 
 pub mod bvh;
 pub mod camera;
@@ -36,6 +37,7 @@ mod gang;
 pub mod kernel_abi;
 pub mod kernel_image;
 pub mod kernels;
+pub mod ppe;
 pub mod runtime;
 pub mod stats;
 pub mod timeline;
