@@ -740,3 +740,27 @@ fn without_root_no_file_opens() {
     assert_eq!(err, "open: Permission denied\n");
     assert_eq!(code, 0);
 }
+
+/// The calls are served alike by the interpreter, the block compiler, the timing model
+/// and the tracer.
+#[test]
+fn every_engine_serves_the_calls() {
+    let d = dir("engines");
+    build(&d, ARGV);
+    let want = "argc=2\nargv[0]=prog.elf\nargv[1]=x\n";
+    for mode in [
+        ["--engine", "interp"],
+        ["--engine", "jit"],
+        ["--timing", "--max-cycles=100000000"],
+    ] {
+        let (out, _, code) = spu(&["run", "-q", mode[0], mode[1], "prog.elf", "--", "x"], &d);
+        assert_eq!((out.as_str(), code), (want, 3), "{mode:?}");
+    }
+    let (out, _, code) = spu(&["run", "--trace", "prog.elf", "--", "x"], &d);
+    let printed: String = out
+        .lines()
+        .filter(|l| l.starts_with("arg"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert_eq!((printed.as_str(), code), (want, 3));
+}

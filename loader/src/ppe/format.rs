@@ -497,3 +497,134 @@ fn hex_float(a: f64, precision: Option<usize>, upper: bool) -> Vec<u8> {
         t.into_bytes()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Local store with the format at 0x1000 and one 16-byte slot per argument from
+    /// 0x2000, jumping 32 bytes at 0x2000 + 16 * `regs` (where the register save area
+    /// ends and the caller's stack begins).
+    fn run(fmt: &str, args: &[[u8; 16]], regs: usize) -> Result<String, String> {
+        let mut ls = vec![0u8; 0x40000];
+        ls[0x1000..0x1000 + fmt.len()].copy_from_slice(fmt.as_bytes());
+        ls[0x3000..0x3006].copy_from_slice(b"hello\0");
+        let mut at = 0x2000;
+        for (i, a) in args.iter().enumerate() {
+            if i == regs {
+                at += 32;
+            }
+            ls[at..at + 16].copy_from_slice(a);
+            at += 16;
+        }
+        let ls = Ls::new(&ls);
+        let fmt = ls.cstr(0x1000, "fmt").unwrap();
+        let mut va = VaList {
+            next: 0x2000,
+            caller_stack: 0x2000 + 16 * regs as u32,
+        };
+        match format(&ls, &fmt, &mut va) {
+            Ok(t) => Ok(String::from_utf8(t).unwrap()),
+            Err(FormatError::Fault(f)) => Err(f.0),
+            Err(FormatError::Overflow) => Err("overflow".into()),
+        }
+    }
+
+    fn int(v: i32) -> [u8; 16] {
+        let mut q = [0u8; 16];
+        q[..4].copy_from_slice(&v.to_be_bytes());
+        q
+    }
+
+    fn dbl(v: f64) -> [u8; 16] {
+        let mut q = [0u8; 16];
+        q[..8].copy_from_slice(&v.to_be_bytes());
+        q
+    }
+
+    #[test]
+    fn the_list_skips_the_callers_link_area() {
+        let args = [int(1), int(2), int(3), int(4)];
+        assert_eq!(run("%d %d %d %d", &args, 2).unwrap(), "1 2 3 4");
+        assert_eq!(
+            run(
+                "%*d|%-*d|%.*f",
+                &[int(4), int(7), int(3), int(8), int(1), dbl(2.25)],
+                3
+            )
+            .unwrap(),
+            "   7|8  |2.2"
+        );
+    }
+
+    #[test]
+    fn conversions_as_glibc_prints_them() {
+        let cases: &[(&str, [u8; 16], &str)] = &[
+            ("%g", dbl(100000.0), "100000"),
+            ("%g", dbl(1e6), "1e+06"),
+            ("%g", dbl(0.0001), "0.0001"),
+            ("%#g", dbl(1.0), "1.00000"),
+            ("%.0f", dbl(2.5), "2"),
+            ("%.0f", dbl(3.5), "4"),
+            ("%e", dbl(0.0), "0.000000e+00"),
+            ("%f", dbl(-0.0), "-0.000000"),
+            ("%+.2e", dbl(12345.678), "+1.23e+04"),
+            ("%a", dbl(0.0), "0x0p+0"),
+            ("%a", dbl(0.5), "0x1p-1"),
+            ("%.1a", dbl(1.96875), "0x2.0p+0"),
+            ("%A", dbl(10.0), "0X1.4P+3"),
+            ("%f", dbl(f64::INFINITY), "inf"),
+            ("%5.1F", dbl(f64::NAN), "  NAN"),
+            ("%08.3x", int(0x1f), "     01f"),
+            ("%-05d|", int(-3), "-3   |"),
+            ("% d", int(5), " 5"),
+            ("%hd", int(0x12345), "9029"),
+            ("%#o", int(8), "010"),
+            ("%#x", int(0), "0"),
+            ("%.0d|", int(0), "|"),
+            ("%lu", int(-1), "4294967295"),
+            ("%10s|", int(0x3000), "     hello|"),
+            ("%-7.3s|", int(0x3000), "hel    |"),
+            ("%p", int(0), "(nil)"),
+            ("%y", int(0), "%y"),
+        ];
+        for (fmt, arg, want) in cases {
+            assert_eq!(run(fmt, &[*arg], 72).unwrap(), *want, "{fmt}");
+        }
+    }
+
+    #[test]
+    fn vector_conversions() {
+        let mut q = [0u8; 16];
+        for (i, b) in q.iter_mut().enumerate() {
+            *b = i as u8 * 17;
+        }
+        assert_eq!(
+            run("%vx", &[q], 72).unwrap(),
+            "0 11 22 33 44 55 66 77 88 99 aa bb cc dd ee ff"
+        );
+        assert_eq!(
+            run("%;vhd", &[q], 72).unwrap(),
+            "17;8755;17493;26231;-30567;-21829;-13091;-4353"
+        );
+        assert_eq!(
+            run("%_vllx", &[q], 72).unwrap(),
+            "11223344556677_8899aabbccddeeff"
+        );
+        let mut d = [0u8; 16];
+        d[..8].copy_from_slice(&1.5f64.to_be_bytes());
+        d[8..].copy_from_slice(&(-2.0f64).to_be_bytes());
+        assert_eq!(run("%vlf", &[d], 72).unwrap(), "1.500000 -2.000000");
+        let mut c = [b'a'; 16];
+        c[15] = b'z';
+        assert_eq!(run("%vc", &[c], 72).unwrap(), "aaaaaaaaaaaaaaaz");
+    }
+
+    #[test]
+    fn refusals() {
+        assert!(run("%n", &[int(0x3000)], 72).unwrap_err().contains("%n"));
+        assert_eq!(run("%2000000d", &[int(1)], 72).unwrap_err(), "overflow");
+        let e = run("%s", &[int(0x40000)], 72).unwrap_err();
+        assert!(e.contains("outside local store"), "{e}");
+    }
+}
