@@ -144,6 +144,12 @@
         PPE_VCALL   vprintf, 37, 1
         PPE_VCALL   vsnprintf, 39, 3
         PPE_VCALL   vsprintf, 40, 2
+        PPE_VACALL  fscanf, 36, 2
+        PPE_VACALL  scanf, 38, 1
+        PPE_VACALL  sscanf, 41, 2
+        PPE_VCALL   vfscanf, 36, 2
+        PPE_VCALL   vscanf, 38, 1
+        PPE_VCALL   vsscanf, 41, 2
 
         # POSIX.1 (libspe2's SPE_POSIX1_* opcodes; flags and errno values are Linux's)
         PPE_CALL    close, POSIX1, 2, 1

@@ -764,3 +764,45 @@ fn every_engine_serves_the_calls() {
         .collect();
     assert_eq!((printed.as_str(), code), (want, 3));
 }
+
+/// scanf from the host's standard input (what it looks at and does not take stays for
+/// the next read), sscanf from a string.
+#[test]
+fn scanf_family() {
+    let src = program(
+        ".Lf: .string \"%d %s\"\n.Lo: .string \"n=%d s=%s c=%d rest=%s|\\n\"\n\
+         .Ls: .string \"1,2\"\n.Lsf: .string \"%d,%d\"\n.Lso: .string \"sscanf=%d a=%d b=%d\\n\"\n\
+         \x20       .data\n        .align 4\nn: .space 16\nw: .space 32\nrest: .space 32\n",
+        "        ila $3, .Lf\n        ila $4, n\n        ila $5, w\n        brsl $lr, scanf\n\
+         \x20       brsl $lr, getchar\n        ori $80, $3, 0\n\
+         \x20       ila $3, rest\n        il $4, 32\n        ila $5, stdin\n        lqd $5, 0($5)\n\
+         \x20       brsl $lr, fgets\n\
+         \x20       ila $3, .Lo\n        ila $4, n\n        lqd $4, 0($4)\n        ila $5, w\n\
+         \x20       ori $6, $80, 0\n        ila $7, rest\n        brsl $lr, printf\n\
+         \x20       ila $3, .Ls\n        ila $4, .Lsf\n        ila $5, n\n        ila $6, w\n\
+         \x20       brsl $lr, sscanf\n        ori $4, $3, 0\n        ila $5, n\n        lqd $5, 0($5)\n\
+         \x20       ila $6, w\n        lqd $6, 0($6)\n        ila $3, .Lso\n        brsl $lr, printf\n",
+    );
+    let d = dir("scanf");
+    build(&d, &src);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_spu"))
+        .args(["run", "-q", "prog.elf"])
+        .current_dir(&d)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    use std::io::Write;
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"  17 words\nrest")
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout),
+        "n=17 s=words c=10 rest=rest|\nsscanf=2 a=1 b=2\n"
+    );
+    assert_eq!(out.status.code(), Some(0));
+}

@@ -5,7 +5,7 @@
 //! side), so output interleaves in the order the program made it.
 
 use super::format::{self, FormatError, VaList};
-use super::{errno, io_errno, Args, Fault, Host, Reply, Writes};
+use super::{errno, io_errno, scan, Args, Fault, Host, Reply, Writes};
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom, Write};
 
@@ -546,6 +546,60 @@ pub fn call(host: &mut Host, op: u32, a: &Args, w: &mut Writes) -> Result<Option
                     Reply::ok(len)
                 }
                 Err(e) => Reply::err(e),
+            }
+        }
+        // vfscanf(stream, fmt, va), vscanf(fmt, va), vsscanf(str, fmt, va)
+        36 | 38 | 41 => {
+            let (fmt_arg, va_at) = if op == 38 { (0, 1) } else { (1, 2) };
+            let fmt = a.ls.cstr(a.word(fmt_arg)?, "a scanf format")?;
+            let va_base = a.base + 16 * va_at;
+            let word = |k: u32| -> Result<u32, Fault> {
+                let q = a.ls.quad(va_base + 16 * k, "the call's va_list")?;
+                Ok(u32::from_be_bytes([q[0], q[1], q[2], q[3]]))
+            };
+            let mut va = VaList {
+                next: word(0)?,
+                caller_stack: word(1)?,
+            };
+            if op == 41 {
+                let text = a.ls.cstr(a.word(0)?, "sscanf's string")?;
+                let mut bytes = text.into_iter();
+                let mut next = move || bytes.next();
+                let mut input = scan::Input::new(&mut next);
+                let n = scan::scan(&a.ls, &fmt, &mut va, &mut input, w)?;
+                Reply::ok(n as u32)
+            } else {
+                let n = if op == 38 { 1 } else { a.word(0)? };
+                let st = match s.get(n) {
+                    Ok(st) => st,
+                    Err(e) => {
+                        return Ok(Some(Reply {
+                            rc: eof(),
+                            errno: e,
+                        }))
+                    }
+                };
+                let mut failed = None;
+                let (n, left) = {
+                    let mut next = || match st.getc() {
+                        Ok(c) => c,
+                        Err(e) => {
+                            failed = Some(e);
+                            None
+                        }
+                    };
+                    let mut input = scan::Input::new(&mut next);
+                    let n = scan::scan(&a.ls, &fmt, &mut va, &mut input, w)?;
+                    (n, input.left_over())
+                };
+                if let Some(c) = left {
+                    st.unget.push(c);
+                    st.eof = false;
+                }
+                Reply {
+                    rc: n as u32,
+                    errno: failed.unwrap_or(0),
+                }
             }
         }
         _ => {

@@ -17,6 +17,7 @@ pub mod format;
 pub mod posix1;
 pub mod runtime;
 pub mod sandbox;
+pub mod scan;
 pub mod start;
 
 use spu_isa::machine::Spu;
