@@ -806,3 +806,24 @@ fn scanf_family() {
     );
     assert_eq!(out.status.code(), Some(0));
 }
+
+/// The runtime's memory and string functions.
+#[test]
+fn memory_and_string_functions() {
+    let src = program(
+        ".Labc: .string \"abc\"\n.Labd: .string \"abd\"\n.Lo: .string \"%s %d %d %s\\n\"\n\
+         \x20       .data\n        .align 4\nb2: .space 32\n",
+        "        ila $3, buf\n        il $4, 120\n        il $5, 5\n        brsl $lr, memset\n\
+         \x20       ila $3, buf + 5\n        ila $4, .Labc\n        il $5, 4\n        brsl $lr, memcpy\n\
+         \x20       ila $3, b2\n        ila $4, buf\n        brsl $lr, strcpy\n\
+         \x20       ila $3, b2 + 1\n        ila $4, b2\n        il $5, 8\n        brsl $lr, memmove\n\
+         \x20       ila $3, buf\n        brsl $lr, strlen\n        ori $80, $3, 0\n\
+         \x20       ila $3, .Labc\n        ila $4, .Labd\n        brsl $lr, strcmp\n\
+         \x20       ori $6, $3, 0\n        ori $5, $80, 0\n        ila $4, buf\n        ila $7, b2\n\
+         \x20       ila $3, .Lo\n        brsl $lr, printf\n",
+    );
+    let (out, err, code) = run_program("string", &src, &[]);
+    assert_eq!(out, "xxxxxabc 8 -1 xxxxxxabc\n");
+    assert_eq!(err, "");
+    assert_eq!(code, 0);
+}

@@ -16,6 +16,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         "kernels/runtime/calls.s",
         include_str!("../../../kernels/runtime/calls.s"),
     ),
+    (
+        "kernels/runtime/string.s",
+        include_str!("../../../kernels/runtime/string.s"),
+    ),
 ];
 
 /// The runtime assembled into relocatable objects, to be linked before the program's.
