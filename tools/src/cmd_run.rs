@@ -79,8 +79,11 @@ pub fn load(file: &PathBuf) -> Result<(Spu, Vec<(String, u32)>), String> {
     load_program(file).map(|(spu, symbols, _)| (spu, symbols))
 }
 
+/// A loaded program: the SPU, its symbols and where its code and data end.
+type Loaded = (Spu, Vec<(String, u32)>, u32);
+
 /// Loads FILE into a fresh SPU; also where its code and data end.
-fn load_program(file: &PathBuf) -> Result<(Spu, Vec<(String, u32)>, u32), String> {
+fn load_program(file: &std::path::Path) -> Result<Loaded, String> {
     let name = file.display();
     let mut spu = Spu::new(0);
     let mut symbols = Vec::new();
