@@ -48,7 +48,7 @@ pub struct Args {
     quiet: bool,
     /// Print the registers and the argv region the program starts with
     /// (docs/running-programs.md).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "json")]
     dump_entry: bool,
     /// Start as libspe2's `spe_context_run` does with these argp and envp (`$4`, `$5`;
     /// `$3` = speid) instead of as `elfspe` does with argc and argv.
