@@ -791,6 +791,30 @@ pub fn spu_include() -> String {
     out
 }
 
+/// A stretch of the kernel's code the statistics report apart (CPI, stalls): from label
+/// `from` up to label `to`, both in the kernel's symbols.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CodeSection {
+    pub from: &'static str,
+    pub to: &'static str,
+}
+
+/// The traversal steps (`modules/traverse.s` and its miss paths, up to the leaves).
+pub const TRAVERSAL: CodeSection = CodeSection {
+    from: "trav",
+    to: "leaf",
+};
+/// The leaves' triangle tests (`modules/triangle.s` and its miss paths).
+pub const INTERSECTION: CodeSection = CodeSection {
+    from: "leaf",
+    to: "packet_done",
+};
+/// The shading module (`modules/shade.s` and the files it composes), with `SHADE`.
+pub const SHADING: CodeSection = CodeSection {
+    from: "shade_packet",
+    to: "shade_end",
+};
+
 /// One decoded pixel of the frame buffer.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PixelResult {
@@ -1034,6 +1058,31 @@ mod tests {
                         "{file} sets {name}, which layout.inc generates: `{line}`"
                     );
                 }
+            }
+        }
+    }
+
+    /// The statistics' code sections are stretches of the kernels they measure: both
+    /// labels are symbols of the (shaded) primary kernel, in order.
+    #[test]
+    fn code_sections_are_stretches_of_the_kernel() {
+        let (source, name) = crate::kernels::frame_program(false);
+        for (defines, sections) in [
+            (&[][..], &[TRAVERSAL, INTERSECTION][..]),
+            (&[("SHADE", 1)][..], &[TRAVERSAL, INTERSECTION, SHADING][..]),
+        ] {
+            let program = crate::runtime::assemble_kernel_with(source, name, defines)
+                .unwrap_or_else(|e| panic!("{e}"));
+            let at = |label: &str| {
+                program
+                    .symbols
+                    .iter()
+                    .find(|(n, _)| n == label)
+                    .unwrap_or_else(|| panic!("no {label} in {name} {defines:?}"))
+                    .1
+            };
+            for s in sections {
+                assert!(at(s.from) < at(s.to), "{s:?}");
             }
         }
     }

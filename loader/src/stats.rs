@@ -5,6 +5,7 @@
 //! Keys added later get `#[serde(default)]` so that stats files written before them still
 //! load.
 
+use crate::kernel_abi::{INTERSECTION, SHADING, TRAVERSAL};
 use crate::runtime::FrameRun;
 use serde::{Deserialize, Serialize};
 use spu_isa::profile::RangeSum;
@@ -434,8 +435,8 @@ impl FrameStats {
             table2: Table2::new(run, rays, clock_ghz),
             config: run.config.clone(),
             caches: CacheStats::new(run),
-            traversal: section(run, "trav", "leaf"),
-            intersection: section(run, "leaf", "packet_done"),
+            traversal: section(run, TRAVERSAL.from, TRAVERSAL.to),
+            intersection: section(run, INTERSECTION.from, INTERSECTION.to),
             totals: run.profile.as_ref().map(|p| ProfileTotals::new(&p.totals)),
             fps: if seconds > 0.0 {
                 rounded(1.0 / seconds, 3)
@@ -451,7 +452,7 @@ impl FrameStats {
             shading: if run.shade_counters.is_empty() {
                 None
             } else {
-                section(run, "shade_packet", "shade_end")
+                section(run, SHADING.from, SHADING.to)
             },
         }
     }

@@ -343,8 +343,9 @@ pub fn check_register_contract<T: PartialEq + std::fmt::Debug>(
             "output ${r} depends on an undeclared register"
         );
     }
-    assert_eq!(
-        first.1, second.1,
+    // (not the outcomes themselves: local-store dumps are long)
+    assert!(
+        first.1 == second.1,
         "the outcome depends on an undeclared register"
     );
     first
