@@ -20,7 +20,7 @@
         .if     SH_IRR_G != SH_IRR_R + 256 || SH_IRR_B != SH_IRR_R + 512
         .error  "the irradiance sums are read from one base"
         .endif
-        .if     SH_DEFER + 12 * 32 > SH_VSTAGE || SH_VSTAGE + 12 * 64 != SH_AREA_BYTES
+        .if     SH_DEFER + SH_IN_FLIGHT * 32 > SH_VSTAGE || SH_VSTAGE + SH_IN_FLIGHT * 64 != SH_AREA_BYTES
         .error  "the vertices in flight do not fit"
         .endif
         .set SH_TAG, 5                  # fetches; colour output on 6 and 7

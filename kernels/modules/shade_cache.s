@@ -9,6 +9,21 @@
 # (sh_vertex_miss, from SH_VERTEX in the i-set's slow path: queued into a staging slot,
 # landed by SH_LAND) and a triangle record the traversal's cache does not hold
 # (sh_tri_miss, from SH_FETCH: queued, waited for before the records are read).
+#
+# sh_vertex_miss takes the area, the vertex, its tag's and line's addresses, the return,
+# the lane's normal offset in the area and the vertex records' EA, and leaves its staging
+# slot and the vertex in flight; sh_tri_miss the area, the record, where it goes and the
+# return (tests/src/lib.rs's module harness checks both):
+#
+# Registers of sh_vertex_miss:
+#   in:       $66 $81 $83 $84 $88 $89 $100 ZERO
+#   out:      $82 $94
+#   clobbers: $71..$77 $85..$87 $90 $125..$127
+#
+# Registers of sh_tri_miss:
+#   in:       $66 $80 $82 $88 ZERO EATRIS
+#   out:      -
+#   clobbers: $81 $83 $84
 
         # ---- the first call: fetch the block, splat the lights, clear counters and caches
 .Lsh_first:

@@ -66,6 +66,15 @@ back:   il      $67, 0xc0
         wrch    $MFC_WrTagUpdate, $67
         rdch    $67, $MFC_RdTagStat
         stop    0x2000
+# back from a miss routine once its fetch (tag 5) is in, through a register it clobbers
+        .irp    R, 84, 85
+back\R:  il      $\R, 0x20
+        wrch    $MFC_WrTagMask, $\R
+        il      $\R, 2
+        wrch    $MFC_WrTagUpdate, $\R
+        rdch    $\R, $MFC_RdTagStat
+        stop    0x2000
+        .endr
 shadow_rays:                                  # shadows are another module's (shadow_module.rs)
         bi      $127
         .include "modules/shade.s"
@@ -354,6 +363,106 @@ fn shade_module_keeps_its_register_contract() {
     });
     assert_eq!(counters.packets, Counter(3));
     assert!(counters.groups.0 > 0 && colours.iter().flatten().any(|&c| c != 0xff));
+}
+
+/// The caches' miss routines alone (`modules/shade_cache.s`' register contracts), with
+/// everything outside their inputs poisoned two ways: sh_tri_miss queues a triangle
+/// record into its slot and counts it; sh_vertex_miss queues a vertex record into the
+/// next staging slot, marks its tag in flight, leaves the copy for SH_LAND and counts it.
+#[test]
+fn shade_cache_misses_keep_their_register_contracts() {
+    let (scene, staged, _) = room_setup();
+    let new = || harness(&staged, &scene, block(vec![], 6, 6));
+    let h = new();
+    let value = |name: &str| h.h.value(name);
+    let (stage, stats, vtags, vdata, vstage, defer, dcount, nrm) = (
+        value("SH_STAGE"),
+        value("SH_STATS"),
+        value("SH_VTAGS"),
+        value("SH_VDATA"),
+        value("SH_VSTAGE"),
+        value("SH_DEFER"),
+        value("SH_DCOUNT"),
+        value("SH_NRM"),
+    );
+    let ea_vertices = h.layout.shading.as_ref().unwrap().block.ea_vertices;
+    let area = h.h.sym("area");
+
+    let contract = RegisterContract::of_module("modules/shade_cache.s", Some("sh_tri_miss"));
+    let (_, (record, count)) = check_register_contract(&contract, |poison| {
+        let mut h = new().h;
+        for (r, v) in [
+            (66, area),
+            (80, 20),
+            (82, area + stage + 64),
+            (88, h.sym("back84")),
+        ] {
+            h.spu.set_reg(r, [v, 0, 0, 0]);
+        }
+        poison(&mut h.spu);
+        assert_eq!(
+            h.run_at(h.sym("sh_tri_miss"), 1_000_000),
+            StopReason::Stop(0x2000)
+        );
+        let count = h.word(area + stats + h.value("SHS_TMISS"));
+        let record = h.bytes(area + stage + 64, 64);
+        (h.spu, (record, count))
+    });
+    let mut expected = [0u8; 64];
+    staged.triangles[20].write_be(&mut expected);
+    assert_eq!((record, count), (expected.to_vec(), 1));
+
+    let contract = RegisterContract::of_module("modules/shade_cache.s", Some("sh_vertex_miss"));
+    let (vertex, entry) = (37u32, 37u32 % 64);
+    let (tag, line, lane) = (
+        area + vtags + 16 * entry,
+        area + vdata + 64 * entry,
+        nrm + 64 + 16,
+    );
+    let (spu, outcome) = check_register_contract(&contract, |poison| {
+        let mut h = new().h;
+        for (r, v) in [
+            (66, area),
+            (81, vertex),
+            (83, tag),
+            (84, line),
+            (88, h.sym("back85")),
+            (89, lane),
+            (100, ea_vertices),
+        ] {
+            h.spu.set_reg(r, [v, 0, 0, 0]);
+        }
+        poison(&mut h.spu);
+        assert_eq!(
+            h.run_at(h.sym("sh_vertex_miss"), 1_000_000),
+            StopReason::Stop(0x2000)
+        );
+        let outcome = (
+            h.word(area + dcount),
+            h.bytes(area + defer, 32),
+            h.word(tag),
+            h.word(area + stats + h.value("SHS_VMISS")),
+            h.bytes(area + vstage, 64),
+        );
+        (h.spu, outcome)
+    });
+    let (bytes, copy, tag_word, misses, slot) = outcome;
+    assert_eq!(spu.reg(82)[0], area + vstage, "the first staging slot");
+    assert_eq!(
+        spu.reg(94)[0],
+        vertex | 0x8000_0000,
+        "the vertex, in flight"
+    );
+    assert_eq!((bytes, tag_word, misses), (32, vertex | 0x8000_0000, 1));
+    let word = |at: usize| u32::from_be_bytes(copy[at..at + 4].try_into().unwrap());
+    assert_eq!(
+        [word(0), word(4), word(8), word(12), word(16)],
+        [area + vstage, area + lane, tag, vertex, line],
+        "the copy: source, lane, tag, vertex; line"
+    );
+    let mut record = [0u8; 64];
+    staged.vertices[vertex as usize].write_be(&mut record);
+    assert_eq!(slot, record.to_vec(), "the vertex record, fetched");
 }
 
 /// A ray through the edge two triangles share: pixel (1021, 164) of the 1024x1024 room
