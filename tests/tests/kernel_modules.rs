@@ -50,7 +50,7 @@ impl FrameState for Harness {
         self.splat("STKBASE", stack);
         self.splat("STK", stack);
         let tag = self.value("CONTEXT_TAG0");
-        self.write_words(rays + self.value("CTX_TAG"), &[tag, 1 << tag, 0, 0]);
+        self.write_words(rays + self.value("CTX_TAG"), [tag, 1 << tag, 0, 0]);
         self.var("V_NCTX1", [u32::MAX; 4]);
         self.var("V_ASSOC4", [0; 4]);
     }
@@ -58,7 +58,7 @@ impl FrameState for Harness {
     /// Writes a cold variable (`vars+V_*`).
     fn var(&mut self, name: &str, value: [u32; 4]) {
         let addr = self.sym("vars") + self.value(name);
-        self.write_words(addr, &value);
+        self.write_words(addr, value);
     }
 
     /// An address in the current packet context.
@@ -74,7 +74,7 @@ impl FrameState for Harness {
         self.splat("TDATA", ttags + lines * 16);
         self.splat("TMASK", lines - 1);
         self.splat("EATRIS", ea);
-        self.write_words(ttags, &vec![u32::MAX; 4 * lines as usize]);
+        self.write_words(ttags, vec![u32::MAX; 4 * lines as usize]);
     }
 
     /// Named registers, then local-store regions (a label, or an offset `CTX_*` in the
@@ -179,8 +179,8 @@ fn triangle_test_on_a_packet() {
         h.write_words(dx + 256 * (3 + axis as u32), &recip);
     }
     let t_addr = h.ctx("CTX_RAY_T");
-    h.write_words(t_addr, &[0x7149_f2ca; 64]);
-    h.write_words(h.ctx("CTX_RAY_ID"), &[u32::MAX; 64]);
+    h.write_words(t_addr, [0x7149_f2ca; 64]);
+    h.write_words(h.ctx("CTX_RAY_ID"), [u32::MAX; 64]);
     let corners: Vec<u32> = (0..3)
         .flat_map(|axis| [0, 7, 56, 63].map(|i| rays[i][axis].to_bits()))
         .collect();
@@ -253,7 +253,7 @@ fn bvh_cache(h: &mut Harness, lines: u32, ea: u32) {
     h.splat("BDATA48", bdata + 48);
     h.splat("BMASK64", (lines - 1) * 64);
     h.splat("EANODES", ea);
-    h.write_words(btags, &vec![u32::MAX; 4 * lines as usize]);
+    h.write_words(btags, vec![u32::MAX; 4 * lines as usize]);
 }
 
 #[test]

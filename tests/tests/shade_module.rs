@@ -413,7 +413,8 @@ fn shade_cache_misses_keep_their_register_contracts() {
     assert_eq!((record, count), (expected.to_vec(), 1));
 
     let contract = RegisterContract::of_module("modules/shade_cache.s", Some("sh_vertex_miss"));
-    let (vertex, entry) = (37u32, 37u32 % 64);
+    let vertex = 37u32;
+    let entry = vertex % 64; // the vertex cache has 2^6 lines
     let (tag, line, lane) = (
         area + vtags + 16 * entry,
         area + vdata + 64 * entry,
