@@ -430,3 +430,55 @@ fn bvh_miss_handler_takes_the_steps_lookup() {
         [6 * 32, 1 << 4, 9, (3 << 2) << 4]
     );
 }
+
+/// The triangle cache's one-context prefetch miss alone (`modules/tri_cache.s`), entered
+/// as the leaf's prefetch pass leaves a missing triangle, everything outside its register
+/// contract poisoned two ways: the record is fetched straight into way 0 (the tag first),
+/// the miss counted, and the pass goes on with a fetch in flight ($78 = 1).
+#[test]
+fn triangle_prefetch_miss_takes_the_pass_lookup() {
+    let contract = spu_tests::RegisterContract::of_module("modules/tri_cache.s", Some(".Lpf_one"));
+    let (index, ea) = (21u32, 0x4000u32);
+    let record: Vec<u8> = (0..64u8).map(|b| b ^ 0x5a).collect();
+    // .Lpf_next waits for the fetch (through a register the handler clobbers) and stops;
+    // the handler's local label is reached through a global one
+    let extra = "
+harness_pf_one: br .Lpf_one
+.Lpf_next:
+        il      $87, 1 << CONTEXT_TAG0
+        wrch    $MFC_WrTagMask, $87
+        il      $87, 2
+        wrch    $MFC_WrTagUpdate, $87
+        rdch    $87, $MFC_RdTagStat
+        stop    0x2200
+";
+    let (spu, (exit, outcome)) = spu_tests::check_register_contract(&contract, |poison| {
+        let mut h = Harness::with_stubs(
+            &["modules/tri_cache.s", "modules/lru.s"],
+            &[".Lpf", ".Ltri_hit", "leaf_cull", "leaf_probe", "suspend"],
+            extra,
+        );
+        h.frame_constants();
+        assert!(h.memory.write_bytes((ea + 64 * index) as u64, &record));
+        h.triangle_cache(256, 128, ea);
+        let contexts = h.reg("TDATA")[0] + 128 * 64;
+        h.context(contexts);
+        let line = index & 127;
+        for (r, v) in [(76, index), (79, 64), (80, line), (81, 16 * line)] {
+            h.spu.set_reg(r, [v, 0, 0, 0]);
+        }
+        poison(&mut h.spu);
+        let exit = h.run_from("harness_pf_one");
+        let ttags = h.reg("TTAGS")[0];
+        let tdata = h.reg("TDATA")[0];
+        let mut out = h.bytes(ttags + 16 * line, 16);
+        out.extend(h.bytes(tdata + 64 * line, 64));
+        out.extend(h.bytes(h.sym("vars") + h.value("V_TMISS"), 4));
+        (h.spu, (exit, out))
+    });
+    assert_eq!(exit, "stop 0x2200", "back to the pass");
+    assert_eq!(spu.reg(78)[0], 1, "a fetch is in flight");
+    assert_eq!(outcome[..4], index.to_be_bytes(), "the tag");
+    assert_eq!(outcome[16..80], record[..], "the record, in way 0");
+    assert_eq!(outcome[80..84], 1u32.to_be_bytes(), "one miss counted");
+}
