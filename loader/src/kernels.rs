@@ -58,6 +58,26 @@ pub const MODULES: &[(&str, &str)] = &[
         include_str!("../../kernels/modules/shade.s"),
     ),
     (
+        "modules/shade_area.s",
+        include_str!("../../kernels/modules/shade_area.s"),
+    ),
+    (
+        "modules/shade_iset.s",
+        include_str!("../../kernels/modules/shade_iset.s"),
+    ),
+    (
+        "modules/shade_light.s",
+        include_str!("../../kernels/modules/shade_light.s"),
+    ),
+    (
+        "modules/shade_iset_slow.s",
+        include_str!("../../kernels/modules/shade_iset_slow.s"),
+    ),
+    (
+        "modules/shade_cache.s",
+        include_str!("../../kernels/modules/shade_cache.s"),
+    ),
+    (
         "modules/shadow.s",
         include_str!("../../kernels/modules/shadow.s"),
     ),
