@@ -16,41 +16,45 @@ pub(crate) struct Line {
 /// space, and the text after a `#` that starts a comment. A `#` or `/*` inside a string is
 /// string, not comment.
 pub(crate) fn split_comment(s: &str) -> (String, Option<&str>) {
-    let mut out = String::new();
-    let mut chars = s.char_indices().peekable();
+    // A byte scan: every character that matters is ASCII, and no byte of a multi-byte
+    // character is, so the slices copied always end on character boundaries.
+    let b = s.as_bytes();
+    let mut out = String::with_capacity(s.len());
+    let (mut start, mut i) = (0, 0);
     let mut in_str = false;
-    while let Some((i, c)) = chars.next() {
+    while i < b.len() {
+        let c = b[i];
         if in_str {
-            out.push(c);
-            if c == '\\' {
-                if let Some((_, n)) = chars.next() {
-                    out.push(n);
-                }
-            } else if c == '"' {
-                in_str = false;
+            match c {
+                // An escape takes the next character with it (`\"` does not end the string).
+                b'\\' => i += 1,
+                b'"' => in_str = false,
+                _ => {}
             }
+            i += 1;
             continue;
         }
         match c {
-            '"' => {
-                in_str = true;
-                out.push(c);
+            b'"' => in_str = true,
+            b'#' => {
+                out.push_str(&s[start..i]);
+                return (out, Some(&s[i + 1..]));
             }
-            '#' => return (out, Some(&s[i + 1..])),
-            '/' if chars.peek().map(|p| p.1) == Some('*') => {
-                chars.next();
-                let mut prev = ' ';
-                for (_, d) in chars.by_ref() {
-                    if prev == '*' && d == '/' {
-                        break;
-                    }
-                    prev = d;
-                }
+            b'/' if b.get(i + 1) == Some(&b'*') => {
+                out.push_str(&s[start..i]);
                 out.push(' ');
+                i = match s[i + 2..].find("*/") {
+                    Some(k) => i + 2 + k + 2,
+                    None => b.len(),
+                };
+                start = i;
+                continue;
             }
-            _ => out.push(c),
+            _ => {}
         }
+        i += 1;
     }
+    out.push_str(&s[start..]);
     (out, None)
 }
 
@@ -156,6 +160,9 @@ pub(crate) fn first_word(text: &str) -> String {
 /// Blanks `/* */` comments (which may span lines) with spaces, keeping every newline so
 /// line and column numbers stay those of the source. Strings and `#` comments are skipped.
 pub(crate) fn blank_block_comments(text: &str) -> String {
+    if !text.contains("/*") {
+        return text.to_string();
+    }
     let mut out = String::with_capacity(text.len());
     let mut chars = text.chars().peekable();
     let (mut in_block, mut in_str, mut in_line_comment) = (false, false, false);
@@ -250,4 +257,42 @@ pub(crate) fn read_source(path: &std::path::Path) -> Result<String, String> {
         return Err(format!("larger than {} MiB", MAX_SOURCE >> 20));
     }
     Ok(bytes_as_text(&bytes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn comments_end_where_gas_ends_them() {
+        assert_eq!(
+            split_comment(r##" .ascii "a#b\"#c" # note"##),
+            (r##" .ascii "a#b\"#c" "##.to_string(), Some(" note"))
+        );
+        assert_eq!(
+            split_comment("ai $3, $3, 1 /* one */ # more"),
+            ("ai $3, $3, 1   ".to_string(), Some(" more"))
+        );
+        // An unclosed `/*` runs to the end of the line; `/*/` does not close it.
+        assert_eq!(
+            split_comment("il $3, 1 /*/ x"),
+            ("il $3, 1  ".to_string(), None)
+        );
+        // Characters past ASCII (bytes as gas reads them) pass through.
+        assert_eq!(
+            split_comment(".ascii \"é\\é#\" #é"),
+            (".ascii \"é\\é#\" ".to_string(), Some("é"))
+        );
+        assert_eq!(strip_comment("/**/nop"), " nop");
+        assert_eq!(first_word("  .IRP\tR, 1 # x"), ".irp");
+    }
+
+    #[test]
+    fn block_comments_keep_lines_and_columns() {
+        let text = "a /* x\n y */ b\n\"/*\" c # /*\nd";
+        assert_eq!(
+            blank_block_comments(text),
+            "a     \n      b\n\"/*\" c # /*\nd"
+        );
+    }
 }

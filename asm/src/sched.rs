@@ -251,6 +251,9 @@ fn expand_irp(lines: &[&str]) -> Result<Vec<(String, usize)>, SchedError> {
 
 /// The lines with `/* */` comments (which may span lines) blanked, one for each line.
 fn code_lines(lines: &[&str]) -> Vec<String> {
+    if !lines.iter().any(|l| l.contains("/*")) {
+        return lines.iter().map(|l| l.to_string()).collect();
+    }
     let blanked = blank_block_comments(&lines.join("\n"));
     let mut out: Vec<String> = blanked.split('\n').map(str::to_string).collect();
     out.resize(lines.len(), String::new());
