@@ -36,8 +36,9 @@ struct Setup {
 }
 
 /// Renders `setup` with `engine`: the recipe of `spu render --scene S --width N --height N
-/// --spes P --assoc A --sht H [--shade M --shadow-early on|off]` with the default caches, lights and latency
-/// (kept in this one function so it follows the library's frame API in one place).
+/// --spes P --assoc A --sht H [--shade M --shadow-early on|off]` with the default caches,
+/// lights and latency (kept in this one function so that it follows the library's frame
+/// API in one place).
 fn render(scene: &Scene, setup: &Setup, engine: Engine) -> FrameRun {
     let bvh = Bvh::build(scene, &BvhConfig::default());
     let staged = StagedScene::new(scene, &bvh, SCENE_BASE).unwrap();
