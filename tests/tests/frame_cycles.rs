@@ -12,7 +12,7 @@
 use spu_isa::jit::Engine;
 use spu_isa::timing::TimingConfig;
 use spu_loader::frame::{FrameLayout, SCENE_BASE};
-use spu_loader::kernel_abi::{ShadingBlock, SHADE_SHADOWS, SHADE_SIMPLE};
+use spu_loader::kernel_abi::{Counter, ShadeCounters, ShadingBlock, SHADE_SHADOWS, SHADE_SIMPLE};
 use spu_loader::runtime::{render_frame, FrameRun};
 use spu_loader::stats::{FrameSetup, FrameStats};
 use spu_loader::{procedural, shading, Bvh, BvhConfig, Scene, StagedScene};
@@ -106,22 +106,25 @@ fn statistics(run: &FrameRun, setup: &Setup) -> String {
         "kernel counters (all SPUs): {:#?}",
         run.kernel_stats()
     ));
-    const SHADE: [&str; 10] = [
-        "packets with a hit",
-        "of them on one triangle",
-        "passes",
-        "packets",
-        "vertex lookups (the host counts 3 a record)",
-        "vertex misses",
-        "material lookups",
-        "material misses",
-        "triangle records looked up",
-        "triangle records fetched",
-    ];
     if !run.shade_counters.is_empty() {
+        let t = ShadeCounters::sum(&run.shade_counters);
+        let counters = [
+            ("packets with a hit", t.groups),
+            ("of them on one triangle", t.same),
+            ("passes", t.passes),
+            ("packets", t.packets),
+            (
+                "vertex lookups (the host counts 3 a record)",
+                t.vertex_lookups,
+            ),
+            ("vertex misses", t.vertex_misses),
+            ("material lookups", t.material_lookups),
+            ("material misses", t.material_misses),
+            ("triangle records looked up", t.triangle_lookups),
+            ("triangle records fetched", t.triangle_misses),
+        ];
         line("shading counters (all SPUs):".into());
-        for (k, name) in SHADE.iter().enumerate() {
-            let total: u64 = run.shade_counters.iter().map(|c| c[k]).sum();
+        for (name, Counter(total)) in counters {
             line(format!("  {name}: {total}"));
         }
     }
@@ -193,8 +196,11 @@ fn frame(setup: &Setup) -> Outcome {
         "an SPU took no tile"
     );
     if setup.shade != 0 {
-        let sum = |i: usize| interp.shade_counters.iter().map(|c| c[i]).sum::<u64>();
-        assert!(sum(5) > 0 && sum(7) > 0, "vertex and material misses");
+        let t = ShadeCounters::sum(&interp.shade_counters);
+        assert!(
+            t.vertex_misses.0 > 0 && t.material_misses.0 > 0,
+            "vertex and material misses"
+        );
     }
     assert_eq!(interp.shadow_rays > 0, setup.shade == SHADE_SHADOWS);
     Outcome {
