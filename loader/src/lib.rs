@@ -14,6 +14,8 @@
 //!   kernel output.
 //! - [`stats`]: a frame's statistics as typed JSON (`spu render --stats`).
 //! - [`timeline`]: when each tile and packet was traced, from the SPUs' event logs.
+//! - [`render`]: the one render API (configuration, prepared scene, frame, validation)
+//!   over [`runtime`], the frame programs ([`variants`], [`kernels`]) and [`frame`]'s layout.
 
 pub mod bvh;
 pub mod camera;
@@ -36,6 +38,8 @@ mod gang;
 pub mod kernel_abi;
 pub mod kernel_image;
 pub mod kernels;
+pub mod render;
 pub mod runtime;
 pub mod stats;
 pub mod timeline;
+pub mod variants;

@@ -121,8 +121,6 @@ fn dump_range(spec: &str) -> exit::Result<std::ops::Range<usize>> {
 }
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
-    spu_isa::jit::Engine::set_default(args.engine);
-    args.compile.apply();
     options::max_cycles(args.max_cycles)?;
     let memory_bytes = options::memory(args.memory)?;
     let dumps = args
@@ -138,6 +136,8 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         mailbox.push(value);
     }
     let (mut spu, symbols) = load(&args.file)?;
+    spu.set_engine(args.engine);
+    spu.share_code(&args.compile.cache());
     for value in mailbox {
         if !spu.write_inbound_mailbox(value) {
             return Err(Error::input(

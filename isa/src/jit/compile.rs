@@ -206,7 +206,7 @@ struct Shared {
 /// SPU decides by its own counts which of its blocks to run compiled, and a block's code
 /// depends only on its address and words.
 ///
-/// A cache made while [`Compiling::Background`] is the default compiles on a host thread
+/// A cache made [`CodeCache::with`] [`Compiling::Background`] compiles on a host thread
 /// of its own: SPUs asking for a block not compiled yet go on interpreting it meanwhile,
 /// so compiling takes no time from the simulation (on a host with a core to spare), and
 /// what runs compiled, only that, depends on the host's timing.
@@ -220,7 +220,7 @@ impl Default for CodeCache {
 }
 
 impl CodeCache {
-    /// A cache compiling as [`Compiling::default`] says.
+    /// A cache compiling inline ([`Compiling::default`]).
     pub fn new() -> CodeCache {
         CodeCache::with(Compiling::default())
     }
@@ -279,6 +279,15 @@ impl CodeCache {
     /// the cache; `compiled_instructions` is left 0).
     pub fn stats(&self) -> super::JitStats {
         *self.0.stats.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// How the cache compiles: on a thread of its own, or on the asking SPU's.
+    pub fn compiling(&self) -> Compiling {
+        if self.0.requests.is_some() {
+            Compiling::Background
+        } else {
+            Compiling::Inline
+        }
     }
 
     /// How many blocks the background compiler finished (compiled or declined) so far.
