@@ -38,8 +38,13 @@ fn main() {
     let out_dir = std::env::var("OUT_DIR").expect("OUT_DIR");
     // The embedded sources (`kernels::MODULES`, `kernels::FRAME_SOURCES`).
     let embed = |name: &str, path: &Path| {
-        let path = path.canonicalize().unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        format!("    ({name:?}, include_str!({:?})),\n", path.display().to_string())
+        let path = path
+            .canonicalize()
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        format!(
+            "    ({name:?}, include_str!({:?})),\n",
+            path.display().to_string()
+        )
     };
     let mut sources = String::from("(\n&[\n");
     for path in &modules {
@@ -49,7 +54,10 @@ fn main() {
         includes.push((name, read(path)));
     }
     sources += "],\n&[\n";
-    let mut files: Vec<&str> = variants::KernelVariant::ALL.iter().map(|v| v.file()).collect();
+    let mut files: Vec<&str> = variants::KernelVariant::ALL
+        .iter()
+        .map(|v| v.file())
+        .collect();
     files.sort();
     files.dedup();
     for file in files {

@@ -11,7 +11,10 @@ pub use crate::variants::KernelVariant;
 
 /// (every kernel module by the name frame programs `.include` it with, relative to
 /// `kernels/`; every frame program's source by its file name under `kernels/`).
-type Sources = (&'static [(&'static str, &'static str)], &'static [(&'static str, &'static str)]);
+type Sources = (
+    &'static [(&'static str, &'static str)],
+    &'static [(&'static str, &'static str)],
+);
 
 const SOURCES: Sources = include!(concat!(env!("OUT_DIR"), "/sources.rs"));
 

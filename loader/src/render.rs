@@ -157,10 +157,7 @@ impl RenderConfig {
         within("packets in flight", self.sht as u64, 1, 8)?;
         within("max cycles", self.max_cycles, 1, u64::MAX)?;
         if !(self.clock_ghz.is_finite() && (0.01..=100.0).contains(&self.clock_ghz)) {
-            return Err(format!(
-                "clock {} GHz: must be 0.01 to 100",
-                self.clock_ghz
-            ));
+            return Err(format!("clock {} GHz: must be 0.01 to 100", self.clock_ghz));
         }
         if !(self.dma_latency_ns.is_finite() && (0.0..=1e6).contains(&self.dma_latency_ns)) {
             return Err(format!(
@@ -405,11 +402,9 @@ pub fn render_with(
     )?;
     let colours = match &run.colour_buffer {
         Some(buffer) => kernel_abi::decode_colour_buffer(buffer, config.width, config.height),
-        None => kernel_abi::decode_frame_buffer_colours(
-            &run.frame_buffer,
-            config.width,
-            config.height,
-        ),
+        None => {
+            kernel_abi::decode_frame_buffer_colours(&run.frame_buffer, config.width, config.height)
+        }
     };
     Ok(FrameResult {
         run,
@@ -485,7 +480,12 @@ pub fn validate(
             config.threads,
         );
         let basis = camera.basis(width, height);
-        let ray = |i: usize| (basis.origin, basis.direction(i as u32 % width, i as u32 / width));
+        let ray = |i: usize| {
+            (
+                basis.origin,
+                basis.direction(i as u32 % width, i as u32 / width),
+            )
+        };
         let within = |i: usize, c: u32| {
             shading::channel_difference(frame.colours[i], c) <= shading::COLOUR_TOLERANCE
         };
@@ -635,13 +635,34 @@ mod tests {
         assert_eq!(shaded.kernel, KernelVariant::Shaded);
         assert_eq!(shaded.check(), Ok(()));
         for bad in [
-            RenderConfig { spes: 17, ..ok.clone() },
-            RenderConfig { sht: 9, ..ok.clone() },
-            RenderConfig { assoc: 2, ..ok.clone() },
-            RenderConfig { bvh_cache: 100, ..ok.clone() },
-            RenderConfig { clock_ghz: f64::NAN, ..ok.clone() },
-            RenderConfig { max_cycles: 0, ..ok.clone() },
-            RenderConfig { threads: 0, ..ok.clone() },
+            RenderConfig {
+                spes: 17,
+                ..ok.clone()
+            },
+            RenderConfig {
+                sht: 9,
+                ..ok.clone()
+            },
+            RenderConfig {
+                assoc: 2,
+                ..ok.clone()
+            },
+            RenderConfig {
+                bvh_cache: 100,
+                ..ok.clone()
+            },
+            RenderConfig {
+                clock_ghz: f64::NAN,
+                ..ok.clone()
+            },
+            RenderConfig {
+                max_cycles: 0,
+                ..ok.clone()
+            },
+            RenderConfig {
+                threads: 0,
+                ..ok.clone()
+            },
         ] {
             assert!(bad.check().is_err(), "{bad:?}");
         }

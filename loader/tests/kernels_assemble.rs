@@ -70,7 +70,10 @@ fn prebuilt_kernels_are_what_the_assembler_makes() {
             "{name} {defines:?}: the prebuilt program differs"
         );
     }
-    let (source, name) = (KernelVariant::Primary.source(), KernelVariant::Primary.name());
+    let (source, name) = (
+        KernelVariant::Primary.source(),
+        KernelVariant::Primary.name(),
+    );
     let edited = format!("{source}\n\tnop\n");
     assert!(kernels::prebuilt(&edited, name, &[], &includes).is_none());
     assert!(kernels::prebuilt(source, name, &[("SHADE", 2)], &includes).is_none());

@@ -272,8 +272,7 @@ fn raytrace_kernel_times_the_same_with_and_without_block_memoization() {
         ..config("conference", 24, 16, 2, 1)
     };
     let program = config.kernel.program().unwrap();
-    let layout =
-        spu_loader::render::frame_layout(&conference, &config, &program, &[]).unwrap();
+    let layout = spu_loader::render::frame_layout(&conference, &config, &program, &[]).unwrap();
     let run = |memoize: bool| {
         spu_loader::runtime::run_frame(
             &spu_loader::runtime::Frame {

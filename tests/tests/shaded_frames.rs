@@ -98,10 +98,7 @@ fn simple_shading_of_the_room_matches_the_reference() {
     // what the caches missed; the shading section is profiled.
     let stats = &shaded.stats;
     let validation = stats.validation.as_ref().unwrap();
-    assert_eq!(
-        (validation.pixels, validation.mismatches),
-        (128 * 128, 0)
-    );
+    assert_eq!((validation.pixels, validation.mismatches), (128 * 128, 0));
     assert_eq!(
         (validation.colour_mismatches, validation.shadow_edge_pixels),
         (Some(0), None)

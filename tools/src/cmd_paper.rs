@@ -8,9 +8,9 @@
 
 use crate::exit::{self, Error};
 use crate::paper_jobs::{select_scenes, shell_word, Job};
-use crate::prepared::Kept;
 use crate::paper_report::{build, Figure, HeatMaps, Report, ReportScene};
 use crate::paper_tables::{tables, Measured, Setup, TableSpec};
+use crate::prepared::Kept;
 use spu_loader::stats::FrameStats;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};

@@ -205,11 +205,7 @@ impl Job {
 
     /// The file stem of the job's outputs: its settings, readable.
     pub fn name(&self) -> String {
-        let assoc = if self.assoc == 4 {
-            "4way"
-        } else {
-            "dm"
-        };
+        let assoc = if self.assoc == 4 { "4way" } else { "dm" };
         format!(
             "{}-{}-{}{}-sht{}-{}spe-{}ghz-{}",
             self.scene_id,

@@ -216,9 +216,9 @@ impl Args {
             width: self.width,
             height: self.height,
             spes: self.spes,
-            threads: self.threads.unwrap_or_else(|| {
-                std::thread::available_parallelism().map_or(1, |n| n.get())
-            }),
+            threads: self
+                .threads
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
             clock_ghz: self.clock,
             dma_latency_ns: self.dma_latency_ns,
             bvh_cache: self.bvh_cache,
@@ -309,7 +309,11 @@ pub fn words(config: &RenderConfig, outputs: &Outputs) -> Vec<String> {
     option("--shade", s.mode.name().to_string());
     if let Some(c) = &config.camera {
         let v = [c.eye.to_array(), c.target.to_array(), c.up.to_array()].concat();
-        let v: Vec<String> = v.iter().chain(&[c.fov_y_degrees]).map(f32::to_string).collect();
+        let v: Vec<String> = v
+            .iter()
+            .chain(&[c.fov_y_degrees])
+            .map(f32::to_string)
+            .collect();
         option("--camera", v.join(","));
     }
     if config.dma_latency_ns != defaults.dma_latency_ns {
