@@ -16,6 +16,7 @@
 //! - [`timeline`]: when each tile and packet was traced, from the SPUs' event logs.
 //! - [`render`]: the one render API (configuration, prepared scene, frame, validation)
 //!   over [`runtime`], the frame programs ([`variants`], [`kernels`]) and [`frame`]'s layout.
+//! - [`ppe`]: how `spu run` starts a program and serves its PPE-assisted library calls.
 
 pub mod bvh;
 pub mod camera;
@@ -38,6 +39,7 @@ mod gang;
 pub mod kernel_abi;
 pub mod kernel_image;
 pub mod kernels;
+pub mod ppe;
 pub mod render;
 pub mod runtime;
 pub mod stats;

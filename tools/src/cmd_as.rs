@@ -30,6 +30,10 @@ pub struct Args {
     /// Define a symbol: NAME=VALUE.
     #[arg(long = "defsym")]
     defsym: Vec<String>,
+    /// Link with the built-in SPU runtime (crt0 calling `main(argc, argv, envp)` then
+    /// `exit`, `printf` and the other PPE-assisted calls; docs/running-programs.md).
+    #[arg(long, conflicts_with = "object")]
+    runtime: bool,
 }
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
@@ -62,7 +66,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             v.map_err(|_| format!("--defsym {d}: bad value"))?,
         ));
     }
-    if args.object || args.input.len() > 1 {
+    if args.object || args.runtime || args.input.len() > 1 {
         return objects(&args, &opts);
     }
     match assemble_file(&args.input[0], &opts) {
@@ -109,6 +113,12 @@ fn objects(args: &Args, opts: &Options) -> exit::Result<ExitCode> {
         ));
     }
     let mut objects = Vec::new();
+    if args.runtime {
+        match spu_loader::ppe::runtime::objects() {
+            Ok(mut runtime) => objects.append(&mut runtime),
+            Err(d) => return Ok(report(&d)),
+        }
+    }
     for input in &args.input {
         match assemble_object_file(input, opts) {
             Ok((obj, warnings)) => {

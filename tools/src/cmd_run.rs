@@ -42,6 +42,27 @@ pub struct Args {
     /// Machine-readable output.
     #[arg(long)]
     json: bool,
+    /// Print nothing but what the program writes, as `elfspe` ran it (the exit status
+    /// still tells how it ended).
+    #[arg(short, long, conflicts_with_all = ["json", "dump_regs"])]
+    quiet: bool,
+    /// Print the registers and the argv region the program starts with
+    /// (docs/running-programs.md).
+    #[arg(long, conflicts_with = "json")]
+    dump_entry: bool,
+    /// Start as libspe2's `spe_context_run` does with these argp and envp (`$4`, `$5`;
+    /// `$3` = speid) instead of as `elfspe` does with argc and argv.
+    #[arg(long)]
+    argp: Option<String>,
+    #[arg(long, requires = "argp")]
+    envp: Option<String>,
+    /// The one host directory the program's file calls may reach (none without it; its
+    /// standard streams are always the host's).
+    #[arg(long)]
+    root: Option<PathBuf>,
+    /// Arguments for the program, after `--` (`argv[1]`...; `argv[0]` is FILE).
+    #[arg(last = true)]
+    program_args: Vec<std::ffi::OsString>,
 }
 
 fn number(text: &str) -> Result<u64, String> {
@@ -55,9 +76,18 @@ fn number(text: &str) -> Result<u64, String> {
 
 /// Loads FILE into a fresh SPU.
 pub fn load(file: &PathBuf) -> Result<(Spu, Vec<(String, u32)>), String> {
+    load_program(file).map(|(spu, symbols, _)| (spu, symbols))
+}
+
+/// A loaded program: the SPU, its symbols and where its code and data end.
+type Loaded = (Spu, Vec<(String, u32)>, u32);
+
+/// Loads FILE into a fresh SPU; also where its code and data end.
+fn load_program(file: &std::path::Path) -> Result<Loaded, String> {
     let name = file.display();
     let mut spu = Spu::new(0);
     let mut symbols = Vec::new();
+    let end;
     if file.extension().is_some_and(|e| e == "s" || e == "S") {
         let out = spu_asm::assemble_file(file, &Default::default()).map_err(|d| {
             d.iter()
@@ -68,6 +98,7 @@ pub fn load(file: &PathBuf) -> Result<(Spu, Vec<(String, u32)>), String> {
         spu.load_image(&out.image);
         spu.set_pc(out.entry);
         symbols = out.symbols;
+        end = out.image.len() as u32;
     } else {
         let bytes = options::read_input(file, options::MAX_PROGRAM_BYTES)?;
         if bytes.starts_with(b"\x7fELF") {
@@ -78,6 +109,12 @@ pub fn load(file: &PathBuf) -> Result<(Spu, Vec<(String, u32)>), String> {
                 .map(|(a, d)| (*a, d.as_slice()))
                 .collect();
             spu.load_segments(&segments, elf.entry);
+            end = elf
+                .segments
+                .iter()
+                .map(|(a, d)| a + d.len() as u32)
+                .max()
+                .unwrap_or(0);
             symbols = elf.symbols;
         } else {
             if bytes.len() > 256 * 1024 {
@@ -87,9 +124,36 @@ pub fn load(file: &PathBuf) -> Result<(Spu, Vec<(String, u32)>), String> {
                 ));
             }
             spu.load_image(&bytes);
+            end = bytes.len() as u32;
         }
     }
-    Ok((spu, symbols))
+    Ok((spu, symbols, end))
+}
+
+/// How the program starts: as `elfspe` ran it from a shell, or through the libspe2 API
+/// with `--argp`/`--envp`.
+fn start_mode(args: &Args) -> exit::Result<spu_loader::ppe::start::Start> {
+    use spu_loader::ppe::start::Start;
+    if let Some(argp) = &args.argp {
+        if !args.program_args.is_empty() {
+            return Err(Error::input(
+                "--argp starts the program through the libspe2 API: no arguments after --",
+            ));
+        }
+        let argp = number(argp).map_err(|e| format!("--argp: {e}"))?;
+        let envp = match &args.envp {
+            Some(v) => number(v).map_err(|e| format!("--envp: {e}"))?,
+            None => 0,
+        };
+        return Ok(Start::Api { argp, envp });
+    }
+    let mut argv = vec![args.file.as_os_str().as_encoded_bytes().to_vec()];
+    argv.extend(
+        args.program_args
+            .iter()
+            .map(|a| a.as_encoded_bytes().to_vec()),
+    );
+    Ok(Start::Shell { args: argv })
 }
 
 /// `spu run --json`: how the program stopped and the machine state.
@@ -135,9 +199,17 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             u32::try_from(value).map_err(|_| format!("--mbox-in {v}: does not fit in 32 bits"))?;
         mailbox.push(value);
     }
-    let (mut spu, symbols) = load(&args.file)?;
+    let (mut spu, symbols, program_end) = load_program(&args.file)?;
     spu.set_engine(args.engine);
     spu.share_code(&args.compile.cache());
+    let start = start_mode(&args)?;
+    let mut memory = MainMemory::zeroed(memory_bytes);
+    let entry = spu_loader::ppe::start::prepare(&start, program_end, memory.len())
+        .map_err(|e| format!("{}: {e}", args.file.display()))?;
+    spu_loader::ppe::start::apply(&entry, &mut spu, &mut memory);
+    if args.dump_entry {
+        dump_entry(&entry)?;
+    }
     for value in mailbox {
         if !spu.write_inbound_mailbox(value) {
             return Err(Error::input(
@@ -148,12 +220,28 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     if args.timing {
         spu.enable_timing(Default::default());
     }
-    let mut memory = MainMemory::zeroed(memory_bytes);
-    let stop = if args.trace {
-        let symbols = SymbolTable::new(symbols.iter().map(|(n, a)| (*a, n.clone())).collect());
-        trace(&mut spu, &mut memory, args.max_cycles, &symbols)?
-    } else {
-        spu.run(&mut memory, args.max_cycles)
+    let mut host = spu_loader::ppe::Host::new(args.root.as_deref())?;
+    let symbols = SymbolTable::new(symbols.iter().map(|(n, a)| (*a, n.clone())).collect());
+    // PPE-assisted calls (stop 0x2100..0x21ff) are served and the program resumed.
+    let stop = loop {
+        let stop = if args.trace {
+            trace(&mut spu, &mut memory, args.max_cycles, &symbols)?
+        } else {
+            spu.run(&mut memory, args.max_cycles)
+        };
+        match stop {
+            StopReason::Stop(code) if spu_loader::ppe::CALL_STOPS.contains(&code) => {
+                if let Err(fault) = host.serve(&mut spu, code) {
+                    eprintln!(
+                        "spu: {}: the program stopped at {:#x}: {fault}",
+                        args.file.display(),
+                        spu.pc().wrapping_sub(4)
+                    );
+                    return Ok(Status::AbnormalStop.into());
+                }
+            }
+            stop => break stop,
+        }
     };
     let out_mbox = spu.read_outbound_mailbox();
     if args.json {
@@ -169,7 +257,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         let json = serde_json::to_string(&report)
             .map_err(|e| exit::Error::failure(format!("JSON: {e}")))?;
         outln!("{json}");
-    } else {
+    } else if !args.quiet {
         outln!("stopped: {}", describe(&stop));
         outln!("pc: {:#x}", spu.pc());
         outln!("instructions: {}", spu.instructions());
@@ -193,6 +281,27 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         }
     }
     Ok(exit_status(&args.file, &stop))
+}
+
+/// `--dump-entry`: the registers that are not zero at entry and the argv region.
+fn dump_entry(entry: &spu_loader::ppe::start::Entry) -> exit::Result<()> {
+    outln!("entry registers (all others zero):");
+    for (n, r) in &entry.regs {
+        outln!("${n}: {:08x} {:08x} {:08x} {:08x}", r[0], r[1], r[2], r[3]);
+    }
+    if let Some(a) = &entry.argv {
+        outln!(
+            "argv region: {} bytes at local store {:#x}, main memory {:#x}",
+            a.bytes.len(),
+            a.ls,
+            a.ea
+        );
+        for (i, row) in a.bytes.chunks(16).enumerate() {
+            let hex: Vec<String> = row.iter().map(|b| format!("{b:02x}")).collect();
+            outln!("{:05x}: {}", a.ls as usize + 16 * i, hex.join(" "));
+        }
+    }
+    Ok(())
 }
 
 /// `stop 0x2000|n` exits with n, as `elfspe` does; any other end is reported on standard
