@@ -95,8 +95,8 @@ pub struct RenderConfig {
     pub kernel: KernelVariant,
     /// What runs the SPUs' instructions (results are the same with either).
     pub engine: Engine,
-    /// The timing model: off, every SPU's cycles are its instructions and there is no
-    /// profile (a faster functional run).
+    /// The timing model: off, a faster functional run without the pipeline's stalls and
+    /// with no profile (the image is the same; the cycles are not the paper's).
     pub timing: bool,
     /// Simulated cycles per SPU before the frame gives up.
     pub max_cycles: u64,

@@ -74,8 +74,8 @@ pub struct Args {
     /// Entries of the direct-mapped material cache (power of two, 16..256).
     #[arg(long = "material-cache", default_value_t = 64, value_parser = shading_cache)]
     pub material_cache: u32,
-    /// The timing model (off: a functional run, each SPU's cycles its instructions, no
-    /// profile; the kernel's results are the same).
+    /// The timing model (off: a functional run without the pipeline's stalls and no
+    /// profile; the image is the same).
     #[arg(long, default_value = "on", value_parser = timing, action = clap::ArgAction::Set)]
     pub timing: bool,
     /// Output image (PNG).
