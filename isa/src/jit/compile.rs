@@ -419,8 +419,10 @@ pub(crate) struct Blocks {
     /// cache's [`CodeCache::completed`] when last asked, as [`asked`] keeps it (asked
     /// again once it moved).
     pub pending: Vec<u32>,
-    /// Distinguishes this table (and each time it starts over) from every other: what a
-    /// caller kept of a block (its entry) holds while this stays the same.
+    /// Distinguishes this table (and each time it starts over) from every other its SPU
+    /// had: what the SPU kept of a block (its entry, in its own timing memo) holds while
+    /// this stays the same. A count per SPU from 1, so that no process-wide counter is
+    /// needed ([`crate::machine::Spu::share_code`] continues it).
     pub generation: u64,
 }
 
@@ -429,22 +431,16 @@ pub(crate) fn asked(completed: u64) -> u32 {
     (completed % u32::MAX as u64) as u32 + 1
 }
 
-/// The next [`Blocks::generation`].
-static GENERATIONS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
-
-fn next_generation() -> u64 {
-    GENERATIONS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
-}
-
 impl Blocks {
-    pub fn new(cache: CodeCache) -> Blocks {
+    /// An empty table compiling into `cache`, its SPU's `generation`th.
+    pub fn new(cache: CodeCache, generation: u64) -> Blocks {
         Blocks {
             cache,
             slots: vec![0; LS_SIZE / 4],
             heat: vec![0; LS_SIZE / 4],
             blocks: Vec::new(),
             pending: vec![0; LS_SIZE / 4],
-            generation: next_generation(),
+            generation,
         }
     }
 
@@ -461,7 +457,7 @@ impl Blocks {
         };
         if self.blocks.len() >= MAX_BLOCKS {
             self.blocks.clear();
-            self.generation = next_generation();
+            self.generation += 1;
             self.slots.fill(0);
         }
         let id = self.blocks.len();
