@@ -2,18 +2,27 @@
 //! diagnostics that name file:line:column. Output is a flat local-store image and an SPU
 //! ELF executable, or a relocatable object; `link` joins objects into an executable.
 
+//!
+//! The house, bottom up: `lex`, `expr` and `expand` read gas syntax (shared with
+//! `sched`, the list scheduler behind `.sched` and `spu sched`); `object`, `reloc` and
+//! `elf` model ELF; `gas` (split as GNU as is: see its header) and `link` build on both
+//! and not on each other.
+
 pub mod elf;
+mod expand;
 mod expr;
 mod gas;
+mod lex;
 pub mod link;
 pub mod object;
 pub mod reloc;
 pub mod sched;
 
 pub use gas::{
-    assemble, assemble_object, Diagnostic, Location, Options, Output, Reloc, RelocTarget, Severity,
-    CHANNELS, MAX_SOURCE,
+    assemble, assemble_object, Diagnostic, Location, Options, Output, Severity, CHANNELS,
+    MAX_SOURCE,
 };
+pub use object::{Reloc, RelocTarget};
 
 fn read_failure(path: &std::path::Path, e: String) -> Vec<Diagnostic> {
     vec![Diagnostic {
@@ -38,7 +47,7 @@ fn with_dir(path: &std::path::Path, opts: &Options) -> Options {
 
 /// Reads a source file (each byte one character, as gas reads it; at most `MAX_SOURCE`).
 fn read(path: &std::path::Path) -> Result<String, Vec<Diagnostic>> {
-    gas::read_source(path).map_err(|e| read_failure(path, e))
+    lex::read_source(path).map_err(|e| read_failure(path, e))
 }
 
 /// Assembles a file from disk, with its directory on the include path.

@@ -3,8 +3,9 @@
 //! end of bss), resolving symbols across objects and applying the SPU relocations.
 //! Overlays are not supported.
 
-use crate::gas::{RelocTarget, SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE, SHT_NOBITS};
-use crate::object::{Object, SymSection};
+use crate::object::{
+    placement, Object, RelocTarget, SymSection, SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE, SHT_NOBITS,
+};
 use std::collections::HashMap;
 
 #[derive(Clone, Debug, Default)]
@@ -38,31 +39,6 @@ fn output_name(name: &str) -> String {
         }
     }
     name.to_string()
-}
-
-/// Where an output section goes (sorted by this, then by first appearance): the
-/// order of GNU ld's SPU script (`.interrupt`, `.init`, `.text`, `.fini`, read-only
-/// data, data, bss); non-allocated sections last (they take no address).
-pub(crate) fn placement(name: &str, ty: u32, flags: u64) -> (u8, i8) {
-    let class = if flags & SHF_ALLOC == 0 {
-        4
-    } else if flags & SHF_EXECINSTR != 0 {
-        0
-    } else if ty == SHT_NOBITS {
-        3
-    } else if flags & SHF_WRITE == 0 {
-        1
-    } else {
-        2
-    };
-    let rank = match name {
-        ".interrupt" => -3,
-        ".init" => -2,
-        ".text" => -1,
-        ".fini" => 1,
-        _ => 0,
-    };
-    (class, rank)
 }
 
 struct OutSection {

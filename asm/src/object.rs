@@ -2,12 +2,67 @@
 //! assembler produces and the linker consumes, written and read with the `object` crate
 //! (one well-kept ELF implementation for section headers, symbol tables, string tables
 //! and RELA sections, rather than a second hand-written one).
+//!
+//! It is the bottom of the assembler's house: the section types and flags, relocations
+//! and the local-store placement of sections live here, so that the assembler (`gas`)
+//! and the linker (`link`) both build on it and neither reaches into the other.
 
-use crate::gas::{Reloc, RelocTarget, SHT_NOBITS};
 use object::elf;
 use object::read::elf::{FileHeader, Rela as _, SectionHeader as _, Sym as _};
 use object::write::elf::{FileHeader as WFileHeader, Rel, SectionHeader, Sym, Writer};
 use object::BigEndian;
+
+/// ELF section types and flags the assembler sets and the linker reads.
+pub const SHT_PROGBITS: u32 = 1;
+pub const SHT_NOBITS: u32 = 8;
+pub const SHF_WRITE: u64 = 1;
+pub const SHF_ALLOC: u64 = 2;
+pub const SHF_EXECINSTR: u64 = 4;
+
+/// A relocation the assembler leaves for the linker (objects only), or applies itself
+/// (`.reloc` in an executable).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Reloc {
+    /// Offset in its section.
+    pub offset: u32,
+    /// An `R_SPU_*` number.
+    pub kind: u32,
+    pub target: RelocTarget,
+    pub addend: i64,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RelocTarget {
+    /// A section of this object (by index into the section list).
+    Section(usize),
+    Symbol(String),
+}
+
+/// Where a section goes in local store (sorted by this, then by first appearance), for
+/// the linker's output sections and the assembler's executables alike: the
+/// order of GNU ld's SPU script (`.interrupt`, `.init`, `.text`, `.fini`, read-only
+/// data, data, bss); non-allocated sections last (they take no address).
+pub(crate) fn placement(name: &str, ty: u32, flags: u64) -> (u8, i8) {
+    let class = if flags & SHF_ALLOC == 0 {
+        4
+    } else if flags & SHF_EXECINSTR != 0 {
+        0
+    } else if ty == SHT_NOBITS {
+        3
+    } else if flags & SHF_WRITE == 0 {
+        1
+    } else {
+        2
+    };
+    let rank = match name {
+        ".interrupt" => -3,
+        ".init" => -2,
+        ".text" => -1,
+        ".fini" => 1,
+        _ => 0,
+    };
+    (class, rank)
+}
 
 /// Where a symbol is defined.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -6,7 +6,10 @@
 //!
 //! A block is written in logical order. Each line is an instruction, a label, or an
 //! `.irp`/`.endr` repetition; `nop`/`lnop` are dropped (the scheduler places its own). The
-//! assembler expands the block's macro calls before it is scheduled.
+//! assembler expands the block's macro calls before it is scheduled. Comments (`#`, and
+//! `/* */` across lines, neither inside a string), `.irp` arguments and `\name`
+//! substitution are read by the assembler's own code (`crate::lex`, `crate::expand`), so
+//! `spu sched` and `.sched` read a block alike.
 //! - `%name` is a virtual register, allocated from the pool after scheduling.
 //! - `!` before an instruction makes it a barrier: everything before it issues before it,
 //!   and no load, store or write of a non-scratch register moves above it. Branches,
@@ -27,6 +30,8 @@
 //! aligned address (the block is aligned first). With a pool, an instruction that would
 //! need more live virtual registers than the pool holds waits.
 
+use crate::expand::{block_end, irp_values, substitute};
+use crate::lex::{blank_block_comments, first_word, split_comment, strip_comment};
 use spu_isa::analysis;
 use spu_isa::table::{forms_named, FormInfo, OperandKind, Pipe};
 
@@ -67,10 +72,11 @@ fn err(line: usize, column: usize, message: impl Into<String>) -> SchedError {
 }
 
 /// Parses the operands of `.sched`: `pool=R,R-R,...` and `scratch=R,R-R,...` (register
-/// numbers, optionally with `$`, or inclusive ranges), separated by spaces.
+/// numbers, optionally with `$`, or inclusive ranges), separated by spaces; a comment
+/// after them is ignored.
 pub fn parse_options(args: &str) -> Result<SchedOptions, String> {
     let mut opts = SchedOptions::default();
-    for word in args.split_whitespace() {
+    for word in strip_comment(args).split_whitespace() {
         let (key, value) = word
             .split_once('=')
             .ok_or_else(|| format!("`{word}`: expected pool=REGS or scratch=REGS"))?;
@@ -235,23 +241,23 @@ pub fn schedule(
     })
 }
 
-/// Expands `.irp VAR, values` ... `.endr` (nested) with `\VAR` substitution.
+/// Expands `.irp VAR, values` ... `.endr` (nested) with `\VAR` substitution, as the
+/// assembler does (`crate::expand`), after blanking `/* */` comments as the assembler
+/// reads them (`crate::lex`): each line keeps its index.
 fn expand_irp(lines: &[&str]) -> Result<Vec<(String, usize)>, SchedError> {
-    let input: Vec<(String, usize)> = lines
-        .iter()
-        .enumerate()
-        .map(|(i, l)| (l.to_string(), i))
-        .collect();
+    let input: Vec<(String, usize)> = code_lines(lines).into_iter().zip(0..).collect();
     expand(&input, 0)
 }
 
-fn first_word(text: &str) -> String {
-    strip_comment(text)
-        .trim()
-        .split(|c: char| c.is_whitespace() || c == ',')
-        .next()
-        .unwrap_or("")
-        .to_ascii_lowercase()
+/// The lines with `/* */` comments (which may span lines) blanked, one for each line.
+fn code_lines(lines: &[&str]) -> Vec<String> {
+    if !lines.iter().any(|l| l.contains("/*")) {
+        return lines.iter().map(|l| l.to_string()).collect();
+    }
+    let blanked = blank_block_comments(&lines.join("\n"));
+    let mut out: Vec<String> = blanked.split('\n').map(str::to_string).collect();
+    out.resize(lines.len(), String::new());
+    out
 }
 
 fn expand(lines: &[(String, usize)], depth: usize) -> Result<Vec<(String, usize)>, SchedError> {
@@ -271,72 +277,26 @@ fn expand(lines: &[(String, usize)], depth: usize) -> Result<Vec<(String, usize)
             i += 1;
             continue;
         }
-        let mut nest = 1;
-        let mut j = i + 1;
-        while j < lines.len() {
-            match first_word(&lines[j].0).as_str() {
-                ".irp" => nest += 1,
-                ".endr" => {
-                    nest -= 1;
-                    if nest == 0 {
-                        break;
-                    }
-                }
-                _ => {}
-            }
-            j += 1;
-        }
-        if j == lines.len() {
+        let Some(j) = block_end(lines, i + 1, |l| first_word(&l.0)) else {
             return Err(err(*origin, 1, "missing .endr"));
-        }
+        };
         let args = strip_comment(text);
         let args = args.trim()[4..].trim();
-        let mut parts = args.split(',').map(str::trim);
-        let var = parts.next().unwrap_or("");
+        let (var, values) = irp_values(false, args);
         if var.is_empty() {
             return Err(err(*origin, 1, ".irp needs a name"));
         }
-        for value in parts {
+        for value in values {
+            let vars = [(var.clone(), value)];
             let body: Vec<(String, usize)> = lines[i + 1..j]
                 .iter()
-                .map(|(t, o)| (substitute(t, var, value), *o))
+                .map(|(t, o)| (substitute(t, &vars, None), *o))
                 .collect();
             out.extend(expand(&body, depth + 1)?);
         }
         i = j + 1;
     }
     Ok(out)
-}
-
-/// Replaces `\var` (not followed by an identifier character) with `value`; `\var\()`
-/// separates the value from text that follows it, as in gas (`%\R\()0`).
-fn substitute(text: &str, var: &str, value: &str) -> String {
-    let pattern = format!("\\{var}");
-    let mut out = String::new();
-    let mut rest = text;
-    while let Some(k) = rest.find(&pattern) {
-        let mut after = &rest[k + pattern.len()..];
-        out.push_str(&rest[..k]);
-        if let Some(tail) = after.strip_prefix("\\()") {
-            out.push_str(value);
-            after = tail;
-        } else if after
-            .chars()
-            .next()
-            .is_some_and(|c| c.is_ascii_alphanumeric() || c == '_')
-        {
-            out.push_str(&pattern);
-        } else {
-            out.push_str(value);
-        }
-        rest = after;
-    }
-    out.push_str(rest);
-    out
-}
-
-fn strip_comment(text: &str) -> &str {
-    text.split('#').next().unwrap_or("")
 }
 
 fn parse_line(
@@ -346,10 +306,8 @@ fn parse_line(
     virtuals: &mut Vec<String>,
     items: &mut Vec<Item>,
 ) -> Result<(), SchedError> {
-    let (code, comment) = match raw.find('#') {
-        Some(k) => (&raw[..k], Some(raw[k + 1..].trim())),
-        None => (raw, None),
-    };
+    let (code, comment) = split_comment(raw);
+    let comment = comment.map(str::trim);
     let mut body = code.trim();
     if body.is_empty() {
         return Ok(());
@@ -910,12 +868,9 @@ fn allocate(
 
 /// `%name` replaced by its register.
 fn rename(text: &str, virtuals: &[String], assignment: &[u8]) -> String {
-    let (code, comment) = match text.find('#') {
-        Some(k) => (&text[..k], &text[k..]),
-        None => (text, ""),
-    };
+    let (code, comment) = split_comment(text);
     let mut out = String::new();
-    let mut rest = code;
+    let mut rest = code.as_str();
     while let Some(k) = rest.find('%') {
         out.push_str(&rest[..k]);
         let name_len = rest[k + 1..]
@@ -929,7 +884,10 @@ fn rename(text: &str, virtuals: &[String], assignment: &[u8]) -> String {
         rest = &rest[k + 1 + name_len..];
     }
     out.push_str(rest);
-    out.push_str(comment);
+    if let Some(comment) = comment {
+        out.push('#');
+        out.push_str(comment);
+    }
     out
 }
 
@@ -968,8 +926,9 @@ impl Names {
         include: &mut dyn FnMut(&str) -> Option<String>,
         depth: usize,
     ) {
-        for line in text.lines() {
-            let code = strip_comment(line).trim();
+        for line in blank_block_comments(text).lines() {
+            let code = strip_comment(line);
+            let code = code.trim();
             let word = code
                 .split_whitespace()
                 .next()
@@ -1040,7 +999,7 @@ impl Names {
 pub fn find_blocks(lines: &[&str]) -> Result<Vec<(usize, usize)>, SchedError> {
     let mut blocks = Vec::new();
     let mut open: Option<usize> = None;
-    for (k, line) in lines.iter().enumerate() {
+    for (k, line) in code_lines(lines).iter().enumerate() {
         match first_word(line).as_str() {
             ".sched" if open.is_some() => return Err(err(k, 1, ".sched inside a .sched block")),
             ".sched" => open = Some(k),

@@ -14,6 +14,16 @@
 # A pair is fetched into the context's staging line and stored axis-major (the layout
 # traverse.s describes) in way 0 when the packet runs again, evicting the least recent way
 # of a 4-way set; the step then runs again.
+#
+# The step (modules/traverse.s) leaves the lookup it made to the handler: $66 = CUR &
+# BMASK64, the pair's line offset in BDATA, and $72 = $66 / 4, its tag's offset in BTAGS;
+# the handler fetches the pair CUR (EANODES + CUR) on the context's tag (RAYS) and goes
+# back to `trav`, one step less counted (the step counts again).
+#
+# Registers of bvh_miss_one (tests/src/lib.rs's module harness checks them):
+#   in:       $66 $72 ZERO CUR RAYS EANODES BTAGS BDATA SWAP S_STEPS
+#   out:      S_STEPS
+#   clobbers: $80..$102
 
         .text
 # ---- BVH cache miss. A 4-way cache looks in the other ways of the set first (a hit there

@@ -5,6 +5,19 @@
 # one way moves to the front (a hit in another way), or the least recent way is evicted
 # for a new line (rotate way 3 to the front, then overwrite it). The caller passes the
 # addresses of way 0's tag and line and the strides from one way to the next.
+#
+# lru_find: the way (1..3) of the set whose tag is $116 to $100, 0 if none; tags at
+# $101 + w * $103. Returns to $0.
+#
+# Registers of lru_find (tests/src/lib.rs's module harness checks them):
+#   in:       $0 $101 $103 $116
+#   out:      $100
+#   clobbers: $105 $107..$109
+#
+# Registers of lru_rotate (below):
+#   in:       $0 $100..$104
+#   out:      -
+#   clobbers: $100 $105..$115
 
         .text
 lru_find:

@@ -10,6 +10,13 @@
 # traversal changes are saved and restored (the frame's constants it only reads). Does
 # nothing unless the shading block's mode is SHADE_SHADOWS.
 #
+# The statistics are counted on, the frame's constants read, the packet registers saved
+# and restored.
+# Registers (tests/src/lib.rs's module harness checks them):
+#   in:       $66 $127 ZERO ONE BIG NBIG PAT0..PAT3 NEGODD ROOTST S_TRIS S_CULLED S_TLOOK S_STEPS M1V EEV
+#   out:      S_TRIS S_CULLED S_TLOOK S_STEPS M1V EEV
+#   clobbers: $67..$90 $94..$96 $98..$100 $104 $106..$126
+#
 # A shadow ray starts AT THE LIGHT Lp with direction d = P - Lp and finds no triangle with
 # 0 < s < 1 - SHADOW_EPSILON (loader/src/shading.rs): the packet's rays share the origin,
 # so the traversal's interval-arithmetic frustum (here from the range of 1/d over the cast
@@ -31,10 +38,9 @@
 # off, the packet is traced to the end as a nearest-hit query within the limit (the paper).
 # A ray is visible when no triangle was recorded for it (its id is still -1).
 
-        .set SV_RAYS, 0                 # the shadow area (SHADOW_AREA): shadow rays cast,
-        .set SV_LIGHT, 16               # the light being traced,
-        .set SV_HANDLERS, 32            # the five miss-handler words of vars, saved
-        .set SV_REGS, 128               # the registers, one quadword each
+# The shadow area (SHADOW_AREA, loader::kernel_abi::ShadowArea: SV_* in layout.inc):
+# the shadow rays cast, the light being traced, the five miss-handler words of vars
+# saved, the registers (one quadword each), the shadow packets' context.
         .if     SH_PY - SH_PX != 256 || SH_PZ - SH_PY != 256 || SH_NY - SH_NX != 256 || SH_NZ - SH_NY != 256
         .error  "shadow.s reads the i-set's x, y, z arrays 256 bytes apart"
         .endif

@@ -18,6 +18,11 @@
 # the third case (first ray misses a child the frustum does not rule out) branches, to
 # FIND_FIRST. A stack entry is a state: (link', meta, first active ray). A leaf goes to
 # the triangle test (modules/triangle.s), which pops the next state when it is done.
+#
+# Across the modules: a step whose pair is not in the BVH cache branches to BMISSH (the
+# handler modules/frame.s chose, in modules/bvh_cache.s) with $66 = CUR & BMASK64 (the
+# line's offset in BDATA) and $72 = $66 / 4 (its tag's offset in BTAGS), which the
+# handler takes as they are (its `# Registers` block); the handler comes back to `trav`.
 
         .text
 # ---- one traversal step: test both children of CUR (an inner node the packet enters)

@@ -13,6 +13,16 @@
 #               the least recent way), so no DMA in flight ever targets a cache line
 # `tri_miss` serves a lookup in the test loop that misses after all (a fallback: the pass
 # leaves every triangle of the leaf in the cache).
+#
+# The leaf's prefetch pass (modules/triangle.s) leaves a handler the missing triangle: $76
+# its record index, $80 its line (index & TMASK), $81 the line's tag offset, $79 the
+# record's size (64); the handler comes back to .Lpf_next with $78 = 1 (a fetch is in
+# flight: the leaf waits once, after the pass).
+#
+# Registers of .Lpf_one (tests/src/lib.rs's module harness checks them):
+#   in:       $76 $79 $80 $81 ZERO RAYS EATRIS TTAGS TDATA
+#   out:      $78
+#   clobbers: $84..$88 $101 $102
 
         .text
 # prefetch misses: one context fetches straight into way 0

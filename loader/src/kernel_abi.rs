@@ -5,6 +5,8 @@
 //! The kernel reads every offset below from the `.set` lines of [`spu_include`], so this
 //! module is the single source of truth for both sides. All records are big-endian.
 
+use std::mem::{offset_of, size_of};
+
 use crate::camera::CameraBasis;
 
 /// Pixels per tile side (the paper's 64x64 image tiles, section 8).
@@ -231,6 +233,9 @@ const _: () = assert!(
 pub const SHADE_SIMPLE: u32 = 1;
 pub const SHADE_SHADOWS: u32 = 2;
 
+/// One quadword of local store or of a record: four big-endian words.
+pub type Quad = [u32; 4];
+
 /// The shading block (`modules/shade.s`), at [`PARAM_EA_SHADING`]: where the vertex and
 /// material records and the 32-bit colour frame buffer are, the mode, the shading caches'
 /// sizes and up to [`crate::shading::MAX_LIGHTS`] point lights.
@@ -250,59 +255,298 @@ pub struct ShadingBlock {
     pub lights: Vec<crate::shading::Light>,
 }
 
-/// Local-store bytes of the shading module's area (`SH_AREA_BYTES` in `modules/shade.s`;
-/// a test keeps the two equal).
-pub const SHADING_AREA_BYTES: usize = 40576;
+/// The shading block as the kernel reads it ([`ShadingBlock::to_be_bytes`]): its offsets
+/// are the `SHB_*` of `layout.inc`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ShadingBlockRecord {
+    pub ea_vertices: u32,
+    pub ea_materials: u32,
+    pub ea_colour: u32,
+    pub light_count: u32,
+    /// The mode, then the three words the kernel reads with it in one quadword: shadow
+    /// early termination (0 or 1), the vertex and material caches' log2 entries.
+    pub mode: u32,
+    pub shadow_early: u32,
+    pub vertex_cache_log2: u32,
+    pub material_cache_log2: u32,
+    pub reserved: [u32; 8],
+    pub lights: [LightRecord; crate::shading::MAX_LIGHTS],
+    /// Room for two more lights: the block stays the 384 bytes the kernel fetches.
+    pub spare: [LightRecord; 2],
+}
 
-/// The shadow module's area (`modules/shadow.s`), right above the shading area (its offset
-/// from the shading area): the shadow-ray counter, the state kept while the shadow packets
-/// run (the light, the saved miss handlers and registers) and the shadow packets' own
-/// packet context.
+/// One point light of the shading block.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LightRecord {
+    /// x, y, z, 0.
+    pub position: [f32; 4],
+    /// r, g, b, 0.
+    pub colour: [f32; 4],
+}
+
+/// Bytes of the shading block.
+pub const SHADING_BLOCK_BYTES: usize = size_of::<ShadingBlockRecord>();
+pub const SHB_EA_VERTICES: usize = offset_of!(ShadingBlockRecord, ea_vertices);
+pub const SHB_LIGHT_COUNT: usize = offset_of!(ShadingBlockRecord, light_count);
+pub const SHB_MODE: usize = offset_of!(ShadingBlockRecord, mode);
+pub const SHB_LIGHTS: usize = offset_of!(ShadingBlockRecord, lights);
+/// Bytes per light: position (x, y, z, 0), colour (r, g, b, 0).
+pub const SHB_LIGHT_BYTES: usize = size_of::<LightRecord>();
+const _: () = assert!(SHADING_BLOCK_BYTES == 384 && SHADING_BLOCK_BYTES.is_multiple_of(128));
+// the kernel reads the mode and the three words after it as one quadword
+const _: () = assert!(
+    SHB_MODE.is_multiple_of(16)
+        && offset_of!(ShadingBlockRecord, material_cache_log2) == SHB_MODE + 12
+);
+/// Bytes of one packet's block in the colour frame buffer.
+pub const COLOUR_BLOCK_BYTES: u32 = 256;
+
+/// One of the shading module's counters: the kernel counts in word 0 of a quadword of its
+/// area (32 bits); the host keeps the count, summed over SPUs, in 64.
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counter(pub u64);
+
+/// Declares [`ShadeCounters`] from one list: each field, what it counts and its assembler
+/// name, from which the offsets in `layout.inc`, the host's decoding and its sums follow.
+macro_rules! shade_counters {
+    ($($(#[doc = $doc:literal])* $field:ident => $spu:literal,)*) => {
+        /// The shading module's counters (`SH_STATS` in its area, one per quadword), in
+        /// the order the kernel keeps them; the host reads them from each SPU's local
+        /// store, as the PPE reads an SPE's memory-mapped local store.
+        #[repr(C)]
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+        pub struct ShadeCounters {
+            $($(#[doc = $doc])* pub $field: Counter,)*
+        }
+
+        impl ShadeCounters {
+            /// Each counter's `SHS_*` name (its offset in `SH_STATS`) and offset.
+            pub const SPU_NAMES: &[(&str, usize)] =
+                &[$(($spu, offset_of!(ShadeCounters, $field)),)*];
+
+            /// Decodes the counters from local-store bytes starting at `SH_STATS` (a
+            /// counter past the end reads 0).
+            pub fn from_be_bytes(bytes: &[u8]) -> Self {
+                let word = |at: usize| {
+                    bytes
+                        .get(at..at + 4)
+                        .map_or(0, |b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]) as u64)
+                };
+                ShadeCounters {
+                    $($field: Counter(word(offset_of!(ShadeCounters, $field))),)*
+                }
+            }
+
+            /// Adds `other`'s counts to these.
+            pub fn add(&mut self, other: &ShadeCounters) {
+                $(self.$field.0 += other.$field.0;)*
+            }
+        }
+    };
+}
+
+shade_counters! {
+    /// Intersection packets (4 rays) with a hit.
+    groups => "SHS_GROUPS",
+    /// ... whose 4 rays hit the same triangle.
+    same => "SHS_SAME",
+    /// Shading passes (one per material of a packet).
+    passes => "SHS_PASSES",
+    /// Packets shaded.
+    packets => "SHS_PACKETS",
+    /// Vertex cache lookups (kept 0 by the kernel: three per triangle record looked up,
+    /// which the host derives from `triangle_lookups`).
+    vertex_lookups => "SHS_VLOOK",
+    vertex_misses => "SHS_VMISS",
+    /// Material cache lookups (one per pass) and misses.
+    material_lookups => "SHS_MLOOK",
+    material_misses => "SHS_MMISS",
+    /// Triangle records looked up in the traversal's triangle cache, and fetched past it.
+    triangle_lookups => "SHS_TLOOK",
+    triangle_misses => "SHS_TMISS",
+}
+
+impl ShadeCounters {
+    /// The counters summed over SPUs.
+    pub fn sum(counters: &[ShadeCounters]) -> ShadeCounters {
+        let mut total = ShadeCounters::default();
+        for c in counters {
+            total.add(c);
+        }
+        total
+    }
+}
+
+/// The most entries of the shading module's vertex and material caches.
+pub const SHADING_CACHE_ENTRIES: usize = 256;
+/// Vertex lookups of one intersection packet the slow path keeps in flight (3 per lane).
+pub const SHADING_VERTICES_IN_FLIGHT: usize = 12;
+
+/// The shading module's local-store area (`modules/shade_area.s`), at
+/// [`ParamBlock::ls_shading`], above everything the kernel carves: its offsets are the
+/// `SH_*` of `layout.inc`. Set up on the first call (the block fetched, the lights
+/// splatted, the counters and the caches' tags cleared); the host reads the counters.
+#[repr(C)]
+pub struct ShadingArea {
+    /// "SHAD" (word 0) once set up.
+    pub flag: Quad,
+    pub stats: ShadeCounters,
+    /// Over a run of the shading block: the next light, the lights left, the material.
+    pub run: [Quad; 3],
+    /// The colour block's EA, its tag, the material cache's EA, its index mask.
+    pub output: Quad,
+    /// The vertex index mask in every lane.
+    pub vertex_mask: Quad,
+    /// The shading block, as fetched.
+    pub block: ShadingBlockRecord,
+    /// Per light: position x, y, z and colour r, g, b, each splatted.
+    pub lights: [[Quad; 6]; crate::shading::MAX_LIGHTS],
+    pub scratch: ShadeScratch,
+    /// Per lane: the triangle record (the slow path's staging).
+    pub stage: [[Quad; 4]; 4],
+    /// Per lane: the vertex normals n0, n1, n2 and one spare.
+    pub normals: [[Quad; 4]; 4],
+    /// The i-set, 16 vectors of 4 rays each: normal (facing the eye), hit point,
+    /// material (-1: none left).
+    pub nx: [Quad; 16],
+    pub ny: [Quad; 16],
+    pub nz: [Quad; 16],
+    pub px: [Quad; 16],
+    pub py: [Quad; 16],
+    pub pz: [Quad; 16],
+    pub material: [Quad; 16],
+    /// Two colour blocks, alternating.
+    pub out: [[u8; COLOUR_BLOCK_BYTES as usize]; 2],
+    /// Per light: the rays' visibility masks (the shadow module's, all ones without).
+    pub visibility: [[Quad; 16]; crate::shading::MAX_LIGHTS],
+    /// The direct-mapped vertex cache: tags, 64-byte lines (vertex records).
+    pub vertex_tags: [Quad; SHADING_CACHE_ENTRIES],
+    pub vertex_lines: [[Quad; 4]; SHADING_CACHE_ENTRIES],
+    /// The direct-mapped material cache: tags, 32-byte lines (material records).
+    pub material_tags: [Quad; SHADING_CACHE_ENTRIES],
+    pub material_lines: [[Quad; 2]; SHADING_CACHE_ENTRIES],
+    /// The vertices in flight (`sh_vertex_miss`): bytes of their copies (word 0), the
+    /// copies (source, lane, tag, vertex; line), a spare, and their staging slots.
+    pub deferred_bytes: Quad,
+    pub deferred: [[Quad; 2]; SHADING_VERTICES_IN_FLIGHT],
+    pub spare: [Quad; 7],
+    pub vertex_stage: [[Quad; 4]; SHADING_VERTICES_IN_FLIGHT],
+}
+
+/// The shading area's scratch (the irradiance sums lie over it and the two arrays after
+/// it once the i-set is built).
+#[repr(C)]
+pub struct ShadeScratch {
+    /// The normals' columns.
+    pub columns: [Quad; 9],
+    /// Which of the fast path's two groups are done.
+    pub groups_done: Quad,
+    /// The fast path's registers over the slow path.
+    pub save: [Quad; 5],
+    /// The slow path's same-triangle flag, kept over the fetches.
+    pub same: Quad,
+}
+
+/// Local-store bytes of the shading module's area.
+pub const SHADING_AREA_BYTES: usize = size_of::<ShadingArea>();
+/// Offset of the shading module's counters in its area (`SH_STATS`).
+pub const SHADE_STATS_OFFSET: usize = offset_of!(ShadingArea, stats);
+
+/// The shadow module's area (`modules/shadow.s`), right above the shading area: its
+/// offsets are the `SV_*` of `layout.inc`.
+#[repr(C)]
+pub struct ShadowArea {
+    /// The shadow rays cast (word 0).
+    pub rays: Quad,
+    /// The light being traced.
+    pub light: Quad,
+    /// The five miss-handler words of `vars`, saved while the shadow packets run.
+    pub handlers: [Quad; 6],
+    /// The registers the shadow packets change and the caller keeps, one quadword each
+    /// (by register number).
+    pub registers: [Quad; 128],
+    /// The shadow packets' own packet context.
+    pub context: [u8; context::BYTES as usize],
+}
+
+/// The shadow area's offset from the shading area.
 pub const SHADOW_AREA: usize = SHADING_AREA_BYTES;
 /// Offset in the shadow area of the shadow rays cast (word 0 of the quadword).
-pub const SHADOW_RAYS_OFFSET: usize = 0;
+pub const SHADOW_RAYS_OFFSET: usize = offset_of!(ShadowArea, rays);
 /// Offset in the shadow area of the shadow packets' context (its start, not its pointer).
-pub const SHADOW_CONTEXT_OFFSET: usize = 128 + 128 * 16;
+pub const SHADOW_CONTEXT_OFFSET: usize = offset_of!(ShadowArea, context);
 /// Bytes of the shadow area.
-pub const SHADOW_AREA_BYTES: usize = SHADOW_CONTEXT_OFFSET + context::BYTES as usize;
+pub const SHADOW_AREA_BYTES: usize = size_of::<ShadowArea>();
 /// Local-store bytes a shaded frame needs above the kernel's caches: the shading and
 /// shadow areas.
 pub const SHADED_LS_BYTES: usize = SHADING_AREA_BYTES + SHADOW_AREA_BYTES;
 /// The DMA tag of the shadow packets' context.
 pub const SHADOW_TAG: u32 = 1;
 
-/// Bytes of the shading block.
-pub const SHADING_BLOCK_BYTES: usize = 384;
-pub const SHB_EA_VERTICES: usize = 0;
-pub const SHB_LIGHT_COUNT: usize = 12;
-pub const SHB_MODE: usize = 16;
-pub const SHB_LIGHTS: usize = 64;
-/// Bytes per light: position (x, y, z, 0), colour (r, g, b, 0).
-pub const SHB_LIGHT_BYTES: usize = 32;
-/// Bytes of one packet's block in the colour frame buffer.
-pub const COLOUR_BLOCK_BYTES: u32 = 256;
-
 impl ShadingBlock {
-    pub fn to_be_bytes(&self) -> [u8; SHADING_BLOCK_BYTES] {
-        let mut words = [0u32; SHADING_BLOCK_BYTES / 4];
-        words[0] = self.ea_vertices;
-        words[1] = self.ea_materials;
-        words[2] = self.ea_colour;
-        words[3] = self.lights.len() as u32;
-        words[4] = self.mode;
-        words[5] = self.shadow_early as u32;
-        words[6] = self.vertex_cache_log2;
-        words[7] = self.material_cache_log2;
-        for (i, light) in self.lights.iter().enumerate() {
-            let at = (SHB_LIGHTS + i * SHB_LIGHT_BYTES) / 4;
-            for c in 0..3 {
-                words[at + c] = light.position[c].to_bits();
-                words[at + 4 + c] = light.colour[c].to_bits();
-            }
+    /// The block as a record: its lights (at most [`crate::shading::MAX_LIGHTS`]) and
+    /// their count.
+    pub fn record(&self) -> ShadingBlockRecord {
+        let mut lights = [LightRecord::default(); crate::shading::MAX_LIGHTS];
+        for (record, light) in lights.iter_mut().zip(&self.lights) {
+            let v = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
+            *record = LightRecord {
+                position: v(light.position),
+                colour: v(light.colour),
+            };
         }
+        ShadingBlockRecord {
+            ea_vertices: self.ea_vertices,
+            ea_materials: self.ea_materials,
+            ea_colour: self.ea_colour,
+            light_count: self.lights.len().min(lights.len()) as u32,
+            mode: self.mode,
+            shadow_early: self.shadow_early as u32,
+            vertex_cache_log2: self.vertex_cache_log2,
+            material_cache_log2: self.material_cache_log2,
+            lights,
+            ..Default::default()
+        }
+    }
+
+    /// The block as the kernel reads it (big-endian words at the record's offsets).
+    pub fn to_be_bytes(&self) -> [u8; SHADING_BLOCK_BYTES] {
+        let r = self.record();
         let mut out = [0u8; SHADING_BLOCK_BYTES];
-        for (chunk, w) in out.chunks_exact_mut(4).zip(words) {
-            chunk.copy_from_slice(&w.to_be_bytes());
+        let mut put = |at: usize, word: u32| out[at..at + 4].copy_from_slice(&word.to_be_bytes());
+        for (at, word) in [
+            (SHB_EA_VERTICES, r.ea_vertices),
+            (offset_of!(ShadingBlockRecord, ea_materials), r.ea_materials),
+            (offset_of!(ShadingBlockRecord, ea_colour), r.ea_colour),
+            (SHB_LIGHT_COUNT, r.light_count),
+            (SHB_MODE, r.mode),
+            (offset_of!(ShadingBlockRecord, shadow_early), r.shadow_early),
+            (
+                offset_of!(ShadingBlockRecord, vertex_cache_log2),
+                r.vertex_cache_log2,
+            ),
+            (
+                offset_of!(ShadingBlockRecord, material_cache_log2),
+                r.material_cache_log2,
+            ),
+        ] {
+            put(at, word);
+        }
+        for (i, light) in r.lights.iter().enumerate() {
+            let at = SHB_LIGHTS + i * SHB_LIGHT_BYTES;
+            for c in 0..4 {
+                put(
+                    at + offset_of!(LightRecord, position) + 4 * c,
+                    light.position[c].to_bits(),
+                );
+                put(
+                    at + offset_of!(LightRecord, colour) + 4 * c,
+                    light.colour[c].to_bits(),
+                );
+            }
         }
         out
     }
@@ -357,12 +601,32 @@ pub struct KernelStats {
     pub bvh_lookups: u64,
 }
 
-pub const STAT_PACKETS: usize = 0;
-pub const STAT_M1SUM: usize = 16;
-pub const STAT_TRIS: usize = 32;
-pub const STAT_BMISS: usize = 48;
-pub const STAT_TLOOK: usize = 64;
-pub const STAT_BLOOK: usize = 80;
+/// One SPU's statistics block as the kernel writes it (`frame_done.s`): pairs of words
+/// at the start of quadwords; its offsets are the `STAT_*` of `layout.inc`.
+#[repr(C)]
+pub struct StatsBlock {
+    /// Packets, traversal steps.
+    pub packets: Quad,
+    /// The sums of the all-ones masks of first-ray misses and of early exits.
+    pub m1sum: Quad,
+    /// Triangle tests, triangles culled.
+    pub tris: Quad,
+    /// BVH cache misses, leaves.
+    pub bmiss: Quad,
+    /// Triangle cache lookups, misses.
+    pub tlook: Quad,
+    /// BVH cache lookups.
+    pub blook: Quad,
+    pub reserved: [Quad; 2],
+}
+const _: () = assert!(size_of::<StatsBlock>() == STATS_BYTES);
+
+pub const STAT_PACKETS: usize = offset_of!(StatsBlock, packets);
+pub const STAT_M1SUM: usize = offset_of!(StatsBlock, m1sum);
+pub const STAT_TRIS: usize = offset_of!(StatsBlock, tris);
+pub const STAT_BMISS: usize = offset_of!(StatsBlock, bmiss);
+pub const STAT_TLOOK: usize = offset_of!(StatsBlock, tlook);
+pub const STAT_BLOOK: usize = offset_of!(StatsBlock, blook);
 
 impl KernelStats {
     /// Decodes one SPU's block (see the kernel's `frame_done`).
@@ -406,10 +670,11 @@ impl KernelStats {
     }
 }
 
-/// The `.set` lines of the parameter and statistics offsets, for `layout.inc`.
-pub fn spu_include() -> String {
-    let mut out = String::from("# kernel ABI: generated by spu_loader::kernel_abi\n");
-    for (name, value) in [
+/// The kernel ABI's constants by their assembler names: the parameter block, the shading
+/// block, area and counters, the shadow area, the packet context and the statistics
+/// block, each from its one definition above.
+pub fn spu_constants() -> Vec<(&'static str, i64)> {
+    let mut constants = vec![
         ("PARAM_EA_NODES", PARAM_EA_NODES as i64),
         ("PARAM_WIDTH", PARAM_WIDTH as i64),
         ("PARAM_ORIGIN", PARAM_ORIGIN as i64),
@@ -467,11 +732,88 @@ pub fn spu_include() -> String {
         ("STAT_BMISS", STAT_BMISS as i64),
         ("STAT_TLOOK", STAT_TLOOK as i64),
         ("STAT_BLOOK", STAT_BLOOK as i64),
-    ] {
+    ];
+    let area = |name, offset: usize| (name, offset as i64);
+    constants.extend([
+        area("SH_FLAG", offset_of!(ShadingArea, flag)),
+        area("SH_STATS", offset_of!(ShadingArea, stats)),
+    ]);
+    constants.extend(
+        ShadeCounters::SPU_NAMES
+            .iter()
+            .map(|&(name, offset)| (name, offset as i64)),
+    );
+    constants.extend([
+        area("SH_RUN", offset_of!(ShadingArea, run)),
+        area("SH_RUN_OUT", offset_of!(ShadingArea, output)),
+        area("SH_VMASK", offset_of!(ShadingArea, vertex_mask)),
+        area("SH_BLOCK", offset_of!(ShadingArea, block)),
+        area("SH_LIGHTS", offset_of!(ShadingArea, lights)),
+        area("SH_LIGHT_BYTES", size_of::<[Quad; 6]>()),
+        area("SH_SCRATCH", offset_of!(ShadingArea, scratch)),
+        area("SH_DONE", offset_of!(ShadingArea, scratch.groups_done)),
+        area("SH_SAVE", offset_of!(ShadingArea, scratch.save)),
+        area("SH_SAME", offset_of!(ShadingArea, scratch.same)),
+        area("SH_STAGE", offset_of!(ShadingArea, stage)),
+        area("SH_NRM", offset_of!(ShadingArea, normals)),
+        area("SH_NX", offset_of!(ShadingArea, nx)),
+        area("SH_NY", offset_of!(ShadingArea, ny)),
+        area("SH_NZ", offset_of!(ShadingArea, nz)),
+        area("SH_PX", offset_of!(ShadingArea, px)),
+        area("SH_PY", offset_of!(ShadingArea, py)),
+        area("SH_PZ", offset_of!(ShadingArea, pz)),
+        area("SH_MAT", offset_of!(ShadingArea, material)),
+        area("SH_OUT", offset_of!(ShadingArea, out)),
+        area("SH_VIS", offset_of!(ShadingArea, visibility)),
+        area("SH_VTAGS", offset_of!(ShadingArea, vertex_tags)),
+        area("SH_VDATA", offset_of!(ShadingArea, vertex_lines)),
+        area("SH_MTAGS", offset_of!(ShadingArea, material_tags)),
+        area("SH_MDATA", offset_of!(ShadingArea, material_lines)),
+        area("SH_DCOUNT", offset_of!(ShadingArea, deferred_bytes)),
+        area("SH_DEFER", offset_of!(ShadingArea, deferred)),
+        area("SH_VSTAGE", offset_of!(ShadingArea, vertex_stage)),
+        area("SH_IN_FLIGHT", SHADING_VERTICES_IN_FLIGHT),
+        area("SH_AREA_BYTES", SHADING_AREA_BYTES),
+        area("SV_RAYS", offset_of!(ShadowArea, rays)),
+        area("SV_LIGHT", offset_of!(ShadowArea, light)),
+        area("SV_HANDLERS", offset_of!(ShadowArea, handlers)),
+        area("SV_REGS", offset_of!(ShadowArea, registers)),
+    ]);
+    constants
+}
+
+/// The `.set` lines of [`spu_constants`], for `layout.inc`.
+pub fn spu_include() -> String {
+    let mut out = String::from("# kernel ABI: generated by spu_loader::kernel_abi\n");
+    for (name, value) in spu_constants() {
         out.push_str(&format!("        .set {name}, {value}\n"));
     }
     out
 }
+
+/// A stretch of the kernel's code the statistics report apart (CPI, stalls): from label
+/// `from` up to label `to`, both in the kernel's symbols.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CodeSection {
+    pub from: &'static str,
+    pub to: &'static str,
+}
+
+/// The traversal steps (`modules/traverse.s` and its miss paths, up to the leaves).
+pub const TRAVERSAL: CodeSection = CodeSection {
+    from: "trav",
+    to: "leaf",
+};
+/// The leaves' triangle tests (`modules/triangle.s` and its miss paths).
+pub const INTERSECTION: CodeSection = CodeSection {
+    from: "leaf",
+    to: "packet_done",
+};
+/// The shading module (`modules/shade.s` and the files it composes), with `SHADE`.
+pub const SHADING: CodeSection = CodeSection {
+    from: "shade_packet",
+    to: "shade_end",
+};
 
 /// One decoded pixel of the frame buffer.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -623,6 +965,146 @@ mod tests {
         assert_eq!(pixel_location(64, 0, 16), (64 * 1024, 0));
         // Pixel (3, 65) with 2 tiles per row: tile 2, packet 0, index 8 + 3.
         assert_eq!(pixel_location(3, 65, 2), (2 * 64 * 1024, 11));
+    }
+
+    /// The shading area, shading block, counters and shadow area keep the offsets the
+    /// kernel's code was laid out with (a field moved moves the kernel's data), and every
+    /// offset reaches `layout.inc` once.
+    #[test]
+    fn shading_abi_offsets_are_the_documented_ones() {
+        assert_eq!((SHADING_AREA_BYTES, SHADE_STATS_OFFSET), (40576, 16));
+        assert_eq!(
+            (SHADING_BLOCK_BYTES, SHB_LIGHT_COUNT, SHB_MODE, SHB_LIGHTS),
+            (384, 12, 16, 64)
+        );
+        assert_eq!(
+            (SHADOW_CONTEXT_OFFSET, SHADOW_AREA_BYTES),
+            (2176, 2176 + 6016)
+        );
+        let constants = spu_constants();
+        let value = |name: &str| {
+            let found: Vec<i64> = constants
+                .iter()
+                .filter(|(n, _)| *n == name)
+                .map(|(_, v)| *v)
+                .collect();
+            assert_eq!(found.len(), 1, "{name}");
+            found[0]
+        };
+        for (name, offset) in [
+            ("SH_STATS", 16),
+            ("SH_RUN", 176),
+            ("SH_RUN_OUT", 224),
+            ("SH_VMASK", 240),
+            ("SH_BLOCK", 256),
+            ("SH_LIGHTS", 640),
+            ("SH_SCRATCH", 1408),
+            ("SH_DONE", 1552),
+            ("SH_SAVE", 1568),
+            ("SH_SAME", 1648),
+            ("SH_STAGE", 1664),
+            ("SH_NRM", 1920),
+            ("SH_NX", 2176),
+            ("SH_MAT", 3712),
+            ("SH_OUT", 3968),
+            ("SH_VIS", 4480),
+            ("SH_VTAGS", 6528),
+            ("SH_VDATA", 10624),
+            ("SH_MTAGS", 27008),
+            ("SH_MDATA", 31104),
+            ("SH_DCOUNT", 39296),
+            ("SH_DEFER", 39312),
+            ("SH_VSTAGE", 39808),
+            ("SHS_GROUPS", 0),
+            ("SHS_PACKETS", 48),
+            ("SHS_TMISS", 144),
+            ("SV_HANDLERS", 32),
+            ("SV_REGS", 128),
+            ("STAT_BLOOK", 80),
+        ] {
+            assert_eq!(value(name), offset, "{name}");
+        }
+        let mut names: Vec<&str> = constants.iter().map(|(n, _)| *n).collect();
+        names.sort_unstable();
+        let count = names.len();
+        names.dedup();
+        assert_eq!(names.len(), count, "a name generated twice");
+    }
+
+    /// No kernel source defines again a name `layout.inc` generates: the generated value
+    /// is the only one.
+    #[test]
+    fn no_kernel_source_mirrors_a_generated_name() {
+        let generated: Vec<String> = crate::kernels::layout_include()
+            .lines()
+            .filter_map(|l| l.trim().strip_prefix(".set "))
+            .map(|l| l.split(',').next().unwrap().trim().to_string())
+            .collect();
+        assert!(generated.iter().any(|n| n == "SH_AREA_BYTES"));
+        let sources = crate::kernels::MODULES
+            .iter()
+            .chain(crate::kernels::FRAME_SOURCES)
+            .map(|(name, text)| (*name, *text));
+        for (file, text) in sources {
+            for line in text.lines() {
+                let code = line.split('#').next().unwrap().trim();
+                if let Some(rest) = code.strip_prefix(".set") {
+                    let name = rest.split(',').next().unwrap().trim();
+                    assert!(
+                        !generated.iter().any(|g| g == name),
+                        "{file} sets {name}, which layout.inc generates: `{line}`"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The statistics' code sections are stretches of the kernels they measure: both
+    /// labels are symbols of the (shaded) primary kernel, in order.
+    #[test]
+    fn code_sections_are_stretches_of_the_kernel() {
+        let primary = crate::kernels::KernelVariant::Primary;
+        let (source, name) = (primary.source(), primary.name());
+        for (defines, sections) in [
+            (&[][..], &[TRAVERSAL, INTERSECTION][..]),
+            (&[("SHADE", 1)][..], &[TRAVERSAL, INTERSECTION, SHADING][..]),
+        ] {
+            let program = crate::runtime::assemble_kernel_with(source, name, defines)
+                .unwrap_or_else(|e| panic!("{e}"));
+            let at = |label: &str| {
+                program
+                    .symbols
+                    .iter()
+                    .find(|(n, _)| n == label)
+                    .unwrap_or_else(|| panic!("no {label} in {name} {defines:?}"))
+                    .1
+            };
+            for s in sections {
+                assert!(at(s.from) < at(s.to), "{s:?}");
+            }
+        }
+    }
+
+    /// The counters decode by name from local store: word 0 of each quadword, in the
+    /// kernel's order; sums add field by field.
+    #[test]
+    fn shade_counters_decode_by_name() {
+        let mut ls = vec![0u8; 160];
+        for i in 0..10u32 {
+            ls[16 * i as usize..16 * i as usize + 4].copy_from_slice(&(100 + i).to_be_bytes());
+            ls[16 * i as usize + 4..16 * i as usize + 8].copy_from_slice(&7u32.to_be_bytes());
+        }
+        let c = ShadeCounters::from_be_bytes(&ls);
+        assert_eq!(
+            (c.groups, c.packets, c.vertex_misses, c.triangle_misses),
+            (Counter(100), Counter(103), Counter(105), Counter(109))
+        );
+        let sum = ShadeCounters::sum(&[c, c]);
+        assert_eq!(
+            (sum.same, sum.material_lookups),
+            (Counter(202), Counter(212))
+        );
+        assert_eq!(ShadeCounters::from_be_bytes(&ls[..18]).same, Counter(0));
     }
 
     #[test]

@@ -16,11 +16,7 @@ pub struct SpuReport {
     pub stats: KernelStats,
 }
 
-/// Offset of the shading module's counters in its local-store area (`SH_STATS`).
-pub const SHADE_STATS_OFFSET: usize = 16;
-
-/// The shading module's counters, in the order of `SHS_*` in `modules/shade.s`.
-pub type ShadeCounters = [u64; 10];
+pub use crate::kernel_abi::{ShadeCounters, SHADE_STATS_OFFSET};
 
 /// The outcome of one frame.
 #[derive(Clone, Debug, Default)]
@@ -450,10 +446,7 @@ pub fn run_frame(
                 .iter()
                 .map(|spu| {
                     // The PPE reads the counters from each SPE's memory-mapped local store.
-                    std::array::from_fn(|i| {
-                        let w = &spu.ls()[area + 16 * i..area + 16 * i + 4];
-                        u32::from_be_bytes([w[0], w[1], w[2], w[3]]) as u64
-                    })
+                    ShadeCounters::from_be_bytes(spu.ls().get(area..).unwrap_or_default())
                 })
                 .collect();
             (

@@ -5,6 +5,7 @@
 //! Keys added later get `#[serde(default)]` so that stats files written before them still
 //! load.
 
+use crate::kernel_abi::{INTERSECTION, SHADING, TRAVERSAL};
 use crate::runtime::FrameRun;
 use serde::{Deserialize, Serialize};
 use spu_isa::profile::RangeSum;
@@ -102,7 +103,7 @@ impl Table4 {
         if counters.is_empty() {
             return None;
         }
-        let sum = |i: usize| counters.iter().map(|c| c[i]).sum::<u64>();
+        let sum = crate::kernel_abi::ShadeCounters::sum(counters);
         let pct = |x: u64, of: u64| {
             if of > 0 {
                 rounded(100.0 * x as f64 / of as f64, 2)
@@ -110,8 +111,15 @@ impl Table4 {
                 0.0
             }
         };
-        let (groups, same, passes, packets) = (sum(0), sum(1), sum(2), sum(3));
-        let (vmiss, mlook, mmiss, tlook, tmiss) = (sum(5), sum(6), sum(7), sum(8), sum(9));
+        let (groups, same, passes, packets) =
+            (sum.groups.0, sum.same.0, sum.passes.0, sum.packets.0);
+        let (vmiss, mlook, mmiss, tlook, tmiss) = (
+            sum.vertex_misses.0,
+            sum.material_lookups.0,
+            sum.material_misses.0,
+            sum.triangle_lookups.0,
+            sum.triangle_misses.0,
+        );
         let vlook = 3 * tlook;
         Some(Table4 {
             same_triangle_pct: pct(same, groups),
@@ -423,8 +431,8 @@ impl FrameStats {
             table2: Table2::new(run, rays, clock_ghz),
             config: run.config.clone(),
             caches: CacheStats::new(run),
-            traversal: section(run, "trav", "leaf"),
-            intersection: section(run, "leaf", "packet_done"),
+            traversal: section(run, TRAVERSAL.from, TRAVERSAL.to),
+            intersection: section(run, INTERSECTION.from, INTERSECTION.to),
             totals: run.profile.as_ref().map(|p| ProfileTotals::new(&p.totals)),
             fps: if seconds > 0.0 {
                 rounded(1.0 / seconds, 3)
@@ -440,7 +448,7 @@ impl FrameStats {
             shading: if run.shade_counters.is_empty() {
                 None
             } else {
-                section(run, "shade_packet", "shade_end")
+                section(run, SHADING.from, SHADING.to)
             },
         }
     }

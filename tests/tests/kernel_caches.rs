@@ -619,3 +619,60 @@ fn bvh_cache_misses_fetch_install_and_keep_lru_order() {
     }
     insta::assert_snapshot!(text);
 }
+
+/// lru_find and lru_rotate keep their register contracts (`modules/lru.s`' header), each
+/// called alone on the set of [`LRU_DRIVER`] with everything but its inputs poisoned two
+/// ways: lru_find answers way 2 for way 2's key, lru_rotate of way 2 gives (2, 0, 1, 3).
+#[test]
+fn lru_routines_keep_their_register_contracts() {
+    let mut src = String::from(
+        "        .text\n        .global _start\n_start: stop 0x2100\nback:   stop 0x2000\n        .include \"modules/lru.s\"\n        .data\n        .align 4\ntags:\n",
+    );
+    for way in 0..4 {
+        src += &format!("        .long {:#x}, 0, 0, 0\n", 0x1000 + 0x40 * way);
+    }
+    src += "lines:\n";
+    for way in 0..4 {
+        for word in 0..16 {
+            src += &format!("        .long {:#x}\n", 0x100 * way + word);
+        }
+    }
+    for entry in ["lru_find", "lru_rotate"] {
+        let contract = spu_tests::RegisterContract::of_module("modules/lru.s", Some(entry));
+        let (spu, ls) = spu_tests::check_register_contract(&contract, |poison| {
+            let mut h =
+                spu_tests::ModuleHarness::new(&src, "lru_driver.s", MainMemory::zeroed(4096));
+            let (tags, lines, back) = (h.sym("tags"), h.sym("lines"), h.sym("back"));
+            for (r, v) in [
+                (0, back),
+                (100, 2),
+                (101, tags),
+                (102, lines),
+                (103, 16),
+                (104, 64),
+                (116, 0x1080),
+            ] {
+                h.spu.set_reg(r, [v, 0, 0, 0]);
+            }
+            poison(&mut h.spu);
+            let stop = h.run_at(h.sym(entry), 100_000);
+            assert_eq!(stop, spu_isa::machine::StopReason::Stop(0x2000), "{entry}");
+            let ls = h.bytes(tags, 64 + 256);
+            (h.spu, ls)
+        });
+        let tag_order: Vec<u32> = (0..4)
+            .map(|w| (word(&ls, 16 * w) - 0x1000) / 0x40)
+            .collect();
+        if entry == "lru_find" {
+            assert_eq!(spu.reg(100)[0], 2, "way 2 holds the key");
+            assert_eq!(tag_order, [0, 1, 2, 3], "nothing moves");
+        } else {
+            assert_eq!(tag_order, [2, 0, 1, 3]);
+            assert_eq!(
+                word(&ls, 64 + 64 + 4 * 5),
+                5,
+                "way 1 holds the old way 0's line"
+            );
+        }
+    }
+}

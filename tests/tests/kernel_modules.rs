@@ -3,106 +3,25 @@
 //! and a `stop` stub for every label it leaves to; the host sets the registers and local
 //! store a module expects, runs it from its entry label with the timing model, and
 //! snapshots the registers and local store it leaves (and checks them against the host
-//! reference). [`Harness`] is the mechanism; the cases below use it.
+//! reference). The mechanism is the tests' one module harness
+//! (`spu_tests::ModuleHarness`); the frame's state it sets up is below.
 
-use spu_asm::sched::Names;
-use spu_isa::machine::{MainMemory, Spu, StopReason};
 use spu_loader::layout::TriangleRecord;
+use spu_tests::ModuleHarness as Harness;
 use std::fmt::Write;
 
-/// A module (or modules) assembled with a driver, on one simulated SPU.
-struct Harness {
-    spu: Spu,
-    memory: MainMemory,
-    symbols: Vec<(String, u32)>,
-    names: Names,
-    /// Stop codes of the stubs, by label.
-    stubs: Vec<(String, u16)>,
+/// The frame's state the modules expect, as `_start` (modules/frame.s) sets it up, and the
+/// snapshot of what a module leaves.
+trait FrameState {
+    fn frame_constants(&mut self);
+    fn context(&mut self, base: u32);
+    fn var(&mut self, name: &str, value: [u32; 4]);
+    fn ctx(&self, offset: &str) -> u32;
+    fn triangle_cache(&mut self, bvh_lines: u32, lines: u32, ea: u32);
+    fn snapshot(&self, exit: &str, regs: &[&str], regions: &[(&str, u32)]) -> String;
 }
 
-impl Harness {
-    /// Assembles `modules` (include names under `kernels/`) with stubs for `exits`, the
-    /// labels outside them the modules branch to; `extra` is more driver source.
-    fn new(modules: &[&str], exits: &[&str], extra: &str) -> Self {
-        let mut src = String::from(
-            "        .include \"layout.inc\"\n        .include \"modules/regs.inc\"\n        .include \"modules/data.s\"\n        .text\n        .global _start\n_start: stop 0x2100\n",
-        );
-        for m in modules {
-            src += &format!("        .include \"{m}\"\n");
-        }
-        let mut stubs = Vec::new();
-        for (k, label) in exits.iter().enumerate() {
-            let code = 0x2101 + k as u16;
-            src += &format!("{label}: stop {code:#x}\n");
-            stubs.push((label.to_string(), code));
-        }
-        src += extra;
-        let program = spu_loader::runtime::assemble_kernel(&src, "driver.s")
-            .unwrap_or_else(|e| panic!("{e}"));
-        let mut spu = Spu::new(0);
-        spu.load_image(&program.image);
-        spu.enable_timing(Default::default());
-        let mut names = Names::default();
-        names.collect(include_str!("../../kernels/layout.inc"), &mut |_| None);
-        names.collect(include_str!("../../kernels/modules/regs.inc"), &mut |_| {
-            None
-        });
-        Harness {
-            spu,
-            memory: MainMemory::zeroed(1 << 20),
-            symbols: program.symbols,
-            names,
-            stubs,
-        }
-    }
-
-    fn sym(&self, name: &str) -> u32 {
-        self.symbols
-            .iter()
-            .find(|(n, _)| n == name)
-            .unwrap_or_else(|| panic!("no symbol {name}"))
-            .1
-    }
-
-    fn reg_number(&self, name: &str) -> usize {
-        self.names
-            .register(name)
-            .unwrap_or_else(|| panic!("no register {name}")) as usize
-    }
-
-    fn set(&mut self, name: &str, value: [u32; 4]) {
-        let r = self.reg_number(name);
-        self.spu.set_reg(r, value);
-    }
-
-    /// A constant of the register map or `layout.inc` (`CTX_RAY_T`, `V_PFMISS`, ...).
-    fn value(&self, name: &str) -> u32 {
-        self.names
-            .value_of(name)
-            .unwrap_or_else(|| panic!("no constant {name}")) as u32
-    }
-
-    fn reg(&self, name: &str) -> [u32; 4] {
-        self.spu.reg(self.reg_number(name))
-    }
-
-    fn splat(&mut self, name: &str, value: u32) {
-        self.set(name, [value; 4]);
-    }
-
-    fn quad(&self, addr: u32) -> [u32; 4] {
-        let ls = self.spu.ls();
-        std::array::from_fn(|i| {
-            let a = addr as usize + 4 * i;
-            u32::from_be_bytes(ls[a..a + 4].try_into().unwrap())
-        })
-    }
-
-    fn write_words(&mut self, addr: u32, words: &[u32]) {
-        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_be_bytes()).collect();
-        self.spu.write_ls(addr, &bytes);
-    }
-
+impl FrameState for Harness {
     /// The frame constants `_start` sets (modules/frame.s), from the same data.
     fn frame_constants(&mut self) {
         self.splat("ZERO", 0);
@@ -131,7 +50,7 @@ impl Harness {
         self.splat("STKBASE", stack);
         self.splat("STK", stack);
         let tag = self.value("CONTEXT_TAG0");
-        self.write_words(rays + self.value("CTX_TAG"), &[tag, 1 << tag, 0, 0]);
+        self.write_words(rays + self.value("CTX_TAG"), [tag, 1 << tag, 0, 0]);
         self.var("V_NCTX1", [u32::MAX; 4]);
         self.var("V_ASSOC4", [0; 4]);
     }
@@ -139,7 +58,7 @@ impl Harness {
     /// Writes a cold variable (`vars+V_*`).
     fn var(&mut self, name: &str, value: [u32; 4]) {
         let addr = self.sym("vars") + self.value(name);
-        self.write_words(addr, &value);
+        self.write_words(addr, value);
     }
 
     /// An address in the current packet context.
@@ -155,21 +74,7 @@ impl Harness {
         self.splat("TDATA", ttags + lines * 16);
         self.splat("TMASK", lines - 1);
         self.splat("EATRIS", ea);
-        self.write_words(ttags, &vec![u32::MAX; 4 * lines as usize]);
-    }
-
-    /// Runs from `label` until a stub stops it: the stub's label.
-    fn run_from(&mut self, label: &str) -> String {
-        let pc = self.sym(label);
-        self.spu.set_pc(pc);
-        match self.spu.run(&mut self.memory, 10_000_000) {
-            StopReason::Stop(code) => self
-                .stubs
-                .iter()
-                .find(|s| s.1 == code)
-                .map_or(format!("stop {code:#x}"), |s| s.0.clone()),
-            other => panic!("the module stopped abnormally: {other}"),
-        }
+        self.write_words(ttags, vec![u32::MAX; 4 * lines as usize]);
     }
 
     /// Named registers, then local-store regions (a label, or an offset `CTX_*` in the
@@ -225,7 +130,7 @@ fn packet_rays(origin: [f32; 3]) -> Vec<[f32; 3]> {
 
 #[test]
 fn triangle_test_on_a_packet() {
-    let mut h = Harness::new(
+    let mut h = Harness::with_stubs(
         &["modules/triangle.s", "modules/tri_cache.s", "modules/lru.s"],
         &["packet_done", "trav", "suspend"],
         "        .set    .Lnewcur, trav\nharness_pf_one: br .Lpf_one\n",
@@ -274,8 +179,8 @@ fn triangle_test_on_a_packet() {
         h.write_words(dx + 256 * (3 + axis as u32), &recip);
     }
     let t_addr = h.ctx("CTX_RAY_T");
-    h.write_words(t_addr, &[0x7149_f2ca; 64]);
-    h.write_words(h.ctx("CTX_RAY_ID"), &[u32::MAX; 64]);
+    h.write_words(t_addr, [0x7149_f2ca; 64]);
+    h.write_words(h.ctx("CTX_RAY_ID"), [u32::MAX; 64]);
     let corners: Vec<u32> = (0..3)
         .flat_map(|axis| [0, 7, 56, 63].map(|i| rays[i][axis].to_bits()))
         .collect();
@@ -348,7 +253,7 @@ fn bvh_cache(h: &mut Harness, lines: u32, ea: u32) {
     h.splat("BDATA48", bdata + 48);
     h.splat("BMASK64", (lines - 1) * 64);
     h.splat("EANODES", ea);
-    h.write_words(btags, &vec![u32::MAX; 4 * lines as usize]);
+    h.write_words(btags, vec![u32::MAX; 4 * lines as usize]);
 }
 
 #[test]
@@ -358,7 +263,7 @@ fn ray_generation_packet_setup_and_one_traversal_step() {
     // fills the line, tests both children, descends to the near leaf and pushes the far
     // one; the first ray misses one child, so find_first gives that child its own first
     // ray (5). The next step sees the leaf and leaves for the triangle test.
-    let mut h = Harness::new(
+    let mut h = Harness::with_stubs(
         &[
             "modules/raygen.s",
             "modules/traverse.s",
@@ -456,4 +361,124 @@ fn ray_generation_packet_setup_and_one_traversal_step() {
         &["CUR", "STK", "FIRST", "S_STEPS", "M1V", "EEV", "F2", "PAX", "PBX", "OAX", "OBX"],
         &[("CTX_STACK", 32), ("CTX_CORNERS", 48), ("cache_area", 32)],
     ));
+}
+
+/// The BVH cache's one-context miss handler alone (`modules/bvh_cache.s`), entered as the
+/// traversal step leaves a miss: the lookup's $66 (the line's offset) and $72 (the tag's)
+/// and the pair in CUR, everything outside its register contract poisoned two ways. It
+/// fetches the pair, installs it axis-major in the line with CUR as the tag, takes back
+/// the step's count and returns to `trav`.
+#[test]
+fn bvh_miss_handler_takes_the_steps_lookup() {
+    use spu_loader::layout::NodeRecord;
+    let contract =
+        spu_tests::RegisterContract::of_module("modules/bvh_cache.s", Some("bvh_miss_one"));
+    let node = |lo: f32, link: u32, count_axis: u32| NodeRecord {
+        min: [lo, lo + 1.0, lo + 2.0],
+        link,
+        max: [lo + 3.0, lo + 4.0, lo + 5.0],
+        count_axis,
+    };
+    // the pair 1 (nodes 2 and 3): an inner node and a leaf of 3 triangles
+    let nodes = [
+        node(0.0, 2, 0),
+        node(0.0, 0, 0),
+        node(10.0, 6, 1),
+        node(20.0, 9, 3 << 2),
+    ];
+    let ea = 0x8000u32;
+    let (spu, (exit, line)) = spu_tests::check_register_contract(&contract, |poison| {
+        let mut h = Harness::with_stubs(
+            &["modules/bvh_cache.s", "modules/lru.s"],
+            &["trav", "suspend"],
+            "",
+        );
+        h.frame_constants();
+        let mut bytes = vec![0u8; 32 * nodes.len()];
+        for (i, n) in nodes.iter().enumerate() {
+            n.write_be(&mut bytes[32 * i..32 * i + 32]);
+        }
+        assert!(h.memory.write_bytes(ea as u64, &bytes));
+        bvh_cache(&mut h, 256, ea);
+        h.triangle_cache(256, 128, 0x4000);
+        let contexts = h.reg("TDATA")[0] + 128 * 64;
+        h.context(contexts);
+        h.set("CUR", [64, 0x40, 0, 0]);
+        h.splat("S_STEPS", 5);
+        let line = 64; // the pair's line: CUR & BMASK64
+        h.spu.set_reg(66, [line, 0, 0, 0]);
+        h.spu.set_reg(72, [line / 4, 0, 0, 0]);
+        poison(&mut h.spu);
+        let exit = h.run_from("bvh_miss_one");
+        let cache = h.sym("cache_area");
+        let mut out = h.bytes(cache + 16, 16);
+        out.extend(h.bytes(cache + 256 * 16 + 64, 64));
+        (h.spu, (exit, out))
+    });
+    assert_eq!(exit, "trav");
+    let steps = spu_tests::kernel_names().register("S_STEPS").unwrap() as usize;
+    assert_eq!(spu.reg(steps)[0], 4, "the step counts again");
+    let word = |at: usize| u32::from_be_bytes(line[at..at + 4].try_into().unwrap());
+    assert_eq!([word(0), word(4)], [64, 0x40], "the tag is the pair");
+    let f = |at: usize| f32::from_bits(word(16 + at));
+    // x planes (min2.x, max2.x, min3.x, max3.x), then y, z; then (link', meta) per child
+    assert_eq!([f(0), f(4), f(8), f(12)], [10.0, 13.0, 20.0, 23.0]);
+    assert_eq!([f(16), f(20), f(24), f(28)], [11.0, 14.0, 21.0, 24.0]);
+    assert_eq!([f(32), f(36), f(40), f(44)], [12.0, 15.0, 22.0, 25.0]);
+    assert_eq!(
+        [word(64), word(68), word(72), word(76)],
+        [6 * 32, 1 << 4, 9, (3 << 2) << 4]
+    );
+}
+
+/// The triangle cache's one-context prefetch miss alone (`modules/tri_cache.s`), entered
+/// as the leaf's prefetch pass leaves a missing triangle, everything outside its register
+/// contract poisoned two ways: the record is fetched straight into way 0 (the tag first),
+/// the miss counted, and the pass goes on with a fetch in flight ($78 = 1).
+#[test]
+fn triangle_prefetch_miss_takes_the_pass_lookup() {
+    let contract = spu_tests::RegisterContract::of_module("modules/tri_cache.s", Some(".Lpf_one"));
+    let (index, ea) = (21u32, 0x4000u32);
+    let record: Vec<u8> = (0..64u8).map(|b| b ^ 0x5a).collect();
+    // .Lpf_next waits for the fetch (through a register the handler clobbers) and stops;
+    // the handler's local label is reached through a global one
+    let extra = "
+harness_pf_one: br .Lpf_one
+.Lpf_next:
+        il      $87, 1 << CONTEXT_TAG0
+        wrch    $MFC_WrTagMask, $87
+        il      $87, 2
+        wrch    $MFC_WrTagUpdate, $87
+        rdch    $87, $MFC_RdTagStat
+        stop    0x2200
+";
+    let (spu, (exit, outcome)) = spu_tests::check_register_contract(&contract, |poison| {
+        let mut h = Harness::with_stubs(
+            &["modules/tri_cache.s", "modules/lru.s"],
+            &[".Lpf", ".Ltri_hit", "leaf_cull", "leaf_probe", "suspend"],
+            extra,
+        );
+        h.frame_constants();
+        assert!(h.memory.write_bytes((ea + 64 * index) as u64, &record));
+        h.triangle_cache(256, 128, ea);
+        let contexts = h.reg("TDATA")[0] + 128 * 64;
+        h.context(contexts);
+        let line = index & 127;
+        for (r, v) in [(76, index), (79, 64), (80, line), (81, 16 * line)] {
+            h.spu.set_reg(r, [v, 0, 0, 0]);
+        }
+        poison(&mut h.spu);
+        let exit = h.run_from("harness_pf_one");
+        let ttags = h.reg("TTAGS")[0];
+        let tdata = h.reg("TDATA")[0];
+        let mut out = h.bytes(ttags + 16 * line, 16);
+        out.extend(h.bytes(tdata + 64 * line, 64));
+        out.extend(h.bytes(h.sym("vars") + h.value("V_TMISS"), 4));
+        (h.spu, (exit, out))
+    });
+    assert_eq!(exit, "stop 0x2200", "back to the pass");
+    assert_eq!(spu.reg(78)[0], 1, "a fetch is in flight");
+    assert_eq!(outcome[..4], index.to_be_bytes(), "the tag");
+    assert_eq!(outcome[16..80], record[..], "the record, in way 0");
+    assert_eq!(outcome[80..84], 1u32.to_be_bytes(), "one miss counted");
 }

@@ -90,9 +90,9 @@ fn simple_shading_of_the_room_matches_the_reference() {
     let distinct: std::collections::HashSet<u32> = shaded.colours.iter().copied().collect();
     assert!(distinct.len() > 500, "{} colours", distinct.len());
     // Every packet was shaded once, on one SPU or the other.
-    let packets: u64 = shaded.run.shade_counters.iter().map(|c| c[3]).sum();
+    let packets: u64 = shaded.run.shade_counters.iter().map(|c| c.packets.0).sum();
     assert_eq!(packets, 16 * 16);
-    let passes: u64 = shaded.run.shade_counters.iter().map(|c| c[2]).sum();
+    let passes: u64 = shaded.run.shade_counters.iter().map(|c| c.passes.0).sum();
     assert!(passes > packets && passes < 3 * packets, "{passes} passes");
     // Table 4 and 6: the colour frame buffer is 4 bytes a pixel, the scene data read is
     // what the caches missed; the shading section is profiled.
@@ -116,9 +116,19 @@ fn simple_shading_of_the_room_matches_the_reference() {
     assert_eq!(table6.result_blocks_written_kb, 128.0);
     assert!(table6.bvh_nodes_kb > 0.0 && table6.triangle_records_kb > 0.0);
     // every material record read is one 32-byte miss
-    let material_misses: u64 = shaded.run.shade_counters.iter().map(|c| c[7]).sum();
+    let material_misses: u64 = shaded
+        .run
+        .shade_counters
+        .iter()
+        .map(|c| c.material_misses.0)
+        .sum();
     assert!((table6.shader_data_kb - material_misses as f64 * 32.0 / 1024.0).abs() < 0.006);
-    let vertex_misses: u64 = shaded.run.shade_counters.iter().map(|c| c[5]).sum();
+    let vertex_misses: u64 = shaded
+        .run
+        .shade_counters
+        .iter()
+        .map(|c| c.vertex_misses.0)
+        .sum();
     assert!((table6.vertex_data_kb - vertex_misses as f64 * 64.0 / 1024.0).abs() < 0.006);
     assert!(stats.shading.as_ref().unwrap().instructions > 0);
     assert!(stats.fps > 0.0);
@@ -133,7 +143,7 @@ fn simple_shading_with_hyperthreading_and_4_way_caches() {
     let shaded = shaded_frame(&room, 64, 1, ShadeMode::Simple, &lights, false, (4, 4));
     assert_eq!(shaded.triangle_mismatches, 0);
     assert_eq!(shaded.colour_mismatches, 0);
-    assert_eq!(shaded.run.shade_counters[0][3], 64);
+    assert_eq!(shaded.run.shade_counters[0].packets.0, 64);
 }
 
 /// Shadow packets (one per light and primary packet, from the light) traced by the kernel's
@@ -189,7 +199,7 @@ fn shadows_with_hyperthreading_and_4_way_caches() {
         let shaded = shaded_frame(&room, 64, 2, ShadeMode::Shadows, &lights, early, (4, 4));
         assert_eq!(shaded.triangle_mismatches, 0);
         assert_eq!(shaded.colour_mismatches, 0);
-        let packets: u64 = shaded.run.shade_counters.iter().map(|c| c[3]).sum();
+        let packets: u64 = shaded.run.shade_counters.iter().map(|c| c.packets.0).sum();
         assert_eq!(packets, 64);
         assert!(shaded.run.shadow_rays > 0);
     }

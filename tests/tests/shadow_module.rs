@@ -4,13 +4,15 @@
 //! (rays, frustum, first ray, miss handlers) for the host to check against the shadow-ray
 //! model, then records the occlusions the host chose and ends the packet, through the
 //! early-termination hook (`shadow_leaf`) when `--shadow-early` is on. The module's
-//! visibility masks, its ray count and the registers it must keep are checked too.
+//! visibility masks and its ray count are checked too, and the module against the register
+//! contract in its header (what it reads, keeps and counts on).
 
 use spu_isa::machine::{MainMemory, Spu, StopReason};
 use spu_loader::kernel_abi::{
     ShadingBlock, PARAM_EA_SHADING, SHADE_SHADOWS, SHADE_SIMPLE, SHADOW_AREA, SHADOW_RAYS_OFFSET,
 };
 use spu_loader::shading::{Light, SHADOW_EPSILON};
+use spu_tests::{check_register_contract, ModuleHarness, RegisterContract};
 
 /// Bytes the stand-in traversal copies per shadow packet: the rays (dx, dy, dz, rx, ry, rz,
 /// t), 16 registers and vars words, the t array after the leaf hook, the corner rays.
@@ -22,8 +24,8 @@ const DRIVER: &str = r#"
         .include "modules/data.s"
         .text
         .global _start
-_start: brsl    $127, shadow_rays
-        stop    0x2000
+_start: brsl    $127, shadow_rays             # (the host calls the module itself)
+back:   stop    0x2000
 # the shading module's offsets and the one-context handlers' addresses, for the host
         .align 4
 offsets: .long SH_BLOCK, SH_PX, SH_PY, SH_PZ, SH_NX, SH_NY, SH_NZ, SH_MAT, SH_VIS
@@ -137,42 +139,26 @@ bvh_miss_ways:
         .include "modules/shadow.s"
 "#;
 
-const STATISTICS: [usize; 6] = [23, 24, 26, 30, 31, 32];
 const LIMIT: f32 = 1.0 - SHADOW_EPSILON;
 
+/// The shadow module alone, with its shading area at `area` and the shading module's
+/// offsets the host writes the i-set at.
 struct Harness {
-    spu: Spu,
-    memory: MainMemory,
-    symbols: std::collections::HashMap<String, u32>,
-    entry: u32,
+    h: ModuleHarness,
     area: u32,
     offsets: Vec<u32>,
 }
 
 fn harness() -> Harness {
-    let out = spu_tests::assemble_with_kernels(DRIVER, "driver.s");
-    let symbols: std::collections::HashMap<String, u32> = out.symbols.into_iter().collect();
-    let mut spu = Spu::new(0);
-    spu.load_image(&out.image);
-    let area = symbols["cache_area"].div_ceil(128) * 128;
+    let mut h = ModuleHarness::new(DRIVER, "driver.s", MainMemory::new(vec![0; 4096]));
+    let area = h.sym("cache_area").div_ceil(128) * 128;
     assert!(area as usize + spu_loader::kernel_abi::SHADED_LS_BYTES <= 256 * 1024);
-    let at = symbols["offsets"] as usize;
-    let offsets = (0..9)
-        .map(|i| u32::from_be_bytes(spu.ls()[at + 4 * i..at + 4 * i + 4].try_into().unwrap()))
-        .collect();
+    let at = h.sym("offsets");
+    let offsets = (0..9).map(|i| h.word(at + 4 * i)).collect();
     // the shading area's address in the parameter block, as the host puts it
-    spu.write_ls(
-        symbols["params"] + PARAM_EA_SHADING as u32 + 4,
-        &area.to_be_bytes(),
-    );
-    Harness {
-        spu,
-        memory: MainMemory::new(vec![0; 4096]),
-        symbols,
-        entry: out.entry,
-        area,
-        offsets,
-    }
+    let params = h.sym("params");
+    h.write_words(params + PARAM_EA_SHADING as u32 + 4, [area]);
+    Harness { h, area, offsets }
 }
 
 /// One lane of the i-set: hit point, normal, material (-1: no hit).
@@ -186,7 +172,7 @@ struct Lane {
 /// The temporaries shade.s still reads after `brsl $127, shadow_rays`.
 const SHADE_KEEPS: [usize; 9] = [66, 91, 92, 93, 97, 101, 102, 103, 105];
 
-/// The frame registers the module reads, and a distinct value in every other register.
+/// The frame registers the module reads (the rest its register contract poisons).
 fn registers(area: u32) -> Vec<[u32; 4]> {
     let splat = |w: u32| [w; 4];
     let pat = |k: u32| splat(0x0001_0203 + 0x0404_0404 * k);
@@ -206,18 +192,35 @@ fn registers(area: u32) -> Vec<[u32; 4]> {
 }
 
 impl Harness {
-    fn write_words(&mut self, at: u32, words: impl IntoIterator<Item = u32>) {
-        let bytes: Vec<u8> = words.into_iter().flat_map(|w| w.to_be_bytes()).collect();
-        self.spu.write_ls(at, &bytes);
-    }
-
     fn word(&self, at: u32) -> u32 {
-        let at = at as usize;
-        u32::from_be_bytes(self.spu.ls()[at..at + 4].try_into().unwrap())
+        self.h.word(at)
     }
 
     fn f(&self, at: u32) -> f32 {
-        f32::from_bits(self.word(at))
+        self.h.f(at)
+    }
+
+    fn sym(&self, name: &str) -> u32 {
+        self.h.sym(name)
+    }
+
+    /// What a run leaves that the host reads: the stand-in traversal's dumps, markers and
+    /// calls, the visibility masks, the ray count, the miss handlers in vars, sv_trace.
+    fn outcome(&self) -> Vec<u8> {
+        let h = &self.h;
+        let counter = self.area + (SHADOW_AREA + SHADOW_RAYS_OFFSET) as u32;
+        [
+            (h.sym("calls"), 16),
+            (h.sym("markers"), 8 * 16),
+            (h.sym("dump"), 8 * DUMP_BYTES),
+            (self.area + self.offsets[8], 8 * 256),
+            (counter, 4),
+            (h.sym("vars") + 496, 80),
+            (h.sym("sv_trace"), 16),
+        ]
+        .into_iter()
+        .flat_map(|(at, len)| h.bytes(at, len))
+        .collect()
     }
 
     /// Runs the module on the i-set `lanes` with `block`; `occluded(light, ray)` says
@@ -227,10 +230,11 @@ impl Harness {
         lanes: &[Lane; 64],
         block: &ShadingBlock,
         occluded: &dyn Fn(usize, usize) -> bool,
+        poison: &dyn Fn(&mut Spu),
     ) {
         let off = self.offsets.clone();
         let area = self.area;
-        self.spu.write_ls(area + off[0], &block.to_be_bytes());
+        self.h.spu.write_ls(area + off[0], &block.to_be_bytes());
         for (array, f) in [
             (
                 1,
@@ -243,11 +247,12 @@ impl Harness {
             (6, &|l: &Lane| l.normal[2].to_bits()),
             (7, &|l: &Lane| l.material as u32),
         ] {
-            self.write_words(area + off[array], lanes.iter().map(f));
+            self.h.write_words(area + off[array], lanes.iter().map(f));
         }
         // stale visibility, to see it overwritten
-        self.write_words(area + off[8], std::iter::repeat_n(0x5555_5555, 8 * 64));
-        let occl = self.symbols["occl"];
+        self.h
+            .write_words(area + off[8], std::iter::repeat_n(0x5555_5555, 8 * 64));
+        let occl = self.sym("occl");
         let cast_lights: Vec<usize> = (0..block.lights.len())
             .filter(|&l| (0..64).any(|i| cast(lanes[i], &block.lights[l])))
             .collect();
@@ -259,11 +264,11 @@ impl Harness {
                     u32::MAX
                 }
             });
-            self.write_words(occl + 256 * call as u32, ids);
+            self.h.write_words(occl + 256 * call as u32, ids);
         }
-        self.write_words(self.symbols["calls"], [0; 4]);
+        self.h.write_words(self.sym("calls"), [0; 4]);
         // the vars words the module swaps: SHT 4, direct mapped
-        let vars = self.symbols["vars"];
+        let vars = self.sym("vars");
         for (name, value) in [
             (512, 0xaaaa),
             (528, 0xbbbb),
@@ -271,13 +276,14 @@ impl Harness {
             (560, 0xdddd),
             (496, 0),
         ] {
-            self.write_words(vars + name, [value, 0, 0, 0]);
+            self.h.write_words(vars + name, [value, 0, 0, 0]);
         }
         for (r, v) in registers(area).into_iter().enumerate() {
-            self.spu.set_reg(r, v);
+            self.h.spu.set_reg(r, v);
         }
-        self.spu.set_pc(self.entry);
-        let stop = self.spu.run(&mut self.memory, 10_000_000);
+        self.h.spu.set_reg(127, [self.sym("back"), 0, 0, 0]);
+        poison(&mut self.h.spu);
+        let stop = self.h.run_at(self.sym("shadow_rays"), 10_000_000);
         assert_eq!(stop, StopReason::Stop(0x2000));
     }
 }
@@ -316,8 +322,11 @@ fn shadow_packets_are_generated_traced_and_give_visibility() {
     ];
     let lanes = lanes(lights[0].position);
     let occluded = |l: usize, i: usize| (i * 7 + l) % 3 == 0;
+    let contract = RegisterContract::of_module("modules/shadow.s", None);
+    for r in SHADE_KEEPS {
+        assert!(contract.keeps(r), "${r}: shade.s reads it after the call");
+    }
     for early in [false, true] {
-        let mut h = harness();
         let block = ShadingBlock {
             mode: SHADE_SHADOWS,
             shadow_early: early,
@@ -326,8 +335,16 @@ fn shadow_packets_are_generated_traced_and_give_visibility() {
             lights: lights.clone(),
             ..Default::default()
         };
-        h.run(&lanes, &block, &occluded);
-        let dump = h.symbols["dump"];
+        // the module alone, everything outside its contract's inputs poisoned two ways
+        let (spu, _) = check_register_contract(&contract, |poison| {
+            let mut h = harness();
+            h.run(&lanes, &block, &occluded, poison);
+            let outcome = h.outcome();
+            (h.h.spu, outcome)
+        });
+        let mut h = harness();
+        h.h.spu = spu;
+        let dump = h.sym("dump");
         let mut cast_total = 0;
         for (l, light) in lights.iter().enumerate() {
             let base = dump + DUMP_BYTES * l as u32;
@@ -377,7 +394,7 @@ fn shadow_packets_are_generated_traced_and_give_visibility() {
             let first = cast.iter().position(|&c| c).unwrap() as u32;
             assert_eq!(quad(11), [first; 4]);
             assert_eq!(quad(12)[..3], [0x40, 0x130, first]);
-            let handlers = h.symbols["handlers"];
+            let handlers = h.sym("handlers");
             assert_eq!(quad(13)[0], h.word(handlers), "bvh_miss_one");
             assert_eq!(
                 quad(14)[0],
@@ -399,7 +416,7 @@ fn shadow_packets_are_generated_traced_and_give_visibility() {
                     let t = h.f(after + 4 * i);
                     assert_eq!(t, if left { LIMIT } else { -1.0 }, "light {l} ray {i}");
                 }
-                let marker = h.word(h.symbols["markers"] + 16 * l as u32);
+                let marker = h.word(h.sym("markers") + 16 * l as u32);
                 assert_eq!(marker, 1, "rays are left: the traversal goes on");
             }
             // the visibility: occluded cast rays only
@@ -409,22 +426,15 @@ fn shadow_packets_are_generated_traced_and_give_visibility() {
                 assert_eq!(h.word(vis + 4 * i), if visible { u32::MAX } else { 0 });
             }
         }
-        assert_eq!(h.word(h.symbols["calls"]), 2);
+        assert_eq!(h.word(h.sym("calls")), 2);
         let counter = h.area + (SHADOW_AREA + SHADOW_RAYS_OFFSET) as u32;
         assert_eq!(h.word(counter) as usize, cast_total);
-        // $0..$65 back but the statistics', and of the temporaries those shade.s reads
-        // after the call (the module header's contract)
-        for (r, v) in registers(h.area).into_iter().enumerate() {
-            if (r < 66 && !STATISTICS.contains(&r)) || SHADE_KEEPS.contains(&r) {
-                assert_eq!(h.spu.reg(r), v, "${r}");
-            }
-        }
-        let vars = h.symbols["vars"];
+        let vars = h.sym("vars");
         assert_eq!(
             [512, 528, 544, 560, 496].map(|o| h.word(vars + o)),
             [0xaaaa, 0xbbbb, 0xcccc, 0xdddd, 0]
         );
-        assert_eq!(h.word(h.symbols["sv_trace"]), 0);
+        assert_eq!(h.word(h.sym("sv_trace")), 0);
     }
 }
 
@@ -449,14 +459,10 @@ fn every_ray_occluded_ends_the_packet_and_no_ray_cast_is_visible() {
         material_cache_log2: 6,
         ..Default::default()
     };
-    h.run(&lanes, &block, &|l, _| l == 1);
+    h.run(&lanes, &block, &|l, _| l == 1, &|_| {});
+    assert_eq!(h.word(h.sym("calls")), 1, "one packet: the second light's");
     assert_eq!(
-        h.word(h.symbols["calls"]),
-        1,
-        "one packet: the second light's"
-    );
-    assert_eq!(
-        h.word(h.symbols["markers"]),
+        h.word(h.sym("markers")),
         2,
         "the packet ended at its first leaf"
     );
@@ -479,13 +485,13 @@ fn simple_shading_casts_no_shadow_ray() {
         lights: vec![light],
         ..Default::default()
     };
-    h.run(&lanes(light.position), &block, &|_, _| true);
-    assert_eq!(h.word(h.symbols["calls"]), 0);
+    h.run(&lanes(light.position), &block, &|_, _| true, &|_| {});
+    assert_eq!(h.word(h.sym("calls")), 0);
     let vis = h.area + h.offsets[8];
     assert_eq!(h.word(vis), 0x5555_5555, "nothing written");
     for (r, v) in registers(h.area).into_iter().enumerate() {
         if r != 127 {
-            assert_eq!(h.spu.reg(r), v, "${r}");
+            assert_eq!(h.h.spu.reg(r), v, "${r}");
         }
     }
 }

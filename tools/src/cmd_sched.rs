@@ -96,8 +96,8 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
                 out.push('\n');
             }
             let directive = lines[start].trim();
-            let opts = parse_options(directive[6..].split('#').next().unwrap_or(""))
-                .map_err(|e| format!("{file}:{}: {e}", start + 1))?;
+            let opts =
+                parse_options(&directive[6..]).map_err(|e| format!("{file}:{}: {e}", start + 1))?;
             let body = &lines[start + 1..end];
             let s = schedule(body, &opts, args.address, &resolve)
                 .map_err(|e| located(&file, start + 1, &lines, &e))?;

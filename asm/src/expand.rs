@@ -1,0 +1,113 @@
+//! The text side of gas's `macro.c`, shared by the assembler's macros and repetitions and
+//! by `spu sched`'s `.irp`: arguments as gas reads them, `\name` substitution, the values
+//! of an `.irp`/`.irpc`, and where a block ends. What a statement means is the assembler's
+//! (`gas::macros`); here is only how the text is taken apart and put together.
+
+use crate::expr::is_ident;
+use crate::lex::split_top;
+
+/// A macro or `.irp` argument as gas's `get_any_string` takes it: a double-quoted
+/// argument is its text without the quotes (so it may hold commas and spaces).
+pub(crate) fn macro_argument(arg: &str) -> String {
+    let quoted = arg.len() >= 2 && arg.starts_with('"') && arg.ends_with('"');
+    if quoted && !arg[1..arg.len() - 1].contains('"') {
+        return arg[1..arg.len() - 1].to_string();
+    }
+    // `name="value"` for a keyword argument.
+    if let Some((name, value)) = arg.split_once('=') {
+        let v = value.trim();
+        if v.len() >= 2
+            && v.starts_with('"')
+            && v.ends_with('"')
+            && !v[1..v.len() - 1].contains('"')
+        {
+            return format!("{name}={}", &v[1..v.len() - 1]);
+        }
+    }
+    arg.to_string()
+}
+
+/// Replaces `\name` (and `\@` with the macro counter) in a macro or repetition body.
+pub(crate) fn substitute(text: &str, vars: &[(String, String)], counter: Option<&str>) -> String {
+    let mut out = String::new();
+    let b = text.as_bytes();
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'\\' {
+            if let Some(c) = counter {
+                if b.get(i + 1) == Some(&b'@') {
+                    out.push_str(c);
+                    i += 2;
+                    continue;
+                }
+            }
+            let start = i + 1;
+            let mut end = start;
+            while end < b.len() && is_ident(b[end] as char) && b[end] != b'.' && b[end] != b'$' {
+                end += 1;
+            }
+            let name = &text[start..end];
+            if let Some((_, v)) = vars.iter().find(|(n, _)| n == name) {
+                out.push_str(v);
+                i = end;
+                // `\()` separates a parameter from following text (gas's rule); a bare
+                // `()` is taken as well, as the assembler always has.
+                if text[i..].starts_with("\\()") {
+                    i += 3;
+                } else if text[i..].starts_with("()") {
+                    i += 2;
+                }
+                continue;
+            }
+        }
+        out.push(b[i] as char);
+        i += 1;
+    }
+    out
+}
+
+/// `.irp VAR, A, B, ...` (each value an argument as `macro_argument` takes it) or `.irpc
+/// VAR, CHARS` (each character a value): the variable and its values, in order.
+pub(crate) fn irp_values(irpc: bool, args: &str) -> (String, Vec<String>) {
+    let parts = split_top(args, ',');
+    let var = parts
+        .first()
+        .map(|s| s.trim().to_string())
+        .unwrap_or_default();
+    let values: Vec<String> = if !irpc {
+        parts[1..]
+            .iter()
+            .map(|s| macro_argument(s.trim()))
+            .collect()
+    } else {
+        parts
+            .get(1)
+            .map(|s| s.trim().chars().map(|c| c.to_string()).collect())
+            .unwrap_or_default()
+    };
+    (var, values)
+}
+
+/// The index of the line that closes a `.macro`/`.rept`/`.irp`/`.irpc` block whose body
+/// starts at `start` (nested blocks counted), given each line's directive word; `None`
+/// when the block is never closed.
+pub(crate) fn block_end<T>(
+    lines: &[T],
+    start: usize,
+    word: impl Fn(&T) -> String,
+) -> Option<usize> {
+    let mut depth = 1;
+    for (i, line) in lines.iter().enumerate().skip(start) {
+        match word(line).as_str() {
+            ".macro" | ".rept" | ".irp" | ".irpc" => depth += 1,
+            ".endm" | ".endr" => {
+                depth -= 1;
+                if depth == 0 {
+                    return Some(i);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}

@@ -1,0 +1,334 @@
+//! Sections and symbol attributes as ELF has them (gas's `obj-elf.c`): `.section` with
+//! its flags and type, subsections, `.pushsection`/`.popsection`/`.previous`, `.comm` and
+//! `.lcomm`, and `.global`, `.weak`, `.hidden`, `.type`, `.size`.
+
+use super::symbols::SymVal;
+use super::{Assembler, Severity, LOCAL_STORE};
+use crate::lex::{split_top, Line};
+use crate::object::{SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE, SHT_NOBITS, SHT_PROGBITS};
+
+/// A section as `.section` declared it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(super) struct SectionDef {
+    pub(super) name: String,
+    pub(super) ty: u32,
+    pub(super) flags: u64,
+    pub(super) entsize: u64,
+}
+
+impl SectionDef {
+    /// GNU as's defaults for a section named without flags (`obj-elf.c` special sections).
+    pub(super) fn named(name: &str) -> SectionDef {
+        let has = |p: &str| name == p || name.starts_with(&format!("{p}."));
+        let (ty, flags) = if has(".text") || has(".init") || has(".fini") {
+            (SHT_PROGBITS, SHF_ALLOC | SHF_EXECINSTR)
+        } else if has(".bss") || has(".sbss") || has(".tbss") {
+            (SHT_NOBITS, SHF_ALLOC | SHF_WRITE)
+        } else if has(".data") || has(".sdata") || has(".tdata") || has(".ctors") || has(".dtors") {
+            (SHT_PROGBITS, SHF_ALLOC | SHF_WRITE)
+        } else if has(".rodata") {
+            (SHT_PROGBITS, SHF_ALLOC)
+        } else {
+            (SHT_PROGBITS, 0)
+        };
+        SectionDef {
+            name: name.to_string(),
+            ty,
+            flags,
+            entsize: 0,
+        }
+    }
+}
+
+impl Assembler<'_> {
+    /// The subsection number after `.text`, `.data`, `.bss`, `.subsection` (0 if none).
+    pub(super) fn subsection(&mut self, args: &str, line: &Line, col: usize) -> i64 {
+        if args.trim().is_empty() {
+            return 0;
+        }
+        match self.eval(args.trim()) {
+            Ok((v, _)) => v,
+            Err((c, m)) => {
+                self.diag(Severity::Error, line, col + c, m);
+                0
+            }
+        }
+    }
+
+    /// `.section NAME[, "FLAGS"[, @TYPE[, ENTSIZE]]]` (also `%type`), or `NAME, SUBSECTION`.
+    pub(super) fn section_args(
+        &mut self,
+        args: &str,
+        line: &Line,
+        col: usize,
+    ) -> Option<(SectionDef, i64)> {
+        let parts = split_top(args, ',');
+        let name = parts[0].trim().trim_matches('"').to_string();
+        if name.is_empty() {
+            self.diag(Severity::Error, line, col, "missing name");
+            return None;
+        }
+        let mut def = SectionDef::named(&name);
+        let mut sub = 0;
+        if let Some(flags) = parts.get(1).map(|f| f.trim()) {
+            if let Some(letters) = flags.strip_prefix('"').and_then(|f| f.strip_suffix('"')) {
+                let mut f = 0;
+                for c in letters.chars() {
+                    match c {
+                        'a' => f |= SHF_ALLOC,
+                        'w' => f |= SHF_WRITE,
+                        'x' => f |= SHF_EXECINSTR,
+                        'M' => f |= 0x10,
+                        'S' => f |= 0x20,
+                        'G' => f |= 0x200,
+                        'T' => f |= 0x400,
+                        'o' => f |= 0x80,
+                        'e' | 'R' | 'd' | '?' => {}
+                        other => {
+                            self.diag(
+                                Severity::Error,
+                                line,
+                                col,
+                                format!("unknown section attribute `{other}'"),
+                            );
+                            return None;
+                        }
+                    }
+                }
+                def.flags = f;
+            } else if !flags.is_empty() && !flags.starts_with(['#', '@', '%']) {
+                // `.section NAME, SUBSECTION` (the non-ELF form gas also takes).
+                sub = self.subsection(flags, line, col);
+            }
+        }
+        if let Some(ty) = parts.get(2).map(|t| t.trim()) {
+            match ty.trim_start_matches(['@', '%']) {
+                "progbits" => def.ty = SHT_PROGBITS,
+                "nobits" => def.ty = SHT_NOBITS,
+                "note" => def.ty = 7,
+                "init_array" => def.ty = 14,
+                "fini_array" => def.ty = 15,
+                "preinit_array" => def.ty = 16,
+                other => {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("unrecognized section type `{other}'"),
+                    );
+                    return None;
+                }
+            }
+        }
+        if let Some(e) = parts.get(3) {
+            if def.flags & 0x10 != 0 {
+                def.entsize = self.eval(e.trim()).map(|v| v.0 as u64).unwrap_or(0);
+            }
+        }
+        if let Some(existing) = self.defs.iter().find(|d| d.name == name).cloned() {
+            // Re-entering a section keeps what it was declared with.
+            if parts.len() > 1 && existing != def && self.pass == 1 {
+                self.diag(
+                    Severity::Warning,
+                    line,
+                    col,
+                    format!("ignoring changed section attributes for {name}"),
+                );
+            }
+            def = existing;
+        }
+        Some((def, sub))
+    }
+
+    /// `.lcomm NAME, SIZE[, ALIGN]` reserves space in `.bss`; `.comm` does too in an
+    /// executable, and leaves a common symbol for the linker in an object.
+    pub(super) fn common(&mut self, d: &str, args: &str, line: &Line, col: usize) {
+        let parts = split_top(args, ',');
+        let name = parts[0].trim().to_string();
+        if name.is_empty() || parts.len() < 2 {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("expected NAME, SIZE after {d}"),
+            );
+            return;
+        }
+        if d == ".lcomm" && parts.len() > 2 {
+            // spu-elf-as 2.40's .lcomm takes no alignment.
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                "junk at end of line, first unrecognized character is `,'",
+            );
+            return;
+        }
+        let size = self
+            .data_values(&parts[1], line, col)
+            .first()
+            .copied()
+            .unwrap_or(0);
+        if !(0..=LOCAL_STORE as i64).contains(&size) {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("{d} length ({size}) out of range"),
+            );
+            return;
+        }
+        // gas TC_IMPLICIT_LCOMM_ALIGNMENT: the largest of 8, 4, 2 that the size reaches.
+        let implicit = match size {
+            8.. => 8,
+            4..=7 => 4,
+            2..=3 => 2,
+            _ => 1,
+        };
+        let align = match parts.get(2) {
+            Some(a) => self.data_values(a, line, col).first().copied().unwrap_or(1),
+            None => implicit,
+        };
+        if align <= 0 || align & (align - 1) != 0 || align > 1 << 15 {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("alignment {align} is not a power of 2"),
+            );
+            return;
+        }
+        if d == ".comm" {
+            self.attrs.entry(name.clone()).or_default().global = true;
+            if self.object {
+                if matches!(self.symbols.get(&name), Some(SymVal::Label(..))) {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("symbol `{name}' is already defined"),
+                    );
+                    return;
+                }
+                self.symbols
+                    .insert(name, SymVal::Common(size as u32, align as u32));
+                return;
+            }
+        }
+        let here = self.sect;
+        let bss = self.chunk(SectionDef::named(".bss"), 0);
+        self.sect = bss;
+        self.align_to(align as u32, Some(0));
+        self.define_label(&name, line);
+        self.emit(&vec![0; size as usize]);
+        self.sect = here;
+    }
+
+    /// The section and symbol-attribute directives; whether `d` was one.
+    pub(super) fn elf_directive(&mut self, d: &str, args: &str, line: &Line, col: usize) -> bool {
+        match d {
+            ".text" | ".data" | ".bss" | ".rodata" => {
+                let sub = self.subsection(args, line, col);
+                let c = self.chunk(SectionDef::named(d), sub);
+                self.switch_to(c);
+            }
+            ".subsection" => {
+                let sub = self.subsection(args, line, col);
+                let def = self.defs[self.chunks[self.sect].0].clone();
+                let c = self.chunk(def, sub);
+                self.switch_to(c);
+            }
+            ".section" | ".pushsection" => {
+                let Some((def, sub)) = self.section_args(args, line, col) else {
+                    return true;
+                };
+                if d == ".pushsection" {
+                    self.sect_stack.push((self.sect, self.prev_sect));
+                }
+                let c = self.chunk(def, sub);
+                self.switch_to(c);
+            }
+            ".popsection" => match self.sect_stack.pop() {
+                Some((s, p)) => {
+                    self.sect = s;
+                    self.prev_sect = p;
+                }
+                None => self.diag(
+                    Severity::Warning,
+                    line,
+                    col,
+                    ".popsection without corresponding .pushsection; ignored",
+                ),
+            },
+            ".previous" => {
+                std::mem::swap(&mut self.sect, &mut self.prev_sect);
+            }
+            ".lcomm" | ".comm" => self.common(d, args, line, col),
+            ".weak" | ".hidden" | ".internal" | ".protected" | ".global" | ".globl" => {
+                for n in split_top(args, ',') {
+                    let n = n.trim();
+                    if n.is_empty() {
+                        continue;
+                    }
+                    let a = self.attrs.entry(n.to_string()).or_default();
+                    match d {
+                        ".weak" => a.weak = true,
+                        ".global" | ".globl" => a.global = true,
+                        _ => a.hidden = true,
+                    }
+                }
+            }
+            ".type" => {
+                let parts = split_top(args, ',');
+                let name = parts[0].trim().to_string();
+                let kind = parts.get(1).map(|k| {
+                    k.trim()
+                        .trim_start_matches(['@', '%', '#'])
+                        .to_ascii_lowercase()
+                });
+                let kind = match kind.as_deref() {
+                    Some("function" | "stt_func") => 2,
+                    Some("object" | "stt_object") => 1,
+                    Some("notype" | "stt_notype") => 0,
+                    Some("tls_object" | "stt_tls") => 6,
+                    Some("common" | "stt_common") => 5,
+                    _ => {
+                        self.diag(
+                            Severity::Error,
+                            line,
+                            col,
+                            format!(
+                                "unrecognized symbol type \"{}\"",
+                                parts.get(1).map_or("", |s| s.trim())
+                            ),
+                        );
+                        return true;
+                    }
+                };
+                self.attrs.entry(name).or_default().kind = kind;
+            }
+            ".size" => {
+                let parts = split_top(args, ',');
+                if parts.len() < 2 {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        "expected comma after name in .size",
+                    );
+                    return true;
+                }
+                let name = parts[0].trim().to_string();
+                match self.eval_val(parts[1..].join(",").trim()) {
+                    Ok((v, _, _)) if !v.reloc || self.pass == 1 => {
+                        self.attrs.entry(name).or_default().size = Some(v.v)
+                    }
+                    Ok(_) => {} // a size that depends on an address: gas keeps an expression; we drop it
+                    Err((c, m)) => self.diag(Severity::Error, line, col + c, m),
+                }
+            }
+            _ => return false,
+        }
+        true
+    }
+}

@@ -1,0 +1,203 @@
+//! Symbols (gas's `symbols.c` and the symbol side of `expr.c`): what a name stands for
+//! (a `.set` value, a label in a chunk, a common block), numeric local labels, labels and
+//! `.set` as statements define them, and expressions evaluated against them
+//! (`crate::expr` parses and evaluates; this is its environment).
+
+use super::{Assembler, Res, Sect, Severity};
+use crate::expr::{Env, Eval, Val};
+use crate::lex::Line;
+
+/// What a symbol is: a value, a place in a chunk, or a common block.
+#[derive(Clone, Debug)]
+pub(super) enum SymVal {
+    /// A value from `.set`/`=` (which may be an address).
+    Abs(Val),
+    Label(Sect, u32),
+    /// `.comm name, size, align` in an object: allocated by the linker.
+    Common(u32, u32),
+}
+
+/// Symbol attributes set by directives.
+#[derive(Clone, Debug, Default)]
+pub(super) struct SymAttrs {
+    pub(super) global: bool,
+    pub(super) weak: bool,
+    pub(super) hidden: bool,
+    /// STT_* from `.type` (1 object, 2 function).
+    pub(super) kind: u8,
+    pub(super) size: Option<i64>,
+}
+
+impl Env for Assembler<'_> {
+    fn symbol(&self, name: &str) -> Option<Val> {
+        if !self.symbols.contains_key(name) && (self.pass == 2 || !self.pass1_symbols.is_empty()) {
+            // A `.set`/`.equ` symbol used before its definition: its final value.
+            return match self.pass1_symbols.get(name)? {
+                SymVal::Abs(v) => Some(v.clone()),
+                _ => None,
+            };
+        }
+        Some(self.value_of(name, self.symbols.get(name)?))
+    }
+    fn dot(&self) -> Val {
+        Val {
+            v: self.here() as i64,
+            reloc: true,
+            sect: Some(self.chunks[self.sect].0),
+            ..Default::default()
+        }
+    }
+    fn local(&self, n: u32, forward: bool) -> Option<Val> {
+        self.numeric_ref(n, forward)
+    }
+    fn lenient(&self) -> bool {
+        self.pass == 1
+    }
+    fn external(&self, name: &str) -> Option<Val> {
+        // In an object, a symbol defined nowhere is an external reference for the linker.
+        (self.object && !name.starts_with(".L")).then(|| Val {
+            v: 0,
+            reloc: true,
+            sym: Some((name.into(), 0)),
+            ..Default::default()
+        })
+    }
+}
+
+impl Assembler<'_> {
+    /// A defined symbol's address or value (executables).
+    pub(super) fn symbol_address(&self, name: &str) -> Option<i64> {
+        self.symbols.get(name).map(|s| self.value_of(name, s).v)
+    }
+
+    pub(super) fn value_of(&self, name: &str, sv: &SymVal) -> Val {
+        match sv {
+            // A local name for an address in a section (`alias = later`) is that address:
+            // gas resolves a branch to it like one to a local label.
+            SymVal::Abs(v)
+                if v.sect.is_some()
+                    && !self.attrs.get(name).is_some_and(|a| a.global || a.weak) =>
+            {
+                Val {
+                    sym: None,
+                    ..v.clone()
+                }
+            }
+            SymVal::Abs(v) => v.clone(),
+            SymVal::Label(s, off) => {
+                let v = (self.bases.get(s).copied().unwrap_or(0) + off) as i64;
+                let a = self.attrs.get(name);
+                let visible = a.is_some_and(|a| a.global || a.weak);
+                Val {
+                    v,
+                    reloc: true,
+                    sect: Some(self.chunks[*s].0),
+                    sym: (self.object && visible).then(|| (name.into(), v)),
+                    cross: false,
+                }
+            }
+            SymVal::Common(..) => Val {
+                v: 0,
+                reloc: true,
+                sym: Some((name.into(), 0)),
+                ..Default::default()
+            },
+        }
+    }
+
+    pub(super) fn numeric_ref(&self, n: u32, forward: bool) -> Option<Val> {
+        // Backward references in a layout walk see this walk's definitions so far;
+        // forward ones (and every reference in the final walk) the previous walk's.
+        let table = if self.pass == 1 && !forward {
+            &self.numeric_next
+        } else {
+            &self.numeric
+        };
+        let defs = table.get(&n)?;
+        let pick = if forward {
+            defs.iter().find(|d| d.0 > self.stmt)
+        } else {
+            defs.iter().rev().find(|d| d.0 < self.stmt)
+        }?;
+        Some(Val {
+            v: (self.bases.get(&pick.1).copied().unwrap_or(0) + pick.2) as i64,
+            reloc: true,
+            sect: Some(self.chunks[pick.1].0),
+            ..Default::default()
+        })
+    }
+
+    /// Evaluates a whole expression: its value (and whether it is an address) and any
+    /// warnings (division by zero, shift counts).
+    pub(super) fn eval_val(&self, text: &str) -> Res<(Val, bool, Vec<String>)> {
+        let (val, rest, undefined, warnings) = self.eval_prefix(text)?;
+        let used = text.len() - rest.len();
+        if !rest.trim().is_empty() {
+            return Err((
+                used,
+                format!("junk at end of expression: `{}`", rest.trim()),
+            ));
+        }
+        Ok((val, undefined, warnings))
+    }
+
+    /// Evaluates the expression at the start of `text`, returning the rest as gas's
+    /// `expression()` leaves it.
+    pub(super) fn eval_prefix<'t>(&self, text: &'t str) -> Res<(Val, &'t str, bool, Vec<String>)> {
+        let lead = text.len() - text.trim_start().len();
+        let Some((ast, rest)) = crate::expr::parse(text) else {
+            return Err((lead, "expected an expression".into()));
+        };
+        let mut e = Eval {
+            env: self,
+            warnings: Vec::new(),
+            undefined: false,
+        };
+        let v = e.eval(&ast)?;
+        Ok((v, rest, e.undefined, e.warnings))
+    }
+
+    pub(super) fn eval(&self, text: &str) -> Res<(i64, bool)> {
+        self.eval_val(text).map(|(v, u, _)| (v.v, u))
+    }
+
+    pub(super) fn define_label(&mut self, name: &str, line: &Line) {
+        let off = self.offsets.get(&self.sect).copied().unwrap_or(0);
+        if let Ok(n) = name.parse::<u32>() {
+            if self.pass == 1 {
+                self.numeric_next
+                    .entry(n)
+                    .or_default()
+                    .push((self.stmt, self.sect, off));
+            }
+            return;
+        }
+        let first = self.defined.insert(name.to_string());
+        if self.pass == 1 {
+            if !first || matches!(self.symbols.get(name), Some(SymVal::Common(..))) {
+                self.diag(
+                    Severity::Error,
+                    line,
+                    1,
+                    format!("symbol `{name}` is already defined"),
+                );
+            }
+        }
+        self.symbols
+            .insert(name.to_string(), SymVal::Label(self.sect, off));
+    }
+
+    pub(super) fn set_symbol(&mut self, name: &str, expr: &str, line: &Line) {
+        if name == "." {
+            let col = line.text.find('=').map_or(1, |c| c + 2);
+            self.org(expr, 0, line, col);
+            return;
+        }
+        match self.eval_val(expr) {
+            Ok((v, _, _)) => {
+                self.symbols.insert(name.to_string(), SymVal::Abs(v));
+            }
+            Err((c, m)) => self.diag(Severity::Error, line, c + 1, m),
+        }
+    }
+}

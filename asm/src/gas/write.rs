@@ -1,0 +1,478 @@
+//! Layout and output (gas's `write.c`): bytes emitted into chunks (subsections), alignment
+//! and its padding, chunks laid out into sections and sections into local store, fixups
+//! recorded as relocations, and the finished program written as an executable image and
+//! ELF or as a relocatable object.
+
+use super::obj_elf::SectionDef;
+use super::symbols::SymVal;
+use super::target::code_padding;
+use super::{Assembler, Diagnostic, Location, Output, Sect, Severity, LOCAL_STORE};
+use crate::expr::Val;
+use crate::lex::{display_text, Line};
+use crate::object::{
+    placement, ObjSection, ObjSymbol, Object, Reloc, RelocTarget, SymSection, SHF_ALLOC,
+    SHF_EXECINSTR, SHT_NOBITS,
+};
+
+impl Assembler<'_> {
+    /// The chunk for a section and subsection, created on first use.
+    pub(super) fn chunk(&mut self, def: SectionDef, sub: i64) -> Sect {
+        let d = match self.defs.iter().position(|x| x.name == def.name) {
+            Some(d) => d,
+            None => {
+                self.defs.push(def);
+                self.defs.len() - 1
+            }
+        };
+        match self.chunks.iter().position(|c| *c == (d, sub)) {
+            Some(c) => c,
+            None => {
+                self.chunks.push((d, sub));
+                self.chunks.len() - 1
+            }
+        }
+    }
+
+    pub(super) fn switch_to(&mut self, chunk: Sect) {
+        if chunk != self.sect {
+            self.prev_sect = self.sect;
+            self.sect = chunk;
+        }
+    }
+
+    pub(super) fn is_nobits(&self, s: Sect) -> bool {
+        self.defs[self.chunks[s].0].ty == SHT_NOBITS
+    }
+
+    pub(super) fn is_code(&self, s: Sect) -> bool {
+        self.defs[self.chunks[s].0].flags & SHF_EXECINSTR != 0
+    }
+
+    /// gas pads the end of each section to the largest alignment requested in it
+    /// (`SUB_SEGMENT_ALIGN` with `HANDLE_ALIGN`): code with nop/lnop, data with zeros.
+    pub(super) fn finish_sections(&mut self) {
+        let current = self.sect;
+        for d in 0..self.defs.len() {
+            let mine: Vec<Sect> = (0..self.chunks.len())
+                .filter(|&c| self.chunks[c].0 == d)
+                .collect();
+            let boundary = mine
+                .iter()
+                .map(|c| self.align.get(c).copied().unwrap_or(1))
+                .max()
+                .unwrap_or(1);
+            let last = mine.iter().max_by_key(|&&c| self.chunks[c].1);
+            if let (Some(&last), true) = (last, boundary > 1) {
+                self.sect = last;
+                self.align_to(boundary, None);
+            }
+        }
+        self.sect = current;
+    }
+
+    pub(super) fn here(&self) -> u32 {
+        self.bases.get(&self.sect).copied().unwrap_or(0)
+            + self.offsets.get(&self.sect).copied().unwrap_or(0)
+    }
+
+    pub(super) fn emit(&mut self, data: &[u8]) {
+        let nobits = self.is_nobits(self.sect);
+        let off = self.offsets.entry(self.sect).or_insert(0);
+        // Past the local store nothing can load: stop growing (the size check reports it).
+        if *off as usize + data.len() > 2 * LOCAL_STORE {
+            *off = (2 * LOCAL_STORE) as u32;
+            return;
+        }
+        if nobits {
+            if self.pass == 2 && data.iter().any(|&b| b != 0) {
+                self.nonzero_in_nobits = true;
+            }
+        } else if self.pass == 2 {
+            let buf = self.bytes.entry(self.sect).or_default();
+            let at = *off as usize;
+            if buf.len() < at + data.len() {
+                buf.resize(at + data.len(), 0);
+            }
+            buf[at..at + data.len()].copy_from_slice(data);
+        }
+        *off += data.len() as u32;
+    }
+
+    pub(super) fn align_to(&mut self, boundary: u32, fill: Option<u8>) {
+        if boundary <= 1 {
+            return;
+        }
+        let a = self.align.entry(self.sect).or_insert(1);
+        *a = (*a).max(boundary);
+        // Padding is to an address (sections start at their alignment), so subsections
+        // align as gas aligns them once they are joined.
+        let off = self.here();
+        let pad = (boundary - off % boundary) % boundary;
+        if self.is_code(self.sect) && fill.is_none() {
+            let bytes = code_padding(off, pad);
+            self.emit(&bytes);
+        } else {
+            self.emit(&vec![fill.unwrap_or(0); pad as usize]);
+        }
+    }
+
+    /// Where the section of chunk `c` starts (its first chunk's base).
+    pub(super) fn section_start(&self, c: Sect) -> i64 {
+        let d = self.chunks[c].0;
+        (0..self.chunks.len())
+            .filter(|&k| self.chunks[k].0 == d)
+            .map(|k| self.bases.get(&k).copied().unwrap_or(0))
+            .min()
+            .unwrap_or(0) as i64
+    }
+
+    /// Records a relocation at `offset` in the section of chunk `sect` (pass 2): in an
+    /// object for the linker, in an executable to be applied once all bytes are there.
+    pub(super) fn add_reloc(
+        &mut self,
+        sect: Sect,
+        offset: u32,
+        kind: u32,
+        v: &Val,
+        line: &Line,
+        col: usize,
+    ) {
+        let def = self.chunks[sect].0;
+        let (target, addend) = if let Some((name, value)) = &v.sym {
+            (RelocTarget::Symbol(name.to_string()), v.v - value)
+        } else if let Some(s) = v.sect {
+            (
+                RelocTarget::Section(s),
+                v.v - if self.object { 0 } else { self.def_start(s) },
+            )
+        } else if v.reloc || v.cross {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                "expression too complex for a relocation",
+            );
+            return;
+        } else {
+            (RelocTarget::Section(usize::MAX), v.v)
+        };
+        let location = Location {
+            file: line.file.clone(),
+            line: line.line,
+            column: col.max(1),
+        };
+        self.relocs.push((
+            def,
+            Reloc {
+                offset,
+                kind,
+                target,
+                addend,
+            },
+            location,
+            line.text.clone(),
+        ));
+    }
+
+    /// Where section definition `d` starts (executables).
+    pub(super) fn def_start(&self, d: usize) -> i64 {
+        (0..self.chunks.len())
+            .filter(|&k| self.chunks[k].0 == d)
+            .map(|k| self.bases.get(&k).copied().unwrap_or(0))
+            .min()
+            .unwrap_or(0) as i64
+    }
+
+    /// Gives every chunk its address: in an executable, code sections from 0, then
+    /// read-only data, data and bss, each section at its alignment (at least 16) and its
+    /// subsections in order; in an object, offsets within each section.
+    pub(super) fn lay_out(&mut self) {
+        let class = |d: &SectionDef| placement(&d.name, d.ty, d.flags).0;
+        let mut order: Vec<usize> = (0..self.defs.len()).collect();
+        order.sort_by_key(|&d| {
+            let def = &self.defs[d];
+            (placement(&def.name, def.ty, def.flags), d)
+        });
+        let mut addr = 0u32;
+        self.bases.clear();
+        for d in order {
+            let mut chunks: Vec<Sect> = (0..self.chunks.len())
+                .filter(|&c| self.chunks[c].0 == d)
+                .collect();
+            chunks.sort_by_key(|&c| self.chunks[c].1);
+            let align = chunks
+                .iter()
+                .map(|c| self.align.get(c).copied().unwrap_or(1))
+                .max()
+                .unwrap_or(1);
+            let mut at = if self.object || class(&self.defs[d]) == 4 {
+                0
+            } else {
+                addr.div_ceil(align.max(16)) * align.max(16)
+            };
+            // Subsections follow one another directly (their padding is to addresses).
+            for c in chunks {
+                self.bases.insert(c, at);
+                at = at.saturating_add(self.offsets.get(&c).copied().unwrap_or(0));
+            }
+            if !self.object && class(&self.defs[d]) != 4 {
+                addr = at;
+            }
+        }
+    }
+
+    /// Label addresses, for checking that layout has settled.
+    pub(super) fn label_values(&self) -> Vec<(String, i64)> {
+        let mut v: Vec<(String, i64)> = self
+            .symbols
+            .iter()
+            .filter(|(_, s)| matches!(s, SymVal::Label(..)))
+            .map(|(n, s)| (n.clone(), self.value_of(n, s).v))
+            .collect();
+        v.sort();
+        v
+    }
+}
+
+/// An assembled program (without errors) as an executable: its sections placed in one
+/// local-store image, `.reloc`s applied, symbols, and the same as an SPU ELF executable.
+pub(super) fn executable(
+    asm: Assembler<'_>,
+    lines: &[Line],
+    file_name: &str,
+    warnings: Vec<Diagnostic>,
+) -> Result<Output, Vec<Diagnostic>> {
+    let fail = |message: String| {
+        vec![Diagnostic {
+            severity: Severity::Error,
+            location: Location {
+                file: file_name.into(),
+                line: 1,
+                column: 1,
+            },
+            message,
+            source_line: lines
+                .first()
+                .map(|l| display_text(&l.text))
+                .unwrap_or_default(),
+        }]
+    };
+    // Sections in address order: (definition, address, size).
+    let mut placed: Vec<(usize, u32, u32)> = Vec::new();
+    for d in 0..asm.defs.len() {
+        if asm.defs[d].flags & SHF_ALLOC == 0 {
+            continue;
+        }
+        let chunks: Vec<Sect> = (0..asm.chunks.len())
+            .filter(|&c| asm.chunks[c].0 == d)
+            .collect();
+        let start = chunks.iter().map(|c| asm.bases[c]).min().unwrap_or(0);
+        let end = chunks
+            .iter()
+            .map(|c| asm.bases[c] + asm.offsets.get(c).copied().unwrap_or(0))
+            .max()
+            .unwrap_or(0);
+        placed.push((d, start, end - start));
+    }
+    placed.sort_by_key(|p| (p.1, p.0));
+    let end = placed.iter().map(|p| p.1 + p.2).max().unwrap_or(0);
+    if end as usize > LOCAL_STORE {
+        return Err(fail(format!(
+            "program of {end} bytes does not fit the 256 KiB local store"
+        )));
+    }
+    let mut image = vec![0u8; end as usize];
+    for c in 0..asm.chunks.len() {
+        if let Some(b) = asm.bytes.get(&c) {
+            let at = asm.bases[&c] as usize;
+            if asm.defs[asm.chunks[c].0].flags & SHF_ALLOC != 0 {
+                image[at..at + b.len()].copy_from_slice(b);
+            }
+        }
+    }
+    // `.reloc` in an executable: applied now that every address is known.
+    let mut reloc_errors = Vec::new();
+    for (def, r, loc, text) in &asm.relocs {
+        let start = placed.iter().find(|p| p.0 == *def).map_or(0, |p| p.1);
+        let s = match &r.target {
+            RelocTarget::Section(usize::MAX) => 0,
+            RelocTarget::Section(t) => placed.iter().find(|p| p.0 == *t).map_or(0, |p| p.1) as i64,
+            RelocTarget::Symbol(n) => asm.symbol_address(n).unwrap_or(0),
+        };
+        let at = start + r.offset;
+        if let Err(m) = crate::reloc::apply(r.kind, &mut image, at, s + r.addend) {
+            reloc_errors.push(Diagnostic {
+                severity: Severity::Error,
+                location: loc.clone(),
+                message: m,
+                source_line: display_text(text),
+            });
+        }
+    }
+    if !reloc_errors.is_empty() {
+        return Err(reloc_errors);
+    }
+    let mut symbols: Vec<(String, u32)> = asm
+        .symbols
+        .iter()
+        .filter_map(|(n, v)| match v {
+            SymVal::Label(s, off) if !n.starts_with(".L") => Some((n.clone(), asm.bases[s] + off)),
+            _ => None,
+        })
+        .collect();
+    symbols.sort_by(|a, b| a.1.cmp(&b.1).then(a.0.cmp(&b.0)));
+    let entry = symbols
+        .iter()
+        .find(|(n, _)| n == "_start")
+        .map(|s| s.1)
+        .unwrap_or(0);
+    let sections: Vec<(String, u32, u32, bool)> = placed
+        .iter()
+        .map(|&(d, a, size)| {
+            let def = &asm.defs[d];
+            (def.name.clone(), a, size, def.flags & SHF_EXECINSTR != 0)
+        })
+        .collect();
+    let globals: Vec<String> = asm
+        .attrs
+        .iter()
+        .filter(|(_, a)| a.global)
+        .map(|(n, _)| n.clone())
+        .collect();
+    let nobits: Vec<bool> = placed
+        .iter()
+        .map(|p| asm.defs[p.0].ty == SHT_NOBITS)
+        .collect();
+    let elf = crate::elf::write_elf(&image, &sections, &nobits, &symbols, &globals, entry);
+    Ok(Output {
+        image,
+        elf,
+        symbols,
+        entry,
+        listing: asm.listing,
+        warnings,
+        sections,
+    })
+}
+
+/// An assembled program (without errors) as a relocatable object: each section from
+/// offset 0 with its relocations, and the symbol table gas would write.
+pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
+    let mut obj = Object {
+        name: file_name.to_string(),
+        ..Default::default()
+    };
+    for (d, def) in asm.defs.iter().enumerate() {
+        let mut chunks: Vec<Sect> = (0..asm.chunks.len())
+            .filter(|&c| asm.chunks[c].0 == d)
+            .collect();
+        chunks.sort_by_key(|&c| asm.chunks[c].1);
+        let size = chunks
+            .iter()
+            .map(|c| asm.bases[c] + asm.offsets.get(c).copied().unwrap_or(0))
+            .max()
+            .unwrap_or(0);
+        let mut data = Vec::new();
+        if def.ty != SHT_NOBITS {
+            data = vec![0u8; size as usize];
+            for c in &chunks {
+                if let Some(b) = asm.bytes.get(c) {
+                    let at = asm.bases[c] as usize;
+                    data[at..at + b.len()].copy_from_slice(b);
+                }
+            }
+        }
+        let align = chunks
+            .iter()
+            .map(|c| asm.align.get(c).copied().unwrap_or(1))
+            .max()
+            .unwrap_or(1);
+        obj.sections.push(ObjSection {
+            name: def.name.clone(),
+            ty: def.ty,
+            flags: def.flags,
+            entsize: def.entsize,
+            align,
+            size,
+            data,
+            relocs: Vec::new(),
+        });
+    }
+    for (d, r, _, _) in &asm.relocs {
+        let mut r = r.clone();
+        if r.target == RelocTarget::Section(usize::MAX) {
+            // An absolute value: against no symbol.
+            r.target = RelocTarget::Symbol(String::new());
+        }
+        obj.sections[*d].relocs.push(r);
+    }
+    let mut names: Vec<&String> = asm.symbols.keys().collect();
+    names.sort();
+    let mut referenced: std::collections::BTreeSet<String> = Default::default();
+    for s in &obj.sections {
+        for r in &s.relocs {
+            if let RelocTarget::Symbol(n) = &r.target {
+                if !n.is_empty() {
+                    referenced.insert(n.clone());
+                }
+            }
+        }
+    }
+    for name in names {
+        let attrs = asm.attrs.get(name).cloned().unwrap_or_default();
+        let (section, value) = match &asm.symbols[name] {
+            SymVal::Label(c, off) => (
+                SymSection::Section(asm.chunks[*c].0),
+                (asm.bases[c] + off) as u64,
+            ),
+            SymVal::Common(size, align) => {
+                obj.symbols.push(ObjSymbol {
+                    name: name.clone(),
+                    value: *align as u64,
+                    size: *size as u64,
+                    section: SymSection::Common,
+                    global: true,
+                    weak: false,
+                    hidden: attrs.hidden,
+                    kind: 1,
+                });
+                continue;
+            }
+            SymVal::Abs(v) if v.sect.is_some() && v.sym.is_none() => {
+                (SymSection::Section(v.sect.unwrap_or(0)), v.v as u64)
+            }
+            SymVal::Abs(v) if !v.reloc && !v.cross => (SymSection::Absolute, v.v as u64),
+            SymVal::Abs(_) => continue,
+        };
+        // Local labels named `.L` stay out of the symbol table, as in gas.
+        if name.starts_with(".L") && !attrs.global {
+            continue;
+        }
+        obj.symbols.push(ObjSymbol {
+            name: name.clone(),
+            value,
+            size: attrs.size.unwrap_or(0) as u64,
+            section,
+            global: attrs.global || attrs.weak,
+            weak: attrs.weak,
+            hidden: attrs.hidden,
+            kind: attrs.kind,
+        });
+    }
+    for name in referenced {
+        if !asm.symbols.contains_key(&name) {
+            let attrs = asm.attrs.get(&name).cloned().unwrap_or_default();
+            obj.symbols.push(ObjSymbol {
+                name,
+                value: 0,
+                size: 0,
+                section: SymSection::Undefined,
+                global: true,
+                weak: attrs.weak,
+                hidden: attrs.hidden,
+                kind: attrs.kind,
+            });
+        }
+    }
+    obj
+}
