@@ -1,6 +1,6 @@
 #!/bin/sh
 # Builds GNU binutils for spu-elf (as, ld, objdump, readelf) from Debian's binutils source
-# package, for the differential tests (asm/tests/gnu_differential.rs), which skip cleanly
+# package, for the differential tests (tests/tests/gnu_differential.rs), which show as ignored
 # without it. Usage: scripts/build-spu-binutils.sh [PREFIX]   (default: $HOME/.local/spu-binutils)
 # Needs root for the deb-src entry; a few minutes on two cores.
 set -eu

@@ -126,10 +126,10 @@ fn random_fragments_never_panic() {
         let mut s = String::new();
         for _ in 0..rng.next() % 12 {
             s.push_str(FRAGMENTS[rng.next() % FRAGMENTS.len()]);
-            if rng.next() % 3 == 0 {
+            if rng.next().is_multiple_of(3) {
                 s.push(' ');
             }
-            if rng.next() % 5 == 0 {
+            if rng.next().is_multiple_of(5) {
                 s.push('\n');
             }
         }

@@ -21,8 +21,8 @@ fn program(rng: &mut Rng, words: usize) -> Vec<u8> {
                 // A channel instruction on channels 0..31 with a register in 0..7.
                 let op = [Op::Wrch, Op::Rdch, Op::Rchcnt][(r >> 8) as usize % 3];
                 ((op.info().opcode11 as u32) << 21)
-                    | ((r >> 16) as u32 % 32) << 7
-                    | (r >> 24) as u32 % 8
+                    | (((r >> 16) as u32 % 32) << 7)
+                    | ((r >> 24) as u32 % 8)
             }
             3 => {
                 // il/ila into registers 0..7 with small values (sizes, tags, commands).
@@ -30,7 +30,7 @@ fn program(rng: &mut Rng, words: usize) -> Vec<u8> {
                     16u32, 128, 0x40, 0x20, 0x44, 0xd0, 0xb4, 0xb0, 8, 4, 0x1000, 0x7000, 2, 1, 0,
                     3,
                 ][(r >> 8) as usize % 16];
-                ((Op::Ila.info().opcode11 as u32) << 21) | v << 7 | (r >> 24) as u32 % 8
+                ((Op::Ila.info().opcode11 as u32) << 21) | (v << 7) | ((r >> 24) as u32 % 8)
             }
             _ => {
                 let op = Op::ALL[(r >> 8) as usize % Op::ALL.len()];

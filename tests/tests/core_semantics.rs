@@ -935,7 +935,7 @@ fn quadword_shifts_and_rotates_at_counts_0_7_15_16_31() {
         [0x1718_191a, 0x1b1c_1d1e, 0x1f00_0000, 0]
     );
     assert_eq!(ri("rotqmbyi", a, -15), [0, 0, 0, 0x10]);
-    assert_eq!(ri("rotqbii", a, 7), unq(av << 7 | av >> 121));
+    assert_eq!(ri("rotqbii", a, 7), unq(av.rotate_left(7)));
     // rotqmbybi with count -7: (0xfffffff9 >> 3) & 0x1f = 0x1f, 0 - 0x1f = 1 byte (the
     // count's low 3 bits are simply ignored, so this is not 0 bytes).
     assert_eq!(q(rr("rotqmbybi", a, s(neg(-7)))), shr(8));

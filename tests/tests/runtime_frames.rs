@@ -140,7 +140,7 @@ fn raytrace_kernel_matches_the_reference_on_the_room() {
             staged.triangles[p.triangle as usize].original_index
         };
         let t_ok = !r.is_hit() || (p.t - r.t).abs() <= 1e-4 * r.t.abs();
-        if (kernel == MISS) != !r.is_hit() || !t_ok {
+        if (kernel == MISS) == r.is_hit() || !t_ok {
             bad.push((i as u32 % w, i as u32 / w, kernel, r.triangle, p.t, r.t));
         }
     }
@@ -196,7 +196,7 @@ fn raytrace_kernel_matches_the_reference_on_the_conference_with_small_caches() {
     let reference = Reference::from_staged(staged).render(&scene.camera, w, h, 1);
     let mut bad = 0;
     for (p, r) in pixels.iter().zip(&reference) {
-        let hit_agrees = (p.triangle == MISS) == !r.is_hit();
+        let hit_agrees = (p.triangle == MISS) != r.is_hit();
         let t_agrees = !r.is_hit() || (p.t - r.t).abs() <= 1e-4 * r.t.abs();
         if !hit_agrees || !t_agrees {
             bad += 1;

@@ -321,7 +321,7 @@ fn shadow_packets_are_generated_traced_and_give_visibility() {
         Light::white(glam::Vec3::new(-0.4375, 3.0, 2.0)),
     ];
     let lanes = lanes(lights[0].position);
-    let occluded = |l: usize, i: usize| (i * 7 + l) % 3 == 0;
+    let occluded = |l: usize, i: usize| (i * 7 + l).is_multiple_of(3);
     let contract = RegisterContract::of_module("modules/shadow.s", None);
     for r in SHADE_KEEPS {
         assert!(contract.keeps(r), "${r}: shade.s reads it after the call");

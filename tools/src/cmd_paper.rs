@@ -158,8 +158,9 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     })?;
     write(&args.out.join("report.md"), &report.to_markdown())?;
     write(&args.out.join("report.html"), &report.to_html())?;
+    write(&args.out.join("results.md"), &report.to_results_markdown())?;
     eprintln!(
-        "wrote {}/report.md, report.html, report.json and the figures ({} of {} runs measured)",
+        "wrote {}/report.md, report.html, report.json, results.md and the figures ({} of {} runs measured)",
         args.out.display(),
         report.jobs_measured,
         report.jobs

@@ -1,5 +1,8 @@
 //! The report of `spu paper`: the tables' rows filled in from the jobs' statistics, as
-//! typed data (report.json) and as Markdown and HTML pages.
+//! typed data (report.json), as Markdown and HTML pages, and as `results.md`: the tables
+//! side by side with the paper's, with nothing of the host in them, so that the copy
+//! committed as `docs/results.md` can be compared byte for byte with what the code
+//! produces (`scripts/check-results`).
 
 use crate::paper_jobs::Job;
 use crate::paper_tables::{value, Measured, TableSpec};
@@ -234,6 +237,94 @@ impl Report {
         s
     }
 
+    /// The tables laid out as the paper's: a row per label, for each scene the paper's
+    /// number beside ours. Only simulated figures and the paper's go in (no host times,
+    /// dates, paths or heat maps), so the same code gives the same bytes on any host.
+    pub fn to_results_markdown(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "# Ray Tracing on the Cell Processor (Benthin et al. 2006): the paper's numbers and ours\n"
+        );
+        let _ = writeln!(
+            s,
+            "Written by `spu paper` as `results.md` in its `--out` directory (beside `report.md`, which adds each row's ratio to the paper's, heat maps and Figure 2's plot). The copy in `docs/results.md` is the full run, `spu paper --scenes room,conference,beetle`, and `scripts/check-results` fails when it differs from what the code produces.\n"
+        );
+        let scenes: Vec<String> = self
+            .scenes
+            .iter()
+            .map(|sc| format!("{} (for the paper's {})", sc.id, sc.paper))
+            .collect();
+        let _ = writeln!(
+            s,
+            "Frames of {0}x{0} pixels; scenes: {1}; {2} of {3} runs measured. Every number of ours is the simulator's (cycles and counters, the same for any host and any `--threads`).",
+            self.size,
+            scenes.join(", "),
+            self.jobs_measured,
+            self.jobs
+        );
+        if !self.notes.is_empty() || !self.missing.is_empty() {
+            let _ = writeln!(s);
+            for n in &self.notes {
+                let _ = writeln!(s, "- {n}");
+            }
+            for m in &self.missing {
+                let _ = writeln!(s, "- missing: {m}");
+            }
+        }
+        for t in &self.tables {
+            let _ = writeln!(s, "\n## {}\n\n{}", t.title, t.note);
+            if !t.unit.is_empty() {
+                let _ = writeln!(s, "Unit: {}.", t.unit);
+            }
+            // the labels in their first order, and for each the rows by scene
+            let mut labels: Vec<&str> = Vec::new();
+            for r in &t.rows {
+                if !labels.contains(&r.label.as_str()) {
+                    labels.push(&r.label);
+                }
+            }
+            let _ = write!(s, "\n| row |");
+            for sc in &self.scenes {
+                let _ = write!(s, " {} (paper) | {} |", sc.paper, sc.id);
+            }
+            let _ = write!(s, " runs (ours) |\n|---|");
+            for _ in &self.scenes {
+                s.push_str("---:|---:|");
+            }
+            s.push_str("---|\n");
+            let mut unmeasured = Vec::new();
+            for label in &labels {
+                let rows: Vec<&Row> = t.rows.iter().filter(|r| r.label == *label).collect();
+                let _ = write!(s, "| {label} |");
+                for sc in &self.scenes {
+                    match rows.iter().find(|r| r.scene == sc.id) {
+                        Some(r) => {
+                            let _ = write!(s, " {} | {} |", fmt_num(r.paper), fmt_num(r.ours));
+                            if let Some(why) = &r.missing {
+                                unmeasured.push(format!("{label}, {}: {why}", sc.id));
+                            }
+                        }
+                        None => s.push_str(" – | – |"),
+                    }
+                }
+                // the runs differ between scenes only in the scene, which is the column
+                let config = rows
+                    .iter()
+                    .find(|r| r.missing.is_none())
+                    .map_or("", |r| r.config.as_str());
+                let _ = writeln!(s, " {} |", config.replace('|', "\\|"));
+            }
+            if !unmeasured.is_empty() {
+                let _ = writeln!(s, "\nNot measured:");
+                for u in unmeasured {
+                    let _ = writeln!(s, "- {u}");
+                }
+            }
+        }
+        s
+    }
+
     pub fn to_html(&self) -> String {
         let e = html_escape;
         let mut s = String::from(
@@ -331,4 +422,98 @@ fn html_escape(s: &str) -> String {
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(label: &str, scene: &str, paper: f64, ours: Option<f64>, config: &str) -> Row {
+        Row {
+            label: label.into(),
+            scene: scene.into(),
+            paper_scene: String::new(),
+            paper: Some(paper),
+            ours,
+            ratio: None,
+            config: config.into(),
+            missing: ours.is_none().then(|| "needs --sht, not built yet".into()),
+        }
+    }
+
+    #[test]
+    fn results_put_each_scene_beside_the_paper_with_nothing_of_the_host() {
+        let report = Report {
+            size: 64,
+            scenes: vec![
+                ReportScene {
+                    id: "room".into(),
+                    source: "/some/host/path".into(),
+                    paper: "ERW6".into(),
+                },
+                ReportScene {
+                    id: "beetle".into(),
+                    source: "beetle".into(),
+                    paper: "VW Beetle".into(),
+                },
+            ],
+            tables: vec![Table {
+                id: "table3".into(),
+                title: "Table 3: SHT".into(),
+                unit: "MRays/s".into(),
+                note: "One SPE.".into(),
+                rows: vec![
+                    row("without", "room", 30.08, Some(37.924), "64x64, SHT off"),
+                    row("without", "beetle", 5.3, Some(7.5), "64x64, SHT off"),
+                    row("with", "room", 30.1, None, ""),
+                    row("with", "beetle", 7.0, Some(123.456), "a|b"),
+                ],
+            }],
+            figures: vec![Figure {
+                id: "table3".into(),
+                title: "plot".into(),
+                files: vec!["figure2.svg".into()],
+            }],
+            jobs: 4,
+            jobs_measured: 3,
+            missing: vec!["x.json: absent".into()],
+            heatmaps: vec![HeatMaps {
+                scene: "room".into(),
+                config: "c".into(),
+                cycles: "jobs/room-heat.png".into(),
+                wait: "jobs/room-heat-wait.png".into(),
+            }],
+            notes: vec!["a note".into()],
+        };
+        let md = report.to_results_markdown();
+        let body = md
+            .split_once("\n\nFrames of")
+            .map(|(_, b)| format!("Frames of{b}"))
+            .unwrap();
+        assert_eq!(
+            body,
+            "Frames of 64x64 pixels; scenes: room (for the paper's ERW6), beetle (for the paper's VW Beetle); 3 of 4 runs measured. Every number of ours is the simulator's (cycles and counters, the same for any host and any `--threads`).
+
+- a note
+- missing: x.json: absent
+
+## Table 3: SHT
+
+One SPE.
+Unit: MRays/s.
+
+| row | ERW6 (paper) | room | VW Beetle (paper) | beetle | runs (ours) |
+|---|---:|---:|---:|---:|---|
+| without | 30.08 | 37.92 | 5.300 | 7.500 | 64x64, SHT off |
+| with | 30.10 | – | 7.000 | 123.5 | a\\|b |
+
+Not measured:
+- with, room: needs --sht, not built yet
+"
+        );
+        assert!(md.starts_with("# Ray Tracing on the Cell Processor"));
+        for host in ["/some/host/path", "jobs/room-heat", "figure2.svg"] {
+            assert!(!md.contains(host), "{host} in results.md");
+        }
+    }
 }

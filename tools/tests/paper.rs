@@ -160,6 +160,28 @@ fn quick_report_has_every_table_and_the_figure() {
             "{title} in report.html"
         );
     }
+    // results.md, the tables beside the paper's, comes from the statistics alone: built
+    // again from the run's stats files it is the same, byte for byte
+    let results = std::fs::read_to_string(dir.join("results.md")).unwrap();
+    for t in r["tables"].as_array().unwrap() {
+        let title = t["title"].as_str().unwrap();
+        assert!(results.contains(&format!("\n## {title}\n")), "{title}");
+    }
+    assert!(results.contains(
+        "| row | ERW6 (paper) | room | Conference (paper) | conference | VW Beetle (paper) | beetle | runs (ours) |"
+    ));
+    let again = dir.join("again");
+    let collected = spu(&[
+        &common[..8],
+        &["--out", again.to_str().unwrap(), "--collect"],
+        &[dir.join("jobs").to_str().unwrap()],
+    ]
+    .concat());
+    assert!(collected.status.success());
+    assert_eq!(
+        std::fs::read_to_string(again.join("results.md")).unwrap(),
+        results
+    );
 
     // --list-jobs prints one render per job, writing where the run wrote
     let listed = spu(&[&common[..], &["--list-jobs"]].concat());
