@@ -1043,11 +1043,8 @@ mod tests {
         assert!(generated.iter().any(|n| n == "SH_AREA_BYTES"));
         let sources = crate::kernels::MODULES
             .iter()
-            .map(|(name, text)| (*name, *text))
-            .chain([
-                ("primary.s", crate::kernels::PRIMARY_SOURCE),
-                ("fill.s", crate::kernels::FILL_SOURCE),
-            ]);
+            .chain(crate::kernels::FRAME_SOURCES)
+            .map(|(name, text)| (*name, *text));
         for (file, text) in sources {
             for line in text.lines() {
                 let code = line.split('#').next().unwrap().trim();
@@ -1066,7 +1063,8 @@ mod tests {
     /// labels are symbols of the (shaded) primary kernel, in order.
     #[test]
     fn code_sections_are_stretches_of_the_kernel() {
-        let (source, name) = crate::kernels::frame_program(false);
+        let primary = crate::kernels::KernelVariant::Primary;
+        let (source, name) = (primary.source(), primary.name());
         for (defines, sections) in [
             (&[][..], &[TRAVERSAL, INTERSECTION][..]),
             (&[("SHADE", 1)][..], &[TRAVERSAL, INTERSECTION, SHADING][..]),

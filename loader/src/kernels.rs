@@ -2,86 +2,28 @@
 //! programs, the modules they compose with `.include`, and `layout.inc`, which is generated
 //! from [`crate::layout`] and [`crate::kernel_abi`] (the checked-in `kernels/layout.inc` is
 //! for users assembling from a checkout, and a test keeps it equal to the generated text).
+//!
+//! The lists of sources are written by the build script from `kernels/modules/` and
+//! [`KernelVariant::ALL`], so they cannot disagree with the files or the variants.
 
-/// The primary-ray frame program (`kernels/primary.s`).
-pub const PRIMARY_SOURCE: &str = include_str!("../../kernels/primary.s");
-/// The fill-pattern program that exercises the runtime (`kernels/fill.s`).
-pub const FILL_SOURCE: &str = include_str!("../../kernels/fill.s");
+use crate::runtime::Program;
+pub use crate::variants::KernelVariant;
+
+/// (every kernel module by the name frame programs `.include` it with, relative to
+/// `kernels/`; every frame program's source by its file name under `kernels/`).
+type Sources = (
+    &'static [(&'static str, &'static str)],
+    &'static [(&'static str, &'static str)],
+);
+
+const SOURCES: Sources = include!(concat!(env!("OUT_DIR"), "/sources.rs"));
 
 /// Every kernel module, by the name frame programs `.include` it with (relative to
 /// `kernels/`).
-pub const MODULES: &[(&str, &str)] = &[
-    (
-        "modules/regs.inc",
-        include_str!("../../kernels/modules/regs.inc"),
-    ),
-    (
-        "modules/data.s",
-        include_str!("../../kernels/modules/data.s"),
-    ),
-    (
-        "modules/frame.s",
-        include_str!("../../kernels/modules/frame.s"),
-    ),
-    (
-        "modules/raygen.s",
-        include_str!("../../kernels/modules/raygen.s"),
-    ),
-    (
-        "modules/traverse.s",
-        include_str!("../../kernels/modules/traverse.s"),
-    ),
-    (
-        "modules/bvh_cache.s",
-        include_str!("../../kernels/modules/bvh_cache.s"),
-    ),
-    (
-        "modules/triangle.s",
-        include_str!("../../kernels/modules/triangle.s"),
-    ),
-    (
-        "modules/tri_cache.s",
-        include_str!("../../kernels/modules/tri_cache.s"),
-    ),
-    ("modules/lru.s", include_str!("../../kernels/modules/lru.s")),
-    ("modules/sht.s", include_str!("../../kernels/modules/sht.s")),
-    (
-        "modules/output.s",
-        include_str!("../../kernels/modules/output.s"),
-    ),
-    (
-        "modules/frame_done.s",
-        include_str!("../../kernels/modules/frame_done.s"),
-    ),
-    (
-        "modules/shade.s",
-        include_str!("../../kernels/modules/shade.s"),
-    ),
-    (
-        "modules/shade_area.s",
-        include_str!("../../kernels/modules/shade_area.s"),
-    ),
-    (
-        "modules/shade_iset.s",
-        include_str!("../../kernels/modules/shade_iset.s"),
-    ),
-    (
-        "modules/shade_light.s",
-        include_str!("../../kernels/modules/shade_light.s"),
-    ),
-    (
-        "modules/shade_iset_slow.s",
-        include_str!("../../kernels/modules/shade_iset_slow.s"),
-    ),
-    (
-        "modules/shade_cache.s",
-        include_str!("../../kernels/modules/shade_cache.s"),
-    ),
-    (
-        "modules/shadow.s",
-        include_str!("../../kernels/modules/shadow.s"),
-    ),
-];
+pub const MODULES: &[(&str, &str)] = SOURCES.0;
+
+/// The frame programs' sources, by file name under `kernels/`.
+pub const FRAME_SOURCES: &[(&str, &str)] = SOURCES.1;
 
 /// The text of `layout.inc`: record layouts and the kernel ABI, from their one definition.
 pub fn layout_include() -> String {
@@ -120,11 +62,18 @@ pub fn include_files() -> Vec<(String, String)> {
     files
 }
 
-/// The frame program `spu render` runs: (source, name for diagnostics).
-pub fn frame_program(fill: bool) -> (&'static str, &'static str) {
-    if fill {
-        (FILL_SOURCE, "kernels/fill.s")
-    } else {
-        (PRIMARY_SOURCE, "kernels/primary.s")
+impl KernelVariant {
+    /// The frame program's source text, as built in.
+    pub fn source(self) -> &'static str {
+        FRAME_SOURCES
+            .iter()
+            .find(|(file, _)| *file == self.file())
+            .map_or("", |(_, text)| text)
+    }
+
+    /// The assembled program: the build's where the sources are the ones it assembled,
+    /// else assembled now.
+    pub fn program(self) -> Result<Program, String> {
+        crate::runtime::assemble_kernel_with(self.source(), self.name(), self.defines())
     }
 }

@@ -14,6 +14,8 @@
 //!   kernel output.
 //! - [`stats`]: a frame's statistics as typed JSON (`spu render --stats`).
 //! - [`timeline`]: when each tile and packet was traced, from the SPUs' event logs.
+//! - [`render`]: the one render API (configuration, prepared scene, frame, validation)
+//!   over [`runtime`], the frame programs ([`variants`], [`kernels`]) and [`frame`]'s layout.
 //! - [`ppe`]: how `spu run` starts a program and serves its PPE-assisted library calls.
 
 pub mod bvh;
@@ -38,6 +40,8 @@ pub mod kernel_abi;
 pub mod kernel_image;
 pub mod kernels;
 pub mod ppe;
+pub mod render;
 pub mod runtime;
 pub mod stats;
 pub mod timeline;
+pub mod variants;

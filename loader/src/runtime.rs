@@ -1,6 +1,5 @@
 //! The multi-SPE runtime: starts N simulated SPUs on a shared main memory, lets them take
 //! tiles from the shared counter, and collects the frame buffer and the statistics.
-//!
 
 use crate::frame::FrameLayout;
 use crate::kernel_abi::{KernelStats, STATS_BYTES};
@@ -42,25 +41,13 @@ pub struct FrameRun {
     pub symbols: Vec<(String, u32)>,
     /// The kernel's local-store image (to tell its no-ops apart in the profile).
     pub kernel_image: Vec<u8>,
-    /// Each SPU's MFC commands and channel waits, when [`FrameOptions::event_log`] was on.
+    /// Each SPU's MFC commands and channel waits, when [`Frame::event_log`] was on.
     pub events: Vec<Vec<spu_isa::machine::SpuEvent>>,
     /// The caches, packets in flight and memory latency the frame ran with.
     pub config: KernelConfig,
     /// The block compiler's work for the frame (its SPUs share one code cache), with
     /// the instructions run compiled summed over the SPUs.
     pub jit: spu_isa::jit::JitStats,
-}
-
-/// What a frame records beyond its image and statistics, and what it may take over from
-/// earlier frames.
-#[derive(Clone, Default)]
-pub struct FrameOptions {
-    /// Log every SPU's MFC commands and channel waits (for heat maps and timelines).
-    pub event_log: bool,
-    /// Blocks compiled by earlier frames of the process, to use and add to (`spu paper`);
-    /// `None`: the frame's SPEs start a cache of their own. The frame's results do not
-    /// depend on it, only how much runs compiled and how soon.
-    pub code: Option<spu_isa::jit::CodeCache>,
 }
 
 /// The kernel configuration of a frame, as `--stats` reports it.
@@ -76,14 +63,14 @@ pub struct KernelConfig {
 }
 
 impl KernelConfig {
-    pub fn new(layout: &FrameLayout, timing: &spu_isa::timing::TimingConfig) -> Self {
+    pub fn new(layout: &FrameLayout, dma_latency_ns: f64) -> Self {
         let p = &layout.params;
         KernelConfig {
             sht: p.sht_contexts,
             assoc: p.cache_assoc,
             bvh_cache_lines: 1 << p.bvh_cache_log2,
             tri_cache_lines: 1 << p.tri_cache_log2,
-            dma_latency_ns: timing.dma_latency_ns,
+            dma_latency_ns,
         }
     }
 }
@@ -146,14 +133,6 @@ pub fn assemble_kernel_with(
             .collect::<Vec<_>>()
             .join("\n")),
     }
-}
-
-fn symbol(program: &Program, name: &str) -> Option<u32> {
-    program
-        .symbols
-        .iter()
-        .find(|(n, _)| n == name)
-        .map(|(_, a)| *a)
 }
 
 /// The main-memory regions whose traffic a frame counts, by name: the scene's node,
@@ -289,87 +268,82 @@ impl From<FrameError> for String {
     }
 }
 
-/// Renders one frame with `spes` SPUs on `threads` host threads; `progress` hears the
-/// number of tiles taken so far.
-#[allow(clippy::too_many_arguments)]
-pub fn render_frame(
-    staged: &StagedScene,
-    layout: &FrameLayout,
-    spes: usize,
-    threads: usize,
-    timing: &spu_isa::timing::TimingConfig,
-    fill: bool,
-    max_cycles: u64,
-    progress: &mut dyn FnMut(u32, u32),
-) -> Result<FrameRun, FrameError> {
-    render_frame_with(
-        staged,
-        layout,
-        spes,
-        threads,
-        timing,
-        fill,
-        max_cycles,
-        &FrameOptions::default(),
-        progress,
-    )
+/// One frame ready to run: the staged scene, the frame's layout (whole: see
+/// [`crate::render::frame_layout`]) and the program, and how to run them.
+pub struct Frame<'a> {
+    pub staged: &'a StagedScene,
+    pub layout: &'a FrameLayout,
+    /// The assembled `kernel`, as it is loaded into every SPU.
+    pub program: &'a Program,
+    pub kernel: crate::kernels::KernelVariant,
+    pub spes: usize,
+    /// Host threads running the SPUs (the result does not depend on it).
+    pub threads: usize,
+    /// The timing model's settings; with `timed` off they give only the DMA latency the
+    /// statistics report.
+    pub timing: spu_isa::timing::TimingConfig,
+    /// Whether the SPUs run with the timing model.
+    pub timed: bool,
+    pub engine: spu_isa::jit::Engine,
+    /// Simulated cycles per SPU before the frame gives up.
+    pub max_cycles: u64,
+    /// Log every SPU's MFC commands and channel waits (for heat maps and timelines).
+    pub event_log: bool,
+    /// The compiled blocks the SPEs share, and add to: earlier frames' blocks are reused.
+    /// The frame's results do not depend on it, only how much runs compiled and how soon.
+    pub code: &'a spu_isa::jit::CodeCache,
 }
 
-/// [`render_frame`] with [`FrameOptions`].
-#[allow(clippy::too_many_arguments)]
-pub fn render_frame_with(
-    staged: &StagedScene,
-    layout: &FrameLayout,
-    spes: usize,
-    threads: usize,
-    timing: &spu_isa::timing::TimingConfig,
-    fill: bool,
-    max_cycles: u64,
-    options: &FrameOptions,
+/// Runs `frame` with its SPUs on its host threads; `progress` hears the number of tiles
+/// taken so far and the frame's tiles. The library's callers go through
+/// [`crate::render::render`], which makes the layout and chooses the program.
+pub fn run_frame(
+    frame: &Frame,
     progress: &mut dyn FnMut(u32, u32),
 ) -> Result<FrameRun, FrameError> {
     use crate::gang::Next;
     use spu_isa::machine::{apply_quantum, MainMemory, Spu, StopReason};
-    let (source, name) = crate::kernels::frame_program(fill);
-    let shaded = layout.shading.is_some() && !fill;
-    let defines: &[(&str, i64)] = if shaded { &[("SHADE", 1)] } else { &[] };
-    let program = assemble_kernel_with(source, name, defines)?;
-    let mut layout = layout.clone();
+    let Frame {
+        staged,
+        layout,
+        program,
+        kernel,
+        spes,
+        threads,
+        max_cycles,
+        code,
+        ..
+    } = *frame;
+    let (fill, shaded) = (!kernel.traces(), kernel.shades());
+    if shaded != layout.shading.is_some() {
+        return Err(FrameError::Setup(format!(
+            "the {} kernel {} a shading block in the frame's layout",
+            kernel.id(),
+            if shaded { "needs" } else { "takes no" }
+        )));
+    }
     if !fill {
-        check_local_store(&program, &layout)?;
+        check_local_store(program, layout)?;
         check_leaves_fit(staged)?;
     }
-    if shaded {
-        // The shading area goes above everything the kernel carves at `cache_area`.
-        let start = symbol(&program, "cache_area")
-            .ok_or_else(|| "the kernel has no cache_area".to_string())?;
-        let p = &layout.params;
-        let carved = crate::kernel_abi::carved_bytes(
-            1 << p.bvh_cache_log2,
-            1 << p.tri_cache_log2,
-            p.sht_contexts.max(1),
-        );
-        layout.set_shading_area(start + carved)?;
-    }
-    let layout = &layout;
     let regions = traffic_regions(staged, layout);
     let memory = MainMemory::new(layout.memory_image(staged));
     // The SPEs run the same kernel: each block is compiled once for all of them.
-    let code = options.code.clone().unwrap_or_default();
     let compiled_before = code.stats();
     let mut spus: Vec<Spu> = (0..spes)
         .map(|i| {
             let mut spu = Spu::new(i as u32);
-            spu.share_code(&code);
+            spu.set_engine(frame.engine);
+            spu.share_code(code);
             spu.load_image(&program.image);
             spu.set_pc(program.entry);
             spu.set_reg(3, [i as u32, 0, 0, 0]);
             spu.set_reg(4, [layout.param_addr, 0, 0, 0]);
-            if std::env::var_os("SPU_NO_TIMING").is_none() {
-                spu.enable_timing(timing.clone());
+            if frame.timed {
+                spu.enable_timing(frame.timing.clone());
             }
             spu.count_traffic(regions.iter().map(|(_, s, e)| (*s, *e)).collect());
-            if options.event_log {
+            if frame.event_log {
                 spu.enable_event_log();
             }
             spu
@@ -451,7 +425,7 @@ pub fn render_frame_with(
     }
     let events = spus.iter_mut().map(|spu| spu.take_events()).collect();
     let shadow_rays = match &layout.shading {
-        Some(_) if shaded => {
+        Some(_) => {
             let at = layout.params.ls_shading as usize
                 + crate::kernel_abi::SHADOW_AREA
                 + crate::kernel_abi::SHADOW_RAYS_OFFSET;
@@ -465,7 +439,7 @@ pub fn render_frame_with(
         _ => 0,
     };
     let (colour_buffer, shade_counters) = match &layout.shading {
-        Some(shading) if shaded => {
+        Some(shading) => {
             let at = shading.colour_addr as usize;
             let area = layout.params.ls_shading as usize + SHADE_STATS_OFFSET;
             let counters = spus
@@ -507,7 +481,7 @@ pub fn render_frame_with(
         profile,
         symbols: program.symbols.clone(),
         kernel_image: program.image.clone(),
-        config: KernelConfig::new(layout, timing),
+        config: KernelConfig::new(layout, frame.timing.dma_latency_ns),
         jit: {
             // This frame's compiling only, where the cache is older than the frame.
             let all = code.stats();

@@ -103,10 +103,14 @@ pub fn parse_lights(texts: &[String]) -> Result<Vec<Light>, String> {
 /// procedural scenes place theirs) or, for files, one white light above and to the right of
 /// the camera, a fifth of the eye-target distance away, so that shadows fall visibly.
 pub fn default_lights(scene: &crate::Scene) -> Vec<Light> {
+    default_lights_seen_from(scene, &scene.camera)
+}
+
+/// [`default_lights`] for the scene seen from `camera` instead of its own.
+pub fn default_lights_seen_from(scene: &crate::Scene, camera: &crate::Camera) -> Vec<Light> {
     if !scene.lights.is_empty() {
         return scene.lights.clone();
     }
-    let camera = &scene.camera;
     let forward = camera.target - camera.eye;
     let distance = forward.length();
     let right = forward.cross(camera.up).normalize_or_zero();

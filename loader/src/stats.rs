@@ -393,8 +393,9 @@ pub struct FrameSetup<'a> {
 }
 
 impl FrameStats {
-    /// The statistics of a finished frame; `validation` is (pixels, mismatches).
-    pub fn new(run: &FrameRun, setup: &FrameSetup, validation: Option<(usize, usize)>) -> Self {
+    /// The statistics of a finished frame, with its comparison with the reference where
+    /// there was one ([`crate::render::FrameResult::stats`] makes both).
+    pub fn new(run: &FrameRun, setup: &FrameSetup, validation: Option<Validation>) -> Self {
         let FrameSetup {
             scene,
             width,
@@ -426,12 +427,7 @@ impl FrameStats {
                     compiled_instructions: s.compiled_instructions,
                 })
                 .collect(),
-            validation: validation.map(|(pixels, mismatches)| Validation {
-                pixels,
-                mismatches,
-                colour_mismatches: None,
-                shadow_edge_pixels: None,
-            }),
+            validation,
             table2: Table2::new(run, rays, clock_ghz),
             config: run.config.clone(),
             caches: CacheStats::new(run),

@@ -1,7 +1,7 @@
 //! The kernels assemble from their modules, with `layout.inc` from its one source; the
 //! checked-in copy of `layout.inc` and the embedded module list match the files.
 
-use spu_loader::kernels;
+use spu_loader::kernels::{self, KernelVariant};
 
 fn kernels_dir() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../kernels")
@@ -9,11 +9,9 @@ fn kernels_dir() -> std::path::PathBuf {
 
 #[test]
 fn kernels_assemble() {
-    for fill in [false, true] {
-        let (source, name) = kernels::frame_program(fill);
-        let program =
-            spu_loader::runtime::assemble_kernel(source, name).unwrap_or_else(|e| panic!("{e}"));
-        assert!(program.image.len() > 256, "{name}");
+    for variant in KernelVariant::ALL {
+        let program = variant.program().unwrap_or_else(|e| panic!("{e}"));
+        assert!(program.image.len() > 256, "{variant:?}");
         assert!(program.symbols.iter().any(|(n, _)| n == "_start"));
     }
 }
@@ -57,10 +55,8 @@ fn every_module_file_is_embedded() {
 #[test]
 fn prebuilt_kernels_are_what_the_assembler_makes() {
     let includes = kernels::include_files();
-    let programs: [(bool, &[(&str, i64)]); 3] =
-        [(false, &[]), (false, &[("SHADE", 1)]), (true, &[])];
-    for (fill, defines) in programs {
-        let (source, name) = kernels::frame_program(fill);
+    for variant in KernelVariant::ALL {
+        let (source, name, defines) = (variant.source(), variant.name(), variant.defines());
         let prebuilt = kernels::prebuilt(source, name, defines, &includes)
             .unwrap_or_else(|| panic!("{name} {defines:?}: no prebuilt program for these sources"));
         let opts = spu_asm::Options {
@@ -74,7 +70,10 @@ fn prebuilt_kernels_are_what_the_assembler_makes() {
             "{name} {defines:?}: the prebuilt program differs"
         );
     }
-    let (source, name) = kernels::frame_program(false);
+    let (source, name) = (
+        KernelVariant::Primary.source(),
+        KernelVariant::Primary.name(),
+    );
     let edited = format!("{source}\n\tnop\n");
     assert!(kernels::prebuilt(&edited, name, &[], &includes).is_none());
     assert!(kernels::prebuilt(source, name, &[("SHADE", 2)], &includes).is_none());

@@ -580,34 +580,20 @@ fn channels_and_dma_run_the_same_compiled() {
 /// two, the same instructions run compiled on each SPU.
 #[test]
 fn a_kernel_frame_is_the_same_compiled() {
-    use spu_loader::frame::{FrameLayout, SCENE_BASE};
-    use spu_loader::runtime::render_frame;
-    use spu_loader::{procedural, Bvh, BvhConfig, StagedScene};
-    let scene = procedural::room();
-    let bvh = Bvh::build(
-        &scene,
-        &BvhConfig {
-            threads: 1,
-            ..BvhConfig::default()
-        },
-    );
-    let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
-    let basis = scene.camera.basis(64, 64);
-    let layout = FrameLayout::new(&staged, &basis, 64, 64, 2, 256, 256).unwrap();
+    use spu_loader::render::{render, Prepared, RenderConfig};
+    let room = Prepared::from_scene("room", spu_loader::procedural::room()).unwrap();
     let frame = |engine: Engine, threads: usize| {
-        Engine::set_default(engine);
-        let run = render_frame(
-            &staged,
-            &layout,
-            2,
+        let config = RenderConfig {
+            width: 64,
+            height: 64,
+            spes: 2,
             threads,
-            &TimingConfig::default(),
-            false,
-            50_000_000_000,
-            &mut |_, _| {},
-        );
-        Engine::set_default(Engine::host_default());
-        run.unwrap()
+            sht: 1,
+            engine,
+            max_cycles: 50_000_000_000,
+            ..RenderConfig::new("room")
+        };
+        render(&room, &config, &CodeCache::default()).unwrap().run
     };
     let a = frame(Engine::Interp, 1);
     let b = frame(Engine::Jit, 1);

@@ -5,22 +5,15 @@
 //! and their cycle-bearing statistics snapshotted (insta). A kernel change that costs or saves a
 //! single cycle anywhere in a frame shows here as a diff; one that is meant to accepts it
 //! with `cargo insta review` (or `INSTA_UPDATE=always`) and commits the new snapshot.
-//!
-//! Which engine runs an SPU is a process-wide default (`Engine::set_default`), so the
-//! frames of this file run one at a time under [`ENGINE`].
 
-use spu_isa::jit::Engine;
-use spu_isa::timing::TimingConfig;
-use spu_loader::frame::{FrameLayout, SCENE_BASE};
-use spu_loader::kernel_abi::{Counter, ShadeCounters, ShadingBlock, SHADE_SHADOWS, SHADE_SIMPLE};
-use spu_loader::runtime::{render_frame, FrameRun};
+use spu_isa::jit::{CodeCache, Engine};
+use spu_loader::kernel_abi::{ShadeCounters, SHADE_SHADOWS, SHADE_SIMPLE};
+use spu_loader::render::{prepare, Prepared, RenderConfig};
+use spu_loader::runtime::FrameRun;
+use spu_loader::shading::ShadeMode;
 use spu_loader::stats::{FrameSetup, FrameStats};
-use spu_loader::{procedural, shading, Bvh, BvhConfig, Scene, StagedScene};
 use std::collections::BTreeSet;
-use std::sync::{Mutex, OnceLock};
-
-/// Held while a frame runs, since the engine is chosen for the whole process.
-static ENGINE: Mutex<()> = Mutex::new(());
+use std::sync::OnceLock;
 
 /// One frame's set-up, as `spu render` takes it.
 #[derive(Debug)]
@@ -35,45 +28,32 @@ struct Setup {
     sht: u32,
 }
 
-/// Renders `setup` with `engine`: the recipe of `spu render --scene S --width N --height N
-/// --spes P --assoc A --sht H [--shade M --shadow-early on|off]` with the default caches,
-/// lights and latency (kept in this one function so that it follows the library's frame
-/// API in one place).
-fn render(scene: &Scene, setup: &Setup, engine: Engine) -> FrameRun {
-    let bvh = Bvh::build(scene, &BvhConfig::default());
-    let staged = StagedScene::new(scene, &bvh, SCENE_BASE).unwrap();
-    let basis = scene.camera.basis(setup.size, setup.size);
-    let mut layout = FrameLayout::new(
-        &staged, &basis, setup.size, setup.size, setup.spes, 256, 256,
-    )
-    .unwrap()
-    .with_kernel_options(setup.assoc, setup.sht)
-    .unwrap();
-    if setup.shade != 0 {
-        let block = ShadingBlock {
-            mode: setup.shade,
-            shadow_early: setup.shadow_early,
-            vertex_cache_log2: 6,
-            material_cache_log2: 6,
-            lights: shading::default_lights(scene),
-            ..Default::default()
-        };
-        layout = layout.with_shading(&staged, block).unwrap();
-    }
-    let _only = ENGINE.lock().unwrap_or_else(|e| e.into_inner());
-    Engine::set_default(engine);
-    let run = render_frame(
-        &staged,
-        &layout,
-        setup.spes,
-        2,
-        &TimingConfig::default(),
-        false,
-        50_000_000_000,
-        &mut |_, _| {},
-    );
-    Engine::set_default(Engine::host_default());
-    run.unwrap()
+/// Renders `setup` with `engine`, as `spu render --scene S --width N --height N --spes P
+/// --assoc A --sht H [--shade M --shadow-early on|off]` does with the default caches,
+/// lights and latency: through the library's render API.
+fn render(scene: &Prepared, setup: &Setup, engine: Engine) -> FrameRun {
+    let mode = match setup.shade {
+        0 => ShadeMode::None,
+        SHADE_SIMPLE => ShadeMode::Simple,
+        _ => ShadeMode::Shadows,
+    };
+    let mut config = RenderConfig {
+        width: setup.size,
+        height: setup.size,
+        spes: setup.spes,
+        threads: 2,
+        assoc: setup.assoc,
+        sht: setup.sht,
+        kernel: RenderConfig::kernel_for(false, mode),
+        engine,
+        max_cycles: 50_000_000_000,
+        ..RenderConfig::new(setup.scene)
+    };
+    config.shading.mode = mode;
+    config.shading.shadow_early = setup.shadow_early;
+    spu_loader::render::render(scene, &config, &CodeCache::default())
+        .unwrap()
+        .run
 }
 
 /// The frame's cycle-bearing statistics as text, one figure a line so that a diff names
@@ -106,25 +86,25 @@ fn statistics(run: &FrameRun, setup: &Setup) -> String {
         "kernel counters (all SPUs): {:#?}",
         run.kernel_stats()
     ));
+    type Count = fn(&ShadeCounters) -> u64;
+    let shade: [(&str, Count); 10] = [
+        ("packets with a hit", |c| c.groups.0),
+        ("of them on one triangle", |c| c.same.0),
+        ("passes", |c| c.passes.0),
+        ("packets", |c| c.packets.0),
+        ("vertex lookups (the host counts 3 a record)", |c| {
+            c.vertex_lookups.0
+        }),
+        ("vertex misses", |c| c.vertex_misses.0),
+        ("material lookups", |c| c.material_lookups.0),
+        ("material misses", |c| c.material_misses.0),
+        ("triangle records looked up", |c| c.triangle_lookups.0),
+        ("triangle records fetched", |c| c.triangle_misses.0),
+    ];
     if !run.shade_counters.is_empty() {
-        let t = ShadeCounters::sum(&run.shade_counters);
-        let counters = [
-            ("packets with a hit", t.groups),
-            ("of them on one triangle", t.same),
-            ("passes", t.passes),
-            ("packets", t.packets),
-            (
-                "vertex lookups (the host counts 3 a record)",
-                t.vertex_lookups,
-            ),
-            ("vertex misses", t.vertex_misses),
-            ("material lookups", t.material_lookups),
-            ("material misses", t.material_misses),
-            ("triangle records looked up", t.triangle_lookups),
-            ("triangle records fetched", t.triangle_misses),
-        ];
         line("shading counters (all SPUs):".into());
-        for (name, Counter(total)) in counters {
+        for (name, count) in shade {
+            let total: u64 = run.shade_counters.iter().map(count).sum();
             line(format!("  {name}: {total}"));
         }
     }
@@ -164,7 +144,7 @@ struct Outcome {
 /// (image, statistics, the profile address by address), and returns the statistics with
 /// the set-up they came from.
 fn frame(setup: &Setup) -> Outcome {
-    let scene = procedural::by_name(setup.scene).unwrap();
+    let scene = prepare(setup.scene).unwrap();
     let interp = render(&scene, setup, Engine::Interp);
     let text = statistics(&interp, setup);
     if Engine::SUPPORTED {
@@ -196,9 +176,9 @@ fn frame(setup: &Setup) -> Outcome {
         "an SPU took no tile"
     );
     if setup.shade != 0 {
-        let t = ShadeCounters::sum(&interp.shade_counters);
+        let all = ShadeCounters::sum(&interp.shade_counters);
         assert!(
-            t.vertex_misses.0 > 0 && t.material_misses.0 > 0,
+            all.vertex_misses.0 > 0 && all.material_misses.0 > 0,
             "vertex and material misses"
         );
     }
@@ -299,10 +279,14 @@ const MODULE_ENTRIES: &[(&str, &[&str])] = &[
     ("lru.s", &["lru_find", "lru_rotate"]),
     ("output.s", &["packet_done"]),
     ("raygen.s", &["packet_loop"]),
-    (
-        "shade.s",
-        &["shade_packet", "sh_vertex_miss", "sh_tri_miss"],
-    ),
+    ("shade.s", &["shade_packet"]),
+    // The shading module's jobs behind shade_packet carry local labels only: they run
+    // within it, and the shading counters of the snapshots count what they did.
+    ("shade_area.s", &[]),
+    ("shade_cache.s", &["sh_vertex_miss", "sh_tri_miss"]),
+    ("shade_iset.s", &[]),
+    ("shade_iset_slow.s", &[]),
+    ("shade_light.s", &[]),
     ("shadow.s", &["shadow_rays", "shadow_done", "shadow_leaf"]),
     (
         "sht.s",

@@ -3,13 +3,14 @@
 //! in flight and direct-mapped or 4-way caches, which must all give the same image as the
 //! blocking direct-mapped kernel and the host reference.
 
+use spu_isa::jit::CodeCache;
 use spu_isa::machine::{MainMemory, Spu};
-use spu_isa::timing::TimingConfig;
 use spu_loader::camera::Camera;
-use spu_loader::frame::{FrameLayout, SCENE_BASE};
+use spu_loader::frame::SCENE_BASE;
 use spu_loader::kernel_abi::{decode_frame_buffer, KernelStats, MISS};
 use spu_loader::reference::Reference;
-use spu_loader::runtime::{render_frame, FrameRun};
+use spu_loader::render::{render, Prepared, RenderConfig};
+use spu_loader::runtime::FrameRun;
 use spu_loader::{procedural, Bvh, BvhConfig, Scene, StagedScene};
 
 /// A driver for `lru.s`: one 4-way set whose ways are 16 bytes (tags) and 64 bytes (lines)
@@ -143,20 +144,25 @@ fn frame(
     assoc: u32,
     sht: u32,
 ) -> Result<FrameRun, String> {
-    let basis = scene.camera.basis(w, h);
-    let layout = FrameLayout::new(staged, &basis, w, h, spes, lines, lines)?
-        .with_kernel_options(assoc, sht)?;
-    render_frame(
-        staged,
-        &layout,
+    let prepared = Prepared {
+        name: "test".into(),
+        scene: scene.clone(),
+        staged: staged.clone(),
+    };
+    let config = RenderConfig {
+        width: w,
+        height: h,
         spes,
-        1,
-        &TimingConfig::default(),
-        false,
-        20_000_000_000,
-        &mut |_, _| {},
-    )
-    .map_err(|e| e.to_string())
+        bvh_cache: lines,
+        tri_cache: lines,
+        assoc,
+        sht,
+        max_cycles: 20_000_000_000,
+        ..RenderConfig::new("test")
+    };
+    render(&prepared, &config, &CodeCache::default())
+        .map(|frame| frame.run)
+        .map_err(|e| e.to_string())
 }
 
 fn stats(run: &FrameRun) -> KernelStats {

@@ -2,46 +2,49 @@
 //! queue and the deterministic memory model; the ray-tracing kernel is checked pixel by
 //! pixel against the host reference.
 
+use spu_isa::jit::CodeCache;
 use spu_isa::timing::TimingConfig;
 use spu_loader::camera::Camera;
-use spu_loader::frame::{FrameLayout, SCENE_BASE};
 use spu_loader::kernel_abi::{
     decode_frame_buffer, pixel_location, MISS, PACKETS_PER_TILE, PACKET_BLOCK_BYTES,
 };
 use spu_loader::reference::Reference;
-use spu_loader::runtime::{render_frame, FrameRun};
-use spu_loader::{procedural, Bvh, BvhConfig, StagedScene};
+use spu_loader::render::{prepare, render, render_with, KernelVariant, Prepared, RenderConfig};
+use spu_loader::runtime::FrameRun;
+
+/// A `width x height` frame of `scene` on `spes` SPEs with blocking misses (one packet in
+/// flight) and 256-line direct-mapped caches.
+fn config(scene: &str, width: u32, height: u32, spes: usize, threads: usize) -> RenderConfig {
+    RenderConfig {
+        width,
+        height,
+        spes,
+        threads,
+        sht: 1,
+        max_cycles: 50_000_000_000,
+        ..RenderConfig::new(scene)
+    }
+}
 
 fn frame(
-    scene: &spu_loader::Scene,
+    prepared: &Prepared,
     width: u32,
     height: u32,
     spes: usize,
     threads: usize,
     fill: bool,
-) -> (StagedScene, FrameRun) {
-    let bvh = Bvh::build(
-        scene,
-        &BvhConfig {
-            threads: 1,
-            ..BvhConfig::default()
+) -> FrameRun {
+    let config = RenderConfig {
+        kernel: if fill {
+            KernelVariant::Fill
+        } else {
+            KernelVariant::Primary
         },
-    );
-    let staged = StagedScene::new(scene, &bvh, SCENE_BASE).unwrap();
-    let basis = scene.camera.basis(width, height);
-    let layout = FrameLayout::new(&staged, &basis, width, height, spes, 256, 256).unwrap();
-    let run = render_frame(
-        &staged,
-        &layout,
-        spes,
-        threads,
-        &TimingConfig::default(),
-        fill,
-        50_000_000_000,
-        &mut |_, _| {},
-    )
-    .unwrap();
-    (staged, run)
+        ..config(&prepared.name, width, height, spes, threads)
+    };
+    render(prepared, &config, &CodeCache::default())
+        .unwrap()
+        .run
 }
 
 fn word(bytes: &[u8], off: usize) -> u32 {
@@ -52,8 +55,7 @@ fn word(bytes: &[u8], off: usize) -> u32 {
 /// tile and packet number exactly once, and the work is spread over several SPUs.
 #[test]
 fn tile_queue_hands_out_every_tile_once_with_16_spus() {
-    let scene = procedural::room();
-    let (_, run) = frame(&scene, 256, 256, 16, 2, true);
+    let run = frame(&prepare("room").unwrap(), 256, 256, 16, 2, true);
     let tiles = 16;
     for tile in 0..tiles {
         for packet in 0..PACKETS_PER_TILE {
@@ -82,10 +84,10 @@ fn tile_queue_hands_out_every_tile_once_with_16_spus() {
 /// The same frame, statistics and cycles for 1, 2 and 4 host threads.
 #[test]
 fn frames_are_identical_for_any_thread_count() {
-    let scene = procedural::room();
-    let (_, one) = frame(&scene, 128, 128, 4, 1, false);
+    let room = prepare("room").unwrap();
+    let one = frame(&room, 128, 128, 4, 1, false);
     for threads in [2, 4] {
-        let (_, other) = frame(&scene, 128, 128, 4, threads, false);
+        let other = frame(&room, 128, 128, 4, threads, false);
         assert_eq!(one.frame_buffer, other.frame_buffer, "{threads} threads");
         assert_eq!(one.frame_cycles, other.frame_cycles);
         for (a, b) in one.spus.iter().zip(&other.spus) {
@@ -101,23 +103,17 @@ fn frames_are_identical_for_any_thread_count() {
 /// threads sharing the SPUs end with it) and the same error on one.
 #[test]
 fn a_frame_out_of_cycles_ends_on_every_thread_count() {
-    let scene = procedural::room();
-    let bvh = Bvh::build(&scene, &BvhConfig::default());
-    let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
-    let basis = scene.camera.basis(128, 128);
-    let layout = FrameLayout::new(&staged, &basis, 128, 128, 4, 256, 256).unwrap();
+    let room = prepare("room").unwrap();
     for threads in [1, 2, 4] {
         let mut quanta = 0;
-        let result = render_frame(
-            &staged,
-            &layout,
-            4,
-            threads,
-            &TimingConfig::default(),
-            false,
-            95_000,
-            &mut |_, _| quanta += 1,
-        );
+        let config = RenderConfig {
+            max_cycles: 95_000,
+            ..config("room", 128, 128, 4, threads)
+        };
+        let result = render_with(&room, &config, &CodeCache::default(), &mut |_, _| {
+            quanta += 1
+        })
+        .map(|_| ());
         assert_eq!(
             result.err(),
             Some(spu_loader::runtime::FrameError::CycleLimit(95_000)),
@@ -130,11 +126,12 @@ fn a_frame_out_of_cycles_ends_on_every_thread_count() {
 /// The kernel's hits agree with the host reference on every pixel of a 128x128 room.
 #[test]
 fn raytrace_kernel_matches_the_reference_on_the_room() {
-    let scene = procedural::room();
+    let room = prepare("room").unwrap();
+    let (scene, staged) = (&room.scene, &room.staged);
     let (w, h) = (128, 128);
-    let (staged, run) = frame(&scene, w, h, 1, 1, false);
+    let run = frame(&room, w, h, 1, 1, false);
     let pixels = decode_frame_buffer(&run.frame_buffer, w, h);
-    let reference = Reference::from_staged(&staged).render(&scene.camera, w, h, 1);
+    let reference = Reference::from_staged(staged).render(&scene.camera, w, h, 1);
     let mut bad = Vec::new();
     for (i, (p, r)) in pixels.iter().zip(&reference).enumerate() {
         let kernel = if p.triangle == MISS {
@@ -183,25 +180,20 @@ fn check_stats(s: &spu_loader::kernel_abi::KernelStats) {
 /// every pixel still agrees with the reference up to ties.
 #[test]
 fn raytrace_kernel_matches_the_reference_on_the_conference_with_small_caches() {
-    let scene = procedural::conference();
+    let conference = prepare("conference").unwrap();
+    let (scene, staged) = (&conference.scene, &conference.staged);
     let (w, h) = (64, 64);
-    let bvh = Bvh::build(&scene, &BvhConfig::default());
-    let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
-    let basis = scene.camera.basis(w, h);
-    let layout = FrameLayout::new(&staged, &basis, w, h, 1, 128, 128).unwrap();
-    let run = render_frame(
-        &staged,
-        &layout,
-        1,
-        1,
-        &TimingConfig::default(),
-        false,
-        20_000_000_000,
-        &mut |_, _| {},
-    )
-    .unwrap();
+    let config = RenderConfig {
+        bvh_cache: 128,
+        tri_cache: 128,
+        max_cycles: 20_000_000_000,
+        ..config("conference", w, h, 1, 1)
+    };
+    let run = render(&conference, &config, &CodeCache::default())
+        .unwrap()
+        .run;
     let pixels = decode_frame_buffer(&run.frame_buffer, w, h);
-    let reference = Reference::from_staged(&staged).render(&scene.camera, w, h, 1);
+    let reference = Reference::from_staged(staged).render(&scene.camera, w, h, 1);
     let mut bad = 0;
     for (p, r) in pixels.iter().zip(&reference) {
         let hit_agrees = (p.triangle == MISS) != r.is_hit();
@@ -248,9 +240,11 @@ fn raytrace_kernel_handles_a_leaf_root_and_an_empty_scene() {
     for (mut scene, expect_hits) in [(one, true), (empty, false)] {
         scene.camera = Camera::parse("0,0,3,0,0,0,0,1,0,60").unwrap();
         let (w, h) = (32, 32);
-        let (staged, run) = frame(&scene, w, h, 1, 1, false);
+        let prepared = Prepared::from_scene("degenerate", scene).unwrap();
+        let run = frame(&prepared, w, h, 1, 1, false);
         let pixels = decode_frame_buffer(&run.frame_buffer, w, h);
-        let reference = Reference::from_staged(&staged).render(&scene.camera, w, h, 1);
+        let reference =
+            Reference::from_staged(&prepared.staged).render(&prepared.scene.camera, w, h, 1);
         let mut hits = 0;
         for (p, r) in pixels.iter().zip(&reference) {
             assert_eq!(p.triangle == MISS, !r.is_hit());
@@ -267,27 +261,37 @@ fn raytrace_kernel_handles_a_leaf_root_and_an_empty_scene() {
 /// The ray-tracing kernel with the timing model's block memoization (replays, chained
 /// blocks, replays run in one go by the core) and without it: the same frame, cycles and
 /// counters, total and per address. A small frame of the conference with small caches, so
-/// that DMA, cache misses and every traversal case interleave with replayed blocks.
+/// that DMA, cache misses and every traversal case interleave with replayed blocks. (Below
+/// the render API: memoization is the timing model's own setting, which no frame changes.)
 #[test]
 fn raytrace_kernel_times_the_same_with_and_without_block_memoization() {
-    let scene = procedural::conference();
-    let (w, h) = (24, 16);
-    let bvh = Bvh::build(&scene, &BvhConfig::default());
-    let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
-    let basis = scene.camera.basis(w, h);
-    let layout = FrameLayout::new(&staged, &basis, w, h, 2, 128, 128).unwrap();
+    let conference = prepare("conference").unwrap();
+    let config = RenderConfig {
+        bvh_cache: 128,
+        tri_cache: 128,
+        ..config("conference", 24, 16, 2, 1)
+    };
+    let program = config.kernel.program().unwrap();
+    let layout = spu_loader::render::frame_layout(&conference, &config, &program, &[]).unwrap();
     let run = |memoize: bool| {
-        render_frame(
-            &staged,
-            &layout,
-            2,
-            1,
-            &TimingConfig {
-                memoize,
-                ..Default::default()
+        spu_loader::runtime::run_frame(
+            &spu_loader::runtime::Frame {
+                staged: &conference.staged,
+                layout: &layout,
+                program: &program,
+                kernel: config.kernel,
+                spes: config.spes,
+                threads: 1,
+                timing: TimingConfig {
+                    memoize,
+                    ..Default::default()
+                },
+                timed: true,
+                engine: config.engine,
+                max_cycles: 20_000_000_000,
+                event_log: false,
+                code: &CodeCache::default(),
             },
-            false,
-            20_000_000_000,
             &mut |_, _| {},
         )
         .unwrap()
@@ -302,4 +306,45 @@ fn raytrace_kernel_times_the_same_with_and_without_block_memoization() {
     };
     assert_eq!(per_address(&pp), per_address(&pm));
     assert!(pp.totals.branch_misses > 0 && pp.totals.instructions > 100_000);
+}
+
+/// Every frame program through the render API on a 64x64 room on two SPEs: the ray tracers
+/// agree with the host reference on every pixel (hits, and colours where they shade), the
+/// fill program writes each packet's number; the profile annotates the program that ran.
+/// (A new [`KernelVariant`] must say here what its frames are.)
+#[test]
+fn every_kernel_variant_renders_and_validates() {
+    let room = prepare("room").unwrap();
+    for variant in KernelVariant::ALL {
+        let mut config = RenderConfig {
+            kernel: variant,
+            ..config("room", 64, 64, 2, 2)
+        };
+        config.shading.mode = match variant {
+            KernelVariant::Primary | KernelVariant::Fill => spu_loader::shading::ShadeMode::None,
+            KernelVariant::Shaded => spu_loader::shading::ShadeMode::Shadows,
+        };
+        let frame = render(&room, &config, &CodeCache::default()).unwrap();
+        assert_eq!(frame.run.kernel_image, variant.program().unwrap().image);
+        assert!(frame
+            .profile_listing()
+            .unwrap()
+            .contains(if variant.traces() { "trav" } else { "_start" }));
+        match variant {
+            KernelVariant::Primary | KernelVariant::Shaded => {
+                let v = spu_loader::render::validate(&room, &config, &frame).unwrap();
+                assert!(v.passed(), "{variant:?}: {:?}", v.messages);
+                assert_eq!(v.pixels, 64 * 64);
+                assert_eq!(v.colour_mismatches.is_some(), variant.shades());
+                assert_eq!(frame.run.shadow_rays > 0, variant.shades());
+            }
+            KernelVariant::Fill => {
+                assert!(spu_loader::render::validate(&room, &config, &frame).is_err());
+                for packet in 0..PACKETS_PER_TILE {
+                    let block = (packet * PACKET_BLOCK_BYTES) as usize;
+                    assert_eq!(word(&frame.run.frame_buffer, block), packet);
+                }
+            }
+        }
+    }
 }

@@ -4,143 +4,87 @@
 //! shadows, a pixel whose shadow ray grazes an occluder's edge may take either outcome's
 //! colour, `Reference::shade_alternatives`, and is counted apart).
 
-use spu_isa::timing::TimingConfig;
-use spu_loader::frame::{FrameLayout, SCENE_BASE};
-use spu_loader::kernel_abi::{
-    decode_colour_buffer, decode_frame_buffer, ShadingBlock, MISS, SHADE_SHADOWS, SHADE_SIMPLE,
-};
-use spu_loader::reference::Reference;
-use spu_loader::runtime::{render_frame, FrameRun};
-use spu_loader::shading::{self, Light};
-use spu_loader::{procedural, Bvh, BvhConfig, Scene, StagedScene};
+use spu_isa::jit::CodeCache;
+use spu_loader::kernel_abi::{decode_frame_buffer, MISS};
+use spu_loader::render::{prepare, render, validate, KernelVariant, Prepared, RenderConfig};
+use spu_loader::runtime::FrameRun;
+use spu_loader::shading::{self, Light, ShadeMode};
 
 struct Shaded {
     run: FrameRun,
     colours: Vec<u32>,
-    /// Pixels whose hit triangle differs from the reference's, and whose colour differs by
-    /// more than the tolerance.
+    /// Pixels whose hit triangle differs from the reference's (even at the same distance),
+    /// and whose colour differs by more than the tolerance.
     triangle_mismatches: usize,
     colour_mismatches: usize,
     /// Pixels beyond the tolerance that take the colour of a grazing shadow ray's other
     /// outcome.
     shadow_edges: usize,
+    /// The frame's statistics, with its validation.
+    stats: spu_loader::stats::FrameStats,
 }
 
 fn shaded_frame(
-    scene: &Scene,
+    room: &Prepared,
     size: u32,
     spes: usize,
-    mode: u32,
+    mode: ShadeMode,
     lights: &[Light],
     shadow_early: bool,
     (assoc, sht): (u32, u32),
 ) -> Shaded {
-    let bvh = Bvh::build(
-        scene,
-        &BvhConfig {
-            threads: 1,
-            ..BvhConfig::default()
-        },
-    );
-    let staged = StagedScene::new(scene, &bvh, SCENE_BASE).unwrap();
-    let basis = scene.camera.basis(size, size);
-    let block = ShadingBlock {
-        mode,
-        shadow_early,
-        vertex_cache_log2: 6,
-        material_cache_log2: 6,
-        lights: lights.to_vec(),
-        ..Default::default()
-    };
-    let layout = FrameLayout::new(&staged, &basis, size, size, spes, 256, 256)
-        .unwrap()
-        .with_kernel_options(assoc, sht)
-        .unwrap()
-        .with_shading(&staged, block)
-        .unwrap();
-    let run = render_frame(
-        &staged,
-        &layout,
+    let mut config = RenderConfig {
+        width: size,
+        height: size,
         spes,
-        2,
-        &TimingConfig::default(),
-        false,
-        50_000_000_000,
-        &mut |_, _| {},
-    )
-    .unwrap();
-    let colours = decode_colour_buffer(run.colour_buffer.as_ref().unwrap(), size, size);
-    let pixels = decode_frame_buffer(&run.frame_buffer, size, size);
-    let reference = Reference::from_staged(&staged);
-    let hits = reference.render(&scene.camera, size, size, 2);
-    let expected = reference.shade_image(
-        &hits,
-        &scene.camera,
+        threads: 2,
+        assoc,
+        sht,
+        kernel: KernelVariant::Shaded,
+        max_cycles: 50_000_000_000,
+        ..RenderConfig::new(&room.name)
+    };
+    config.shading.mode = mode;
+    config.shading.lights = lights.to_vec();
+    config.shading.shadow_early = shadow_early;
+    let frame = render(room, &config, &CodeCache::default()).unwrap();
+    let validation = validate(room, &config, &frame).unwrap();
+    for message in &validation.messages {
+        eprintln!("{message}");
+    }
+    let pixels = decode_frame_buffer(&frame.run.frame_buffer, size, size);
+    let hits = spu_loader::reference::Reference::from_staged(&room.staged).render(
+        &room.scene.camera,
         size,
         size,
-        lights,
-        mode == SHADE_SHADOWS,
         2,
     );
-    let mut triangle_mismatches = 0;
-    let mut colour_mismatches = 0;
-    let mut shadow_edges = 0;
-    for (i, ((p, hit), (&c, &e))) in pixels
+    let triangle_mismatches = pixels
         .iter()
         .zip(&hits)
-        .zip(colours.iter().zip(&expected))
-        .enumerate()
-    {
-        let kernel = if p.triangle == MISS {
-            MISS
-        } else {
-            staged.triangles[p.triangle as usize].original_index
-        };
-        triangle_mismatches += (kernel != hit.triangle) as usize;
-        if shading::channel_difference(c, e) > shading::COLOUR_TOLERANCE {
-            let basis = scene.camera.basis(size, size);
-            let dir = basis.direction(i as u32 % size, i as u32 / size);
-            if mode == SHADE_SHADOWS
-                && reference
-                    .shade_alternatives(hit, basis.origin, dir, lights)
-                    .iter()
-                    .any(|&a| shading::channel_difference(c, a) <= shading::COLOUR_TOLERANCE)
-            {
-                shadow_edges += 1;
-                continue;
-            }
-            // the kernel's triangle, hit on an edge it shares with the reference's
-            let tie = reference.shade_edge_tie(
-                hit,
-                p.triangle,
-                basis.origin,
-                dir,
-                lights,
-                mode == SHADE_SHADOWS,
-            );
-            if tie.is_some_and(|t| shading::channel_difference(c, t) <= shading::COLOUR_TOLERANCE) {
-                continue;
-            }
-            if colour_mismatches < 5 {
-                eprintln!("pixel {}: kernel {c:08x}, reference {e:08x}", i);
-            }
-            colour_mismatches += 1;
-        }
-    }
+        .filter(|(p, hit)| {
+            let kernel = match p.triangle {
+                MISS => MISS,
+                t => room.staged.triangles[t as usize].original_index,
+            };
+            kernel != hit.triangle
+        })
+        .count();
     Shaded {
-        run,
-        colours,
+        stats: frame.stats(&config, Some(&validation)),
+        colours: frame.colours,
+        run: frame.run,
         triangle_mismatches,
-        colour_mismatches,
-        shadow_edges,
+        colour_mismatches: validation.colour_mismatches.unwrap(),
+        shadow_edges: validation.shadow_edge_pixels.unwrap_or(0),
     }
 }
 
 #[test]
 fn simple_shading_of_the_room_matches_the_reference() {
-    let scene = procedural::room();
-    let lights = shading::default_lights(&scene);
-    let shaded = shaded_frame(&scene, 128, 2, SHADE_SIMPLE, &lights, false, (1, 1));
+    let room = prepare("room").unwrap();
+    let lights = shading::default_lights(&room.scene);
+    let shaded = shaded_frame(&room, 128, 2, ShadeMode::Simple, &lights, false, (1, 1));
     assert_eq!(shaded.triangle_mismatches, 0);
     assert_eq!(shaded.colour_mismatches, 0);
     let distinct: std::collections::HashSet<u32> = shaded.colours.iter().copied().collect();
@@ -152,15 +96,12 @@ fn simple_shading_of_the_room_matches_the_reference() {
     assert!(passes > packets && passes < 3 * packets, "{passes} passes");
     // Table 4 and 6: the colour frame buffer is 4 bytes a pixel, the scene data read is
     // what the caches missed; the shading section is profiled.
-    let stats = spu_loader::stats::FrameStats::new(
-        &shaded.run,
-        &spu_loader::stats::FrameSetup {
-            scene: "room",
-            width: 128,
-            height: 128,
-            clock_ghz: 2.4,
-        },
-        None,
+    let stats = &shaded.stats;
+    let validation = stats.validation.as_ref().unwrap();
+    assert_eq!((validation.pixels, validation.mismatches), (128 * 128, 0));
+    assert_eq!(
+        (validation.colour_mismatches, validation.shadow_edge_pixels),
+        (Some(0), None)
     );
     let table4 = stats.table4.as_ref().unwrap();
     assert!(
@@ -197,9 +138,9 @@ fn simple_shading_of_the_room_matches_the_reference() {
 /// out of order and the shading module reads each from its own context: still exact.
 #[test]
 fn simple_shading_with_hyperthreading_and_4_way_caches() {
-    let scene = procedural::room();
+    let room = prepare("room").unwrap();
     let lights = room_lights();
-    let shaded = shaded_frame(&scene, 64, 1, SHADE_SIMPLE, &lights, false, (4, 4));
+    let shaded = shaded_frame(&room, 64, 1, ShadeMode::Simple, &lights, false, (4, 4));
     assert_eq!(shaded.triangle_mismatches, 0);
     assert_eq!(shaded.colour_mismatches, 0);
     assert_eq!(shaded.run.shade_counters[0].packets.0, 64);
@@ -210,13 +151,13 @@ fn simple_shading_with_hyperthreading_and_4_way_caches() {
 /// termination on and off alike, and only the lit hits cast shadow rays.
 #[test]
 fn shadows_of_the_room_match_the_reference_with_and_without_early_termination() {
-    let scene = procedural::room();
+    let room = prepare("room").unwrap();
     let lights = room_lights();
-    let simple = shaded_frame(&scene, 64, 1, SHADE_SIMPLE, &lights, false, (1, 1));
+    let simple = shaded_frame(&room, 64, 1, ShadeMode::Simple, &lights, false, (1, 1));
     assert_eq!(simple.run.shadow_rays, 0);
     let mut colours = Vec::new();
     for early in [false, true] {
-        let shaded = shaded_frame(&scene, 64, 1, SHADE_SHADOWS, &lights, early, (1, 1));
+        let shaded = shaded_frame(&room, 64, 1, ShadeMode::Shadows, &lights, early, (1, 1));
         assert_eq!(shaded.triangle_mismatches, 0, "early {early}");
         assert_eq!(shaded.colour_mismatches, 0, "early {early}");
         assert!(
@@ -252,10 +193,10 @@ fn shadows_of_the_room_match_the_reference_with_and_without_early_termination() 
 /// packets resume untouched.
 #[test]
 fn shadows_with_hyperthreading_and_4_way_caches() {
-    let scene = procedural::room();
-    let lights = shading::default_lights(&scene);
+    let room = prepare("room").unwrap();
+    let lights = shading::default_lights(&room.scene);
     for early in [false, true] {
-        let shaded = shaded_frame(&scene, 64, 2, SHADE_SHADOWS, &lights, early, (4, 4));
+        let shaded = shaded_frame(&room, 64, 2, ShadeMode::Shadows, &lights, early, (4, 4));
         assert_eq!(shaded.triangle_mismatches, 0);
         assert_eq!(shaded.colour_mismatches, 0);
         let packets: u64 = shaded.run.shade_counters.iter().map(|c| c.packets.0).sum();

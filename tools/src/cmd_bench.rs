@@ -1,6 +1,7 @@
 //! `spu bench`: simulator speed in simulated instructions per host second, on a mixed
 //! loop (loads, float multiply-adds, shuffles, adds, a hinted branch), with the timing
-//! model off and on, with the interpreter and the block compiler, measured in one run.
+//! model off and on, with the interpreter and the block compiler, measured in one run; and
+//! on a frame of the ray tracer (the room, through the render API, as `spu render` runs it).
 
 use crate::exit::{self, Status};
 use crate::options;
@@ -19,6 +20,9 @@ pub struct Args {
     engine: Option<Engine>,
     #[command(flatten)]
     compile: crate::options::CompileOption,
+    /// Also a SIZExSIZE frame of the room on one SPE with the timing model (0: none).
+    #[arg(long, default_value_t = 128)]
+    frame: u32,
 }
 
 /// The benchmark loop, assembled from source so it reads like SPU code.
@@ -49,7 +53,12 @@ data:   .float  1.5, 2.0, 0.5, 3.0, 0.25, 1.0, 2.0, 4.0
         .space  16
 ";
 
-fn measure(iterations: u32, timing: bool, engine: Engine) -> exit::Result<(u64, u64, f64)> {
+fn measure(
+    iterations: u32,
+    timing: bool,
+    engine: Engine,
+    compile: &options::CompileOption,
+) -> exit::Result<(u64, u64, f64)> {
     let opts = spu_asm::Options {
         defines: vec![("ITER".into(), iterations as i64)],
         ..Default::default()
@@ -60,6 +69,7 @@ fn measure(iterations: u32, timing: bool, engine: Engine) -> exit::Result<(u64, 
     spu.load_image(&program.image);
     spu.set_pc(program.entry);
     spu.set_engine(engine);
+    spu.share_code(&compile.cache());
     if timing {
         spu.enable_timing(Default::default());
     }
@@ -76,9 +86,30 @@ fn measure(iterations: u32, timing: bool, engine: Engine) -> exit::Result<(u64, 
     Ok((spu.instructions(), spu.cycles(), seconds))
 }
 
+/// A frame of the room on one SPE with `engine`: (instructions, cycles, host seconds).
+fn measure_frame(
+    room: &spu_loader::render::Prepared,
+    size: u32,
+    engine: Engine,
+    compile: &options::CompileOption,
+) -> exit::Result<(u64, u64, f64)> {
+    let config = spu_loader::render::RenderConfig {
+        width: size,
+        height: size,
+        engine,
+        ..spu_loader::render::RenderConfig::new(&room.name)
+    };
+    let started = Instant::now();
+    let frame = spu_loader::render::render(room, &config, &compile.cache())
+        .map_err(|e| exit::Error::failure(e.to_string()))?;
+    let seconds = started.elapsed().as_secs_f64();
+    let instructions = frame.run.spus.iter().map(|s| s.instructions).sum();
+    Ok((instructions, frame.run.frame_cycles, seconds))
+}
+
 pub fn run(args: Args) -> exit::Result<ExitCode> {
     options::count("--iterations", args.iterations, 1..=u32::MAX)?;
-    args.compile.apply();
+    options::count("--frame", args.frame, 0..=1024)?;
     let engines = match args.engine {
         Some(e) => vec![e],
         None if Engine::SUPPORTED => vec![Engine::Interp, Engine::Jit],
@@ -86,9 +117,9 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     };
     outln!("mixed loop: {} iterations", args.iterations);
     let mut rates = Vec::new();
-    for engine in engines {
-        let (n_off, _, s_off) = measure(args.iterations, false, engine)?;
-        let (n_on, cycles, s_on) = measure(args.iterations, true, engine)?;
+    for &engine in &engines {
+        let (n_off, _, s_off) = measure(args.iterations, false, engine, &args.compile)?;
+        let (n_on, cycles, s_on) = measure(args.iterations, true, engine, &args.compile)?;
         let off = n_off as f64 / s_off.max(1e-9) / 1e6;
         let on = n_on as f64 / s_on.max(1e-9) / 1e6;
         outln!("{engine:6} timing off: {off:8.1} M simulated instructions per host second ({n_off} instructions)");
@@ -102,6 +133,17 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             j_off / i_off,
             j_on / i_on
         );
+    }
+    if args.frame > 0 {
+        let room = spu_loader::render::prepare("room").map_err(exit::Error::failure)?;
+        let size = args.frame;
+        for &engine in &engines {
+            let (n, cycles, s) = measure_frame(&room, size, engine, &args.compile)?;
+            outln!(
+                "{engine:6} room {size}x{size} frame: {:8.1} M simulated instructions per host second ({n} instructions, {cycles} cycles)",
+                n as f64 / s.max(1e-9) / 1e6
+            );
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -1,13 +1,16 @@
 //! `spu paper`: re-runs every experiment of the paper on the simulator and puts the paper's
 //! numbers and ours side by side (report.md, report.html, report.json, the figures).
 //!
-//! The runs are independent `spu render` jobs: run here on host threads, or listed
-//! (`--list-jobs`) to spread over machines and collected afterwards (`--collect`).
+//! The runs are independent frames, one [`spu_loader::render::RenderConfig`] each: rendered
+//! here on host threads (sharing prepared scenes and compiled blocks, [`Kept`]), or listed
+//! as `spu render` commands (`--list-jobs`) to spread over machines and collected
+//! afterwards (`--collect`).
 
 use crate::exit::{self, Error};
-use crate::paper_jobs::{select_scenes, shell_word, Caps, Job};
+use crate::paper_jobs::{select_scenes, shell_word, Job};
 use crate::paper_report::{build, Figure, HeatMaps, Report, ReportScene};
 use crate::paper_tables::{tables, Measured, Setup, TableSpec};
+use crate::prepared::Kept;
 use spu_loader::stats::FrameStats;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -33,8 +36,8 @@ pub struct Args {
     /// Where the shared scene files are.
     #[arg(long, default_value = "../shared/scenes")]
     shared_scenes: PathBuf,
-    /// Print one `spu render ... --stats FILE` command per run (files under OUT/jobs) and
-    /// stop.
+    /// Print each run's frame as the `spu render ... --stats FILE` command that renders it
+    /// (files under OUT/jobs), and stop.
     #[arg(long)]
     list_jobs: bool,
     /// Build the report from the stats files in this directory instead of running.
@@ -64,12 +67,10 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         Some(n) => n,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
-    let (scenes, mut notes) = select_scenes(args.scenes.as_deref(), &args.shared_scenes)?;
-    let caps = Caps::of_render();
+    let (scenes, notes) = select_scenes(args.scenes.as_deref(), &args.shared_scenes)?;
     let setup = Setup {
         scenes,
         size,
-        caps,
         max_spes: args.max_spes,
     };
     let specs = tables(&setup);
@@ -86,7 +87,10 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         for job in &jobs {
             let words: Vec<String> = std::iter::once(exe.clone())
                 .chain(std::iter::once("render".to_string()))
-                .chain(job.render_args(&jobs_dir))
+                .chain(crate::render_options::words(
+                    &job.config(),
+                    &job.outputs(&jobs_dir),
+                ))
                 .map(|w| shell_word(&w))
                 .collect();
             outln!("{}", words.join(" "));
@@ -116,20 +120,6 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         .values()
         .filter_map(|r| r.as_ref().err().cloned())
         .collect();
-    if !caps.assoc || !caps.sht || !caps.shade {
-        notes.push(format!(
-            "this build's `spu render` lacks {}: those rows say so",
-            [
-                (!caps.assoc).then_some("--assoc"),
-                (!caps.sht).then_some("--sht"),
-                (!caps.shade).then_some("--shade"),
-            ]
-            .into_iter()
-            .flatten()
-            .collect::<Vec<_>>()
-            .join(", ")
-        ));
-    }
     let tables = build(&specs, &results);
     let mut report = Report {
         size,
@@ -239,13 +229,6 @@ fn write(path: &Path, text: &str) -> exit::Result<()> {
     exit::write_file(path, text.as_bytes())
 }
 
-#[derive(clap::Parser)]
-#[command(name = "render", no_binary_name = true)]
-struct RenderCli {
-    #[command(flatten)]
-    args: crate::cmd_render::Args,
-}
-
 /// Runs the jobs on `threads` host threads, one bar over all of them; a job that fails
 /// leaves no stats file and the report names it.
 fn run_jobs(jobs: &[Job], dir: &Path, threads: usize) {
@@ -261,7 +244,7 @@ fn run_jobs(jobs: &[Job], dir: &Path, threads: usize) {
     );
     let next = AtomicUsize::new(0);
     // Each scene is prepared once and kept while runs of it remain.
-    crate::prepared::keep();
+    let kept = Kept::default();
     let mut left: BTreeMap<&str, usize> = BTreeMap::new();
     for job in jobs {
         *left.entry(job.scene_arg.as_str()).or_default() += 1;
@@ -282,7 +265,7 @@ fn run_jobs(jobs: &[Job], dir: &Path, threads: usize) {
                     r.insert(name.clone());
                     show(&r);
                 }
-                if let Err(e) = run_job(job, dir) {
+                if let Err(e) = run_job(job, dir, &kept) {
                     if let Ok(mut f) = failures.lock() {
                         f.push(format!("{name}: {e}"));
                     }
@@ -291,7 +274,7 @@ fn run_jobs(jobs: &[Job], dir: &Path, threads: usize) {
                     let n = left.entry(job.scene_arg.as_str()).or_default();
                     *n = n.saturating_sub(1);
                     if *n == 0 {
-                        crate::prepared::forget(&job.scene_arg);
+                        kept.forget(&job.scene_arg);
                     }
                 }
                 if let Ok(mut r) = running.lock() {
@@ -317,15 +300,14 @@ fn weight(job: &Job) -> u64 {
     scene * job.size as u64 * job.size as u64
 }
 
-/// One job in this process, through `spu render` itself so that every option it has
-/// applies; its stats file is removed first so that a failed run leaves none.
-fn run_job(job: &Job, dir: &Path) -> Result<(), String> {
+/// One job in this process, as `spu render` renders and writes a frame; its stats file is
+/// removed first so that a failed run leaves none.
+fn run_job(job: &Job, dir: &Path, kept: &Kept) -> Result<(), String> {
     let stats = job.stats_path(dir);
     let _ = std::fs::remove_file(&stats);
-    let mut words = job.render_args(dir);
-    words.extend(["--threads".into(), "1".into(), "--quiet".into()]);
-    let cli = <RenderCli as clap::Parser>::try_parse_from(&words).map_err(|e| e.to_string())?;
-    crate::cmd_render::run(cli.args).map_err(|e| e.message.unwrap_or_default())?;
+    let prepared = kept.prepare(&job.scene_arg)?;
+    crate::cmd_render::frame(&prepared, &job.config(), &job.outputs(dir), &kept.code)
+        .map_err(|e| e.message.unwrap_or_default())?;
     Ok(())
 }
 
@@ -360,8 +342,8 @@ fn read_stats(text: &str, job: &Job) -> Result<Measured, String> {
     let c = &stats.config;
     // files written before the configuration was recorded have none (sht 0)
     if c.sht != 0
-        && (c.sht != job.sht.unwrap_or(1)
-            || c.assoc != job.assoc.unwrap_or(1)
+        && (c.sht != job.sht
+            || c.assoc != job.assoc
             || c.bvh_cache_lines != job.cache
             || c.tri_cache_lines != job.cache)
     {

@@ -34,11 +34,11 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
-    spu_isa::jit::Engine::set_default(args.engine);
-    args.compile.apply();
     options::max_cycles(args.max_cycles)?;
     let memory_bytes = options::memory(args.memory)?;
     let (mut spu, symbols) = crate::cmd_run::load(&args.file)?;
+    spu.set_engine(args.engine);
+    spu.share_code(&args.compile.cache());
     let address_of = |name: &str| symbols.iter().find(|(n, _)| n == name).map(|(_, a)| *a);
     let range = match &args.range {
         Some(r) => {

@@ -185,8 +185,6 @@ fn dump_range(spec: &str) -> exit::Result<std::ops::Range<usize>> {
 }
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
-    spu_isa::jit::Engine::set_default(args.engine);
-    args.compile.apply();
     options::max_cycles(args.max_cycles)?;
     let memory_bytes = options::memory(args.memory)?;
     let dumps = args
@@ -202,6 +200,8 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         mailbox.push(value);
     }
     let (mut spu, symbols, program_end) = load_program(&args.file)?;
+    spu.set_engine(args.engine);
+    spu.share_code(&args.compile.cache());
     let start = start_mode(&args)?;
     let mut memory = MainMemory::zeroed(memory_bytes);
     let entry = spu_loader::ppe::start::prepare(&start, program_end, memory.len())

@@ -24,6 +24,7 @@ mod paper_jobs;
 mod paper_report;
 mod paper_tables;
 mod prepared;
+mod render_options;
 mod trace;
 
 use clap::{Parser, Subcommand};

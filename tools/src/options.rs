@@ -44,9 +44,9 @@ pub struct CompileOption {
 }
 
 impl CompileOption {
-    /// Makes it the way every code cache made from now on compiles.
-    pub fn apply(&self) {
-        spu_isa::jit::Compiling::set_default(self.compile);
+    /// A code cache compiling this way, for the SPUs of one command to share.
+    pub fn cache(&self) -> spu_isa::jit::CodeCache {
+        spu_isa::jit::CodeCache::with(self.compile)
     }
 }
 

@@ -46,14 +46,11 @@ pub fn series(table: &Table) -> Vec<Series> {
     out
 }
 
+/// Gives plotters (whose font table is its own, process-wide) the embedded font; doing it
+/// again replaces the entry with the same font.
 pub fn register_font() -> Result<(), String> {
-    static REGISTERED: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
-    REGISTERED
-        .get_or_init(|| {
-            plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular())
-                .map_err(|_| "the embedded font did not load".to_string())
-        })
-        .clone()
+    plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular())
+        .map_err(|_| "the embedded font did not load".to_string())
 }
 
 const WIDTH: u32 = 800;

@@ -1,7 +1,10 @@
-//! The runs `spu paper` needs: the scenes, what `spu render` can do in this build, and one
-//! render configuration per job, named so that its stats file can be found again.
+//! The runs `spu paper` needs: the scenes, and one render configuration
+//! ([`RenderConfig`]) per job, named so that its stats file can be found again.
 
 use crate::paper_data::PaperScene;
+use crate::render_options::Outputs;
+use spu_loader::render::{RenderConfig, Shading};
+use spu_loader::shading::ShadeMode;
 use std::path::{Path, PathBuf};
 
 /// A scene of the report and the paper column it stands in for.
@@ -106,38 +109,10 @@ pub fn select_scenes(
     Ok((chosen, Vec::new()))
 }
 
-/// What this build's `spu render` can do beyond the blocking direct-mapped ray caster,
-/// read from its own options, so the paper's other configurations switch on by
-/// themselves when the kernels that need them land.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Caps {
-    /// `--assoc 1|4`: 4-way set-associative caches.
-    pub assoc: bool,
-    /// `--sht N`: software hyperthreading.
-    pub sht: bool,
-    /// `--shade none|simple|shadows`.
-    pub shade: bool,
-    /// `--shade shadows` runs (the kernel traces shadow packets).
-    pub shadows: bool,
-}
-
-impl Caps {
-    pub fn of_render() -> Self {
-        let cmd = <crate::cmd_render::Args as clap::Args>::augment_args(clap::Command::new("r"));
-        let has = |long: &str| cmd.get_arguments().any(|a| a.get_long() == Some(long));
-        Caps {
-            assoc: has("assoc"),
-            sht: has("sht"),
-            shade: has("shade"),
-            shadows: has("shade") && crate::cmd_render::KERNEL_TRACES_SHADOWS,
-        }
-    }
-}
-
 /// SHT depth of the paper's software hyperthreading runs.
 pub const SHT_ON: u32 = 4;
 
-/// One `spu render` run.
+/// One frame of the report.
 #[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct Job {
     pub scene_id: String,
@@ -147,15 +122,12 @@ pub struct Job {
     pub clock_mhz: u32,
     /// Lines of both caches.
     pub cache: u32,
-    /// `--assoc`, passed only where the option exists.
-    pub assoc: Option<u32>,
-    /// `--sht`, passed only where the option exists.
-    pub sht: Option<u32>,
-    /// `--shade`, passed only where the option exists.
-    pub shade: Option<&'static str>,
+    pub assoc: u32,
+    pub sht: u32,
+    pub shade: &'static str,
 }
 
-/// The settings of a job before they are checked against [`Caps`].
+/// The settings of a job.
 #[derive(Clone, Copy, Debug)]
 pub struct Want {
     pub spes: usize,
@@ -180,55 +152,67 @@ impl Default for Want {
 }
 
 impl Job {
-    /// The job for `want`, or why this build cannot run it.
-    pub fn new(scene: &SceneSpec, size: u32, want: Want, caps: Caps) -> Result<Job, String> {
-        if want.assoc != 1 && !caps.assoc {
-            return Err("needs 4-way caches (`spu render --assoc 4`), not built yet".into());
-        }
-        if want.sht != 1 && !caps.sht {
-            return Err(
-                "needs software hyperthreading (`spu render --sht N`), not built yet".into(),
-            );
-        }
-        if want.shade == "shadows" && caps.shade && !caps.shadows {
-            return Err(
-                "needs shadow packets in the kernel (`spu render --shade shadows`), not built yet"
-                    .into(),
-            );
-        }
-        if want.shade != "none" && !caps.shade {
-            return Err(format!(
-                "needs shading (`spu render --shade {}`), not built yet",
-                want.shade
-            ));
-        }
-        Ok(Job {
+    /// The job of `scene` at `size` for `want`.
+    pub fn new(scene: &SceneSpec, size: u32, want: Want) -> Job {
+        Job {
             scene_id: scene.id.clone(),
             scene_arg: scene.render_name.clone(),
             size,
             spes: want.spes,
             clock_mhz: (want.clock_ghz * 1000.0).round() as u32,
             cache: want.cache,
-            assoc: caps.assoc.then_some(want.assoc),
-            sht: caps.sht.then_some(want.sht),
-            shade: caps.shade.then_some(want.shade),
-        })
+            assoc: want.assoc,
+            sht: want.sht,
+            shade: want.shade,
+        }
+    }
+
+    /// The frame the job renders, its SPEs simulated on one host thread (the jobs run
+    /// side by side).
+    pub fn config(&self) -> RenderConfig {
+        let mode = ShadeMode::parse(self.shade).unwrap_or(ShadeMode::None);
+        RenderConfig {
+            width: self.size,
+            height: self.size,
+            spes: self.spes,
+            threads: 1,
+            clock_ghz: self.clock_ghz(),
+            bvh_cache: self.cache,
+            tri_cache: self.cache,
+            assoc: self.assoc,
+            sht: self.sht,
+            shading: Shading {
+                mode,
+                ..Shading::default()
+            },
+            kernel: RenderConfig::kernel_for(false, mode),
+            event_log: self.draws_heatmap(),
+            ..RenderConfig::new(&self.scene_arg)
+        }
+    }
+
+    /// What the job writes into `dir`: its statistics and image, and the heat maps of the
+    /// base configuration.
+    pub fn outputs(&self, dir: &Path) -> Outputs {
+        Outputs {
+            image: self.image_path(dir),
+            stats: Some(self.stats_path(dir)),
+            heatmap: self.draws_heatmap().then(|| self.heatmap_path(dir)),
+            quiet: true,
+            ..Outputs::default()
+        }
     }
 
     /// The file stem of the job's outputs: its settings, readable.
     pub fn name(&self) -> String {
-        let assoc = if self.assoc.unwrap_or(1) == 4 {
-            "4way"
-        } else {
-            "dm"
-        };
+        let assoc = if self.assoc == 4 { "4way" } else { "dm" };
         format!(
             "{}-{}-{}{}-sht{}-{}spe-{}ghz-{}",
             self.scene_id,
-            self.shade.unwrap_or("none"),
+            self.shade,
             assoc,
             self.cache,
-            self.sht.unwrap_or(1),
+            self.sht,
             self.spes,
             self.clock_ghz(),
             self.size
@@ -247,63 +231,19 @@ impl Job {
             self.size,
             self.spes,
             self.clock_ghz(),
-            if self.assoc.unwrap_or(1) == 4 {
+            if self.assoc == 4 {
                 "4-way"
             } else {
                 "direct-mapped"
             },
             self.cache,
-            self.sht.map_or("off".to_string(), |n| {
-                if n == 1 {
-                    "off".into()
-                } else {
-                    n.to_string()
-                }
-            }),
-            self.shade.unwrap_or("none")
+            if self.sht == 1 {
+                "off".to_string()
+            } else {
+                self.sht.to_string()
+            },
+            self.shade
         )
-    }
-
-    /// `spu render` arguments (after `render`) writing the stats and image into `dir`.
-    pub fn render_args(&self, dir: &Path) -> Vec<String> {
-        let mut args: Vec<String> = vec![
-            "--scene".into(),
-            self.scene_arg.clone(),
-            "--width".into(),
-            self.size.to_string(),
-            "--height".into(),
-            self.size.to_string(),
-            "--spes".into(),
-            self.spes.to_string(),
-            "--clock".into(),
-            self.clock_ghz().to_string(),
-            "--bvh-cache".into(),
-            self.cache.to_string(),
-            "--tri-cache".into(),
-            self.cache.to_string(),
-        ];
-        if let Some(a) = self.assoc {
-            args.extend(["--assoc".into(), a.to_string()]);
-        }
-        if let Some(n) = self.sht {
-            args.extend(["--sht".into(), n.to_string()]);
-        }
-        if let Some(m) = self.shade {
-            args.extend(["--shade".into(), m.to_string()]);
-        }
-        if self.draws_heatmap() {
-            args.extend([
-                "--heatmap".into(),
-                self.heatmap_path(dir).display().to_string(),
-            ]);
-        }
-        args.extend([
-            "--stats".into(),
-            self.stats_path(dir).display().to_string(),
-            "-o".into(),
-            self.image_path(dir).display().to_string(),
-        ]);
-        args
     }
 
     /// Whether this run also draws the scene's heat maps: the paper's base configuration
@@ -312,9 +252,9 @@ impl Job {
         self.spes == 1
             && self.clock_mhz == 2400
             && self.cache == 256
-            && self.assoc.unwrap_or(1) == 1
-            && self.sht.unwrap_or(1) == 1
-            && self.shade.unwrap_or("none") == "none"
+            && self.assoc == 1
+            && self.sht == 1
+            && self.shade == "none"
     }
 
     /// The cycles heat map (`--heatmap` writes the DMA-wait map beside it).

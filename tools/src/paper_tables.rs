@@ -3,7 +3,7 @@
 //! `spu paper` is exactly the union of the rows' jobs.
 
 use crate::paper_data::{self as paper, Cache, PAPER_SIZE};
-use crate::paper_jobs::{Caps, Job, SceneSpec, Want, SHT_ON};
+use crate::paper_jobs::{Job, SceneSpec, Want, SHT_ON};
 use spu_loader::stats::FrameStats;
 
 /// A finished job's statistics: typed, and as raw JSON for keys other kernels add.
@@ -61,7 +61,6 @@ pub struct TableSpec {
 pub struct Setup {
     pub scenes: Vec<SceneSpec>,
     pub size: u32,
-    pub caps: Caps,
     /// Largest SPE count to run (16; smaller only to keep tests short).
     pub max_spes: usize,
 }
@@ -71,13 +70,13 @@ impl Setup {
         if want.spes > self.max_spes {
             return Err(format!("{} SPEs: above --max-spes", want.spes));
         }
-        Job::new(scene, self.size, want, self.caps)
+        Ok(Job::new(scene, self.size, want))
     }
 
-    /// The paper's best ray caster: SHT where it exists.
+    /// The paper's best ray caster: with SHT.
     fn best(&self) -> Want {
         Want {
-            sht: if self.caps.sht { SHT_ON } else { 1 },
+            sht: SHT_ON,
             ..Want::default()
         }
     }

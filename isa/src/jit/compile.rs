@@ -206,7 +206,7 @@ struct Shared {
 /// SPU decides by its own counts which of its blocks to run compiled, and a block's code
 /// depends only on its address and words.
 ///
-/// A cache made while [`Compiling::Background`] is the default compiles on a host thread
+/// A cache made [`CodeCache::with`] [`Compiling::Background`] compiles on a host thread
 /// of its own: SPUs asking for a block not compiled yet go on interpreting it meanwhile,
 /// so compiling takes no time from the simulation (on a host with a core to spare), and
 /// what runs compiled, only that, depends on the host's timing.
@@ -220,7 +220,7 @@ impl Default for CodeCache {
 }
 
 impl CodeCache {
-    /// A cache compiling as [`Compiling::default`] says.
+    /// A cache compiling inline ([`Compiling::default`]).
     pub fn new() -> CodeCache {
         CodeCache::with(Compiling::default())
     }
@@ -279,6 +279,15 @@ impl CodeCache {
     /// the cache; `compiled_instructions` is left 0).
     pub fn stats(&self) -> super::JitStats {
         *self.0.stats.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// How the cache compiles: on a thread of its own, or on the asking SPU's.
+    pub fn compiling(&self) -> Compiling {
+        if self.0.requests.is_some() {
+            Compiling::Background
+        } else {
+            Compiling::Inline
+        }
     }
 
     /// How many blocks the background compiler finished (compiled or declined) so far.
@@ -410,8 +419,10 @@ pub(crate) struct Blocks {
     /// cache's [`CodeCache::completed`] when last asked, as [`asked`] keeps it (asked
     /// again once it moved).
     pub pending: Vec<u32>,
-    /// Distinguishes this table (and each time it starts over) from every other: what a
-    /// caller kept of a block (its entry) holds while this stays the same.
+    /// Distinguishes this table (and each time it starts over) from every other its SPU
+    /// had: what the SPU kept of a block (its entry, in its own timing memo) holds while
+    /// this stays the same. A count per SPU from 1, so that no process-wide counter is
+    /// needed ([`crate::machine::Spu::share_code`] continues it).
     pub generation: u64,
 }
 
@@ -420,22 +431,16 @@ pub(crate) fn asked(completed: u64) -> u32 {
     (completed % u32::MAX as u64) as u32 + 1
 }
 
-/// The next [`Blocks::generation`].
-static GENERATIONS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
-
-fn next_generation() -> u64 {
-    GENERATIONS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
-}
-
 impl Blocks {
-    pub fn new(cache: CodeCache) -> Blocks {
+    /// An empty table compiling into `cache`, its SPU's `generation`th.
+    pub fn new(cache: CodeCache, generation: u64) -> Blocks {
         Blocks {
             cache,
             slots: vec![0; LS_SIZE / 4],
             heat: vec![0; LS_SIZE / 4],
             blocks: Vec::new(),
             pending: vec![0; LS_SIZE / 4],
-            generation: next_generation(),
+            generation,
         }
     }
 
@@ -452,7 +457,7 @@ impl Blocks {
         };
         if self.blocks.len() >= MAX_BLOCKS {
             self.blocks.clear();
-            self.generation = next_generation();
+            self.generation += 1;
             self.slots.fill(0);
         }
         let id = self.blocks.len();

@@ -25,7 +25,6 @@
 
 use std::fmt;
 use std::str::FromStr;
-use std::sync::atomic::{AtomicU8, Ordering};
 
 #[cfg(block_compiler)]
 mod compile;
@@ -56,6 +55,11 @@ impl CodeCache {
 
     pub fn completed(&self) -> u64 {
         0
+    }
+
+    /// Nothing is compiled; inline, as nothing waits.
+    pub fn compiling(&self) -> Compiling {
+        Compiling::Inline
     }
 
     pub fn stats(&self) -> JitStats {
@@ -94,26 +98,11 @@ impl Engine {
     }
 }
 
-/// The engine new SPUs start with: 0 the host default, else 1 + `Engine as u8`.
-static DEFAULT: AtomicU8 = AtomicU8::new(0);
-
-impl Engine {
-    /// Sets the engine every SPU made from now on starts with (the `--engine` option of
-    /// the `spu` commands, so the runtime that makes the SPUs needs no parameter for it).
-    /// Results do not depend on it, only host speed.
-    pub fn set_default(engine: Engine) {
-        DEFAULT.store(1 + engine as u8, Ordering::Relaxed);
-    }
-}
-
 impl Default for Engine {
-    /// The engine set by [`Engine::set_default`], else [`Engine::host_default`].
+    /// [`Engine::host_default`]: what a new SPU starts with until
+    /// [`crate::machine::Spu::set_engine`] says otherwise.
     fn default() -> Self {
-        match DEFAULT.load(Ordering::Relaxed) {
-            1 => Engine::Interp,
-            2 if Engine::SUPPORTED => Engine::Jit,
-            _ => Engine::host_default(),
-        }
+        Engine::host_default()
     }
 }
 
@@ -147,16 +136,7 @@ pub enum Compiling {
     Background,
 }
 
-/// How code caches made from now on compile: 0 inline, else 1 + `Compiling as u8`.
-static COMPILING: AtomicU8 = AtomicU8::new(0);
-
 impl Compiling {
-    /// Sets how every code cache made from now on compiles (the `--compile` option of the
-    /// `spu` commands).
-    pub fn set_default(compiling: Compiling) {
-        COMPILING.store(1 + compiling as u8, Ordering::Relaxed);
-    }
-
     pub const fn name(self) -> &'static str {
         match self {
             Compiling::Inline => "inline",
@@ -166,12 +146,9 @@ impl Compiling {
 }
 
 impl Default for Compiling {
-    /// The way set by [`Compiling::set_default`], else inline.
+    /// Inline: what runs compiled is the same at every run.
     fn default() -> Self {
-        match COMPILING.load(Ordering::Relaxed) {
-            2 => Compiling::Background,
-            _ => Compiling::Inline,
-        }
+        Compiling::Inline
     }
 }
 

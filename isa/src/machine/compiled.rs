@@ -35,7 +35,9 @@ impl Spu {
     pub fn share_code(&mut self, cache: &CodeCache) {
         #[cfg(block_compiler)]
         {
-            self.compiled = Some(Box::new(crate::jit::Blocks::new(cache.clone())));
+            // A generation after every one the SPU's timing memo may have kept code of.
+            let generation = self.compiled.as_ref().map_or(1, |b| b.generation + 1);
+            self.compiled = Some(Box::new(crate::jit::Blocks::new(cache.clone(), generation)));
         }
         #[cfg(not(block_compiler))]
         let _ = cache;
@@ -181,7 +183,7 @@ mod host {
             let w = (pc as usize >> 2) & (LS_SIZE / 4 - 1);
             let blocks = self
                 .compiled
-                .get_or_insert_with(|| Box::new(Blocks::new(CodeCache::new())));
+                .get_or_insert_with(|| Box::new(Blocks::new(CodeCache::new(), 1)));
             let slot = blocks.slots[w];
             if slot == DECLINED {
                 return None;

@@ -1,0 +1,72 @@
+//! The frame programs a render can run, declared once: the build script (`build.rs`
+//! includes this file to assemble each one ahead of time), the runtime (which runs the one a
+//! [`crate::render::RenderConfig`] names) and the profiler (which annotates the program
+//! that ran) all iterate [`KernelVariant::ALL`]. A new variant is a kernel source, an entry
+//! here, one `spu render` option and one test.
+//!
+//! Plain `const` data and `std` only, so that the build script can include it.
+
+/// One frame program: a kernel source under `kernels/` assembled with its defines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum KernelVariant {
+    /// Primary rays, each pixel the eye-light grey of its hit (`kernels/primary.s`).
+    Primary,
+    /// Primary rays shaded by the shading module, with shadow rays where the frame's
+    /// shading block asks for them (`kernels/primary.s` with `SHADE`).
+    Shaded,
+    /// The fill pattern that exercises the runtime without tracing (`kernels/fill.s`).
+    Fill,
+}
+
+impl KernelVariant {
+    /// Every variant, in the order the build assembles them.
+    pub const ALL: [KernelVariant; 3] = [
+        KernelVariant::Primary,
+        KernelVariant::Shaded,
+        KernelVariant::Fill,
+    ];
+
+    /// A short name: prebuilt file names, messages.
+    pub const fn id(self) -> &'static str {
+        match self {
+            KernelVariant::Primary => "primary",
+            KernelVariant::Shaded => "shaded",
+            KernelVariant::Fill => "fill",
+        }
+    }
+
+    /// The source file, relative to `kernels/`.
+    pub const fn file(self) -> &'static str {
+        match self {
+            KernelVariant::Primary | KernelVariant::Shaded => "primary.s",
+            KernelVariant::Fill => "fill.s",
+        }
+    }
+
+    /// The name diagnostics and the sources' hash use.
+    pub const fn name(self) -> &'static str {
+        match self {
+            KernelVariant::Primary | KernelVariant::Shaded => "kernels/primary.s",
+            KernelVariant::Fill => "kernels/fill.s",
+        }
+    }
+
+    /// The symbols defined as `--defsym` does before assembling.
+    pub const fn defines(self) -> &'static [(&'static str, i64)] {
+        match self {
+            KernelVariant::Shaded => &[("SHADE", 1)],
+            KernelVariant::Primary | KernelVariant::Fill => &[],
+        }
+    }
+
+    /// Whether the program traces rays (and so carves caches and packet contexts above its
+    /// `cache_area`, and has its hits validated); the fill program only writes a pattern.
+    pub const fn traces(self) -> bool {
+        !matches!(self, KernelVariant::Fill)
+    }
+
+    /// Whether the program runs the shading module (and needs the frame's shading block).
+    pub const fn shades(self) -> bool {
+        matches!(self, KernelVariant::Shaded)
+    }
+}
