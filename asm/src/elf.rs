@@ -61,7 +61,7 @@ pub fn write_elf(
     // Section contents after the image.
     let mut body = image.to_vec();
     let align4 = |v: &mut Vec<u8>| {
-        while v.len() % 4 != 0 {
+        while !v.len().is_multiple_of(4) {
             v.push(0)
         }
     };

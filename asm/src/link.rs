@@ -168,7 +168,7 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
     let mut addr = opts.text_addr as u64;
     for (n, &k) in order.iter().enumerate() {
         let a = outs[k].align.max(16) as u64;
-        if n > 0 || addr % a != 0 {
+        if n > 0 || !addr.is_multiple_of(a) {
             addr = addr.div_ceil(a) * a;
         }
         outs[k].addr = addr.min(u32::MAX as u64) as u32;

@@ -342,15 +342,15 @@ impl Object {
             } else {
                 s.data(endian, data).map_err(err)?.to_vec()
             };
-            let align = s.sh_addralign(endian).clamp(1, 1 << 15) as u32;
+            let align = s.sh_addralign(endian).clamp(1, 1 << 15);
             ours[i] = Some(obj.sections.len());
             obj.sections.push(ObjSection {
                 name: nm,
                 ty,
-                flags: s.sh_flags(endian).0 as u64,
+                flags: s.sh_flags(endian).0,
                 entsize: s.sh_entsize(endian) as u64,
                 align,
-                size: size as u32,
+                size,
                 data: bytes,
                 relocs: Vec::new(),
             });
@@ -419,7 +419,7 @@ impl Object {
                     format!("{name}: relocation names symbol {sym}, which is not there")
                 })?;
                 obj.sections[k].relocs.push(Reloc {
-                    offset: r.r_offset(endian) as u32,
+                    offset: r.r_offset(endian),
                     kind: r.r_type(endian).0,
                     target,
                     addend: r.r_addend(endian) as i64,

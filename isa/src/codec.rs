@@ -236,7 +236,7 @@ pub fn operand_value(kind: OperandKind, format: Format, word: u32, pc: u32) -> i
         OperandKind::X16 => field(7, 16) as i64,
         OperandKind::U18 => field(7, 18) as i64,
         OperandKind::Abs18 => field(7, 16) as i64 * 4,
-        OperandKind::Rel18 => ((pc as i64 + sext(field(7, 16), 16) as i64 * 4) & 0x3ffff) as i64,
+        OperandKind::Rel18 => (pc as i64 + sext(field(7, 16), 16) as i64 * 4) & 0x3ffff,
         OperandKind::BrInst => {
             let high = if format == Format::LBTI {
                 field(14, 2)

@@ -483,7 +483,7 @@ impl Profile {
 
     #[cold]
     fn grow(&mut self, i: usize) {
-        let len = (i + 1).next_power_of_two().max(1024).min(0x1_0000);
+        let len = (i + 1).next_power_of_two().clamp(1024, 0x1_0000);
         self.pcs.resize(len, PcStats::default());
     }
 
@@ -729,7 +729,7 @@ mod listing {
         lines: &[ListingLine],
         opts: &ListingOptions,
     ) -> String {
-        let in_range = |a: u32| opts.range.map_or(true, |(s, e)| a >= s && a < e);
+        let in_range = |a: u32| opts.range.is_none_or(|(s, e)| a >= s && a < e);
         let mut out = String::new();
         let _ = writeln!(
             out,
@@ -874,7 +874,7 @@ mod listing {
     /// The same data as JSON: `{"totals":{..},"instructions":[{addr,text,executions,
     /// cycles,dual,stall:{..},waits_on:[{addr,cycles}],channels:[..]}],"labels":[..]}`.
     pub fn listing_json(profile: &Profile, lines: &[ListingLine], opts: &ListingOptions) -> String {
-        let in_range = |a: u32| opts.range.map_or(true, |(s, e)| a >= s && a < e);
+        let in_range = |a: u32| opts.range.is_none_or(|(s, e)| a >= s && a < e);
         let mut insts = Vec::new();
         let mut labels: Vec<(String, u32, RangeSum)> = Vec::new();
         let mut range_sum = RangeSum::default();

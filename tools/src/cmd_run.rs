@@ -4,7 +4,7 @@ use crate::exit::{self, Error, Status};
 use crate::options;
 use spu_isa::disasm::{instruction_text, SymbolTable};
 use spu_isa::machine::{MainMemory, Spu, StopReason};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(clap::Args)]
@@ -75,7 +75,7 @@ fn number(text: &str) -> Result<u64, String> {
 }
 
 /// Loads FILE into a fresh SPU.
-pub fn load(file: &PathBuf) -> Result<(Spu, Vec<(String, u32)>), String> {
+pub fn load(file: &Path) -> Result<(Spu, Vec<(String, u32)>), String> {
     load_program(file).map(|(spu, symbols, _)| (spu, symbols))
 }
 

@@ -61,7 +61,7 @@ pub fn max_cycles(cycles: u64) -> exit::Result<()> {
 /// `--memory`: 16 bytes to 4 GiB, a multiple of 16 (DMA moves quadwords); returned as the
 /// host size.
 pub fn memory(bytes: u64) -> exit::Result<usize> {
-    if !(16..=MAX_MEMORY_BYTES).contains(&bytes) || bytes % 16 != 0 {
+    if !(16..=MAX_MEMORY_BYTES).contains(&bytes) || !bytes.is_multiple_of(16) {
         return Err(Error::input(format!(
             "--memory {bytes}: must be a multiple of 16 from 16 to {MAX_MEMORY_BYTES} (4 GiB)"
         )));

@@ -166,10 +166,7 @@ pub(super) fn collect_block(lines: &[Line], start: usize) -> (Vec<Line>, usize) 
     let no_macros = HashMap::new();
     let word = |l: &Line| {
         let text = strip_comment(&l.text);
-        block_word(
-            text.trim().split_whitespace().next().unwrap_or(""),
-            &no_macros,
-        )
+        block_word(text.split_whitespace().next().unwrap_or(""), &no_macros)
     };
     match block_end(lines, start, word) {
         Some(end) => (lines[start..end].to_vec(), end + 1),

@@ -121,11 +121,15 @@ struct Assembler<'o> {
     /// `.sched` blocks already scheduled in an earlier pass: the same lines, options and
     /// start give the same schedule when every register name the scheduler resolved
     /// still resolves the same (layout passes repeat each block unchanged).
-    schedules: HashMap<SchedKey, (Vec<(String, Option<u8>)>, Result<Scheduled, SchedError>)>,
+    schedules: HashMap<SchedKey, SchedEntry>,
 }
 
 /// What a `.sched` block's schedule is made from: its lines, options and start address.
 type SchedKey = (Vec<String>, String, u32);
+
+/// A scheduled `.sched` block: the register names the scheduler resolved (with their
+/// numbers) and its schedule.
+type SchedEntry = (Vec<(String, Option<u8>)>, Result<Scheduled, SchedError>);
 
 /// A result with an error at a column (0-based, in the text given) and its message.
 type Res<T> = Result<T, (usize, String)>;

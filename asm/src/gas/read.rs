@@ -136,8 +136,7 @@ impl Assembler<'_> {
             self.stmt += 1;
             let mut rest = piece.trim().to_string();
             // Labels.
-            loop {
-                let Some(colon) = rest.find(':') else { break };
+            while let Some(colon) = rest.find(':') {
                 let name = rest[..colon].trim();
                 if name.is_empty() || !name.chars().all(is_ident) || name.contains(' ') {
                     break;
@@ -174,8 +173,8 @@ impl Assembler<'_> {
                 // A pseudo-op written without its dot (`GLOBL`), as gas's NO_PSEUDO_DOT
                 // targets and MRI mode read it.
                 self.directive(&format!(".{lw}"), &args, line, col);
-            } else if args.starts_with('=') {
-                let v = args[1..].trim().to_string();
+            } else if let Some(v) = args.strip_prefix('=') {
+                let v = v.trim().to_string();
                 self.set_symbol(&word, &v, line);
             } else if let Some((name, value)) = word
                 .split_once('=')
@@ -308,10 +307,11 @@ impl Assembler<'_> {
             return;
         }
         let size = if d.ends_with('w') { 2 } else { 4 };
-        let pattern = match parts.get(1).map(|p| p.trim()).filter(|p| !p.is_empty()) {
-            Some(p) => Some(self.data_values(p, line, col).first().copied().unwrap_or(0)),
-            None => None,
-        };
+        let pattern = parts
+            .get(1)
+            .map(|p| p.trim())
+            .filter(|p| !p.is_empty())
+            .map(|p| self.data_values(p, line, col).first().copied().unwrap_or(0));
         let max = match parts.get(2) {
             Some(m) => self.data_values(m, line, col).first().copied(),
             None => None,

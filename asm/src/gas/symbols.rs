@@ -173,15 +173,14 @@ impl Assembler<'_> {
             return;
         }
         let first = self.defined.insert(name.to_string());
-        if self.pass == 1 {
-            if !first || matches!(self.symbols.get(name), Some(SymVal::Common(..))) {
-                self.diag(
-                    Severity::Error,
-                    line,
-                    1,
-                    format!("symbol `{name}` is already defined"),
-                );
-            }
+        if self.pass == 1 && (!first || matches!(self.symbols.get(name), Some(SymVal::Common(..))))
+        {
+            self.diag(
+                Severity::Error,
+                line,
+                1,
+                format!("symbol `{name}` is already defined"),
+            );
         }
         self.symbols
             .insert(name.to_string(), SymVal::Label(self.sect, off));

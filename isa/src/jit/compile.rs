@@ -1667,7 +1667,7 @@ impl Translator<'_> {
                 let t = self.b.ins().ireduce(I32, code);
                 let taken = self.b.ins().band_imm_u(code, TAKEN as i64);
                 let taken = self.b.ins().icmp_imm_u(IntCC::NotEqual, taken, 0);
-                debug_assert!(BRANCH != 0);
+                const { assert!(BRANCH != 0) };
                 (t, taken)
             }
         };

@@ -961,7 +961,6 @@ pub(crate) fn execute_in<const TRUNCATING: bool>(core: &mut Core, inst: Inst, pc
             };
             if matches!(inst.op, Brsl | Brasl) {
                 w!([next, 0, 0, 0])
-            } else {
             }
         }
         Brz | Brnz | Brhz | Brhnz => {
@@ -1004,7 +1003,6 @@ pub(crate) fn execute_in<const TRUNCATING: bool>(core: &mut Core, inst: Inst, pc
             };
             if matches!(inst.op, Bisl | Bisled) {
                 w!([next, 0, 0, 0])
-            } else {
             }
         }
         Hbr | Hbra | Hbrr => {

@@ -157,7 +157,7 @@ impl Spu {
         size: u32,
         memory: &MainMemory,
     ) -> Result<(), String> {
-        let ok_size = matches!(size, 1 | 2 | 4 | 8) || (size % 16 == 0 && size <= 16384);
+        let ok_size = matches!(size, 1 | 2 | 4 | 8) || (size.is_multiple_of(16) && size <= 16384);
         if !ok_size {
             return Err(format!(
                 "transfer size {size} is not 1, 2, 4, 8 or a multiple of 16 up to 16384"
@@ -166,7 +166,7 @@ impl Spu {
         if size == 0 {
             // A zero-length transfer moves nothing and completes its tag.
         } else if size < 16 {
-            if lsa % size != 0 || ea % size as u64 != 0 {
+            if !lsa.is_multiple_of(size) || !ea.is_multiple_of(size as u64) {
                 return Err(format!(
                     "{size}-byte transfer with LS {lsa:#x} / EA {ea:#x} not naturally aligned"
                 ));
@@ -243,7 +243,7 @@ impl Spu {
                         "DMA list address {list:#x} is not 8-byte aligned"
                     ));
                 }
-                if self.core.mfc.size % 8 != 0 || self.core.mfc.size / 8 > 2048 {
+                if !self.core.mfc.size.is_multiple_of(8) || self.core.mfc.size / 8 > 2048 {
                     return ChannelOutcome::Error(format!(
                         "DMA list size {} is not a multiple of 8 up to 16384",
                         self.core.mfc.size

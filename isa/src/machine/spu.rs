@@ -490,8 +490,8 @@ impl Spu {
                             Some(t) => t.channel_stall(pc, inst.ra, when),
                             None => self.cycle = when,
                         }
-                        if self.timing.is_some() {
-                            self.cycle = self.timing.as_ref().unwrap().now();
+                        if let Some(t) = &self.timing {
+                            self.cycle = t.now();
                         }
                         continue;
                     }

@@ -209,7 +209,7 @@ pub fn hint_branch_address(pc: u32, inst: Inst) -> u32 {
 #[inline]
 pub fn hint_static_target(pc: u32, inst: Inst) -> Option<u32> {
     match inst.op {
-        Op::Hbra => Some(((inst.u16() << 2) & 0x3_ffff) as u32),
+        Op::Hbra => Some((inst.u16() << 2) & 0x3_ffff),
         Op::Hbrr => Some(pc.wrapping_add((inst.imm << 2) as u32) & 0x3_ffff),
         _ => None,
     }
@@ -450,11 +450,12 @@ impl Timing {
         let mut hint_ready = 0u64;
         if flags & F_BRANCH != 0 {
             let h = &self.hint;
-            if h.valid && h.branch == pc {
-                if self.index - h.index >= self.config.hint_min_distance as u64 {
-                    hinted = Some(h.target);
-                    hint_ready = h.issued + self.config.hint_window as u64;
-                }
+            if h.valid
+                && h.branch == pc
+                && self.index - h.index >= self.config.hint_min_distance as u64
+            {
+                hinted = Some(h.target);
+                hint_ready = h.issued + self.config.hint_window as u64;
             }
         }
 
