@@ -5,6 +5,7 @@
 mod cli;
 mod exit_status;
 mod paper;
+mod ppe_run;
 mod shade_cli;
 mod views;
 
