@@ -10,7 +10,8 @@ mod shade_cli;
 mod views;
 
 /// The size and 8-bit RGB pixels of a PNG file the `spu` command wrote.
-pub fn read_png_rgb(path: &std::path::Path) -> (u32, u32, Vec<[u8; 3]>) {
+pub fn read_png_rgb(path: impl AsRef<std::path::Path>) -> (u32, u32, Vec<[u8; 3]>) {
+    let path = path.as_ref();
     let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut reader = png::Decoder::new(std::io::BufReader::new(file))
         .read_info()
