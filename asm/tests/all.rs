@@ -3,7 +3,6 @@
 //! (`tests/tests/test_files.rs` checks that none is left out).
 
 mod gnu_compat;
-mod gnu_differential;
 mod never_panics;
 mod objects_and_limits;
 mod sched;

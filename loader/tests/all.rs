@@ -4,4 +4,3 @@
 
 mod fuzz_regressions;
 mod kernels_assemble;
-mod shared_scenes;
