@@ -18,7 +18,7 @@ fn kernels_assemble() {
 
 /// `kernels/layout.inc` is the generated text. To regenerate it after changing
 /// `loader::layout` or `loader::kernel_abi`: `SPU_BLESS_LAYOUT=1 cargo test -p spu-loader
-/// --test kernels_assemble`.
+/// --test all kernels_assemble`.
 #[test]
 fn checked_in_layout_inc_is_the_generated_one() {
     let path = kernels_dir().join("layout.inc");
@@ -30,7 +30,7 @@ fn checked_in_layout_inc_is_the_generated_one() {
     assert!(
         on_disk == generated,
         "kernels/layout.inc differs from loader::layout and loader::kernel_abi; regenerate it \
-         with SPU_BLESS_LAYOUT=1 cargo test -p spu-loader --test kernels_assemble"
+         with SPU_BLESS_LAYOUT=1 cargo test -p spu-loader --test all kernels_assemble"
     );
 }
 

@@ -1,6 +1,6 @@
 //! Speed of the timing model with all counters on, on a mixed loop (loads, multiply-adds,
 //! shuffles, adds, a hinted branch). Run with
-//! `cargo test --release -p spu-tests --test timing_speed -- --ignored --nocapture`.
+//! `cargo test --release -p spu-tests --test all timing_speed -- --ignored --nocapture`.
 
 use spu_isa::codec::{decode, encode, Inst};
 use spu_isa::table::forms_named;

@@ -163,16 +163,12 @@ fn validation_status(validation: Option<&Validation>) -> Status {
 }
 
 fn write_png(path: &Path, colours: &[u32], width: u32, height: u32) -> exit::Result<()> {
-    use image::ImageEncoder as _;
     let mut rgb = Vec::with_capacity(colours.len() * 3);
     for colour in colours {
         let [r, g, b, _] = colour.to_be_bytes();
         rgb.extend([r, g, b]);
     }
-    let mut png = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut png)
-        .write_image(&rgb, width, height, image::ExtendedColorType::Rgb8)
-        .map_err(|e| Error::output(path, e))?;
+    let png = crate::png::encode_rgb(&rgb, width, height).map_err(|e| Error::output(path, e))?;
     exit::write_file(path, &png)
 }
 

@@ -115,10 +115,7 @@ fn draw(
         title,
     )?;
     // Encoded in memory and written whole: a failed write leaves no partial image.
-    use image::ImageEncoder as _;
-    let mut png = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut png)
-        .write_image(&rgb, full_w, scale_h, image::ExtendedColorType::Rgb8)
+    let png = crate::png::encode_rgb(&rgb, full_w, scale_h)
         .map_err(|e| format!("{}: {e}", path.display()))?;
     crate::exit::write_file(path, &png).map_err(|e| e.message.unwrap_or_default())
 }

@@ -23,6 +23,7 @@ mod paper_figure;
 mod paper_jobs;
 mod paper_report;
 mod paper_tables;
+mod png;
 mod prepared;
 mod render_options;
 mod trace;

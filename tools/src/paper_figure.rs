@@ -67,7 +67,8 @@ pub fn write_figure2(dir: &Path, stem: &str, series: &[Series]) -> Result<Vec<St
         draw(&root, series).map_err(|e| format!("{png}: {e}"))?;
     }
     let path = dir.join(&png);
-    image::save_buffer(&path, &rgb, WIDTH, HEIGHT, image::ColorType::Rgb8)
+    crate::png::encode_rgb(&rgb, WIDTH, HEIGHT)
+        .and_then(|bytes| std::fs::write(&path, bytes).map_err(|e| e.to_string()))
         .map_err(|e| format!("{}: {e}", path.display()))?;
     let mut text = String::new();
     {

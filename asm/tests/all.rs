@@ -1,0 +1,8 @@
+//! Every integration test of `spu-asm` in one test binary: each `.rs` file beside this one is a
+//! module of it, so the build links one test binary instead of one per file
+//! (`tests/tests/test_files.rs` checks that none is left out).
+
+mod gnu_compat;
+mod never_panics;
+mod objects_and_limits;
+mod sched;
