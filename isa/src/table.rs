@@ -1,7 +1,7 @@
 //! The one declaration of every SPU instruction and its assembler forms.
 //!
 //! Everything about an instruction — its opcode, format, operand order, pipe and latency,
-//! the assembler forms that produce it — is written once, in [`for_each_op!`]. The
+//! the assembler forms that produce it — is written once, in [`for_each_op!`](crate::for_each_op). The
 //! encoder, the decoder table, the disassembler, the visitor used by the interpreter and
 //! the profilers, and the timing classes are all derived from it (the pattern of
 //! wasmtime's Pulley `for_each_op!`). Rows follow the order of the GNU binutils SPU opcode

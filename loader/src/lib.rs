@@ -10,7 +10,7 @@
 //!   records, paper section 5.1) and the staged main-memory image.
 //! - [`shading`]: the shading model (diffuse, interpolated normals, point lights, shadows)
 //!   the shading kernels and the reference share, and the `--shade` modes.
-//! - [`reference`]: a scalar ray caster over the same records that defines the expected
+//! - [`reference`](mod@reference): a scalar ray caster over the same records that defines the expected
 //!   kernel output.
 //! - [`stats`]: a frame's statistics as typed JSON (`spu render --stats`).
 //! - [`timeline`]: when each tile and packet was traced, from the SPUs' event logs.

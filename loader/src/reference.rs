@@ -4,7 +4,7 @@
 //! pixel by pixel. It is itself checked against an f64 brute-force Möller–Trumbore caster.
 //!
 //! Conventions shared with the kernels:
-//! - rays come from [`CameraBasis::direction`] (unnormalized; `t` is in units of that
+//! - rays come from [`CameraBasis::direction`](crate::CameraBasis::direction) (unnormalized; `t` is in units of that
 //!   direction, see [`crate::camera`]);
 //! - a hit needs `T_MIN < t < t_max`, where `t_max` starts at [`T_MAX`] (finite: the SPU has
 //!   no infinity) and shrinks to the nearest hit so far; of two hits at exactly the same `t`

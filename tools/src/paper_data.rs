@@ -29,7 +29,7 @@ pub const PAPER_SIZE: u32 = 1024;
 /// Cache sizes of Table 1, in lines.
 pub const CACHE_SIZES: [u32; 4] = [128, 256, 512, 1024];
 
-/// Table 1: cache hit rates in %, [size index][scene] as (4-way, direct mapped).
+/// Table 1: cache hit rates in %, `[size index][scene]` as (4-way, direct mapped).
 const TABLE1_BC: [[(f64, f64); 3]; 4] = [
     [(99.8, 99.4), (95.7, 91.2), (87.6, 84.4)],
     [(99.9, 99.7), (98.0, 94.4), (91.6, 88.3)],
@@ -117,7 +117,7 @@ pub const MACHINES: [Machine; 4] = [
     },
 ];
 
-/// Table 5: frames per second at 1024x1024, [mode][machine][scene].
+/// Table 5: frames per second at 1024x1024, `[mode][machine][scene]`.
 pub const TABLE5_FPS: [[[f64; 3]; 4]; 3] = [
     [
         [30.1, 7.8, 7.0],
@@ -139,7 +139,7 @@ pub const TABLE5_FPS: [[[f64; 3]; 4]; 3] = [
     ],
 ];
 
-/// Table 5's baseline, a 2.4 GHz Opteron: fps [mode][scene] (for the text, not compared).
+/// Table 5's baseline, a 2.4 GHz Opteron: fps `[mode][scene]` (for the text, not compared).
 pub const TABLE5_X86_FPS: [[f64; 3]; 3] = [[28.1, 8.7, 7.7], [15.3, 6.7, 6.6], [7.2, 3.0, 2.5]];
 
 /// Table 6's rows: KB read per 1024x1024 frame with simple shading, 256-line caches.

@@ -62,7 +62,7 @@ pub struct Args {
     /// shadows (simple plus one shadow ray per light).
     #[arg(long, default_value = "none", value_parser = ShadeMode::parse)]
     pub shade: ShadeMode,
-    /// A point light x,y,z[,r,g,b] (repeatable, up to 8; default: the scene's own).
+    /// A point light `x,y,z[,r,g,b]` (repeatable, up to 8; default: the scene's own).
     #[arg(long = "light", value_parser = Light::parse, allow_hyphen_values = true)]
     pub lights: Vec<Light>,
     /// Shadow packets stop as soon as every ray is occluded (on|off).

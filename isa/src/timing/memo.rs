@@ -859,7 +859,7 @@ impl Timing {
 
     /// For a core that runs whole memoized blocks: the memo (id and length) of the block
     /// starting at `pc` with `inst` when the state matches its record and nothing else is
-    /// in progress; nothing changes. Follow with [`Timing::start_block_replay`].
+    /// in progress; nothing changes. Once the core ran it whole, [`Timing::block_replayed`].
     #[inline(always)]
     pub fn block_replay_candidate(&mut self, pc: u32, inst: Inst) -> Option<(usize, usize)> {
         if !self.memo_between_blocks() || is_terminator(inst) {
