@@ -55,13 +55,13 @@ fn heatmap_and_trace_of_a_small_frame() {
     );
 
     for map in ["heat.png", "heat-wait.png"] {
-        let (width, height, pixels) = crate::read_png_rgb(&p(map));
+        let (width, height, pixels) = crate::read_png_rgb(p(map));
         assert_eq!((width, height), (128 + 110, 160), "{map}");
         // every pixel of the frame belongs to a packet (none left in the no-packet grey)
         let grey = [40u8, 40, 40];
         assert!((0..128).all(|y| (0..128).all(|x| pixels[(y * width + x) as usize] != grey)));
     }
-    let (width, _, heat) = crate::read_png_rgb(&p("heat.png"));
+    let (width, _, heat) = crate::read_png_rgb(p("heat.png"));
     let distinct: std::collections::BTreeSet<[u8; 3]> = (0..128)
         .flat_map(|y| (0..128).map(move |x| (x, y)))
         .map(|(x, y)| heat[(y * width + x) as usize])
