@@ -699,8 +699,11 @@ mod listing {
     pub enum ListingLine {
         /// A label line: the symbol name.
         Label(String),
+        /// An instruction line.
         Inst {
+            /// The instruction's local-store byte address.
             addr: u32,
+            /// Its disassembly.
             text: String,
         },
     }

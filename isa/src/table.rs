@@ -509,8 +509,8 @@ macro_rules! define_table {
         /// One method per operation: the interpreter, the tracer and the profilers
         /// implement this and get the dispatch from [`visit`].
         pub trait Visitor {
-            type Output;
             /// The value every visitor method returns.
+            type Output;
             $(
                 #[doc = concat!("Handles a `", stringify!($snake), "` instruction.")]
                 fn $snake(&mut self, inst: $crate::Inst) -> Self::Output;
