@@ -180,7 +180,7 @@ pub struct Core {
     pub mfc: MfcParams,
 }
 
-/// Local store size and the mask that wraps addresses into it.
+/// Local store size in bytes (256 KiB).
 pub const LS_SIZE: usize = 256 * 1024;
 /// Mask that wraps a byte address into the local store (`LS_SIZE - 1`).
 pub const LS_MASK: u32 = (LS_SIZE as u32) - 1;
