@@ -23,10 +23,15 @@ pub const MFC_PARAM_CHANNELS: std::ops::RangeInclusive<u8> = 16..=20;
 /// Register usage of one operation's fields.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RegUse {
+    /// The operation reads register `rt` (stores, `selb`-like forms and branches on `rt`).
     pub reads_rt: bool,
+    /// The operation writes its result to register `rt`.
     pub writes_rt: bool,
+    /// The operation reads register `ra`.
     pub reads_ra: bool,
+    /// The operation reads register `rb`.
     pub reads_rb: bool,
+    /// The operation reads register `rc`.
     pub reads_rc: bool,
 }
 
@@ -73,10 +78,13 @@ pub fn regs(op: Op) -> RegUse {
 /// The registers an instruction reads (up to four) and the one it writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Operands {
+    /// Register numbers (0 to 127) read, in the order `ra`, `rb`, `rc`, `rt`; `None` where that field is not read.
     pub reads: [Option<u8>; 4],
+    /// The register number written, if the instruction writes one.
     pub writes: Option<u8>,
 }
 
+/// The registers `inst` reads and writes, from its operation's [`RegUse`] and its register fields.
 pub fn operands(inst: Inst) -> Operands {
     let u = regs(inst.op);
     let reads = [
@@ -114,18 +122,22 @@ pub fn is_branch(op: Op) -> bool {
     )
 }
 
+/// Whether `op` is a branch hint (`hbr`, `hbra`, `hbrr`).
 pub fn is_hint(op: Op) -> bool {
     matches!(op, Op::Hbr | Op::Hbra | Op::Hbrr)
 }
 
+/// Whether `op` is a quadword load from local store (`lqd`, `lqx`, `lqa`, `lqr`).
 pub fn is_load(op: Op) -> bool {
     matches!(op, Op::Lqd | Op::Lqx | Op::Lqa | Op::Lqr)
 }
 
+/// Whether `op` is a quadword store to local store (`stqd`, `stqx`, `stqa`, `stqr`).
 pub fn is_store(op: Op) -> bool {
     matches!(op, Op::Stqd | Op::Stqx | Op::Stqa | Op::Stqr)
 }
 
+/// Whether `op` is a no-op of either pipeline (`nop`, `lnop`).
 pub fn is_nop(op: Op) -> bool {
     matches!(op, Op::Nop | Op::Lnop)
 }

@@ -12,6 +12,7 @@ use crate::table::{FormInfo, Format, Op, OperandKind, FORMS, OP_INFO};
 /// A decoded instruction: its operation and its fields, pre-extracted for the interpreter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Inst {
+    /// The operation this instruction word encodes.
     pub op: Op,
     /// Destination register: bits 21..27 for RRR, bits 0..6 otherwise.
     pub rt: u8,
@@ -56,6 +57,7 @@ impl Inst {
         ((self.word >> 14) & 0x7f) as u8
     }
 
+    /// The instruction format (field layout) of this instruction's operation.
     pub const fn format(self) -> Format {
         self.op.info().format
     }

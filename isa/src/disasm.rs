@@ -44,6 +44,7 @@ pub struct SymbolTable {
 }
 
 impl SymbolTable {
+    /// A table of `(local-store address, name)` symbols, sorted by address here.
     pub fn new(symbols: Vec<(u32, String)>) -> Self {
         Self::ranked(symbols.into_iter().map(|(a, n)| (a, n, 0)).collect())
     }
@@ -71,6 +72,7 @@ impl SymbolTable {
             .map(|s| s.1.as_str())
     }
 
+    /// Whether the table holds no symbols.
     pub fn is_empty(&self) -> bool {
         self.symbols.is_empty()
     }

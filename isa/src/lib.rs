@@ -3,6 +3,8 @@
 //!
 //! [`table`] is the single declaration every other module derives from.
 
+#![warn(missing_docs)]
+
 pub mod analysis;
 pub mod codec;
 pub mod disasm;

@@ -18,6 +18,7 @@ use std::fmt::Write as _;
 /// Counters of one instruction address.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PcStats {
+    /// Times the instruction executed.
     pub executions: u64,
     /// Cycles charged to this instruction (issue cycle + stalls charged to it).
     pub cycles: u64,
@@ -31,6 +32,7 @@ pub struct PcStats {
 }
 
 impl PcStats {
+    /// All stall cycles charged to this instruction, over every cause.
     pub fn stall_total(&self) -> u64 {
         self.stall.iter().sum()
     }
@@ -113,7 +115,9 @@ pub struct Totals {
     pub cycles: u64,
     /// Cycles in which both pipes issued.
     pub dual_cycles: u64,
+    /// Conditional and unconditional branches that were taken.
     pub branches_taken: u64,
+    /// Conditional branches that fell through.
     pub branches_not_taken: u64,
     /// Branches that paid the miss penalty (taken unhinted, or hinted wrongly).
     pub branch_misses: u64,
@@ -144,10 +148,12 @@ impl Totals {
         self.instructions.saturating_sub(2 * self.dual_cycles)
     }
 
+    /// All stall cycles, over every cause.
     pub fn stall_cycles(&self) -> u64 {
         self.stall.iter().sum()
     }
 
+    /// Cycles per instruction over the run (0 before any instruction).
     pub fn cpi(&self) -> f64 {
         if self.instructions == 0 {
             0.0
@@ -356,6 +362,7 @@ pub const UNITS: [Unit; 12] = [
     Unit::FPD,
 ];
 
+/// The upper-case name of an execution class, as the reports print it (`FX2`, `LS`, ...).
 pub fn unit_name(u: Unit) -> &'static str {
     match u {
         Unit::FX2 => "FX2",
@@ -402,6 +409,7 @@ pub struct Profile {
     dep_extra: HashMap<(u32, u32), u64>,
     /// Channel stall cycles per (address, channel).
     channels: HashMap<(u32, u8), u64>,
+    /// The whole-run counters.
     pub totals: Totals,
     /// While the timing model records a block, every per-address change is also logged
     /// here so that the block's replays can repeat it.
@@ -421,6 +429,7 @@ pub(crate) struct LogEntry {
 pub(crate) const DEP: u8 = 100;
 
 impl Profile {
+    /// An empty profile (every counter zero).
     pub fn new() -> Self {
         Profile {
             pcs: Vec::new(),
@@ -648,13 +657,18 @@ impl Profile {
 /// Counters summed over a range of addresses (a label's code, `--range`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RangeSum {
+    /// Times instructions in the range executed.
     pub executions: u64,
+    /// Cycles charged to the range's instructions.
     pub cycles: u64,
+    /// Executions that issued as half of a dual-issued pair.
     pub dual: u64,
+    /// Stall cycles by cause, indexed by [`StallCause::index`].
     pub stall: [u64; STALL_CLASSES],
 }
 
 impl RangeSum {
+    /// Adds one address's counters to the sums.
     pub fn add(&mut self, s: &PcStats) {
         self.executions += s.executions;
         self.cycles += s.cycles;
@@ -664,6 +678,7 @@ impl RangeSum {
         }
     }
 
+    /// Cycles per executed instruction in the range (0 when none executed).
     pub fn cpi(&self) -> f64 {
         if self.executions == 0 {
             0.0
@@ -682,8 +697,15 @@ mod listing {
     /// One line of a program listing to annotate: an address with its text, or a label.
     #[derive(Clone, Debug)]
     pub enum ListingLine {
+        /// A label line: the symbol name.
         Label(String),
-        Inst { addr: u32, text: String },
+        /// An instruction line.
+        Inst {
+            /// The instruction's local-store byte address.
+            addr: u32,
+            /// Its disassembly.
+            text: String,
+        },
     }
 
     /// The listing lines of every executed address of `image` (a local-store image), in

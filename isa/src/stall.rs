@@ -4,11 +4,17 @@
 /// Why an instruction waited (the stall classes IBM's simulator reports).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum StallCause {
+    /// Waiting for a source register that an earlier instruction has not produced yet.
     Dependency,
+    /// Refilling the pipeline after a mispredicted (unhinted or wrongly hinted) taken branch.
     BranchMiss,
+    /// Waiting for a branch hint to complete before its branch can issue.
     Hint,
+    /// Held behind a double-precision instruction, which blocks issue for several cycles.
     DoublePrecision,
+    /// Blocked on a channel read or write; the value is the channel number.
     Channel(u8),
+    /// Waiting for the instruction fetch to bring in the next line from local store.
     Fetch,
 }
 

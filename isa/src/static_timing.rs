@@ -25,10 +25,15 @@ pub struct SourceLine {
 }
 
 #[derive(Clone, Debug)]
+/// One instruction of the assembly source, as assembled for the static timing analysis.
 pub struct SourceInst {
+    /// Its local-store byte address.
     pub addr: u32,
+    /// The decoded instruction.
     pub inst: Inst,
+    /// The mnemonic as written in the source.
     pub mnemonic: String,
+    /// The operand text as written in the source.
     pub operands: String,
 }
 
@@ -276,7 +281,9 @@ pub fn parse_source(src: &str) -> Vec<SourceLine> {
 /// The timing of one instruction in the static listing.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct StaticRow {
+    /// Local-store byte address of the instruction.
     pub addr: u32,
+    /// The instruction's text as shown in the listing.
     pub text: String,
     /// 0 (even) or 1 (odd).
     pub pipe: u8,
@@ -302,17 +309,22 @@ pub struct StaticRow {
 /// A basic block: from a label, or the instruction after a branch, to the next.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StaticBlock {
+    /// The label the block starts at, if any.
     pub label: Option<String>,
+    /// Local-store byte address of the block's first instruction.
     pub addr: u32,
+    /// Number of instructions in the block.
     pub instructions: u64,
     /// From its first issue to its last, inclusive.
     pub cycles: u64,
     /// Dual-issue cycles.
     pub dual: u64,
+    /// Stall cycles inside the block.
     pub stall: u64,
 }
 
 impl StaticBlock {
+    /// Cycles per instruction of the block (`cycles / instructions`; 0 when it is empty).
     pub fn cpi(&self) -> f64 {
         if self.instructions == 0 {
             0.0
@@ -323,9 +335,13 @@ impl StaticBlock {
 }
 
 #[derive(Clone, Debug)]
+/// The result of the static timing analysis of one source file (`spu timing`): per-instruction rows and per-block sums.
 pub struct StaticTiming {
+    /// The source file's lines, in order.
     pub lines: Vec<SourceLine>,
+    /// One row per timed instruction, in issue order.
     pub rows: Vec<StaticRow>,
+    /// The basic blocks, in address order.
     pub blocks: Vec<StaticBlock>,
     /// The source lines shown (all, or the one block asked for).
     pub shown: std::ops::Range<usize>,

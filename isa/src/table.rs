@@ -222,12 +222,19 @@ macro_rules! for_each_op {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[allow(clippy::upper_case_acronyms)]
 pub enum Format {
+    /// Register-register: two source registers `ra`, `rb` and target `rt`, 11-bit opcode.
     RR,
+    /// Register-register-register: three sources and a target, 4-bit opcode (`selb`, `fma`, `shufb`).
     RRR,
+    /// Register and 7-bit immediate I7 (shift and rotate counts).
     RI7,
+    /// Register and 8-bit immediate I8 (the float/integer conversion scales).
     RI8,
+    /// Register and 10-bit signed immediate I10 (arithmetic, logical and compare immediates, `lqd`/`stqd`).
     RI10,
+    /// 16-bit immediate I16 (immediate loads, relative and absolute branches and loads/stores).
     RI16,
+    /// 18-bit immediate I18 (`ila`).
     RI18,
     /// `hbra`/`hbrr`: 16-bit target plus a 9-bit branch offset split over two fields.
     LBT,
@@ -253,28 +260,43 @@ impl Format {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[allow(clippy::upper_case_acronyms)]
 pub enum Unit {
+    /// Simple fixed-point operations (add, logical, compare), 2 cycles.
     FX2,
+    /// Word and halfword rotates and shifts, 4 cycles.
     FX3,
+    /// Byte operations (`cntb`, `absdb`, `avgb`, `sumb`), 4 cycles.
     FXB,
+    /// Single-precision floating point, 6 cycles.
     FP6,
+    /// Integer multiplies, float/integer conversions, `fi` and `fscrwr`, 7 cycles.
     FP7,
+    /// Double-precision floating point, 13 cycles (and it blocks issue for a while).
     FPD,
+    /// The even pipe's no-op (`nop`), 1 cycle.
     NOP,
+    /// Shuffles, quadword shifts and rotates, form-select masks, gathers, insertion controls and the float estimates, 4 cycles.
     SHUF,
+    /// Local-store loads and stores, 6 cycles.
     LS,
+    /// Branches and branch hints, 4 cycles.
     BR,
+    /// Channel and special-purpose register access, 6 cycles.
     SPR,
+    /// The odd pipe's no-op (`lnop`), 1 cycle.
     LNOP,
 }
 
 /// The SPU's two issue pipes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Pipe {
+    /// Pipe 0: fixed-point and floating-point arithmetic.
     Even,
+    /// Pipe 1: loads and stores, shuffles, branches and channels.
     Odd,
 }
 
 impl Unit {
+    /// The pipe this class issues on.
     pub const fn pipe(self) -> Pipe {
         match self {
             Unit::FX2 | Unit::FX3 | Unit::FXB | Unit::FP6 | Unit::FP7 | Unit::FPD | Unit::NOP => {
@@ -302,7 +324,9 @@ impl Unit {
 pub enum OperandKind {
     /// Destination register (bits 21..27 in RRR, bits 0..6 otherwise).
     Rt,
+    /// First source register (bits 7..13).
     Ra,
+    /// Second source register (bits 14..20).
     Rb,
     /// Third source of RRR (bits 0..6).
     Rc,
@@ -310,18 +334,27 @@ pub enum OperandKind {
     Ch,
     /// Special-purpose register number in the RA field.
     Spr,
+    /// Signed 7-bit immediate in I7.
     S7,
+    /// Signed shift or rotate count in I7 that the assembler checks to -32..31 (warning outside -31..0).
     S6,
+    /// Signed bit count in I7 for `rotqmbii` (a right shift written as a negative count).
     S3,
+    /// Signed 7-bit immediate in I7 used as a rotate count (`roti`, `rotqbyi`).
     S7n,
+    /// Unsigned bit count in I7 for the quadword bit rotates and shifts (`rotqbii`, `shlqbii`).
     U3,
+    /// Unsigned immediate in I7: the assembler warns above 31 and rejects above 127.
     U5,
+    /// Unsigned immediate in I7: the assembler warns above 63 and rejects above 127.
     U6,
+    /// Unsigned 7-bit immediate in I7.
     U7,
     /// `cflts`/`cfltu` scale, stored as `173 - scale` in I8.
     Scale173,
     /// `csflt`/`cuflt` scale, stored as `155 - scale` in I8.
     Scale155,
+    /// Signed 10-bit immediate in I10.
     S10,
     /// Byte immediate: the low 8 bits matter; outside -128..255 the assembler warns.
     S10b,
@@ -329,8 +362,11 @@ pub enum OperandKind {
     Off14,
     /// The base register written in parentheses after an offset: `32($1)`.
     ParenRa,
+    /// Signed 16-bit immediate in I16.
     S16,
+    /// 16-bit immediate in I16 taken as a bit pattern (signed or unsigned; written in hex by the disassembler).
     X16,
+    /// Unsigned 18-bit immediate in I18 (`ila`).
     U18,
     /// Absolute local-store byte address stored divided by 4 in I16.
     Abs18,
@@ -338,6 +374,7 @@ pub enum OperandKind {
     Rel18,
     /// Address of the hinted branch, stored as a 9-bit word offset from the hint.
     BrInst,
+    /// The 14-bit stop-and-signal code of `stop` (bits 0..13).
     U14,
 }
 
@@ -368,23 +405,30 @@ impl OperandKind {
 /// Static facts about one machine operation (one opcode).
 #[derive(Debug)]
 pub struct OpInfo {
+    /// The operation these facts describe (its index in [`OP_INFO`]).
     pub op: Op,
     /// Canonical mnemonic: the first form binutils lists for this opcode.
     pub name: &'static str,
+    /// The operation's encoding format.
     pub format: Format,
     /// The opcode left-justified in 11 bits; the word's base value is `opcode11 << 21`.
     pub opcode11: u16,
+    /// The execution class, which decides the pipe and the result latency.
     pub unit: Unit,
 }
 
 /// One assembler form: a mnemonic and operand list that encodes to an opcode.
 #[derive(Debug)]
 pub struct FormInfo {
+    /// The mnemonic the assembler accepts and the disassembler may print.
     pub mnemonic: &'static str,
+    /// The operation this form encodes to.
     pub op: Op,
+    /// The form's field layout (usually the operation's, but `syscall` uses RI7).
     pub format: Format,
     /// Feature bits ORed in at bit 14 (D = 0x20, E = 0x10, `syncc`/`hbrp` 0x40).
     pub extra: u8,
+    /// The operands in the order they are written.
     pub operands: &'static [OperandKind],
     /// The mnemonic this one is an alias of (`lr` → `ori`).
     pub alias_of: Option<&'static str>,
@@ -425,12 +469,20 @@ macro_rules! define_table {
         /// the operation of `bi`). `Unknown` stands for a word that matches no opcode.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
         #[repr(u8)]
-        pub enum Op { $($Name,)* Unknown }
+        pub enum Op {
+            $(
+                #[doc = concat!("The `", stringify!($snake), "` operation.")]
+                $Name,
+            )*
+            /// A word that matches no opcode (disassembled as `.long`).
+            Unknown,
+        }
 
         impl Op {
             /// Every real operation, in table order (without `Unknown`).
             pub const ALL: &'static [Op] = &[$(Op::$Name),*];
 
+            /// Static facts about this operation: its name, format, opcode and unit.
             pub const fn info(self) -> &'static OpInfo { &OP_INFO[self as usize] }
         }
 
@@ -457,8 +509,13 @@ macro_rules! define_table {
         /// One method per operation: the interpreter, the tracer and the profilers
         /// implement this and get the dispatch from [`visit`].
         pub trait Visitor {
+            /// The value every visitor method returns.
             type Output;
-            $(fn $snake(&mut self, inst: $crate::Inst) -> Self::Output;)*
+            $(
+                #[doc = concat!("Handles a `", stringify!($snake), "` instruction.")]
+                fn $snake(&mut self, inst: $crate::Inst) -> Self::Output;
+            )*
+            /// Handles a word that decodes to no operation ([`Op::Unknown`]).
             fn unknown(&mut self, inst: $crate::Inst) -> Self::Output;
         }
 

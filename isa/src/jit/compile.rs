@@ -225,6 +225,7 @@ impl CodeCache {
         CodeCache::with(Compiling::default())
     }
 
+    /// An empty cache that compiles hot blocks the way `compiling` says.
     pub fn with(compiling: Compiling) -> CodeCache {
         let module = new_module();
         let ctx = module.make_context();

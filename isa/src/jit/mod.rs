@@ -90,6 +90,7 @@ impl Engine {
         }
     }
 
+    /// The engine's name as the command-line options spell it (`interp` or `jit`).
     pub const fn name(self) -> &'static str {
         match self {
             Engine::Interp => "interp",
@@ -137,6 +138,7 @@ pub enum Compiling {
 }
 
 impl Compiling {
+    /// The mode's name as the command-line options spell it (`inline` or `background`).
     pub const fn name(self) -> &'static str {
         match self {
             Compiling::Inline => "inline",

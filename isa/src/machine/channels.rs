@@ -9,33 +9,61 @@ use crate::table::Op;
 
 /// Channel numbers (SPU ISA / Cell BE Handbook).
 pub mod ch {
+    /// SPU_RdEventStat: read the pending events enabled by the mask (waits while there are none).
     pub const RD_EVENT_STAT: u8 = 0;
+    /// SPU_WrEventMask: write which events SPU_RdEventStat reports.
     pub const WR_EVENT_MASK: u8 = 1;
+    /// SPU_WrEventAck: write to clear pending event bits.
     pub const WR_EVENT_ACK: u8 = 2;
+    /// SPU_RdSigNotify1: read (and clear) signal-notification register 1 (waits while it is empty).
     pub const RD_SIG_NOTIFY1: u8 = 3;
+    /// SPU_RdSigNotify2: read (and clear) signal-notification register 2 (waits while it is empty).
     pub const RD_SIG_NOTIFY2: u8 = 4;
+    /// SPU_WrDec: load the decrementer.
     pub const WR_DEC: u8 = 7;
+    /// SPU_RdDec: read the decrementer.
     pub const RD_DEC: u8 = 8;
+    /// MFC_WrMSSyncReq: request a multisource synchronisation.
     pub const WR_MS_SYNC_REQ: u8 = 9;
+    /// SPU_RdEventMask: read back the event mask.
     pub const RD_EVENT_MASK: u8 = 11;
+    /// MFC_RdTagMask: read back the tag-group query mask.
     pub const RD_TAG_MASK: u8 = 12;
+    /// SPU_RdMachStat: read the machine status (here only the interrupt-enable bit).
     pub const RD_MACH_STAT: u8 = 13;
+    /// SPU_WrSRR0: write the interrupt return address (SRR0).
     pub const WR_SRR0: u8 = 14;
+    /// SPU_RdSRR0: read the interrupt return address (SRR0).
     pub const RD_SRR0: u8 = 15;
+    /// MFC_LSA: the local-store byte address of the next MFC command.
     pub const LSA: u8 = 16;
+    /// MFC_EAH: the high 32 bits of the next MFC command's effective address.
     pub const EAH: u8 = 17;
+    /// MFC_EAL: the low 32 bits of the next MFC command's effective address.
     pub const EAL: u8 = 18;
+    /// MFC_Size: the next MFC command's transfer size in bytes (list size for list commands).
     pub const SIZE: u8 = 19;
+    /// MFC_TagID: the next MFC command's tag group (0 to 31).
     pub const TAG_ID: u8 = 20;
+    /// MFC_Cmd: write an MFC command opcode to queue the command with the parameters above.
     pub const CMD: u8 = 21;
+    /// MFC_WrTagMask: write the tag groups a tag-status query looks at (one bit per tag).
     pub const WR_TAG_MASK: u8 = 22;
+    /// MFC_WrTagUpdate: request a tag-status update (immediate, any or all).
     pub const WR_TAG_UPDATE: u8 = 23;
+    /// MFC_RdTagStat: read the tag-status update's result (waits until it is ready).
     pub const RD_TAG_STAT: u8 = 24;
+    /// MFC_RdListStallStat: read the tag groups whose DMA lists are stalled on a stall-and-notify element.
     pub const RD_LIST_STALL_STAT: u8 = 25;
+    /// MFC_WrListStallAck: resume the stalled DMA list of a tag group.
     pub const WR_LIST_STALL_ACK: u8 = 26;
+    /// MFC_RdAtomicStat: read the outcome of the last atomic command (`getllar`, `putllc`, `putlluc`).
     pub const RD_ATOMIC_STAT: u8 = 27;
+    /// SPU_WrOutMbox: write the outbound mailbox (one entry; waits while it is full).
     pub const WR_OUT_MBOX: u8 = 28;
+    /// SPU_RdInMbox: read the inbound mailbox (four entries; waits while it is empty).
     pub const RD_IN_MBOX: u8 = 29;
+    /// SPU_WrOutIntrMbox: write the outbound interrupt mailbox (one entry; waits while it is full).
     pub const WR_OUT_INTR_MBOX: u8 = 30;
 }
 
@@ -48,7 +76,9 @@ pub mod event {
     pub const PRIV_ATTN: u32 = 0x800;
     /// Lock-line reservation lost.
     pub const LR: u32 = 0x400;
+    /// Signal-notification register 1 received a signal.
     pub const SIGNAL1: u32 = 0x200;
+    /// Signal-notification register 2 received a signal.
     pub const SIGNAL2: u32 = 0x100;
     /// The outbound mailbox became available (the host read it).
     pub const OUT_MBOX: u32 = 0x80;
@@ -91,6 +121,7 @@ impl Spu {
         true
     }
 
+    /// Takes the value the SPU wrote to its outbound mailbox, as the host (PPE) would; `None` if it is empty.
     pub fn read_outbound_mailbox(&mut self) -> Option<u32> {
         let v = self.out_mbox.take();
         if v.is_some() {
@@ -99,6 +130,7 @@ impl Spu {
         v
     }
 
+    /// Takes the value the SPU wrote to its outbound interrupt mailbox, as the host would; `None` if it is empty.
     pub fn read_outbound_interrupt_mailbox(&mut self) -> Option<u32> {
         let v = self.out_intr_mbox.take();
         if v.is_some() {

@@ -25,6 +25,7 @@ impl Spu {
         };
     }
 
+    /// The engine this SPU runs its code with.
     pub fn engine(&self) -> Engine {
         self.engine
     }

@@ -12,17 +12,31 @@ pub enum SpuEvent {
     /// An MFC command entered the queue at `cycle`; `complete` is when its transfer is done
     /// (the latest of its tag's queued commands; `cycle` for commands that queue nothing).
     Dma {
+        /// The SPU cycle the command was queued.
         cycle: u64,
+        /// The SPU cycle its tag group's transfers are done.
         complete: u64,
+        /// The MFC command opcode (`get`, `put`, list and atomic variants).
         cmd: u8,
+        /// The local-store byte address of the transfer.
         lsa: u32,
+        /// The main-memory effective address of the transfer.
         ea: u64,
+        /// The transfer size in bytes (for lists, the list's size in bytes).
         size: u32,
+        /// The command's tag group (0 to 31).
         tag: u8,
     },
     /// A channel instruction could not proceed at `cycle` and waited until `until` (the
     /// data's arrival, or the quantum boundary).
-    ChannelWait { cycle: u64, until: u64, channel: u8 },
+    ChannelWait {
+        /// The SPU cycle the channel instruction first tried.
+        cycle: u64,
+        /// The SPU cycle it could proceed (or the quantum ended).
+        until: u64,
+        /// The channel number.
+        channel: u8,
+    },
 }
 
 impl Spu {

@@ -5,6 +5,7 @@ use crate::codec::Inst;
 use crate::float;
 use crate::table::Op;
 
+/// One 128-bit SPU register or local-store quadword as four 32-bit words, word 0 first (the big-endian order; word 0 is the preferred slot).
 pub type Reg = [u32; 4];
 
 #[inline]
@@ -112,10 +113,15 @@ fn splat_b(v: u8) -> Reg {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C)]
 pub struct MfcParams {
+    /// MFC_LSA: the local-store byte address.
     pub lsa: u32,
+    /// MFC_EAH: the high 32 bits of the effective address.
     pub eah: u32,
+    /// MFC_EAL: the low 32 bits of the effective address.
     pub eal: u32,
+    /// MFC_Size: the transfer size in bytes.
     pub size: u32,
+    /// MFC_TagID: the tag group (only the low 5 bits count).
     pub tag_id: u32,
 }
 
@@ -152,51 +158,70 @@ const _: () = assert!(
 /// Architectural state the semantics act on (the channels and the MFC live outside, but
 /// for the command parameters' latches).
 pub struct Core {
+    /// The 128 general-purpose registers.
     pub regs: [Reg; 128],
+    /// The 256 KiB local store, indexed by local-store byte address.
     pub ls: Box<[u8; LS_SIZE]>,
+    /// The floating-point status and control register.
     pub fpscr: float::Fpscr,
+    /// Whether interrupts are enabled (set and cleared by the E and D bits of the indirect branches).
     pub interrupts_enabled: bool,
+    /// SRR0: the local-store address `iret` returns to.
     pub srr0: u32,
     /// Whether SPU_RdEventStat has a count (for `bisled`), valid while
     /// `event_pending_known` is set by the SPU around that one instruction.
     pub event_pending: bool,
+    /// Whether `event_pending` is valid (the SPU sets it around a `bisled`).
     pub event_pending_known: bool,
     /// The target of the last register-form hint (`hbr`) executed: blocks run whole hold
     /// such hints, and the timing model takes the hint entry's target from here.
     pub hint_target: u32,
+    /// The latched MFC command parameters.
     pub mfc: MfcParams,
 }
 
-/// Local store size and the mask that wraps addresses into it.
+/// Local store size in bytes (256 KiB).
 pub const LS_SIZE: usize = 256 * 1024;
+/// Mask that wraps a byte address into the local store (`LS_SIZE - 1`).
 pub const LS_MASK: u32 = (LS_SIZE as u32) - 1;
 
 /// What executing one instruction did besides writing registers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Effect {
+    /// Nothing special: execution goes on at the next instruction.
     Next,
     /// A branch instruction: where it went when taken.
     Branch {
+        /// Whether the branch was taken.
         taken: bool,
+        /// The local-store address it went to when taken.
         target: u32,
     },
     /// A quadword store to this (aligned) local-store address.
     Store {
+        /// The quadword's local-store byte address (a multiple of 16).
         addr: u32,
     },
+    /// A branch hint (`hbr`, `hbra`, `hbrr`; not `hbrp`).
     Hint {
+        /// Local-store address of the hinted branch.
         branch: u32,
+        /// Local-store address the hint predicts the branch goes to.
         target: u32,
     },
+    /// `stop`: the SPU stops with this 14-bit stop-and-signal code.
     Stop(u16),
+    /// A halt instruction (`heq`, `hgt`, `hlgt` and their immediate forms) whose condition held.
     Halt,
     /// Channel instructions are carried out by the SPU, not here (but for the writes of
     /// the MFC command parameters, [`MfcParams`]).
     Channel,
+    /// A word that decodes to no operation.
     Illegal,
 }
 
 impl Core {
+    /// A core with every register and the whole local store zero, interrupts disabled.
     pub fn new() -> Core {
         Core {
             regs: [[0; 4]; 128],
@@ -212,6 +237,7 @@ impl Core {
     }
 
     #[inline(always)]
+    /// The quadword at local-store byte address `addr` (wrapped into the local store, low 4 bits ignored).
     pub fn load_quad(&self, addr: u32) -> Reg {
         let a = (addr & LS_MASK & !15) as usize;
         let q: &[u8; 16] = self.ls[a..a + 16].try_into().unwrap();
@@ -221,6 +247,7 @@ impl Core {
     }
 
     #[inline(always)]
+    /// Stores `v` at local-store byte address `addr` (wrapped, low 4 bits ignored); returns the aligned address written.
     pub fn store_quad(&mut self, addr: u32, v: Reg) -> u32 {
         let a = (addr & LS_MASK & !15) as usize;
         let q: &mut [u8; 16] = (&mut self.ls[a..a + 16]).try_into().unwrap();

@@ -17,12 +17,14 @@ pub struct MainMemory {
 }
 
 impl MainMemory {
+    /// Main memory holding `bytes` (effective address 0 is the first byte), with an idle memory interface.
     pub fn new(bytes: Vec<u8>) -> Self {
         MainMemory {
             bytes,
             bus_busy_until: 0.0,
         }
     }
+    /// Main memory of `len` zero bytes.
     pub fn zeroed(len: usize) -> Self {
         MainMemory::new(vec![0; len])
     }
@@ -36,18 +38,23 @@ impl MainMemory {
     pub fn bus_busy_until(&self) -> u64 {
         self.bus_busy_until.ceil() as u64
     }
+    /// Size of main memory in bytes.
     pub fn len(&self) -> usize {
         self.bytes.len()
     }
+    /// Whether main memory has no bytes.
     pub fn is_empty(&self) -> bool {
         self.bytes.is_empty()
     }
+    /// The whole of main memory, indexed by effective address.
     pub fn bytes(&self) -> &[u8] {
         &self.bytes
     }
+    /// The whole of main memory, writable (for the host to set up inputs).
     pub fn bytes_mut(&mut self) -> &mut [u8] {
         &mut self.bytes
     }
+    /// The big-endian word at effective address `addr`, or 0 if it is not all inside main memory.
     pub fn read_u32(&self, addr: u32) -> u32 {
         let a = addr as usize;
         self.bytes
@@ -55,15 +62,18 @@ impl MainMemory {
             .map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]))
             .unwrap_or(0)
     }
+    /// Writes `value` big-endian at effective address `addr`; ignored if it is not all inside main memory.
     pub fn write_u32(&mut self, addr: u32, value: u32) {
         let a = addr as usize;
         if let Some(b) = self.bytes.get_mut(a..a + 4) {
             b.copy_from_slice(&value.to_be_bytes());
         }
     }
+    /// The big-endian single-precision float at effective address `addr` (0.0 outside main memory).
     pub fn read_f32(&self, addr: u32) -> f32 {
         f32::from_bits(self.read_u32(addr))
     }
+    /// Writes `value` as a big-endian single-precision float at `addr`; ignored outside main memory.
     pub fn write_f32(&mut self, addr: u32, value: f32) {
         self.write_u32(addr, value.to_bits())
     }

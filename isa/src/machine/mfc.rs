@@ -33,8 +33,11 @@ pub(super) enum WriteKind {
 /// PROBLEM_STATE_OFFSET`), with SPU_Sig_Notify_1 and _2 at their problem-state offsets
 /// 0x1400C and 0x1C00C (Cell BE Handbook, problem-state register map).
 pub const RAW_SPU_BASE: u32 = 0xE000_0000;
+/// Bytes between consecutive raw SPUs' areas.
 pub const RAW_SPU_STRIDE: u32 = 0x10_0000;
+/// Offset of the problem-state registers within a raw SPU's area, in bytes.
 pub const PROBLEM_STATE_OFFSET: u32 = 0x4_0000;
+/// Offsets of SPU_Sig_Notify_1 and _2 within the problem-state area, in bytes.
 pub const SIG_NOTIFY_OFFSETS: [u32; 2] = [0x1_400C, 0x1_C00C];
 
 /// The effective address of signal-notification register `which` (0 or 1) of the SPU with
@@ -464,10 +467,12 @@ pub struct Traffic {
     pub regions: Vec<(u64, u64)>,
     /// Bytes read (gets) and written (puts) per region.
     pub read: Vec<u64>,
+    /// Bytes written (puts) per region, in the order of `regions`.
     pub written: Vec<u64>,
 }
 
 impl Traffic {
+    /// Counters for `regions` (`(start, end)` effective addresses, end exclusive), all zero.
     pub fn new(regions: Vec<(u64, u64)>) -> Traffic {
         let n = regions.len();
         Traffic {

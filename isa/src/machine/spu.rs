@@ -24,40 +24,57 @@ pub enum StopReason {
     Stop(u16),
     /// A halt instruction's condition held.
     Halt {
+        /// Local-store address of the halt instruction.
         pc: u32,
     },
+    /// A word that decodes to no instruction was executed.
     IllegalInstruction {
+        /// Local-store address of the word.
         pc: u32,
+        /// The instruction word itself.
         word: u32,
     },
     /// An MFC command the hardware would reject: the command, the local-store address,
     /// effective address, size and tag it was issued with (for a list, those of the
     /// offending element), and why.
     DmaError {
+        /// Local-store address of the channel instruction that issued the command.
         pc: u32,
+        /// The MFC command opcode.
         cmd: u8,
+        /// The local-store byte address.
         lsa: u32,
+        /// The main-memory effective address.
         ea: u64,
+        /// The transfer size in bytes.
         size: u32,
+        /// The tag group.
         tag: u32,
+        /// Why the command is rejected.
         reason: String,
     },
     /// A channel instruction named a channel the SPU does not have, or read a write
     /// channel or wrote a read channel (the hardware's "invalid channel" stop, SPU_Status
     /// bit IC).
     InvalidChannel {
+        /// Local-store address of the channel instruction.
         pc: u32,
+        /// The channel number it named.
         channel: u8,
     },
     /// Blocked on a channel nothing will ever make ready.
     Deadlock {
+        /// Local-store address of the channel instruction.
         pc: u32,
+        /// The channel it waits on.
         channel: u8,
     },
     /// Waiting on a channel only the host can serve (a mailbox or signal): resumable.
     Blocked {
+        /// The channel it waits on.
         channel: u8,
     },
+    /// The run reached the cycle limit it was given.
     CycleLimit,
 }
 
@@ -95,6 +112,7 @@ impl std::fmt::Display for StopReason {
 
 /// One SPU.
 pub struct Spu {
+    /// The SPU's number (0-based), which also places its signal-notification registers in the raw-SPU map.
     pub index: u32,
     pub(super) core: Core,
     pub(super) decoded: Box<[Inst; LS_SIZE / 4]>,
@@ -212,6 +230,7 @@ pub(super) fn invalidate_quad(
 }
 
 impl Spu {
+    /// SPU number `index`, reset: registers and local store zero, program counter 0, no timing model.
     pub fn new(index: u32) -> Spu {
         Spu {
             index,
@@ -310,22 +329,27 @@ impl Spu {
         fresh
     }
 
+    /// The program counter: the local-store address of the next instruction.
     pub fn pc(&self) -> u32 {
         self.pc
     }
 
+    /// Sets the program counter (wrapped into the local store and aligned to a word).
     pub fn set_pc(&mut self, pc: u32) {
         self.pc = pc & LS_MASK & !3;
     }
 
+    /// Register `n` (taken modulo 128).
     pub fn reg(&self, n: usize) -> Reg {
         self.core.regs[n & 127]
     }
 
+    /// Sets register `n` (taken modulo 128) to `value`.
     pub fn set_reg(&mut self, n: usize, value: Reg) {
         self.core.regs[n & 127] = value;
     }
 
+    /// The whole 256 KiB local store, indexed by local-store byte address.
     pub fn ls(&self) -> &[u8] {
         &self.core.ls[..]
     }
@@ -349,22 +373,27 @@ impl Spu {
         self.redecode(addr, bytes.len() as u32);
     }
 
+    /// Instructions executed so far.
     pub fn instructions(&self) -> u64 {
         self.instructions
     }
 
+    /// The SPU's clock in cycles: the timing model's cycle when it is on, one per instruction otherwise.
     pub fn cycles(&self) -> u64 {
         self.cycle
     }
 
+    /// The floating-point status and control register.
     pub fn fpscr(&self) -> &crate::float::Fpscr {
         &self.core.fpscr
     }
 
+    /// The timing model, if [`Spu::enable_timing`] turned it on.
     pub fn timing(&self) -> Option<&Timing> {
         self.timing.as_ref()
     }
 
+    /// The timing model, writable, if it is on.
     pub fn timing_mut(&mut self) -> Option<&mut Timing> {
         self.timing.as_mut()
     }

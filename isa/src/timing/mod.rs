@@ -263,6 +263,7 @@ impl Last {
 /// Per-issue detail of one instruction, for the static `spu timing` listing and tests.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct IssueRecord {
+    /// Local-store address of the instruction.
     pub pc: u32,
     /// The cycle it issued.
     pub issue: u64,
@@ -278,6 +279,7 @@ pub struct IssueRecord {
 /// The per-SPU pipeline model.
 #[derive(Clone, Debug)]
 pub struct Timing {
+    /// The latencies and rules this model was built with.
     pub config: TimingConfig,
     classes: &'static [OpClass],
     /// The earliest cycle the next instruction may issue, ignoring stalls.
@@ -344,6 +346,7 @@ impl Fetch {
 }
 
 impl Timing {
+    /// A model at cycle 0 with every register ready, using `config`.
     pub fn new(config: TimingConfig) -> Self {
         Timing {
             config,
