@@ -45,14 +45,17 @@ pub struct CodeCache;
 
 #[cfg(not(block_compiler))]
 impl CodeCache {
+    /// An empty cache (there is nothing to put in it).
     pub fn new() -> CodeCache {
         CodeCache
     }
 
+    /// An empty cache; how it would compile does not matter without a compiler.
     pub fn with(_compiling: Compiling) -> CodeCache {
         CodeCache
     }
 
+    /// Compilations finished: always 0.
     pub fn completed(&self) -> u64 {
         0
     }
@@ -62,6 +65,7 @@ impl CodeCache {
         Compiling::Inline
     }
 
+    /// The compiler's work: none.
     pub fn stats(&self) -> JitStats {
         JitStats::default()
     }
