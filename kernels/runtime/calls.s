@@ -6,22 +6,33 @@
         .set    C99, 0x2100
         .set    POSIX1, 0x2101
 
-# NAME(a0, ..., a[NARGS-1]): opcode OP of CLASS.
-        .macro  PPE_CALL name, class, op, nargs
+# The entry of NAME: a global function that saves its link register in the caller's frame.
+        .macro  ENTRY name
         .text
         .global \name
         .type   \name, @function
 \name:
         stqd    $0, 16($1)
-        stqd    $1, -128($1)
-        ai      $1, $1, -128
-        .set    .Lreg, 3
-        .set    .Loff, 32
-        .rept   \nargs
+        .endm
+
+# Stores COUNT argument registers from $.Lreg on, one per quadword from .Loff($1) on,
+# leaving .Lreg and .Loff past them.
+        .macro  STORE_ARGS count
+        .rept   \count
         stqd    .Lreg, .Loff($1)
         .set    .Lreg, .Lreg + 1
         .set    .Loff, .Loff + 16
         .endr
+        .endm
+
+# NAME(a0, ..., a[NARGS-1]): opcode OP of CLASS.
+        .macro  PPE_CALL name, class, op, nargs
+        ENTRY   \name
+        stqd    $1, -128($1)
+        ai      $1, $1, -128
+        .set    .Lreg, 3
+        .set    .Loff, 32
+        STORE_ARGS \nargs
         il      $3, \class
         il      $4, \op
         ai      $5, $1, 32
@@ -38,11 +49,7 @@
 # the arguments the caller passed on its stack; the block holds the named arguments and
 # the va_list (32 bytes).
         .macro  PPE_VACALL name, op, named
-        .text
-        .global \name
-        .type   \name, @function
-\name:
-        stqd    $0, 16($1)
+        ENTRY   \name
         .set    .Lsave, (72 - \named) * 16
         .set    .Lframe, 32 + 96 + .Lsave
         stqd    $1, -.Lframe($1)
@@ -50,17 +57,9 @@
         sf      $1, $75, $1
         .set    .Lreg, 3
         .set    .Loff, 32
-        .rept   \named
-        stqd    .Lreg, .Loff($1)
-        .set    .Lreg, .Lreg + 1
-        .set    .Loff, .Loff + 16
-        .endr
+        STORE_ARGS \named
         .set    .Loff, 128
-        .rept   72 - \named
-        stqd    .Lreg, .Loff($1)
-        .set    .Lreg, .Lreg + 1
-        .set    .Loff, .Loff + 16
-        .endr
+        STORE_ARGS 72 - \named
         .set    .Lva, 32 + 16 * \named
         ai      $6, $1, 128             # the first unnamed argument
         stqd    $6, .Lva($1)
@@ -81,20 +80,12 @@
 # NAME(a0, ..., a[NAMED-1], va_list ap): the vprintf family; ap points to the 32-byte
 # va_list, copied into the block after the named arguments.
         .macro  PPE_VCALL name, op, named
-        .text
-        .global \name
-        .type   \name, @function
-\name:
-        stqd    $0, 16($1)
+        ENTRY   \name
         stqd    $1, -128($1)
         ai      $1, $1, -128
         .set    .Lreg, 3
         .set    .Loff, 32
-        .rept   \named
-        stqd    .Lreg, .Loff($1)
-        .set    .Lreg, .Lreg + 1
-        .set    .Loff, .Loff + 16
-        .endr
+        STORE_ARGS \named
         lqd     $6, 0(.Lreg)
         lqd     $7, 16(.Lreg)
         stqd    $6, .Loff($1)
