@@ -16,7 +16,10 @@
 //! - [`timeline`]: when each tile and packet was traced, from the SPUs' event logs.
 //! - [`render`]: the one render API (configuration, prepared scene, frame, validation)
 //!   over [`runtime`], the frame programs ([`variants`], [`kernels`]) and [`frame`]'s layout.
-//! - [`ppe`]: how `spu run` starts a program and serves its PPE-assisted library calls.
+//! - [`ppe`]: the SPU runtime `spu as --runtime` links with a program.
+//!
+//! The SPUs, their main memory, quanta and host threads are the SPE runtime's
+//! ([`spu_spe::System`]); [`runtime`] runs a frame's SPUs on it.
 
 pub mod bvh;
 pub mod camera;
@@ -35,7 +38,6 @@ pub use error::LoadError;
 pub use layout::StagedScene;
 pub use scene::{Material, Scene, Triangle};
 pub mod frame;
-mod gang;
 pub mod kernel_abi;
 pub mod kernel_image;
 pub mod kernels;

@@ -301,8 +301,9 @@ pub fn run_frame(
     frame: &Frame,
     progress: &mut dyn FnMut(u32, u32),
 ) -> Result<FrameRun, FrameError> {
-    use crate::gang::Next;
-    use spu_isa::machine::{apply_quantum, MainMemory, Spu, StopReason};
+    use spu_isa::machine::{MainMemory, StopReason};
+    use spu_spe::{ContextConfig, Outcome, Quantum, State, System};
+    use std::ops::ControlFlow;
     let Frame {
         staged,
         layout,
@@ -327,70 +328,76 @@ pub fn run_frame(
         check_leaves_fit(staged)?;
     }
     let regions = traffic_regions(staged, layout);
-    let memory = MainMemory::new(layout.memory_image(staged));
+    let mut system = System::with_memory(MainMemory::new(layout.memory_image(staged)));
+    system.set_quantum(Quantum::Aligned(QUANTUM_CYCLES));
+    system.set_threads(threads);
     // The SPEs run the same kernel: each block is compiled once for all of them.
     let compiled_before = code.stats();
-    let mut spus: Vec<Spu> = (0..spes)
-        .map(|i| {
-            let mut spu = Spu::new(i as u32);
-            spu.set_engine(frame.engine);
-            spu.share_code(code);
-            spu.load_image(&program.image);
-            spu.set_pc(program.entry);
-            spu.set_reg(3, [i as u32, 0, 0, 0]);
-            spu.set_reg(4, [layout.param_addr, 0, 0, 0]);
-            if frame.timed {
-                spu.enable_timing(frame.timing.clone());
-            }
-            spu.count_traffic(regions.iter().map(|(_, s, e)| (*s, *e)).collect());
-            if frame.event_log {
-                spu.enable_event_log();
-            }
-            spu
-        })
-        .collect();
-    let mut finished: Vec<Option<u64>> = vec![None; spes];
-    let mut memory = memory;
-    let mut until = 0u64;
-    crate::gang::run_quanta(&mut spus, &mut memory, threads, |spus, memory, outcomes| {
-        if let Some(outcomes) = outcomes {
-            apply_quantum(spus, memory);
-            for (i, outcome) in outcomes.into_iter().enumerate() {
-                match outcome {
-                    None => {}
-                    Some(StopReason::Stop(code)) if code == STOP_DONE => {
-                        if spus[i].read_outbound_mailbox() != Some(1) {
-                            return Err(FrameError::SpuStopped {
-                                spu: i,
-                                reason: "without its end-of-frame message".into(),
-                            });
-                        }
-                        finished[i] = Some(spus[i].cycles());
-                    }
-                    Some(StopReason::Blocked { .. }) => {}
-                    Some(other) => {
-                        return Err(FrameError::SpuStopped {
-                            spu: i,
-                            reason: other.to_string(),
-                        })
-                    }
+    for i in 0..spes {
+        let id = system.create_context(ContextConfig {
+            engine: frame.engine,
+            timing: frame.timed.then(|| frame.timing.clone()),
+            code: Some(code.clone()),
+        });
+        let spu = system.spu_mut(id);
+        spu.load_image(&program.image);
+        spu.set_pc(program.entry);
+        spu.set_reg(3, [i as u32, 0, 0, 0]);
+        spu.set_reg(4, [layout.param_addr, 0, 0, 0]);
+        spu.count_traffic(regions.iter().map(|(_, s, e)| (*s, *e)).collect());
+        if frame.event_log {
+            spu.enable_event_log();
+        }
+    }
+    let done = |state: &State| *state == State::Stopped(StopReason::Stop(STOP_DONE));
+    let outcome = system.run_observed(max_cycles, |memory, states| {
+        let taken = memory
+            .read_u32(layout.counter_addr)
+            .min(layout.params.num_tiles);
+        progress(taken, layout.params.num_tiles);
+        // An SPU that stopped any other way ends the frame at once.
+        match states
+            .iter()
+            .any(|s| !done(s) && !matches!(s, State::Runnable | State::Waiting { .. }))
+        {
+            true => ControlFlow::Break(()),
+            false => ControlFlow::Continue(()),
+        }
+    });
+    let contexts: Vec<_> = system.contexts().collect();
+    for (i, &id) in contexts.iter().enumerate() {
+        let reason = match system.state(id).clone() {
+            state if done(&state) => {
+                if system.read_out_mbox(id) == Some(1) {
+                    continue;
                 }
+                "without its end-of-frame message".to_string()
             }
-            let taken = memory
-                .read_u32(layout.counter_addr)
-                .min(layout.params.num_tiles);
-            progress(taken, layout.params.num_tiles);
+            State::Runnable => continue,
+            State::Waiting { channel, pc } => format!(
+                "deadlock at {pc:#x} on channel {}",
+                channel.number()
+            ),
+            State::Stopped(other) => other.to_string(),
+            State::Faulted { message, .. } => message,
+        };
+        if outcome != Outcome::CycleLimit {
+            return Err(FrameError::SpuStopped { spu: i, reason });
         }
-        if finished.iter().all(|f| f.is_some()) {
-            return Ok(Next::Done);
-        }
-        until = until.saturating_add(QUANTUM_CYCLES);
-        if until > max_cycles {
-            return Err(FrameError::CycleLimit(max_cycles));
-        }
-        let running = finished.iter().map(|f| f.is_none()).collect();
-        Ok(Next::Run { until, running })
-    })?;
+    }
+    if outcome == Outcome::CycleLimit {
+        return Err(FrameError::CycleLimit(max_cycles));
+    }
+    let finished: Vec<Option<u64>> = contexts
+        .iter()
+        .map(|&id| Some(system.spu(id).cycles()))
+        .collect();
+    let events = contexts
+        .iter()
+        .map(|&id| system.spu_mut(id).take_events())
+        .collect();
+    let spus: Vec<&spu_isa::machine::Spu> = contexts.iter().map(|&id| system.spu(id)).collect();
+    let memory = system.memory();
     let stats_base = layout.stats_addr as usize;
     let spus_report = spus
         .iter()
@@ -423,7 +430,6 @@ pub fn run_frame(
             }
         }
     }
-    let events = spus.iter_mut().map(|spu| spu.take_events()).collect();
     let shadow_rays = match &layout.shading {
         Some(_) => {
             let at = layout.params.ls_shading as usize
@@ -467,7 +473,7 @@ pub fn run_frame(
         .collect();
     // The frame buffer ends main memory: taken out of it, moved down rather than copied
     // into fresh pages (a 1024x1024 frame's is 12 MB).
-    let mut frame_buffer = memory.into_bytes();
+    let mut frame_buffer = system.into_memory().into_bytes();
     frame_buffer.truncate(fb + layout.frame_buffer_len);
     frame_buffer.drain(..fb);
     Ok(FrameRun {

@@ -11,13 +11,12 @@
 //! against local store first: a bad one, an unknown class or opcode, or `%n` stops the
 //! program with a [`Fault`] (`spu run` exits 134).
 
-pub mod c99;
+pub(crate) mod c99;
 pub mod errno;
-pub mod format;
-pub mod posix1;
-pub mod runtime;
-pub mod sandbox;
-pub mod scan;
+pub(crate) mod format;
+pub(crate) mod posix1;
+pub(crate) mod sandbox;
+pub(crate) mod scan;
 pub mod start;
 
 use spu_isa::machine::Spu;
@@ -43,7 +42,7 @@ impl std::fmt::Display for Fault {
 }
 
 /// Local store as a call's handler reads it: every access checked.
-pub struct Ls<'a> {
+pub(crate) struct Ls<'a> {
     bytes: &'a [u8],
 }
 
@@ -86,7 +85,7 @@ impl<'a> Ls<'a> {
 }
 
 /// Checks that `[addr, addr + len)` lies inside local store.
-pub fn check(addr: u32, len: u64, what: &str) -> Result<(), Fault> {
+pub(crate) fn check(addr: u32, len: u64, what: &str) -> Result<(), Fault> {
     if addr as u64 + len > LS_SIZE as u64 {
         return Err(Fault(format!(
             "{what}: {len} bytes at {addr:#x} lie outside local store (0..{LS_SIZE:#x})"
@@ -96,7 +95,7 @@ pub fn check(addr: u32, len: u64, what: &str) -> Result<(), Fault> {
 }
 
 /// One call's arguments: quadword `n` of the block at `base`.
-pub struct Args<'a> {
+pub(crate) struct Args<'a> {
     pub ls: Ls<'a>,
     pub base: u32,
 }
@@ -112,7 +111,7 @@ impl Args<'_> {
 }
 
 /// A call's outcome: the return value and errno written back to the program.
-pub struct Reply {
+pub(crate) struct Reply {
     pub rc: u32,
     pub errno: i32,
 }
@@ -131,10 +130,10 @@ impl Reply {
 }
 
 /// A local-store write a handler asks for (made after the handler returns).
-pub type Writes = Vec<(u32, Vec<u8>)>;
+pub(crate) type Writes = Vec<(u32, Vec<u8>)>;
 
 /// The host's side of every call: the sandbox and the open streams and descriptors.
-pub struct Host {
+pub(crate) struct Host {
     pub sandbox: sandbox::Sandbox,
     pub c99: c99::Streams,
     pub posix1: posix1::Fds,
@@ -191,6 +190,6 @@ impl Host {
 }
 
 /// The errno of a host I/O error, as the SPU's newlib numbers it (Linux's numbers).
-pub fn io_errno(e: &std::io::Error) -> i32 {
+pub(crate) fn io_errno(e: &std::io::Error) -> i32 {
     e.raw_os_error().unwrap_or(errno::EIO)
 }

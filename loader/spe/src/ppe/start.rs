@@ -31,10 +31,18 @@ pub const SPEID: u64 = 0x0000_0000_5350_4530;
 #[derive(Clone, Debug)]
 pub enum Start {
     /// From a shell through `elfspe`: `main(argc, argv)`; `args[0]` is the program's name.
-    Shell { args: Vec<Vec<u8>> },
+    Shell {
+        /// The arguments, the program's name first.
+        args: Vec<Vec<u8>>,
+    },
     /// Through `spe_context_run(ctx, &entry, 0, argp, envp, ...)`: `main(speid, argp,
     /// envp)`.
-    Api { argp: u64, envp: u64 },
+    Api {
+        /// `$4`: the argument pointer (an effective address, as a rule).
+        argp: u64,
+        /// `$5`: the environment pointer.
+        envp: u64,
+    },
 }
 
 /// The argv region `elfspe` builds.
@@ -44,6 +52,7 @@ pub struct ArgvRegion {
     pub ls: u32,
     /// Where it lies in main memory.
     pub ea: u64,
+    /// The pointers and strings.
     pub bytes: Vec<u8>,
 }
 
@@ -52,6 +61,7 @@ pub struct ArgvRegion {
 pub struct Entry {
     /// Every register that is not zero at entry, in order.
     pub regs: Vec<(usize, [u32; 4])>,
+    /// The argv region of a [`Start::Shell`] start.
     pub argv: Option<ArgvRegion>,
 }
 
