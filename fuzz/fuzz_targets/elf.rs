@@ -9,7 +9,7 @@ thread_local! {
 }
 
 fuzz_target!(|data: &[u8]| {
-    if let Ok(elf) = spu_asm::elf::read_elf(data) {
+    if let Ok(elf) = spu_spe::elf::read_elf(data) {
         let segments: Vec<(u32, &[u8])> = elf
             .segments
             .iter()

@@ -2,7 +2,8 @@
 //! (`layout.inc`: the frame layout and the kernel ABI; the kernel modules), and come back
 //! out of their ELF.
 
-use spu_asm::{assemble, elf::read_elf, Options};
+use spu_asm::{assemble, Options};
+use spu_spe::elf::read_elf;
 
 fn options() -> Options {
     Options {

@@ -18,7 +18,7 @@ pub fn run(args: Args) -> crate::exit::Result<ExitCode> {
     let bytes = crate::options::read_input(&args.file, crate::options::MAX_PROGRAM_BYTES)?;
     let name = args.file.display();
     if !args.raw && bytes.starts_with(b"\x7fELF") {
-        let elf = spu_asm::elf::read_elf(&bytes).map_err(|e| format!("{name}: {e}"))?;
+        let elf = spu_spe::elf::read_elf(&bytes).map_err(|e| format!("{name}: {e}"))?;
         // objdump names an address after a symbol of its section, a global one before
         // local labels; absolute symbols name nothing.
         let symbols = SymbolTable::ranked(

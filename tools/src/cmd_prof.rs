@@ -4,7 +4,7 @@
 
 use crate::exit::{self, Status};
 use crate::options;
-use spu_isa::machine::MainMemory;
+use spu_spe::{ContextConfig, Start, System};
 use spu_isa::profile::{annotated_listing, executed_lines, listing_json, ListingOptions};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -36,9 +36,8 @@ pub struct Args {
 pub fn run(args: Args) -> exit::Result<ExitCode> {
     options::max_cycles(args.max_cycles)?;
     let memory_bytes = options::memory(args.memory)?;
-    let (mut spu, symbols) = crate::cmd_run::load(&args.file)?;
-    spu.set_engine(args.engine);
-    spu.share_code(&args.compile.cache());
+    let program = crate::cmd_run::load(&args.file)?;
+    let symbols = &program.symbols;
     let address_of = |name: &str| symbols.iter().find(|(n, _)| n == name).map(|(_, a)| *a);
     let range = match &args.range {
         Some(r) => {
@@ -56,15 +55,37 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         }
         None => None,
     };
-    spu.enable_timing(Default::default());
-    let mut memory = MainMemory::zeroed(memory_bytes);
-    let stop = spu.run(&mut memory, args.max_cycles);
+    // Started as `spu run` starts it, its PPE-assisted calls served.
+    let mut system = System::new(memory_bytes);
+    let id = system.create_context(ContextConfig {
+        engine: args.engine,
+        timing: Some(Default::default()),
+        code: Some(args.compile.cache()),
+    });
+    let start = Start::Shell {
+        args: vec![args.file.as_os_str().as_encoded_bytes().to_vec()],
+    };
+    system
+        .load(id, &program, &start)
+        .map_err(|e| format!("{}: {e}", args.file.display()))?;
+    let outcome = system.run(args.max_cycles);
+    let stop = match crate::cmd_run::final_stop(&system, id, &outcome) {
+        Ok(stop) => stop,
+        Err((pc, fault)) => {
+            eprintln!(
+                "spu: {}: the program stopped at {pc:#x}: {fault}",
+                args.file.display()
+            );
+            return Ok(Status::AbnormalStop.into());
+        }
+    };
+    let spu = system.spu(id);
     let profile = spu
         .timing()
         .map(|t| t.finish_profile())
         .ok_or_else(|| exit::Error::failure("timing was not enabled"))?;
     // Every executed address, with its labels and disassembly, in address order.
-    let lines = executed_lines(&profile, spu.ls(), &symbols);
+    let lines = executed_lines(&profile, spu.ls(), symbols);
     let opts = ListingOptions {
         range,
         executed_only: true,

@@ -3,7 +3,8 @@
 use crate::exit::{self, Error, Status};
 use crate::options;
 use spu_isa::disasm::{instruction_text, SymbolTable};
-use spu_isa::machine::{MainMemory, Spu, StopReason};
+use spu_isa::machine::StopReason;
+use spu_spe::{ContextConfig, ContextId, Outcome, Program, Start, State, System};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -74,66 +75,48 @@ fn number(text: &str) -> Result<u64, String> {
     v.map_err(|_| format!("bad number `{text}`"))
 }
 
-/// Loads FILE into a fresh SPU.
-pub fn load(file: &Path) -> Result<(Spu, Vec<(String, u32)>), String> {
-    load_program(file).map(|(spu, symbols, _)| (spu, symbols))
-}
-
-/// A loaded program: the SPU, its symbols and where its code and data end.
-type Loaded = (Spu, Vec<(String, u32)>, u32);
-
-/// Loads FILE into a fresh SPU; also where its code and data end.
-fn load_program(file: &std::path::Path) -> Result<Loaded, String> {
-    let name = file.display();
-    let mut spu = Spu::new(0);
-    let mut symbols = Vec::new();
-    let end;
-    if file.extension().is_some_and(|e| e == "s" || e == "S") {
+/// Reads FILE: a `.s` source is assembled; anything else must be an SPU ELF or a raw
+/// image, checked before anything runs ([`Program::from_file`]: segments inside local
+/// store and apart, no empty or text files).
+pub fn load(file: &Path) -> Result<Program, String> {
+    if file.extension().is_some_and(|e| e == "s") {
         let out = spu_asm::assemble_file(file, &Default::default()).map_err(|d| {
             d.iter()
                 .map(|x| x.to_string())
                 .collect::<Vec<_>>()
                 .join("\n")
         })?;
-        spu.load_image(&out.image);
-        spu.set_pc(out.entry);
-        symbols = out.symbols;
-        end = out.image.len() as u32;
-    } else {
-        let bytes = options::read_input(file, options::MAX_PROGRAM_BYTES)?;
-        if bytes.starts_with(b"\x7fELF") {
-            let elf = spu_asm::elf::read_elf(&bytes).map_err(|e| format!("{name}: {e}"))?;
-            let segments: Vec<(u32, &[u8])> = elf
-                .segments
-                .iter()
-                .map(|(a, d)| (*a, d.as_slice()))
-                .collect();
-            spu.load_segments(&segments, elf.entry);
-            end = elf
-                .segments
-                .iter()
-                .map(|(a, d)| a + d.len() as u32)
-                .max()
-                .unwrap_or(0);
-            symbols = elf.symbols;
-        } else {
-            if bytes.len() > 256 * 1024 {
-                return Err(format!(
-                    "{name}: {} bytes do not fit the 256 KiB local store",
-                    bytes.len()
-                ));
-            }
-            spu.load_image(&bytes);
-            end = bytes.len() as u32;
-        }
+        return Ok(Program {
+            segments: vec![(0, out.image)],
+            entry: out.entry,
+            symbols: out.symbols,
+        });
     }
-    Ok((spu, symbols, end))
+    Program::from_file(file).map_err(|e| e.to_string())
+}
+
+/// How the run of the program's one context ended, as the SPU's stop: a wait the command
+/// cannot serve (its mailbox values are spent) is a deadlock. `Err`: a PPE-assisted call
+/// refused what the program asked (the `stop`'s address and why).
+pub fn final_stop(
+    system: &System,
+    id: ContextId,
+    outcome: &Outcome,
+) -> Result<StopReason, (u32, String)> {
+    match (outcome, system.state(id)) {
+        (_, State::Faulted { pc, message }) => Err((*pc, message.clone())),
+        (_, State::Stopped(stop)) => Ok(stop.clone()),
+        (_, State::Waiting { channel, pc }) => Ok(StopReason::Deadlock {
+            pc: *pc,
+            channel: channel.number(),
+        }),
+        (_, State::Runnable) => Ok(StopReason::CycleLimit),
+    }
 }
 
 /// How the program starts: as `elfspe` ran it from a shell, or through the libspe2 API
 /// with `--argp`/`--envp`.
-fn start_mode(args: &Args) -> exit::Result<spu_loader::ppe::start::Start> {
-    use spu_loader::ppe::start::Start;
+fn start_mode(args: &Args) -> exit::Result<Start> {
     if let Some(argp) = &args.argp {
         if !args.program_args.is_empty() {
             return Err(Error::input(
@@ -199,50 +182,52 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             u32::try_from(value).map_err(|_| format!("--mbox-in {v}: does not fit in 32 bits"))?;
         mailbox.push(value);
     }
-    let (mut spu, symbols, program_end) = load_program(&args.file)?;
-    spu.set_engine(args.engine);
-    spu.share_code(&args.compile.cache());
+    let program = load(&args.file)?;
     let start = start_mode(&args)?;
-    let mut memory = MainMemory::zeroed(memory_bytes);
-    let entry = spu_loader::ppe::start::prepare(&start, program_end, memory.len())
+    let mut system = System::new(memory_bytes);
+    let id = system.create_context(ContextConfig {
+        engine: args.engine,
+        timing: args.timing.then(Default::default),
+        code: Some(args.compile.cache()),
+    });
+    let entry = system
+        .load(id, &program, &start)
         .map_err(|e| format!("{}: {e}", args.file.display()))?;
-    spu_loader::ppe::start::apply(&entry, &mut spu, &mut memory);
     if args.dump_entry {
         dump_entry(&entry)?;
     }
     for value in mailbox {
-        if !spu.write_inbound_mailbox(value) {
+        if !system.write_in_mbox(id, value) {
             return Err(Error::input(
                 "--mbox-in: the inbound mailbox holds 4 values",
             ));
         }
     }
-    if args.timing {
-        spu.enable_timing(Default::default());
-    }
-    let mut host = spu_loader::ppe::Host::new(args.root.as_deref())?;
-    let symbols = SymbolTable::new(symbols.iter().map(|(n, a)| (*a, n.clone())).collect());
+    system.set_root(args.root.as_deref())?;
+    let symbols = SymbolTable::new(
+        program
+            .symbols
+            .iter()
+            .map(|(n, a)| (*a, n.clone()))
+            .collect(),
+    );
     // PPE-assisted calls (stop 0x2100..0x21ff) are served and the program resumed.
-    let stop = loop {
-        let stop = if args.trace {
-            trace(&mut spu, &mut memory, args.max_cycles, &symbols)?
-        } else {
-            spu.run(&mut memory, args.max_cycles)
-        };
-        match stop {
-            StopReason::Stop(code) if spu_loader::ppe::CALL_STOPS.contains(&code) => {
-                if let Err(fault) = host.serve(&mut spu, code) {
-                    eprintln!(
-                        "spu: {}: the program stopped at {:#x}: {fault}",
-                        args.file.display(),
-                        spu.pc().wrapping_sub(4)
-                    );
-                    return Ok(Status::AbnormalStop.into());
-                }
-            }
-            stop => break stop,
+    let outcome = if args.trace {
+        trace(&mut system, id, args.max_cycles, &symbols)?
+    } else {
+        system.run(args.max_cycles)
+    };
+    let stop = match final_stop(&system, id, &outcome) {
+        Ok(stop) => stop,
+        Err((pc, fault)) => {
+            eprintln!(
+                "spu: {}: the program stopped at {pc:#x}: {fault}",
+                args.file.display(),
+            );
+            return Ok(Status::AbnormalStop.into());
         }
     };
+    let spu = system.spu_mut(id);
     let out_mbox = spu.read_outbound_mailbox();
     if args.json {
         let report = RunReport {
@@ -284,7 +269,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
 }
 
 /// `--dump-entry`: the registers that are not zero at entry and the argv region.
-fn dump_entry(entry: &spu_loader::ppe::start::Entry) -> exit::Result<()> {
+fn dump_entry(entry: &spu_spe::ppe::start::Entry) -> exit::Result<()> {
     outln!("entry registers (all others zero):");
     for (n, r) in &entry.regs {
         outln!("${n}: {:08x} {:08x} {:08x} {:08x}", r[0], r[1], r[2], r[3]);
@@ -360,21 +345,23 @@ pub fn describe(stop: &StopReason) -> String {
 /// Runs one instruction at a time (no timing model: one cycle each), printing each one's
 /// address, text and the registers it changed.
 fn trace(
-    spu: &mut Spu,
-    memory: &mut MainMemory,
+    system: &mut System,
+    id: ContextId,
     max_cycles: u64,
     symbols: &SymbolTable,
-) -> exit::Result<StopReason> {
+) -> exit::Result<Outcome> {
     loop {
+        let spu = system.spu(id);
         if spu.cycles() >= max_cycles {
-            return Ok(StopReason::CycleLimit);
+            return Ok(Outcome::CycleLimit);
         }
         let pc = spu.pc();
         let at = pc as usize & (256 * 1024 - 4);
         let ls = spu.ls();
         let word = u32::from_be_bytes([ls[at], ls[at + 1], ls[at + 2], ls[at + 3]]);
         let before: Vec<_> = (0..128).map(|n| spu.reg(n)).collect();
-        let stop = spu.run(memory, spu.cycles() + 1);
+        let outcome = system.run(spu.cycles() + 1);
+        let spu = system.spu(id);
         let mut line = format!(
             "{pc:05x}: {word:08x}  {}",
             instruction_text(word, pc, symbols)
@@ -389,8 +376,8 @@ fn trace(
             }
         }
         outln!("{line}");
-        if stop != StopReason::CycleLimit {
-            return Ok(stop);
+        if outcome != Outcome::CycleLimit {
+            return Ok(outcome);
         }
     }
 }

@@ -3,7 +3,7 @@
 
 use crate::exit;
 use crate::options;
-use spu_isa::static_timing::{analyze_source, render_static, static_json};
+use spu_isa::static_timing::{analyze_source, render_static, static_json, StaticTiming};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -33,6 +33,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     let src =
         String::from_utf8(bytes).map_err(|_| format!("{}: not UTF-8 text", args.file.display()))?;
     let t = analyze_source(&src, args.label.as_deref())?;
+    check_operands(&args.file, &t)?;
     for (line, word) in t.unknown_statements() {
         eprintln!(
             "{}:{line}: warning: `{word}` is not an SPU instruction; not timed",
@@ -49,4 +50,31 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         None => out!("{text}"),
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Refuses an instruction `spu as` refuses (a register past `$127`, an immediate out of
+/// range, a bad operand), with the assembler's diagnostics, before timing anything: the
+/// timing of an instruction that does not assemble describes no program. Statements the
+/// timing does not time (reported as warnings) are left to the warnings.
+fn check_operands(file: &std::path::Path, timing: &StaticTiming) -> exit::Result<()> {
+    let Err(diagnostics) = spu_asm::assemble_object_file(file, &Default::default()) else {
+        return Ok(());
+    };
+    let name = file.display().to_string();
+    let timed = |line: usize| {
+        line >= 1 && timing.lines.get(line - 1).is_some_and(|l| !l.insts.is_empty())
+    };
+    let refused: Vec<String> = diagnostics
+        .iter()
+        .filter(|d| {
+            d.severity == spu_asm::Severity::Error
+                && d.location.file == name
+                && timed(d.location.line)
+        })
+        .map(|d| d.to_string())
+        .collect();
+    if refused.is_empty() {
+        return Ok(());
+    }
+    Err(exit::Error::input(refused.join("\n")))
 }
