@@ -98,6 +98,7 @@ pub(super) struct Memo {
     /// The blocks that followed a full replay, not taken and taken (see [`Chain`]).
     pub chain: [Chain; 2],
     /// What the core keeps with the record (its compiled code), zeros for nothing.
+    #[cfg_attr(not(block_compiler), allow(dead_code))]
     pub code: [u64; 3],
     /// The next record for the same start (another entry state): memo index + 1, 0 none.
     pub next: u32,
@@ -861,7 +862,7 @@ impl Timing {
     /// starting at `pc` with `inst` when the state matches its record and nothing else is
     /// in progress; nothing changes. Once the core ran it whole, [`Timing::block_replayed`].
     #[inline(always)]
-    pub fn block_replay_candidate(&mut self, pc: u32, inst: Inst) -> Option<(usize, usize)> {
+    pub(crate) fn block_replay_candidate(&mut self, pc: u32, inst: Inst) -> Option<(usize, usize)> {
         if !self.memo_between_blocks() || is_terminator(inst) {
             return None;
         }
@@ -892,7 +893,7 @@ impl Timing {
     /// reading its first word. The memo and its length, or `None` with nothing changed
     /// (then ask [`Timing::block_replay_candidate`]).
     #[inline(always)]
-    pub fn chained_replay_candidate(&mut self, pc: u32, epoch: u64) -> Option<(usize, usize)> {
+    pub(crate) fn chained_replay_candidate(&mut self, pc: u32, epoch: u64) -> Option<(usize, usize)> {
         if !self.memo_between_blocks() {
             return None;
         }
@@ -954,27 +955,29 @@ impl Timing {
     /// The words memo `id` recorded, and the core's code epoch at which local store last
     /// held them.
     #[inline]
-    pub fn memo_words(&self, id: usize) -> (&[u32], u64) {
+    pub(crate) fn memo_words(&self, id: usize) -> (&[u32], u64) {
         let m = &self.memo.memos[id];
         (&m.words, m.verified)
     }
 
     /// What the core kept with memo `id` ([`Timing::set_memo_code`]); zeros for nothing.
     #[inline]
-    pub fn memo_code(&self, id: usize) -> [u64; 3] {
+    #[cfg_attr(not(block_compiler), allow(dead_code))]
+    pub(crate) fn memo_code(&self, id: usize) -> [u64; 3] {
         self.memo.memos[id].code
     }
 
     /// Keeps `code` with memo `id` (the core's compiled code for the record's words), until
     /// the record is replaced.
     #[inline]
-    pub fn set_memo_code(&mut self, id: usize, code: [u64; 3]) {
+    #[cfg_attr(not(block_compiler), allow(dead_code))]
+    pub(crate) fn set_memo_code(&mut self, id: usize, code: [u64; 3]) {
         self.memo.memos[id].code = code;
     }
 
     /// Notes that local store held memo `id`'s words at code epoch `epoch`.
     #[inline]
-    pub fn set_memo_verified(&mut self, id: usize, epoch: u64) {
+    pub(crate) fn set_memo_verified(&mut self, id: usize, epoch: u64) {
         self.memo.memos[id].verified = epoch;
     }
 
@@ -1012,7 +1015,7 @@ impl Timing {
     /// instructions would have made them, and `branch` (its last instruction's address,
     /// whether it was taken and where to) resolves.
     #[inline(always)]
-    pub fn block_replayed(&mut self, id: usize, branch: Option<(u32, bool, u32)>) {
+    pub(crate) fn block_replayed(&mut self, id: usize, branch: Option<(u32, bool, u32)>) {
         let mut rp = self.block_entry(id);
         let m = &mut self.memo.memos[id];
         m.hits += 1;
@@ -1026,14 +1029,14 @@ impl Timing {
 
     /// The core ran the first `k` instructions of memo `id`'s block, the last of them an
     /// inner branch at `pc`, which was taken (to `target`).
-    pub fn block_left_at_branch(&mut self, id: usize, k: usize, pc: u32, target: u32) {
+    pub(crate) fn block_left_at_branch(&mut self, id: usize, k: usize, pc: u32, target: u32) {
         self.block_replayed_partly(id, k);
         self.resolve_branch(pc, true, target);
     }
 
     /// The core ran the first `k` instructions of memo `id`'s block and stopped (the rest
     /// go through `issue`).
-    pub fn block_replayed_partly(&mut self, id: usize, k: usize) {
+    pub(crate) fn block_replayed_partly(&mut self, id: usize, k: usize) {
         let mut rp = self.block_entry(id);
         rp.k = k;
         self.memo.replay = Some(rp);
@@ -1055,7 +1058,8 @@ impl Timing {
     /// there. The one part that does not settle that way, whether a hint the block does
     /// not set itself is far enough ahead of the branch, only grows from false to true,
     /// so it is required true.
-    pub fn steady_passes(&mut self, id: usize, pc: u32, inst: Inst, until: u64) -> u64 {
+    #[cfg_attr(not(block_compiler), allow(dead_code))]
+    pub(crate) fn steady_passes(&mut self, id: usize, pc: u32, inst: Inst, until: u64) -> u64 {
         if !self.memo_between_blocks() {
             return 0;
         }
@@ -1088,7 +1092,8 @@ impl Timing {
     /// [`Timing::steady_passes`] found, each a full replay whose final branch (at
     /// `branch.0`) went back to the block's start `branch.2`: the state and counters
     /// become what replaying them one by one would have made them.
-    pub fn steady_replayed(&mut self, id: usize, passes: u64, branch: (u32, bool, u32)) {
+    #[cfg_attr(not(block_compiler), allow(dead_code))]
+    pub(crate) fn steady_replayed(&mut self, id: usize, passes: u64, branch: (u32, bool, u32)) {
         if passes == 0 {
             return;
         }
@@ -1122,7 +1127,7 @@ impl Timing {
 
     /// The memo whose replay `issue` started.
     #[inline]
-    pub fn replay_memo(&self) -> Option<usize> {
+    pub(crate) fn replay_memo(&self) -> Option<usize> {
         self.memo.replay.map(|rp| rp.memo)
     }
 
@@ -1535,14 +1540,14 @@ impl Timing {
     /// instructions without calling `issue` and finish with [`Timing::block_replayed`]
     /// (or stop early with [`Timing::block_replayed_partly`]): the result is the same.
     #[inline]
-    pub fn replay_started(&self) -> Option<usize> {
+    pub(crate) fn replay_started(&self) -> Option<usize> {
         let rp = self.memo.replay.as_ref()?;
         (rp.k == 1).then(|| self.memo.memos[rp.memo].words.len())
     }
 
     /// The words of the block being replayed (to check local store still holds them).
     #[inline]
-    pub fn replay_words(&self) -> &[u32] {
+    pub(crate) fn replay_words(&self) -> &[u32] {
         match &self.memo.replay {
             Some(rp) => &self.memo.memos[rp.memo].words,
             None => &[],
@@ -1551,7 +1556,7 @@ impl Timing {
 
     /// The core's code epoch at which the replayed block's words were last checked.
     #[inline]
-    pub fn replay_verified(&self) -> u64 {
+    pub(crate) fn replay_verified(&self) -> u64 {
         match &self.memo.replay {
             Some(rp) => self.memo.memos[rp.memo].verified,
             None => u64::MAX,
@@ -1560,7 +1565,7 @@ impl Timing {
 
     /// Notes that local store held the replayed block's words at code epoch `epoch`.
     #[inline]
-    pub fn set_replay_verified(&mut self, epoch: u64) {
+    pub(crate) fn set_replay_verified(&mut self, epoch: u64) {
         if let Some(rp) = &self.memo.replay {
             self.memo.memos[rp.memo].verified = epoch;
         }

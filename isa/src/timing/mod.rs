@@ -723,7 +723,7 @@ impl Timing {
     /// without the `hint` hook (`Core::hint_target`): a replayed record whose hint entry
     /// an `hbr` set last takes it as the entry's target.
     #[inline(always)]
-    pub fn note_hint_target(&mut self, target: u32) {
+    pub(crate) fn note_hint_target(&mut self, target: u32) {
         self.hint_target = target & 0x3_ffff;
     }
 
@@ -827,7 +827,7 @@ impl Timing {
     }
 
     /// Issue detail of the last instruction issued (exact when `memoize` is off).
-    pub fn last_record(&self) -> IssueRecord {
+    pub(crate) fn last_record(&self) -> IssueRecord {
         self.record
     }
 
