@@ -356,12 +356,13 @@ pub fn run_frame(
             .min(layout.params.num_tiles);
         progress(taken, layout.params.num_tiles);
         // An SPU that stopped any other way ends the frame at once.
-        match states
+        let failed = states
             .iter()
-            .any(|s| !done(s) && !matches!(s, State::Runnable | State::Waiting { .. }))
-        {
-            true => ControlFlow::Break(()),
-            false => ControlFlow::Continue(()),
+            .any(|s| !done(s) && !matches!(s, State::Runnable | State::Waiting { .. }));
+        if failed {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
         }
     });
     let contexts: Vec<_> = system.contexts().collect();

@@ -553,3 +553,162 @@ fn serve_stop(
     }
     State::Stopped(StopReason::Stop(code))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn elf(source: &str) -> Vec<u8> {
+        spu_asm::assemble(source, "test.s", &Default::default())
+            .unwrap_or_else(|d| panic!("{}", d[0]))
+            .elf
+    }
+
+    /// Each SPU adds its argp to `$12` 300 times, putting the sum to the same main-memory
+    /// quadword (0x800) each time, then gets that quadword back: the SPUs race on it.
+    const RACE: &str = "
+_start: il      $10, 300
+        shlqbyi $20, $4, 4
+        il      $12, 0
+        il      $13, 0x1000
+        il      $14, 0x800
+        il      $15, 16
+        il      $16, 0
+        il      $17, 0x20
+        il      $18, 1
+        il      $19, 2
+loop:   a       $12, $12, $20
+        stqa    $12, 0x1000
+        wrch    $MFC_LSA, $13
+        wrch    $MFC_EAH, $16
+        wrch    $MFC_EAL, $14
+        wrch    $MFC_Size, $15
+        wrch    $MFC_TagID, $16
+        wrch    $MFC_Cmd, $17
+        wrch    $MFC_WrTagMask, $18
+        wrch    $MFC_WrTagUpdate, $19
+        rdch    $21, $MFC_RdTagStat
+        ai      $10, $10, -1
+        brnz    $10, loop
+        il      $22, 0x1100
+        wrch    $MFC_LSA, $22
+        wrch    $MFC_EAL, $14
+        il      $23, 0x40
+        wrch    $MFC_Cmd, $23
+        wrch    $MFC_WrTagUpdate, $19
+        rdch    $21, $MFC_RdTagStat
+        stop    0x2000
+";
+
+    /// Per SPU (cycles, `$12`, the word it got back), and main memory's 0x800.
+    fn race(threads: usize, engine: Engine, timing: bool) -> (Vec<(u64, u32, u32)>, u32) {
+        let program = elf(RACE);
+        let mut system = System::new(1 << 16);
+        system.set_threads(threads);
+        system.set_quantum(Quantum::Aligned(500));
+        let ids: Vec<_> = (1..=3u64)
+            .map(|i| {
+                let id = system.create_context(ContextConfig {
+                    engine,
+                    timing: timing.then(TimingConfig::default),
+                    code: None,
+                });
+                let start = Start::Api {
+                    argp: 0x10 * i,
+                    envp: 0,
+                };
+                system.load_elf(id, &program, &start).unwrap();
+                id
+            })
+            .collect();
+        assert_eq!(system.run(10_000_000), Outcome::Stopped);
+        let word = |b: &[u8]| u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+        let spus = ids
+            .iter()
+            .map(|&id| {
+                assert_eq!(*system.state(id), State::Stopped(StopReason::Stop(0x2000)));
+                let spu = system.spu(id);
+                (spu.cycles(), spu.reg(12)[0], word(&spu.ls()[0x1100..]))
+            })
+            .collect();
+        (spus, system.memory().read_u32(0x800))
+    }
+
+    #[test]
+    fn contexts_run_alike_on_any_number_of_threads_and_either_engine() {
+        for timing in [false, true] {
+            let (spus, last) = race(1, Engine::Interp, timing);
+            // Each SPU's own sum is exact; the race's winner is the same every time.
+            let sums: Vec<u32> = spus.iter().map(|s| s.1).collect();
+            assert_eq!(sums, [300 * 0x10, 300 * 0x20, 300 * 0x30]);
+            assert!(sums.contains(&last), "{last:#x}");
+            for threads in [1, 2, 3] {
+                for engine in [Engine::Interp, Engine::host_default()] {
+                    assert_eq!(
+                        race(threads, engine, timing),
+                        (spus.clone(), last),
+                        "{threads} threads, {engine:?}, timing {timing}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_call_class_handler_gets_the_data_word_and_the_program_resumes_after_it() {
+        // stop 0x2105 then its data word (opcode 7, block at 0x200); then exit with $3.
+        let program = elf("_start: stop 0x2105\n .long 0x07000200\n stop 0x2000\n");
+        let mut system = System::new(4096);
+        let id = system.create_context(ContextConfig::default());
+        system
+            .load_elf(id, &program, &Start::Api { argp: 0, envp: 0 })
+            .unwrap();
+        let seen = std::rc::Rc::new(std::cell::Cell::new(0));
+        let saw = seen.clone();
+        system.register_call_handler(5, move |call| {
+            saw.set(call.opdata);
+            call.spu.set_reg(3, [99, 0, 0, 0]);
+            Ok(())
+        });
+        assert_eq!(system.run(1000), Outcome::Stopped);
+        assert_eq!(seen.get(), 0x0700_0200);
+        assert_eq!(*system.state(id), State::Stopped(StopReason::Stop(0x2000)));
+        assert_eq!(system.spu(id).reg(3)[0], 99);
+        assert_eq!(system.spu(id).pc(), 12);
+    }
+
+    #[test]
+    fn an_unknown_call_class_faults_naming_class_and_opcode() {
+        let program = elf("_start: stop 0x2107\n .long 0x03000200\n stop 0x2000\n");
+        let mut system = System::new(4096);
+        let id = system.create_context(ContextConfig::default());
+        system
+            .load_elf(id, &program, &Start::Api { argp: 0, envp: 0 })
+            .unwrap();
+        assert_eq!(system.run(1000), Outcome::Stopped);
+        assert_eq!(
+            *system.state(id),
+            State::Faulted {
+                pc: 0,
+                message: "stop 0x2107: PPE-assisted call class 7 (opcode 3) is not one this \
+                          host serves (0 = C99, 1 = POSIX.1)"
+                    .into()
+            }
+        );
+    }
+
+    #[test]
+    fn the_cycle_limit_leaves_the_run_resumable() {
+        let program = elf("_start: il $3, 1000\nl: ai $3, $3, -1\n brnz $3, l\n stop 0x2000\n");
+        let mut system = System::new(4096);
+        let id = system.create_context(ContextConfig::default());
+        system
+            .load_elf(id, &program, &Start::Api { argp: 0, envp: 0 })
+            .unwrap();
+        assert_eq!(system.run(100), Outcome::CycleLimit);
+        assert_eq!(system.spu(id).cycles(), 100);
+        assert_eq!(system.run(10_000), Outcome::Stopped);
+        // il, 1000 passes of ai and brnz, stop: one cycle each without the timing model.
+        assert_eq!(system.spu(id).cycles(), 2002);
+    }
+}
