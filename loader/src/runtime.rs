@@ -375,10 +375,9 @@ pub fn run_frame(
                 "without its end-of-frame message".to_string()
             }
             State::Runnable => continue,
-            State::Waiting { channel, pc } => format!(
-                "deadlock at {pc:#x} on channel {}",
-                channel.number()
-            ),
+            State::Waiting { channel, pc } => {
+                format!("deadlock at {pc:#x} on channel {}", channel.number())
+            }
             State::Stopped(other) => other.to_string(),
             State::Faulted { message, .. } => message,
         };

@@ -4,8 +4,8 @@
 
 use crate::exit::{self, Status};
 use crate::options;
-use spu_spe::{ContextConfig, Start, System};
 use spu_isa::profile::{annotated_listing, executed_lines, listing_json, ListingOptions};
+use spu_spe::{ContextConfig, Start, System};
 use std::path::PathBuf;
 use std::process::ExitCode;
 

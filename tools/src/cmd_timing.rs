@@ -62,7 +62,11 @@ fn check_operands(file: &std::path::Path, timing: &StaticTiming) -> exit::Result
     };
     let name = file.display().to_string();
     let timed = |line: usize| {
-        line >= 1 && timing.lines.get(line - 1).is_some_and(|l| !l.insts.is_empty())
+        line >= 1
+            && timing
+                .lines
+                .get(line - 1)
+                .is_some_and(|l| !l.insts.is_empty())
     };
     let refused: Vec<String> = diagnostics
         .iter()

@@ -133,9 +133,7 @@ fn text_given_as_an_image_is_refused() {
     assert_eq!(status, 2, "{stderr}");
     assert_eq!(
         stderr,
-        format!(
-            "spu: {path}: a text file, not an SPU program: assemble it first, or name it .s\n"
-        )
+        format!("spu: {path}: a text file, not an SPU program: assemble it first, or name it .s\n")
     );
     // The same text named .s is assembled and runs.
     let path = write(&d, "prog.s", source);

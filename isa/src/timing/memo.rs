@@ -893,7 +893,11 @@ impl Timing {
     /// reading its first word. The memo and its length, or `None` with nothing changed
     /// (then ask [`Timing::block_replay_candidate`]).
     #[inline(always)]
-    pub(crate) fn chained_replay_candidate(&mut self, pc: u32, epoch: u64) -> Option<(usize, usize)> {
+    pub(crate) fn chained_replay_candidate(
+        &mut self,
+        pc: u32,
+        epoch: u64,
+    ) -> Option<(usize, usize)> {
         if !self.memo_between_blocks() {
             return None;
         }

@@ -82,7 +82,11 @@ fn main() {
         u32::from_be_bytes([b[0], b[1], b[2], b[3]])
     };
     // The ball went 0, 1, 2, ... 19, 20: SPU 0 sent the odd words, SPU 1 the even ones.
-    println!("SPU 0's last word: {}, SPU 1's: {}", word(0x100), word(0x110));
+    println!(
+        "SPU 0's last word: {}, SPU 1's: {}",
+        word(0x100),
+        word(0x110)
+    );
     assert_eq!((word(0x100), word(0x110)), (19, 20));
 }
 

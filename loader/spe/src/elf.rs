@@ -200,13 +200,19 @@ mod tests {
     #[test]
     fn malformed_input_is_an_error() {
         assert_eq!(read_elf(&[]).unwrap_err(), "not an ELF file");
-        assert_eq!(read_elf(b"\x7fELF").unwrap_err(), "not a 32-bit big-endian ELF file");
+        assert_eq!(
+            read_elf(b"\x7fELF").unwrap_err(),
+            "not a 32-bit big-endian ELF file"
+        );
         let mut elf = executable(&[(0, &[0; 4], 4)]);
         elf.truncate(60);
         assert_eq!(read_elf(&elf).unwrap_err(), "truncated ELF file");
         let mut elf = executable(&[(0, &[0; 4], 4)]);
         elf[19] = 20;
-        assert_eq!(read_elf(&elf).unwrap_err(), "ELF machine 20 is not SPU (23)");
+        assert_eq!(
+            read_elf(&elf).unwrap_err(),
+            "ELF machine 20 is not SPU (23)"
+        );
     }
 
     // Executables as the assembler writes them.

@@ -226,7 +226,12 @@ impl System {
     /// Loads `program` into context `id` and sets its entry state as the SDK's loader
     /// did (`start`: as `elfspe` ran it from a shell, or as `spe_context_run` with argp
     /// and envp); the state, for `--dump-entry`.
-    pub fn load(&mut self, id: ContextId, program: &Program, start: &Start) -> Result<Entry, LoadError> {
+    pub fn load(
+        &mut self,
+        id: ContextId,
+        program: &Program,
+        start: &Start,
+    ) -> Result<Entry, LoadError> {
         let entry = start::prepare(start, program.end(), self.memory.len()).map_err(LoadError)?;
         let spu = &mut self.spus[id.0];
         let segments: Vec<(u32, &[u8])> = program
@@ -243,7 +248,12 @@ impl System {
 
     /// Loads an SPU ELF executable (bytes) into context `id` (libspe2's
     /// `spe_image_open` and `spe_program_load`), with the entry state `start`.
-    pub fn load_elf(&mut self, id: ContextId, elf: &[u8], start: &Start) -> Result<Entry, LoadError> {
+    pub fn load_elf(
+        &mut self,
+        id: ContextId,
+        elf: &[u8],
+        start: &Start,
+    ) -> Result<Entry, LoadError> {
         let program = Program::from_elf(elf)?;
         self.load(id, &program, start)
     }
@@ -357,9 +367,9 @@ impl System {
         self.register_stop_handler(*CALL_STOPS.start() | class as u16, move |stopped| {
             let pc = stopped.spu.pc();
             let ls = stopped.spu.ls();
-            let word = ls
-                .get(pc as usize..pc as usize + 4)
-                .ok_or_else(|| format!("the call's data word at {pc:#x} lies outside local store"))?;
+            let word = ls.get(pc as usize..pc as usize + 4).ok_or_else(|| {
+                format!("the call's data word at {pc:#x} lies outside local store")
+            })?;
             let opdata = u32::from_be_bytes([word[0], word[1], word[2], word[3]]);
             handler(&mut LibraryCall {
                 context: stopped.context,
@@ -386,7 +396,7 @@ impl System {
         mut observe: impl FnMut(&MainMemory, &[State]) -> ControlFlow<()>,
     ) -> Outcome {
         let waits = self.waits();
-        let runnable = self.states.iter().any(|s| *s == State::Runnable);
+        let runnable = self.states.contains(&State::Runnable);
         if !runnable && !waits.is_empty() {
             if !self.served {
                 return Outcome::Deadlock(waits);
@@ -435,7 +445,7 @@ impl System {
                     outcome = Outcome::Interrupted;
                     return Ok(Next::Done);
                 }
-                let runnable = states.iter().any(|s| *s == State::Runnable);
+                let runnable = states.contains(&State::Runnable);
                 let waiting = states.iter().any(|s| matches!(s, State::Waiting { .. }));
                 if !runnable && (!waiting || all_blocked) {
                     outcome = if waiting {

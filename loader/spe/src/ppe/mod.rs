@@ -3,7 +3,7 @@
 //! stops with a code in 0x2100..0x21ff, the PPE-assisted library calls it asks for.
 //!
 //! The protocol is libspe2's: the stop code's low byte names the class (0 = C99 stdio,
-//! [`c99`]; 1 = POSIX.1, [`posix1`]); the word after the `stop` holds the opcode in its top
+//! `c99.rs`; 1 = POSIX.1, `posix1.rs`); the word after the `stop` holds the opcode in its top
 //! byte and the local-store address of the argument block in its low 24 bits. The block
 //! holds one argument per 16-byte quadword (the value in the preferred slot); the host
 //! writes the result over the first quadword as {return value, 0, 0, errno} and resumes
