@@ -4,7 +4,7 @@ use crate::exit::{self, Error, Status};
 use crate::options;
 use spu_isa::disasm::{instruction_text, SymbolTable};
 use spu_isa::machine::StopReason;
-use spu_spe::{ContextConfig, ContextId, Outcome, Program, Start, State, System};
+use spu_spe::{Channel, ContextConfig, ContextId, Outcome, Program, Start, State, System};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -27,7 +27,8 @@ pub struct Args {
     /// Print local store: ADDR:LEN (hex or decimal).
     #[arg(long)]
     dump_ls: Vec<String>,
-    /// Values for the inbound mailbox, in order.
+    /// Values for the inbound mailbox, in order (4 at a time: the rest as the program
+    /// reads them).
     #[arg(long = "mbox-in")]
     mbox_in: Vec<String>,
     /// Run with the cycle-level timing model (otherwise one cycle per instruction).
@@ -114,6 +115,18 @@ pub fn final_stop(
     }
 }
 
+/// Writes `--mbox-in` values into the inbound mailbox while it has room.
+fn feed(system: &mut System, id: ContextId, values: &mut std::collections::VecDeque<u32>) {
+    while system.in_mbox_len(id) < 4 {
+        match values.pop_front() {
+            Some(v) => {
+                system.write_in_mbox(id, v);
+            }
+            None => break,
+        }
+    }
+}
+
 /// How the program starts: as `elfspe` ran it from a shell, or through the libspe2 API
 /// with `--argp`/`--envp`.
 fn start_mode(args: &Args) -> exit::Result<Start> {
@@ -175,12 +188,12 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         .iter()
         .map(|s| dump_range(s))
         .collect::<exit::Result<Vec<_>>>()?;
-    let mut mailbox = Vec::new();
+    let mut mailbox = std::collections::VecDeque::new();
     for v in &args.mbox_in {
         let value = number(v).map_err(|e| format!("--mbox-in: {e}"))?;
         let value =
             u32::try_from(value).map_err(|_| format!("--mbox-in {v}: does not fit in 32 bits"))?;
-        mailbox.push(value);
+        mailbox.push_back(value);
     }
     let program = load(&args.file)?;
     let start = start_mode(&args)?;
@@ -196,13 +209,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     if args.dump_entry {
         dump_entry(&entry)?;
     }
-    for value in mailbox {
-        if !system.write_in_mbox(id, value) {
-            return Err(Error::input(
-                "--mbox-in: the inbound mailbox holds 4 values",
-            ));
-        }
-    }
+    feed(&mut system, id, &mut mailbox);
     system.set_root(args.root.as_deref())?;
     let symbols = SymbolTable::new(
         program
@@ -212,10 +219,21 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             .collect(),
     );
     // PPE-assisted calls (stop 0x2100..0x21ff) are served and the program resumed.
-    let outcome = if args.trace {
-        trace(&mut system, id, args.max_cycles, &symbols)?
-    } else {
-        system.run(args.max_cycles)
+    // The mailbox holds 4 values: the rest go in as the program waits for them.
+    let outcome = loop {
+        let outcome = if args.trace {
+            trace(&mut system, id, args.max_cycles, &symbols)?
+        } else {
+            system.run(args.max_cycles)
+        };
+        match &outcome {
+            Outcome::Waiting(waits)
+                if !mailbox.is_empty() && waits.iter().any(|w| w.channel == Channel::InMbox) =>
+            {
+                feed(&mut system, id, &mut mailbox)
+            }
+            _ => break outcome,
+        }
     };
     let stop = match final_stop(&system, id, &outcome) {
         Ok(stop) => stop,

@@ -6,7 +6,7 @@ mod cli;
 mod exit_status;
 mod paper;
 mod ppe_run;
-mod run_refusals;
+mod run_input;
 mod sched_cli;
 mod shade_cli;
 mod views;

@@ -1,7 +1,8 @@
-//! Inputs a run would misuse are refused before it starts (issue 31, item 4): an ELF
-//! segment outside local store or over another, an empty file, a text file given as a
-//! program image, and a source `spu timing` would time though `spu as` refuses it. Each
-//! case asserts the exact message and exit status 2 (bad input).
+//! A run's inputs. Those it would misuse are refused before it starts (issue 31, item 4):
+//! an ELF segment outside local store or over another, an empty file, a text file given as
+//! a program image, and a source `spu timing` would time though `spu as` refuses it; each
+//! case asserts the exact message and exit status 2 (bad input). Mailbox values beyond the
+//! four the mailbox holds go in as the program waits for them.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -156,4 +157,34 @@ fn timing_checks_operands_as_the_assembler_does() {
     let path = write(&d, "good.s", "\tlqd $5,0($1)\n");
     let (status, _, stderr) = spu(&["timing", &path]);
     assert_eq!((status, stderr.as_str()), (0, ""));
+}
+
+#[test]
+fn mailbox_values_beyond_four_go_in_as_the_program_waits() {
+    let d = dir("mbox");
+    // Sums six mailbox values into $3.
+    let src = write(
+        &d,
+        "sum.s",
+        "_start: il $5, 6\n il $3, 0\nl: rdch $4, $SPU_RdInMbox\n a $3, $3, $4\n \
+         ai $5, $5, -1\n brnz $5, l\n stop 0x2000\n",
+    );
+    let values = ["--mbox-in", "1", "--mbox-in", "2", "--mbox-in", "3"];
+    let more = ["--mbox-in", "4", "--mbox-in", "5", "--mbox-in", "6"];
+    let (status, _, stderr) = spu(&[&["run", "-q", &src][..], &values, &more].concat());
+    assert_eq!((status, stderr.as_str()), (0, ""));
+    // The sum is in $3.
+    let (status, stdout, _) = spu(&[&["run", "--json", &src][..], &values, &more].concat());
+    assert_eq!(status, 0);
+    let run: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(run["registers"][3][0], 21);
+    // Five values: the sixth read waits for ever.
+    let (status, _, stderr) = spu(&[&["run", &src][..], &values, &more[..4]].concat());
+    assert_eq!(status, 134);
+    assert_eq!(
+        stderr,
+        format!(
+            "spu: {src}: SPU stopped abnormally: deadlock at 0x8 on channel SPU_RdInMbox (29)\n"
+        )
+    );
 }
