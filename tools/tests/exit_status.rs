@@ -483,3 +483,154 @@ fn recursive_macro_from_the_fuzzer_is_bad_input() {
     );
     assert_eq!(files_in(&d), Vec::<String>::new());
 }
+
+/// No output overwrites an input or another output of the same command, whatever the
+/// spelling, symbolic link or hard link: refused before any work, status 2, naming both,
+/// and the files are left as they were.
+#[test]
+fn no_output_overwrites_an_input_or_another_output() {
+    let d = dir("clobber");
+    let at = |name: &str| d.join(name).to_str().unwrap().to_string();
+    let src = program(&d, "c.s", "        stop 0x2000\n");
+    let original = std::fs::read(&src).unwrap();
+    assert_eq!(
+        spu(&["as", &src, "-c", "-o", &at("a.o")]).status,
+        0,
+        "setup"
+    );
+    assert_eq!(spu(&["as", &src, "-c", "-o", &at("b.o")]).status, 0);
+    let (a_o, b_o) = (at("a.o"), at("b.o"));
+    let objects = std::fs::read(&a_o).unwrap();
+    let scene = write(&d, "s.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let dotted = format!("{}/./c.s", d.display());
+    let words = |w: &[&str]| -> Vec<String> { w.iter().map(|s| s.to_string()).collect() };
+    let cases: Vec<(Vec<String>, String)> = vec![
+        (
+            words(&["as", &src, "-o", &src]),
+            format!("-o {src}: would overwrite the input {src}"),
+        ),
+        (
+            words(&["as", &src, "-o", &dotted]),
+            format!("-o {dotted}: would overwrite the input {src}"),
+        ),
+        (
+            words(&["as", &src, "--listing", &src]),
+            format!("--listing {src}: would overwrite the input {src}"),
+        ),
+        (
+            words(&["as", &src, "-o", &at("x.elf"), "--listing", &at("x.elf")]),
+            format!(
+                "-o {0} and --listing {0} are the same file: each output needs its own",
+                at("x.elf")
+            ),
+        ),
+        (
+            words(&["ld", &a_o, &b_o, "-o", &a_o]),
+            format!("-o {a_o}: would overwrite the input {a_o}"),
+        ),
+        (
+            words(&["timing", &src, "-o", &src]),
+            format!("-o {src}: would overwrite the input {src}"),
+        ),
+        (
+            words(&["sched", &src, "-o", &src]),
+            format!("-o {src}: would overwrite the input {src}"),
+        ),
+        (
+            words(&["render", "-o", &at("s.png"), "--stats", &at("s.png")]),
+            format!(
+                "-o {0} and --stats {0} are the same file: each output needs its own",
+                at("s.png")
+            ),
+        ),
+        (
+            words(&["render", "--heatmap", &at("X.png"), "-o", &at("X.png")]),
+            format!(
+                "-o {0} and --heatmap {0} are the same file: each output needs its own",
+                at("X.png")
+            ),
+        ),
+        (
+            words(&["render", "-o", &at("h.png"), "--heatmap", &at("h.png")]),
+            format!(
+                "-o {0} and --heatmap {0} are the same file: each output needs its own",
+                at("h.png")
+            ),
+        ),
+        (
+            words(&[
+                "render",
+                "-o",
+                &at("w.png"),
+                "--heatmap",
+                &at("r-wait.png"),
+                "--stats",
+                &at("r-wait-wait.png"),
+            ]),
+            format!(
+                "--heatmap {0} and --stats {0} are the same file: each output needs its own",
+                at("r-wait-wait.png")
+            ),
+        ),
+        (
+            words(&["render", "--trace", &at("x.json"), "--stats", &at("x.json")]),
+            format!(
+                "--stats {0} and --trace {0} are the same file: each output needs its own",
+                at("x.json")
+            ),
+        ),
+        (
+            words(&["render", "--scene", &scene, "--stats", &scene]),
+            format!("--stats {scene}: would overwrite the scene {scene}"),
+        ),
+    ];
+    for (args, message) in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = spu(&args);
+        assert_eq!(out.status, 2, "spu {args:?}: {}", out.stderr);
+        assert_eq!(out.stderr, format!("spu: {message}\n"), "spu {args:?}");
+        assert_eq!(out.stdout, "", "spu {args:?} did work before refusing");
+    }
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink("c.s", d.join("soft.s")).unwrap();
+        std::fs::hard_link(&src, d.join("hard.s")).unwrap();
+        for link in [at("soft.s"), at("hard.s")] {
+            let out = spu(&["as", &src, "-o", &link]);
+            assert_eq!(out.status, 2, "{}", out.stderr);
+            assert_eq!(
+                out.stderr,
+                format!("spu: -o {link}: would overwrite the input {src}\n")
+            );
+        }
+        // An output through a link that is no input is written through it, whole.
+        std::os::unix::fs::symlink("linked.elf", d.join("link.elf")).unwrap();
+        assert_eq!(spu(&["as", &src, "-o", &at("link.elf")]).status, 0);
+        assert!(std::fs::symlink_metadata(d.join("link.elf"))
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert!(std::fs::read(at("linked.elf"))
+            .unwrap()
+            .starts_with(b"\x7fELF"));
+        std::fs::remove_file(at("linked.elf")).unwrap();
+        std::fs::remove_file(at("link.elf")).unwrap();
+        std::fs::remove_file(at("soft.s")).unwrap();
+        std::fs::remove_file(at("hard.s")).unwrap();
+    }
+    assert_eq!(
+        std::fs::read(&src).unwrap(),
+        original,
+        "the source is intact"
+    );
+    assert_eq!(
+        std::fs::read(&a_o).unwrap(),
+        objects,
+        "the object is intact"
+    );
+    assert_eq!(
+        files_in(&d),
+        ["a.o", "b.o", "c.s", "s.obj"],
+        "nothing else written"
+    );
+}
