@@ -376,6 +376,41 @@ fn json_outputs_are_well_formed() {
         "{run}"
     );
 
+    // Local-store dumps go inside the one document; the trace goes to standard error.
+    let out = spu(&[
+        "run",
+        &src,
+        "--json",
+        "--dump-ls",
+        "0:0x10",
+        "--dump-ls",
+        "8:4",
+        "--trace",
+    ]);
+    assert_eq!(out.status, 7, "{}", out.stderr);
+    let run: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    assert_eq!(
+        run["local_store"],
+        serde_json::json!([
+            {"address": 0, "bytes": "4080038321a00e030000200700000000"},
+            {"address": 8, "bytes": "00002007"},
+        ])
+    );
+    assert_eq!(run["instructions"], 3);
+    assert_eq!(
+        out.stderr,
+        "00000: 40800383  il\t$3,7\t$3 <- 00000007 00000007 00000007 00000007\n\
+         00004: 21a00e03  wrch\t$ch28,$3\n\
+         00008: 00002007  stop\n"
+    );
+    // Without --json the same dump is text after the summary.
+    let out = spu(&["run", &src, "--dump-ls", "8:4"]);
+    assert!(
+        out.stdout.ends_with("\n00008: 00 00 20 07\n"),
+        "{}",
+        out.stdout
+    );
+
     let out = spu(&["prof", &src, "--json"]);
     assert_eq!(out.status, 0);
     let prof: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
