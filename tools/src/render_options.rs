@@ -195,6 +195,11 @@ impl Args {
                 shading::MAX_LIGHTS
             )));
         }
+        if !self.lights.is_empty() && self.shade == ShadeMode::None {
+            return Err(Error::input(
+                "--light lights a shaded frame, and this one is not shaded: add --shade simple or --shade shadows",
+            ));
+        }
         if self.fill && self.shade != ShadeMode::None {
             return Err(Error::input(format!(
                 "--fill runs the fill program, which does not shade: drop --shade {}",

@@ -316,6 +316,39 @@ fn bad_scenes_are_refused_with_the_reason() {
     let missing = d.join("missing.obj");
     let out = render(missing.to_str().unwrap());
     out.refused(2, "missing.obj: cannot read");
+    // MTL errors name the library's line; a comment may hold any bytes; a material the
+    // library lacks is a warning naming it, once.
+    write(
+        &d,
+        "m.mtl",
+        b"# \xe9t\xe9\nnewmtl red\nKd 1 0 0\nillum two\n",
+    );
+    let tri = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    let scene = write(&d, "m.obj", format!("{tri}usemtl red\nf 1 2 3\n"));
+    let out = render(&scene);
+    out.refused(
+        2,
+        &format!(
+            "{}:4: material library: illum needs",
+            d.join("m.mtl").display()
+        ),
+    );
+    write(&d, "m.mtl", b"# \xe9t\xe9\nnewmtl red\nKd 1 0 0\n");
+    let mut obj = format!(
+        "# caf\u{1}\n{tri}usemtl red\nf 1 2 3\nusemtl blue\nf 1 3 2\nusemtl blue\nf 2 3 1\n"
+    )
+    .into_bytes();
+    let at = obj.iter().position(|&b| b == 1).unwrap();
+    obj[at] = 0xe9;
+    let scene = write(&d, "m.obj", obj);
+    let out = render(&scene);
+    assert_eq!(out.status, 0, "{}", out.stderr);
+    let warning = format!(
+        "warning: {scene}:8: usemtl blue: no such material in the library; default colour\n"
+    );
+    assert!(out.stderr.starts_with(&warning), "{}", out.stderr);
+    assert_eq!(out.stderr.matches("warning").count(), 1, "{}", out.stderr);
+    std::fs::remove_file(png).unwrap();
     assert!(
         !Path::new(png).exists(),
         "no image is written for a refused scene"
