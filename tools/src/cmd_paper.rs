@@ -78,8 +78,10 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     let jobs_dir = args.out.join("jobs");
 
     if args.list_jobs {
-        // the listed renders write their files there, and a renderer does not make folders
-        std::fs::create_dir_all(&jobs_dir).map_err(|e| Error::output(&jobs_dir, e))?;
+        // the listed renders write their files there, and a renderer does not make folders;
+        // a folder that cannot be made is bad input, found before any work (status 2)
+        std::fs::create_dir_all(&jobs_dir)
+            .map_err(|e| Error::input(format!("--out: {}: {e}", jobs_dir.display())))?;
         let exe = std::env::current_exe()
             .ok()
             .and_then(|p| p.to_str().map(str::to_string))

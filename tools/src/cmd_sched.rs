@@ -33,8 +33,9 @@ pub struct Args {
     output: Option<PathBuf>,
 }
 
-/// Exit status 0, 1 when the output cannot be written, 2 for bad input (an unreadable
-/// source, a block that does not schedule, bad options).
+/// Exit status 0, 1 when writing the output fails part-way, 2 for bad input (an unreadable
+/// source, a block that does not schedule, bad options, an output that cannot be written or
+/// would overwrite an input).
 pub fn run(args: Args) -> exit::Result<ExitCode> {
     let mut files = crate::outputs::Files::new();
     files.input("the input", &args.input);

@@ -81,7 +81,9 @@ impl Error {
         Error::new(Status::Failure, message)
     }
 
-    /// An output file that could not be written (status 1).
+    /// An output file whose writing failed part-way, a full device say (status 1). One
+    /// that cannot be written at all is bad input found before the work starts (status 2,
+    /// [`check_writable`]).
     pub fn output(path: &Path, err: impl fmt::Display) -> Error {
         Error::failure(format!("{}: {err}", path.display()))
     }
