@@ -486,7 +486,12 @@ impl Spu {
                 self.core.event_pending = self.event_status & self.event_mask != 0;
                 self.core.event_pending_known = true;
             }
-            let before = near_limit(self).then(|| self.timing.clone()).flatten();
+            // Boxed: the model is large, and this is on every instruction's path.
+            let before: Option<Box<Timing>> = if near_limit(self) {
+                self.timing.as_ref().map(|t| Box::new(t.clone()))
+            } else {
+                None
+            };
             let issue = match &mut self.timing {
                 Some(t) => t.issue(pc, inst),
                 None => self.cycle,
@@ -494,8 +499,8 @@ impl Spu {
             if issue >= self.limit {
                 // It would issue at or after the limit: it does not run, and the clock
                 // stops at the limit.
-                if before.is_some() {
-                    self.timing = before;
+                if let Some(model) = before {
+                    self.timing = Some(*model);
                 }
                 self.cycle = self.limit;
                 return None;
@@ -556,7 +561,7 @@ impl Spu {
                             self.log_channel_wait(issue, last, inst.ra);
                         }
                         match before {
-                            Some(model) => self.timing = Some(model),
+                            Some(model) => self.timing = Some(*model),
                             None => {
                                 if let Some(t) = &mut self.timing {
                                     t.channel_stall(pc, inst.ra, last);
