@@ -121,3 +121,87 @@ fn unknown_word_is_illegal_and_empty_mailbox_deadlocks() {
         StopReason::Deadlock { pc: 0, channel: 29 }
     );
 }
+
+/// `run(max_cycles)` stops exactly there, timing model on or off, either engine: the clock
+/// reads `max_cycles` (never more), and running on from there ends exactly as one
+/// uninterrupted run does, to the cycle (so nothing issued at or after the limit ran, and
+/// no stall ran past it: a branch miss, a dependency, a fetch, a DMA wait, a memoized
+/// block).
+#[test]
+fn cycle_limits_stop_exactly_and_resume_seamlessly() {
+    // A DMA get waited on, then a loop of dependent multiplies ending in a backward branch.
+    let image = asm(&[
+        ("ila", &[5, 0x400]),
+        ("il", &[6, 0x100]),
+        ("il", &[7, 16]),
+        ("il", &[8, 0]),
+        ("wrch", &[16, 5]),
+        ("wrch", &[17, 8]),
+        ("wrch", &[18, 6]),
+        ("wrch", &[19, 7]),
+        ("wrch", &[20, 8]),
+        ("il", &[9, 0x40]),
+        ("wrch", &[21, 9]),
+        ("il", &[9, 1]),
+        ("wrch", &[22, 9]),
+        ("il", &[9, 2]),
+        ("wrch", &[23, 9]),
+        ("rdch", &[10, 24]),
+        ("il", &[3, 12]),
+        ("lqd", &[11, 0, 5]),
+        ("fm", &[12, 11, 11]),
+        ("fm", &[12, 12, 12]),
+        ("ai", &[3, 3, -1]),
+        ("fa", &[13, 12, 13]),
+        ("brnz", &[3, 4 * 17]),
+        ("stop", &[0x2000]),
+    ]);
+    let fresh = |engine, timing: bool| {
+        let mut spu = Spu::new(0);
+        spu.set_engine(engine);
+        if timing {
+            spu.enable_timing(Default::default());
+        }
+        spu.load_image(&image);
+        spu
+    };
+    let state = |spu: &Spu| {
+        (
+            spu.pc(),
+            spu.instructions(),
+            spu.cycles(),
+            (0..16).map(|r| spu.reg(r)).collect::<Vec<_>>(),
+            spu.timing()
+                .map(|t| (t.cycles(), t.finish_profile().totals)),
+        )
+    };
+    for engine in [spu_isa::jit::Engine::Interp, spu_isa::jit::Engine::Jit] {
+        for timing in [false, true] {
+            let mut whole = fresh(engine, timing);
+            let mut mem = MainMemory::zeroed(4096);
+            assert_eq!(whole.run(&mut mem, 1_000_000), StopReason::Stop(0x2000));
+            let end = state(&whole);
+            let total = whole.cycles();
+            assert!(total > 100, "{engine:?} timing {timing}: {total}");
+            let mut last_instructions = 0;
+            for limit in (1..total).step_by(if timing { 1 } else { 3 }) {
+                let mut spu = fresh(engine, timing);
+                let mut mem = MainMemory::zeroed(4096);
+                let what = format!("{engine:?}, timing {timing}, limit {limit}");
+                assert_eq!(spu.run(&mut mem, limit), StopReason::CycleLimit, "{what}");
+                assert_eq!(spu.cycles(), limit, "{what}");
+                if let Some(t) = spu.timing() {
+                    assert!(t.cycles() <= limit, "{what}: model at {}", t.cycles());
+                }
+                assert!(spu.instructions() >= last_instructions, "{what}");
+                last_instructions = spu.instructions();
+                assert_eq!(
+                    spu.run(&mut mem, 1_000_000),
+                    StopReason::Stop(0x2000),
+                    "{what}"
+                );
+                assert_eq!(state(&spu), end, "{what}");
+            }
+        }
+    }
+}

@@ -1,8 +1,10 @@
 //! Wavefront OBJ scenes through the `tobj` crate, plus what `tobj` does not give us: a
-//! missing `.mtl` library is not an error (each `usemtl` name gets a deterministic default
-//! color instead, [`Material::default_for_name`]), a file without any `usemtl` gets one such
-//! material per group/object (so that e.g. Sponza's groups stay distinguishable), and parse
-//! errors are traced back to the offending line, since `tobj` reports only the kind of error.
+//! missing `.mtl` library or material is not an error but a warning (each such `usemtl`
+//! name gets a deterministic default color instead, [`Material::default_for_name`]), a file
+//! without any `usemtl` gets one such material per group/object (so that e.g. Sponza's
+//! groups stay distinguishable), comments may hold any bytes, and parse errors in the OBJ
+//! and its MTL libraries are traced back to the offending line, since `tobj` reports only
+//! the kind of error.
 
 use std::cell::RefCell;
 use std::collections::HashMap;
@@ -18,19 +20,25 @@ const MISSING_LIBRARY: &str = "spu-loader-no-material-library.mtl";
 
 /// Parses OBJ text (already decompressed) that was read from `path`; `path` is used for
 /// error messages and to find `mtllib` files next to it (`name.mtl` or `name.mtl.gz`).
+/// Warnings (a missing library or material) go to standard error.
 pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
-    let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = 1 + bytes[..e.valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count();
-        LoadError::new(path, Some(line), "invalid UTF-8")
-    })?;
+    let (scene, warnings) = parse_obj_warned(path, bytes)?;
+    for warning in warnings {
+        eprintln!("{warning}");
+    }
+    Ok(scene)
+}
+
+/// [`parse_obj`], returning the warnings instead of printing them: each names the file, the
+/// line where there is one, and the library or material.
+pub fn parse_obj_warned(path: &Path, bytes: &[u8]) -> Result<(Scene, Vec<String>), LoadError> {
+    let text = &text_outside_comments(path, bytes)?;
 
     check_vertex_positions(path, text)?;
     let usemtl_names = used_material_names(text);
     let directory = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let material_error: RefCell<Option<LoadError>> = RefCell::new(None);
+    let warnings: RefCell<Vec<String>> = RefCell::new(Vec::new());
     let material_loader = |mtl: &Path| -> tobj::MTLLoadResult {
         let plain = directory.join(mtl);
         let mut gz_name = plain.clone().into_os_string();
@@ -42,8 +50,9 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
         match found {
             Some(mtl_path) => {
                 let parsed = read_maybe_gzipped(&mtl_path).and_then(|data| {
+                    let data = text_outside_comments(&mtl_path, &data)?;
                     check_mtl(&mtl_path, &data)?;
-                    tobj::load_mtl_buf(&mut &data[..]).map_err(|e| {
+                    tobj::load_mtl_buf(&mut data.as_bytes()).map_err(|e| {
                         LoadError::new(&mtl_path, None, format!("material library: {e}"))
                     })
                 });
@@ -55,17 +64,22 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
             None => {
                 // No library: define every used name so groups keep distinct materials
                 // (as viewers do), saying so, as GNU tools go on after a warning.
-                if mtl != Path::new(MISSING_LIBRARY) && !usemtl_names.is_empty() {
-                    eprintln!(
-                        "warning: {}: material library {} not found; {} materials get default colours",
+                if !usemtl_names.is_empty() {
+                    let names: Vec<&str> = usemtl_names.iter().map(|(n, _)| n.as_str()).collect();
+                    let missing = if mtl == Path::new(MISSING_LIBRARY) {
+                        "no material library (mtllib)".to_string()
+                    } else {
+                        format!("material library {} not found", mtl.display())
+                    };
+                    warnings.borrow_mut().push(format!(
+                        "warning: {}: {missing}; default colours for {}",
                         path.display(),
-                        mtl.display(),
-                        usemtl_names.len()
-                    );
+                        names.join(", ")
+                    ));
                 }
                 let materials: Vec<tobj::Material> = usemtl_names
                     .iter()
-                    .map(|name| {
+                    .map(|(name, _)| {
                         let default = Material::default_for_name(name);
                         tobj::Material {
                             name: name.clone(),
@@ -77,7 +91,7 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
                 let map = usemtl_names
                     .iter()
                     .enumerate()
-                    .map(|(i, n)| (n.clone(), i))
+                    .map(|(i, (n, _))| (n.clone(), i))
                     .collect();
                 Ok((materials, map))
             }
@@ -110,6 +124,18 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
     let (models, materials) = result.map_err(|kind| locate_obj_error(path, text, kind))?;
     // Library errors are captured above; an `Err` here can only mean "nothing loaded".
     let tobj_materials = materials.unwrap_or_default();
+    let mut warnings = warnings.into_inner();
+    if warnings.is_empty() {
+        // The libraries were read: a name none of them defines gets the default material.
+        for (name, line) in &usemtl_names {
+            if !tobj_materials.iter().any(|m| &m.name == name) {
+                warnings.push(format!(
+                    "warning: {}:{line}: usemtl {name}: no such material in the library; default colour",
+                    path.display()
+                ));
+            }
+        }
+    }
 
     let mut scene_materials: Vec<Material> = tobj_materials
         .iter()
@@ -201,7 +227,42 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
     if needs_normal.iter().any(|&n| n) {
         scene.compute_smooth_normals_where(&mut needs_normal);
     }
-    Ok(scene)
+    Ok((scene, warnings))
+}
+
+/// The text of an OBJ or MTL file, a comment that is not UTF-8 cut at its `#` (comments may
+/// hold any bytes: a Latin-1 author's name, say); anything else that is not UTF-8 is refused
+/// naming its line. Lines keep their numbers.
+fn text_outside_comments(path: &Path, bytes: &[u8]) -> Result<String, LoadError> {
+    if let Ok(text) = std::str::from_utf8(bytes) {
+        return Ok(text.to_string());
+    }
+    let mut text = String::with_capacity(bytes.len());
+    for (number, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        if number > 0 {
+            text.push('\n');
+        }
+        let line = match std::str::from_utf8(line) {
+            Ok(line) => line,
+            Err(e) => {
+                let hash = line.iter().position(|&b| b == b'#');
+                match hash {
+                    Some(at) if at < e.valid_up_to() => {
+                        std::str::from_utf8(&line[..at]).expect("UTF-8 up to here")
+                    }
+                    _ => {
+                        return Err(LoadError::new(
+                            path,
+                            Some(number + 1),
+                            "invalid UTF-8 outside a comment",
+                        ))
+                    }
+                }
+            }
+        };
+        text.push_str(line);
+    }
+    Ok(text)
 }
 
 /// Refuses, naming the line, a `v` line whose position is not finite or too large for the
@@ -226,12 +287,39 @@ fn check_vertex_positions(path: &Path, text: &str) -> Result<(), LoadError> {
 /// Checks the colour and number statements of an MTL library line by line, so that a bad
 /// value is reported with its line (`tobj` reports only that parsing failed) and no
 /// non-finite or negative colour reaches the shaders.
-fn check_mtl(path: &Path, bytes: &[u8]) -> Result<(), LoadError> {
-    let text = std::str::from_utf8(bytes)
-        .map_err(|_| LoadError::new(path, None, "material library is not UTF-8"))?;
+fn check_mtl(path: &Path, text: &str) -> Result<(), LoadError> {
     for (number, line) in text.lines().enumerate() {
         let mut words = line.split_ascii_whitespace();
-        let (expected, what) = match words.next() {
+        let keyword = words.next();
+        let error = |reason: String| {
+            LoadError::new(
+                path,
+                Some(number + 1),
+                format!("material library: {reason}"),
+            )
+        };
+        // What `tobj` refuses without saying where.
+        match keyword {
+            Some(
+                k @ ("newmtl" | "map_Ka" | "map_Kd" | "map_Ks" | "map_Bump" | "map_bump" | "map_Ns"
+                | "map_ns" | "map_NS" | "bump" | "map_d"),
+            ) if line.trim()[k.len()..].trim().is_empty() => {
+                return Err(error(format!("{k} needs a name")));
+            }
+            Some("illum")
+                if words
+                    .clone()
+                    .next()
+                    .and_then(|w| w.parse::<u8>().ok())
+                    .is_none() =>
+            {
+                return Err(error(
+                    "illum needs an illumination model number 0 to 255".into(),
+                ));
+            }
+            _ => {}
+        }
+        let (expected, what) = match keyword {
             Some("Kd" | "Ka" | "Ks" | "Ke" | "Tf") => (3, "colour needs three numbers >= 0"),
             Some("Ns" | "Ni" | "d" | "Tr") => (1, "needs one finite number"),
             _ => continue,
@@ -257,17 +345,17 @@ fn check_mtl(path: &Path, bytes: &[u8]) -> Result<(), LoadError> {
     Ok(())
 }
 
-/// Every `usemtl` name, in order of first use.
-fn used_material_names(text: &str) -> Vec<String> {
+/// Every `usemtl` name, in order of first use, with the line of that use.
+fn used_material_names(text: &str) -> Vec<(String, usize)> {
     let mut seen = HashMap::new();
     let mut names = Vec::new();
-    for line in text.lines() {
+    for (number, line) in text.lines().enumerate() {
         let line = line.trim_start();
         if let Some(rest) = line.strip_prefix("usemtl") {
             if rest.starts_with(|c: char| c.is_ascii_whitespace()) {
                 let name = rest.trim().to_string();
                 if !name.is_empty() && seen.insert(name.clone(), ()).is_none() {
-                    names.push(name);
+                    names.push((name, number + 1));
                 }
             }
         }
@@ -278,10 +366,16 @@ fn used_material_names(text: &str) -> Vec<String> {
 /// Turns `tobj`'s line-less error kind into an error naming the first line that causes it.
 fn locate_obj_error(path: &Path, text: &str, kind: tobj::LoadError) -> LoadError {
     let (mut n_positions, mut n_texcoords, mut n_normals) = (0usize, 0usize, 0usize);
+    // `tobj` keeps a colour per `v` line that has one (x y z r g b) and indexes them as the
+    // positions: a face using a vertex past the coloured ones fails.
+    let mut n_colours = 0usize;
     for line in text.lines() {
         let mut words = line.split_ascii_whitespace();
         match words.next() {
-            Some("v") => n_positions += 1,
+            Some("v") => {
+                n_positions += 1;
+                n_colours += usize::from(words.count() == 6);
+            }
             Some("vt") => n_texcoords += 1,
             Some("vn") => n_normals += 1,
             _ => {}
@@ -317,7 +411,33 @@ fn locate_obj_error(path: &Path, text: &str, kind: tobj::LoadError) -> LoadError
         let problem = match words.next() {
             Some("v") => {
                 seen_p += 1;
-                (!floats_ok(words, 3)).then(|| "vertex position needs three numbers".to_string())
+                let rest: Vec<&str> = words.clone().skip(3).collect();
+                if !floats_ok(words, 3) {
+                    Some("vertex position needs three numbers".to_string())
+                } else {
+                    match rest[..] {
+                        [] => None,
+                        [w] => match w.parse::<f32>() {
+                            Ok(w) if w != 0.0 => None,
+                            Ok(_) => Some("vertex weight w is 0".to_string()),
+                            Err(_) => Some(format!("vertex weight '{w}' is not a number")),
+                        },
+                        [_, _, _] => None,
+                        _ => Some(format!(
+                            "vertex has {} numbers after x y z: expected a weight w or a colour r g b",
+                            rest.len()
+                        )),
+                    }
+                }
+            }
+            // `tobj` takes the name after the first space.
+            Some("usemtl")
+                if line
+                    .trim()
+                    .split_once(' ')
+                    .is_none_or(|(_, name)| name.trim().is_empty()) =>
+            {
+                Some("usemtl needs a name after a space".to_string())
             }
             Some("vt") => {
                 seen_t += 1;
@@ -359,9 +479,20 @@ fn locate_obj_error(path: &Path, text: &str, kind: tobj::LoadError) -> LoadError
                             problem = Some(format!("face corner '{corner}' has no position index"));
                             break;
                         }
-                        if let Err(e) = resolve(word, total) {
-                            problem = Some(format!("face corner '{corner}': {what} {e}"));
-                            break;
+                        match resolve(word, total) {
+                            Err(e) => {
+                                problem = Some(format!("face corner '{corner}': {what} {e}"));
+                                break;
+                            }
+                            Ok(Some(index)) if i == 0 && n_colours > 0 && index >= n_colours => {
+                                problem = Some(format!(
+                                    "face corner '{corner}': vertex {} has no colour, but {n_colours} \
+                                     vertices do (r g b on every v line or on none)",
+                                    index + 1
+                                ));
+                                break;
+                            }
+                            _ => {}
                         }
                     }
                 }
@@ -458,6 +589,86 @@ mod tests {
     }
 
     #[test]
+    fn comments_hold_any_bytes_and_nothing_else_does() {
+        let scene = parse_obj(
+            Path::new("/nowhere/test.obj"),
+            b"# by Ren\xe9\nv 0 0 0\nv 1 0 0 # \xff\xfe\nv 0 1 0\nf 1 2 3\n",
+        )
+        .unwrap();
+        assert_eq!(scene.triangles.len(), 1);
+        assert_eq!(
+            scene.positions[1],
+            Vec3::X,
+            "the line before the comment is kept"
+        );
+        let err = parse_obj(
+            Path::new("/nowhere/test.obj"),
+            b"v 0 0 0\ng caf\xe9 # ok\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        )
+        .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "/nowhere/test.obj:2: invalid UTF-8 outside a comment"
+        );
+    }
+
+    #[test]
+    fn every_statement_tobj_refuses_names_its_line() {
+        let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+        let cases = [
+            ("v 1 2 3 0\n", "4: vertex weight w is 0"),
+            ("v 1 2 3 x\n", "4: vertex weight 'x' is not a number"),
+            (
+                "v 1 2 3 4 5\n",
+                "4: vertex has 2 numbers after x y z: expected a weight w or a colour r g b",
+            ),
+            ("usemtl\n", "4: usemtl needs a name after a space"),
+            ("usemtl\tred\n", "4: usemtl needs a name after a space"),
+        ];
+        for (line, message) in cases {
+            let err = parse(&format!("{tri}{line}f 1 2 3\n")).unwrap_err();
+            assert_eq!(
+                err.to_string(),
+                format!("/nowhere/test.obj:{message}"),
+                "{line:?}"
+            );
+        }
+        // Colours on some vertices only: the face that uses one without.
+        let err = parse("v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "/nowhere/test.obj:4: face corner '2': vertex 2 has no colour, but 1 vertices do \
+             (r g b on every v line or on none)"
+        );
+        // A weight, and colours on every vertex, are fine.
+        let scene = parse("v 0 0 0 1 0 0\nv 2 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n").unwrap();
+        assert_eq!(scene.triangles.len(), 1);
+        let scene = parse("v 0 0 0\nv 2 0 0 2\nv 0 1 0\nf 1 2 3\n").unwrap();
+        assert_eq!(scene.positions[1], Vec3::X, "x y z divided by w");
+    }
+
+    #[test]
+    fn missing_materials_warn_once_naming_them() {
+        let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+        let path = Path::new("/nowhere/test.obj");
+        let text = format!("{tri}usemtl a\nf 1 2 3\nusemtl b\nf 1 3 2\nusemtl a\nf 2 3 1\n");
+        let (_, warnings) = parse_obj_warned(path, text.as_bytes()).unwrap();
+        assert_eq!(
+            warnings,
+            ["warning: /nowhere/test.obj: no material library (mtllib); default colours for a, b"]
+        );
+        let text = format!("mtllib gone.mtl\n{text}");
+        let (_, warnings) = parse_obj_warned(path, text.as_bytes()).unwrap();
+        assert_eq!(
+            warnings,
+            ["warning: /nowhere/test.obj: material library gone.mtl not found; default colours for a, b"]
+        );
+        // Without any usemtl there is nothing to warn about.
+        let (_, warnings) = parse_obj_warned(path, format!("{tri}f 1 2 3\n").as_bytes()).unwrap();
+        assert!(warnings.is_empty());
+    }
+
+    #[test]
     fn file_normals_are_kept() {
         let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nf 1//1 2//1 3//1\n";
         let scene = parse(text).unwrap();
@@ -512,7 +723,57 @@ mod tests {
                 "{err}"
             );
         }
+        // What tobj refuses in a library is located too; comments hold any bytes.
+        for (bad, message) in [
+            ("newmtl", "newmtl needs a name"),
+            ("map_Kd  ", "map_Kd needs a name"),
+            (
+                "illum x",
+                "illum needs an illumination model number 0 to 255",
+            ),
+        ] {
+            std::fs::write(dir.join("m.mtl"), format!("# m\nnewmtl green\n{bad}\n")).unwrap();
+            let err = Scene::load(&obj).unwrap_err();
+            assert_eq!(
+                err.to_string(),
+                format!(
+                    "{}:3: material library: {message}",
+                    dir.join("m.mtl").display()
+                )
+            );
+        }
+        std::fs::write(dir.join("m.mtl"), b"# \xe9t\xe9\nnewmtl green\nKd 0 1 0\n").unwrap();
+        assert_eq!(
+            Scene::load(&obj).unwrap().materials[0].diffuse,
+            [0.0, 1.0, 0.0]
+        );
+        // A name the library does not define: a warning naming it and its first use, once.
+        std::fs::write(
+            &obj,
+            "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl green\nf 1 2 3\n\
+             usemtl blue\nf 1 3 2\nusemtl blue\nf 2 3 1\n",
+        )
+        .unwrap();
+        let bytes = std::fs::read(&obj).unwrap();
+        let (scene, warnings) = parse_obj_warned(&obj, &bytes).unwrap();
+        assert_eq!(
+            warnings,
+            [format!(
+                "warning: {}:7: usemtl blue: no such material in the library; default colour",
+                obj.display()
+            )]
+        );
+        assert_eq!(scene.triangles[1].material, scene.triangles[2].material);
+        assert_eq!(
+            scene.materials[scene.triangles[1].material as usize],
+            Material::default()
+        );
         // A missing library is a warning: default colours, one per used name.
+        std::fs::write(
+            &obj,
+            "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl green\nf 1 2 3\n",
+        )
+        .unwrap();
         std::fs::remove_file(dir.join("m.mtl")).unwrap();
         let scene = Scene::load(&obj).unwrap();
         assert_eq!(scene.materials[0], Material::default_for_name("green"));

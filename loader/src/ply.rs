@@ -89,6 +89,8 @@ struct Element {
     name: String,
     count: usize,
     properties: Vec<Property>,
+    /// The header line that declares it.
+    line: usize,
 }
 
 struct Header {
@@ -124,7 +126,13 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
         .elements
         .iter()
         .find(|e| e.name == "vertex")
-        .ok_or_else(|| LoadError::new(path, None, "no 'vertex' element"))?;
+        .ok_or_else(|| {
+            LoadError::new(
+                path,
+                Some(header.header_lines),
+                "no 'vertex' element before end_header",
+            )
+        })?;
     let slots: Vec<VertexSlot> = vertex_element
         .properties
         .iter()
@@ -142,12 +150,20 @@ pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Scene, LoadError> {
         .collect();
     let has = |slot: VertexSlot| slots.contains(&slot);
     if !(0..3).all(|i| has(VertexSlot::Position(i))) {
-        return Err(LoadError::new(path, None, "vertex element lacks x, y or z"));
+        return Err(LoadError::new(
+            path,
+            Some(vertex_element.line),
+            "vertex element lacks x, y or z",
+        ));
     }
     let has_normals = (0..3).all(|i| has(VertexSlot::Normal(i)));
     let has_texcoords = (0..2).all(|i| has(VertexSlot::Texcoord(i)));
     if !header.elements.iter().any(|e| e.name == "face") {
-        return Err(LoadError::new(path, None, "no 'face' element"));
+        return Err(LoadError::new(
+            path,
+            Some(header.header_lines),
+            "no 'face' element before end_header",
+        ));
     }
     check_counts_against_data(path, &header, bytes.len())?;
     let vertex_count = vertex_element.count;
@@ -202,9 +218,20 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, LoadError> {
         line_number += 1;
         let raw = &bytes[offset..offset + length];
         offset += length + 1;
-        let line = std::str::from_utf8(raw)
-            .map_err(|_| LoadError::new(path, Some(line_number), "header line is not text"))?
-            .trim_end_matches('\r');
+        // A comment may hold any bytes (a Latin-1 author's name, say).
+        let is_comment = raw.starts_with(b"comment") || raw.starts_with(b"obj_info");
+        let line = match std::str::from_utf8(raw) {
+            Ok(line) => line,
+            Err(_) if is_comment => "comment",
+            Err(_) => {
+                return Err(LoadError::new(
+                    path,
+                    Some(line_number),
+                    "header line is not text",
+                ))
+            }
+        }
+        .trim_end_matches('\r');
         let error = |reason: String| LoadError::new(path, Some(line_number), reason);
         let words: Vec<&str> = line.split_ascii_whitespace().collect();
         if line_number == 1 {
@@ -237,6 +264,7 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, LoadError> {
                     name: name.to_string(),
                     count,
                     properties: Vec::new(),
+                    line: line_number,
                 });
             }
             Some("property") => {
@@ -278,7 +306,14 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, LoadError> {
             Some(other) => return Err(error(format!("unknown header keyword '{other}'"))),
         }
     }
-    let format = format.ok_or_else(|| LoadError::new(path, None, "header has no 'format' line"))?;
+    // What the whole header lacks is reported at its end.
+    let format = format.ok_or_else(|| {
+        LoadError::new(
+            path,
+            Some(line_number),
+            "header has no 'format' line before end_header",
+        )
+    })?;
     for element in &elements {
         if element.name == "face" {
             let ok = element.properties.iter().any(|p| {
@@ -288,7 +323,7 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, LoadError> {
             if !ok {
                 return Err(LoadError::new(
                     path,
-                    None,
+                    Some(element.line),
                     "face element has no integer 'vertex_indices' list",
                 ));
             }
@@ -678,6 +713,52 @@ mod tests {
 
     fn parse(bytes: &[u8]) -> Result<Scene, LoadError> {
         parse_ply(Path::new("/nowhere/test.ply"), bytes)
+    }
+
+    #[test]
+    fn header_errors_name_their_line_and_comments_hold_any_bytes() {
+        let latin1 = ASCII_SQUARE.replace("comment test", "comment caf\u{e9}");
+        let latin1 = latin1.replace('\u{e9}', "\u{1}");
+        let mut bytes = latin1.into_bytes();
+        let at = bytes.iter().position(|&b| b == 1).unwrap();
+        bytes[at] = 0xe9; // Latin-1, not UTF-8
+        assert_eq!(parse(&bytes).unwrap().triangles.len(), 3);
+        let cases = [
+            (
+                ASCII_SQUARE.replace(
+                    "element face 2\nproperty list uchar int vertex_indices\n",
+                    "",
+                ),
+                "/nowhere/test.ply:9: no 'face' element before end_header",
+            ),
+            (
+                ASCII_SQUARE.replace("property float z\n", ""),
+                "/nowhere/test.ply:4: vertex element lacks x, y or z",
+            ),
+            (
+                ASCII_SQUARE.replace("format ascii 1.0\n", ""),
+                "/nowhere/test.ply:10: header has no 'format' line before end_header",
+            ),
+            (
+                ASCII_SQUARE.replace(
+                    "list uchar int vertex_indices",
+                    "list uchar float vertex_indices",
+                ),
+                "/nowhere/test.ply:9: face element has no integer 'vertex_indices' list",
+            ),
+        ];
+        for (text, message) in cases {
+            assert_eq!(parse(text.as_bytes()).unwrap_err().to_string(), message);
+        }
+        let mut bytes = ASCII_SQUARE
+            .replace("property uchar red", "property uchar r\u{1}d")
+            .into_bytes();
+        let at = bytes.iter().position(|&b| b == 1).unwrap();
+        bytes[at] = 0xe9;
+        assert_eq!(
+            parse(&bytes).unwrap_err().to_string(),
+            "/nowhere/test.ply:8: header line is not text"
+        );
     }
 
     #[test]

@@ -595,10 +595,19 @@ pub fn beetle() -> Scene {
 
 /// The procedural scene called `name` (`room`, `conference` or `beetle`).
 pub fn by_name(name: &str) -> Option<Scene> {
+    built_in(name).map(|build| build())
+}
+
+/// Whether `name` is a built-in scene's (and not a file's), without building it.
+pub fn is_built_in(name: &str) -> bool {
+    built_in(name).is_some()
+}
+
+fn built_in(name: &str) -> Option<fn() -> Scene> {
     match name {
-        "room" | "erw6" => Some(room()),
-        "conference" => Some(conference()),
-        "beetle" => Some(beetle()),
+        "room" | "erw6" => Some(room),
+        "conference" => Some(conference),
+        "beetle" => Some(beetle),
         _ => None,
     }
 }

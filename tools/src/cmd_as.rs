@@ -43,10 +43,15 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             args.format
         )));
     }
-    exit::check_writable(&args.output)?;
-    if let Some(path) = &args.listing {
-        exit::check_writable(path)?;
+    let mut files = crate::outputs::Files::new();
+    for input in &args.input {
+        files.input("the input", input);
     }
+    files.output("-o", &args.output);
+    if let Some(path) = &args.listing {
+        files.output("--listing", path);
+    }
+    files.check()?;
     let mut opts = Options {
         include_dirs: args.include.clone(),
         ..Default::default()

@@ -35,7 +35,11 @@ fn parse_address(s: &str) -> Result<u32, String> {
 }
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
-    exit::check_writable(&args.output)?;
+    let mut files = crate::outputs::Files::new();
+    for input in &args.input {
+        files.input("the input", input);
+    }
+    files.output("-o", &args.output).check()?;
     let mut objects = Vec::new();
     for path in &args.input {
         let name = path.display().to_string();

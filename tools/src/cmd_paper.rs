@@ -78,8 +78,10 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     let jobs_dir = args.out.join("jobs");
 
     if args.list_jobs {
-        // the listed renders write their files there, and a renderer does not make folders
-        std::fs::create_dir_all(&jobs_dir).map_err(|e| Error::output(&jobs_dir, e))?;
+        // the listed renders write their files there, and a renderer does not make folders;
+        // a folder that cannot be made is bad input, found before any work (status 2)
+        std::fs::create_dir_all(&jobs_dir)
+            .map_err(|e| Error::input(format!("--out: {}: {e}", jobs_dir.display())))?;
         let exe = std::env::current_exe()
             .ok()
             .and_then(|p| p.to_str().map(str::to_string))
@@ -107,6 +109,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
                     dir.display()
                 )));
             }
+            check_collected(&jobs, dir, &args.out)?;
             dir.clone()
         }
         None => {
@@ -223,6 +226,31 @@ fn prepare_out(out: &Path) -> exit::Result<()> {
         .map_err(|e| Error::input(format!("--out {}: {e}", out.display())))?;
     exit::check_writable(&out.join("report.json"))
         .map_err(|e| Error::input(format!("--out: {}", e.message.unwrap_or_default())))
+}
+
+/// The files the report is written to (the figures besides).
+const REPORT_FILES: [&str; 6] = [
+    "report.json",
+    "report.md",
+    "report.html",
+    "results.md",
+    "figure2.png",
+    "figure2.svg",
+];
+
+/// No report file overwrites a stats file or heat map `--collect` reads.
+fn check_collected(jobs: &[Job], dir: &Path, out: &Path) -> exit::Result<()> {
+    let mut files = crate::outputs::Files::new();
+    for job in jobs {
+        let (cycles, wait) = crate::heatmap::paths(&job.heatmap_path(dir));
+        for path in [job.stats_path(dir), cycles, wait] {
+            files.input("the collected", &path);
+        }
+    }
+    for name in REPORT_FILES {
+        files.output("--out", &out.join(name));
+    }
+    files.check()
 }
 
 fn write(path: &Path, text: &str) -> exit::Result<()> {

@@ -35,13 +35,14 @@ pub struct Args {
     #[arg(long, conflicts_with = "trace")]
     timing: bool,
     /// Print every executed instruction: address, text and the registers it wrote (like
-    /// IBM systemsim's instruction trace).
+    /// IBM systemsim's instruction trace); on standard error with --json.
     #[arg(long)]
     trace: bool,
     /// Main memory in bytes.
     #[arg(long, default_value_t = 1 << 20)]
     memory: u64,
-    /// Machine-readable output.
+    /// Machine-readable output: one JSON document on standard output, with the
+    /// --dump-ls ranges in it.
     #[arg(long)]
     json: bool,
     /// Print nothing but what the program writes, as `elfspe` ran it (the exit status
@@ -163,6 +164,16 @@ struct RunReport {
     cycles: u64,
     outbound_mailbox: Option<u32>,
     registers: Vec<[u32; 4]>,
+    /// The `--dump-ls` ranges, in order.
+    local_store: Vec<LsDump>,
+}
+
+/// One `--dump-ls` range in `spu run --json`.
+#[derive(serde::Serialize)]
+struct LsDump {
+    address: usize,
+    /// The bytes as lowercase hex, two digits each.
+    bytes: String,
 }
 
 /// A `--dump-ls ADDR:LEN` range, checked against the 256 KiB local store.
@@ -222,7 +233,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     // The mailbox holds 4 values: the rest go in as the program waits for them.
     let outcome = loop {
         let outcome = if args.trace {
-            trace(&mut system, id, args.max_cycles, &symbols)?
+            trace(&mut system, id, args.max_cycles, &symbols, args.json)?
         } else {
             system.run(args.max_cycles)
         };
@@ -248,34 +259,62 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     let spu = system.spu_mut(id);
     let out_mbox = spu.read_outbound_mailbox();
     if args.json {
-        let report = RunReport {
-            stop: describe(&stop),
-            exit_code: exit::program_exit_code(&stop),
-            pc: spu.pc(),
-            instructions: spu.instructions(),
-            cycles: spu.cycles(),
-            outbound_mailbox: out_mbox,
-            registers: (0..128).map(|n| spu.reg(n)).collect(),
-        };
-        let json = serde_json::to_string(&report)
-            .map_err(|e| exit::Error::failure(format!("JSON: {e}")))?;
-        outln!("{json}");
-    } else if !args.quiet {
-        outln!("stopped: {}", describe(&stop));
-        outln!("pc: {:#x}", spu.pc());
-        outln!("instructions: {}", spu.instructions());
-        outln!("cycles: {}", spu.cycles());
-        if let Some(v) = out_mbox {
-            outln!("outbound mailbox: {v:#x}");
-        }
-        if args.dump_regs {
-            for n in 0..128 {
-                let r = spu.reg(n);
-                outln!("${n}: {:08x} {:08x} {:08x} {:08x}", r[0], r[1], r[2], r[3]);
+        json_report(&spu, &stop, out_mbox, &dumps)?;
+    } else {
+        if !args.quiet {
+            outln!("stopped: {}", describe(&stop));
+            outln!("pc: {:#x}", spu.pc());
+            outln!("instructions: {}", spu.instructions());
+            outln!("cycles: {}", spu.cycles());
+            if let Some(v) = out_mbox {
+                outln!("outbound mailbox: {v:#x}");
+            }
+            if args.dump_regs {
+                for n in 0..128 {
+                    let r = spu.reg(n);
+                    outln!("${n}: {:08x} {:08x} {:08x} {:08x}", r[0], r[1], r[2], r[3]);
+                }
             }
         }
+        text_dumps(spu.ls(), &dumps)?;
     }
-    let ls = spu.ls();
+    Ok(exit_status(&args.file, &stop))
+}
+
+/// `spu run --json`: one document on standard output, the local-store dumps in it.
+fn json_report(
+    spu: &Spu,
+    stop: &StopReason,
+    out_mbox: Option<u32>,
+    dumps: &[std::ops::Range<usize>],
+) -> exit::Result<()> {
+    let report = RunReport {
+        stop: describe(stop),
+        exit_code: exit::program_exit_code(stop),
+        pc: spu.pc(),
+        instructions: spu.instructions(),
+        cycles: spu.cycles(),
+        outbound_mailbox: out_mbox,
+        registers: (0..128).map(|n| spu.reg(n)).collect(),
+        local_store: dumps
+            .iter()
+            .map(|range| LsDump {
+                address: range.start,
+                bytes: spu.ls()[range.clone()]
+                    .iter()
+                    .map(|b| format!("{b:02x}"))
+                    .collect(),
+            })
+            .collect(),
+    };
+    let json =
+        serde_json::to_string(&report).map_err(|e| exit::Error::failure(format!("JSON: {e}")))?;
+    outln!("{json}");
+    Ok(())
+}
+
+/// `--dump-ls` as text: 16 bytes a row, each row with its address.
+fn text_dumps(ls: &[u8], dumps: &[std::ops::Range<usize>]) -> exit::Result<()> {
     for range in dumps {
         for row in range.clone().step_by(16) {
             let end = (row + 16).min(range.end);
@@ -283,7 +322,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             outln!("{row:05x}: {}", hex.join(" "));
         }
     }
-    Ok(exit_status(&args.file, &stop))
+    Ok(())
 }
 
 /// `--dump-entry`: the registers that are not zero at entry and the argv region.
@@ -361,12 +400,14 @@ pub fn describe(stop: &StopReason) -> String {
 }
 
 /// Runs one instruction at a time (no timing model: one cycle each), printing each one's
-/// address, text and the registers it changed.
+/// address, text and the registers it changed: on standard error under `--json`, whose
+/// standard output is the one JSON document (a trace is too long to hold in it).
 fn trace(
     system: &mut System,
     id: ContextId,
     max_cycles: u64,
     symbols: &SymbolTable,
+    json: bool,
 ) -> exit::Result<Outcome> {
     loop {
         let spu = system.spu(id);
@@ -393,7 +434,11 @@ fn trace(
                 ));
             }
         }
-        outln!("{line}");
+        if json {
+            eprintln!("{line}");
+        } else {
+            outln!("{line}");
+        }
         if outcome != Outcome::CycleLimit {
             return Ok(outcome);
         }

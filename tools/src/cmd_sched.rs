@@ -33,12 +33,19 @@ pub struct Args {
     output: Option<PathBuf>,
 }
 
-/// Exit status 0, 1 when the output cannot be written, 2 for bad input (an unreadable
-/// source, a block that does not schedule, bad options).
+/// Exit status 0, 1 when writing the output fails part-way, 2 for bad input (an unreadable
+/// source, a block that does not schedule, bad options, an output that cannot be written or
+/// would overwrite an input).
 pub fn run(args: Args) -> exit::Result<ExitCode> {
-    if let Some(path) = &args.output {
-        exit::check_writable(path)?;
+    let mut files = crate::outputs::Files::new();
+    files.input("the input", &args.input);
+    for path in &args.names {
+        files.input("--names", path);
     }
+    if let Some(path) = &args.output {
+        files.output("-o", path);
+    }
+    files.check()?;
     let read =
         |p: &PathBuf| std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()));
     let source = read(&args.input)?;

@@ -26,9 +26,12 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
+    let mut files = crate::outputs::Files::new();
+    files.input("the input", &args.file);
     if let Some(path) = &args.output {
-        exit::check_writable(path)?;
+        files.output("-o", path);
     }
+    files.check()?;
     let bytes = options::read_input(&args.file, options::MAX_SOURCE_BYTES)?;
     let src =
         String::from_utf8(bytes).map_err(|_| format!("{}: not UTF-8 text", args.file.display()))?;

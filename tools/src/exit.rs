@@ -81,7 +81,9 @@ impl Error {
         Error::new(Status::Failure, message)
     }
 
-    /// An output file that could not be written (status 1).
+    /// An output file whose writing failed part-way, a full device say (status 1). One
+    /// that cannot be written at all is bad input found before the work starts (status 2,
+    /// [`check_writable`]).
     pub fn output(path: &Path, err: impl fmt::Display) -> Error {
         Error::failure(format!("{}: {err}", path.display()))
     }
@@ -137,7 +139,8 @@ macro_rules! out {
 
 /// Writes `bytes` to `path` whole or not at all: into a temporary file in the same
 /// directory, renamed over `path` once complete, so a failure never leaves a partial or
-/// empty output behind.
+/// empty output behind. A symbolic link is written through, to the file it names, as
+/// writing into it in place would.
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
     write_file_with(path, |file| {
         use std::io::Write as _;
@@ -159,13 +162,14 @@ pub fn write_file_with(
             .and_then(|mut file| produce(&mut file).and_then(|_| file.flush()));
         return result.map_err(|e| Error::output(path, e));
     }
-    let tmp = temp_path(path);
+    let target = crate::outputs::resolve_links(path);
+    let tmp = temp_path(&target);
     let result = (|| {
         let mut file = std::fs::File::create(&tmp)?;
         produce(&mut file)?;
         file.flush()?;
         drop(file);
-        std::fs::rename(&tmp, path)
+        std::fs::rename(&tmp, &target)
     })();
     result.map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
@@ -182,7 +186,7 @@ pub fn check_writable(path: &Path) -> Result<()> {
     if is_special(path) {
         return Ok(());
     }
-    let tmp = temp_path(path);
+    let tmp = temp_path(&crate::outputs::resolve_links(path));
     match std::fs::File::create(&tmp) {
         Ok(_) => {
             let _ = std::fs::remove_file(&tmp);

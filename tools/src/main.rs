@@ -18,6 +18,7 @@ mod cmd_timing;
 mod frame_views;
 mod heatmap;
 mod options;
+mod outputs;
 mod paper_data;
 mod paper_figure;
 mod paper_jobs;

@@ -67,17 +67,22 @@ pub fn write_figure2(dir: &Path, stem: &str, series: &[Series]) -> Result<Vec<St
         draw(&root, series).map_err(|e| format!("{png}: {e}"))?;
     }
     let path = dir.join(&png);
-    crate::png::encode_rgb(&rgb, WIDTH, HEIGHT)
-        .and_then(|bytes| std::fs::write(&path, bytes).map_err(|e| e.to_string()))
+    let bytes = crate::png::encode_rgb(&rgb, WIDTH, HEIGHT)
         .map_err(|e| format!("{}: {e}", path.display()))?;
+    write_whole(&path, &bytes)?;
     let mut text = String::new();
     {
         let root = SVGBackend::with_string(&mut text, (WIDTH, HEIGHT)).into_drawing_area();
         draw(&root, series).map_err(|e| format!("{svg}: {e}"))?;
     }
     let path = dir.join(&svg);
-    std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    write_whole(&path, text.as_bytes())?;
     Ok(vec![png, svg])
+}
+
+/// [`crate::exit::write_file`], its message as the figures report it.
+fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    crate::exit::write_file(path, bytes).map_err(|e| e.message.unwrap_or_default())
 }
 
 fn draw<DB: DrawingBackend>(

@@ -195,6 +195,11 @@ impl Args {
                 shading::MAX_LIGHTS
             )));
         }
+        if !self.lights.is_empty() && self.shade == ShadeMode::None {
+            return Err(Error::input(
+                "--light lights a shaded frame, and this one is not shaded: add --shade simple or --shade shadows",
+            ));
+        }
         if self.fill && self.shade != ShadeMode::None {
             return Err(Error::input(format!(
                 "--fill runs the fill program, which does not shade: drop --shade {}",
@@ -272,17 +277,24 @@ fn check_outputs(args: &Args) -> exit::Result<()> {
             )));
         }
     }
-    exit::check_writable(&args.output)?;
-    if let Some((_, wait)) = &heatmaps {
-        exit::check_writable(wait)?;
+    let mut files = crate::outputs::Files::new();
+    if !spu_loader::procedural::is_built_in(&args.scene) {
+        files.input("the scene", std::path::Path::new(&args.scene));
     }
-    for path in [&args.stats, &args.profile, &args.heatmap, &args.trace]
-        .into_iter()
-        .flatten()
-    {
-        exit::check_writable(path)?;
+    files.output("-o", &args.output);
+    if let Some((cycles, wait)) = &heatmaps {
+        files.output("--heatmap", cycles).output("--heatmap", wait);
     }
-    Ok(())
+    for (option, path) in [
+        ("--stats", &args.stats),
+        ("--profile", &args.profile),
+        ("--trace", &args.trace),
+    ] {
+        if let Some(path) = path {
+            files.output(option, path);
+        }
+    }
+    files.check()
 }
 
 /// The `spu render` options (after `render`) that render `config` and write `outputs`:

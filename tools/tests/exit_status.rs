@@ -129,16 +129,47 @@ fn cycle_limits_exit_124() {
         assert_eq!(out.status, 124, "{command}: {}", out.stderr);
         assert!(out.stderr.contains("cycle limit"), "{}", out.stderr);
     }
-    let out = spu(&["run", &spin, "--timing", "--max-cycles", "5000"]);
+    // The stop is exact: timing model on or off, either engine, with a branch miss, a
+    // dependency stall or a memoized block in the way (`--max-cycles 10` reported 23).
+    let dependent = program(
+        &d,
+        "dependent.s",
+        "        il $3, 1\n        fm $4, $3, $3\n        fm $5, $4, $4\n        fm $6, $5, $5\n        br _start\n",
+    );
+    for file in [&spin, &dependent] {
+        for limit in ["10", "23", "5000"] {
+            for engine in ["interp", "jit"] {
+                for timing in [&[][..], &["--timing"][..]] {
+                    let args = [
+                        &[
+                            "run",
+                            file.as_str(),
+                            "--max-cycles",
+                            limit,
+                            "--engine",
+                            engine,
+                        ][..],
+                        timing,
+                    ]
+                    .concat();
+                    let out = spu(&args);
+                    assert_eq!(out.status, 124, "{args:?}: {}", out.stderr);
+                    assert!(
+                        out.stdout.contains(&format!("\ncycles: {limit}\n")),
+                        "{args:?}: {}",
+                        out.stdout
+                    );
+                    let json = spu(&[&args[..], &["--json"]].concat());
+                    let report: serde_json::Value = serde_json::from_str(&json.stdout).unwrap();
+                    assert_eq!(report["cycles"].to_string(), limit, "{args:?}");
+                }
+            }
+        }
+    }
+    let out = spu(&["prof", &dependent, "--max-cycles", "23", "--json"]);
     assert_eq!(out.status, 124);
-    let cycles: u64 = out
-        .stdout
-        .lines()
-        .find_map(|l| l.strip_prefix("cycles: "))
-        .and_then(|n| n.parse().ok())
-        .expect("cycles");
-    // The limit is checked between the blocks the timing model replays whole.
-    assert!((5000..5100).contains(&cycles), "{cycles}");
+    let prof: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    assert!(prof["totals"]["cycles"].as_u64().unwrap() <= 23, "{prof}");
 }
 
 #[test]
@@ -316,6 +347,39 @@ fn bad_scenes_are_refused_with_the_reason() {
     let missing = d.join("missing.obj");
     let out = render(missing.to_str().unwrap());
     out.refused(2, "missing.obj: cannot read");
+    // MTL errors name the library's line; a comment may hold any bytes; a material the
+    // library lacks is a warning naming it, once.
+    write(
+        &d,
+        "m.mtl",
+        b"# \xe9t\xe9\nnewmtl red\nKd 1 0 0\nillum two\n",
+    );
+    let tri = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    let scene = write(&d, "m.obj", format!("{tri}usemtl red\nf 1 2 3\n"));
+    let out = render(&scene);
+    out.refused(
+        2,
+        &format!(
+            "{}:4: material library: illum needs",
+            d.join("m.mtl").display()
+        ),
+    );
+    write(&d, "m.mtl", b"# \xe9t\xe9\nnewmtl red\nKd 1 0 0\n");
+    let mut obj = format!(
+        "# caf\u{1}\n{tri}usemtl red\nf 1 2 3\nusemtl blue\nf 1 3 2\nusemtl blue\nf 2 3 1\n"
+    )
+    .into_bytes();
+    let at = obj.iter().position(|&b| b == 1).unwrap();
+    obj[at] = 0xe9;
+    let scene = write(&d, "m.obj", obj);
+    let out = render(&scene);
+    assert_eq!(out.status, 0, "{}", out.stderr);
+    let warning = format!(
+        "warning: {scene}:8: usemtl blue: no such material in the library; default colour\n"
+    );
+    assert!(out.stderr.starts_with(&warning), "{}", out.stderr);
+    assert_eq!(out.stderr.matches("warning").count(), 1, "{}", out.stderr);
+    std::fs::remove_file(png).unwrap();
     assert!(
         !Path::new(png).exists(),
         "no image is written for a refused scene"
@@ -374,6 +438,41 @@ fn json_outputs_are_well_formed() {
     assert!(
         run["stop"].as_str().unwrap().starts_with("stop 0x2007"),
         "{run}"
+    );
+
+    // Local-store dumps go inside the one document; the trace goes to standard error.
+    let out = spu(&[
+        "run",
+        &src,
+        "--json",
+        "--dump-ls",
+        "0:0x10",
+        "--dump-ls",
+        "8:4",
+        "--trace",
+    ]);
+    assert_eq!(out.status, 7, "{}", out.stderr);
+    let run: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+    assert_eq!(
+        run["local_store"],
+        serde_json::json!([
+            {"address": 0, "bytes": "4080038321a00e030000200700000000"},
+            {"address": 8, "bytes": "00002007"},
+        ])
+    );
+    assert_eq!(run["instructions"], 3);
+    assert_eq!(
+        out.stderr,
+        "00000: 40800383  il\t$3,7\t$3 <- 00000007 00000007 00000007 00000007\n\
+         00004: 21a00e03  wrch\t$ch28,$3\n\
+         00008: 00002007  stop\n"
+    );
+    // Without --json the same dump is text after the summary.
+    let out = spu(&["run", &src, "--dump-ls", "8:4"]);
+    assert!(
+        out.stdout.ends_with("\n00008: 00 00 20 07\n"),
+        "{}",
+        out.stdout
     );
 
     let out = spu(&["prof", &src, "--json"]);
@@ -482,4 +581,155 @@ fn recursive_macro_from_the_fuzzer_is_bad_input() {
         out.stderr
     );
     assert_eq!(files_in(&d), Vec::<String>::new());
+}
+
+/// No output overwrites an input or another output of the same command, whatever the
+/// spelling, symbolic link or hard link: refused before any work, status 2, naming both,
+/// and the files are left as they were.
+#[test]
+fn no_output_overwrites_an_input_or_another_output() {
+    let d = dir("clobber");
+    let at = |name: &str| d.join(name).to_str().unwrap().to_string();
+    let src = program(&d, "c.s", "        stop 0x2000\n");
+    let original = std::fs::read(&src).unwrap();
+    assert_eq!(
+        spu(&["as", &src, "-c", "-o", &at("a.o")]).status,
+        0,
+        "setup"
+    );
+    assert_eq!(spu(&["as", &src, "-c", "-o", &at("b.o")]).status, 0);
+    let (a_o, b_o) = (at("a.o"), at("b.o"));
+    let objects = std::fs::read(&a_o).unwrap();
+    let scene = write(&d, "s.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let dotted = format!("{}/./c.s", d.display());
+    let words = |w: &[&str]| -> Vec<String> { w.iter().map(|s| s.to_string()).collect() };
+    let cases: Vec<(Vec<String>, String)> = vec![
+        (
+            words(&["as", &src, "-o", &src]),
+            format!("-o {src}: would overwrite the input {src}"),
+        ),
+        (
+            words(&["as", &src, "-o", &dotted]),
+            format!("-o {dotted}: would overwrite the input {src}"),
+        ),
+        (
+            words(&["as", &src, "--listing", &src]),
+            format!("--listing {src}: would overwrite the input {src}"),
+        ),
+        (
+            words(&["as", &src, "-o", &at("x.elf"), "--listing", &at("x.elf")]),
+            format!(
+                "-o {0} and --listing {0} are the same file: each output needs its own",
+                at("x.elf")
+            ),
+        ),
+        (
+            words(&["ld", &a_o, &b_o, "-o", &a_o]),
+            format!("-o {a_o}: would overwrite the input {a_o}"),
+        ),
+        (
+            words(&["timing", &src, "-o", &src]),
+            format!("-o {src}: would overwrite the input {src}"),
+        ),
+        (
+            words(&["sched", &src, "-o", &src]),
+            format!("-o {src}: would overwrite the input {src}"),
+        ),
+        (
+            words(&["render", "-o", &at("s.png"), "--stats", &at("s.png")]),
+            format!(
+                "-o {0} and --stats {0} are the same file: each output needs its own",
+                at("s.png")
+            ),
+        ),
+        (
+            words(&["render", "--heatmap", &at("X.png"), "-o", &at("X.png")]),
+            format!(
+                "-o {0} and --heatmap {0} are the same file: each output needs its own",
+                at("X.png")
+            ),
+        ),
+        (
+            words(&["render", "-o", &at("h.png"), "--heatmap", &at("h.png")]),
+            format!(
+                "-o {0} and --heatmap {0} are the same file: each output needs its own",
+                at("h.png")
+            ),
+        ),
+        (
+            words(&[
+                "render",
+                "-o",
+                &at("w.png"),
+                "--heatmap",
+                &at("r-wait.png"),
+                "--stats",
+                &at("r-wait-wait.png"),
+            ]),
+            format!(
+                "--heatmap {0} and --stats {0} are the same file: each output needs its own",
+                at("r-wait-wait.png")
+            ),
+        ),
+        (
+            words(&["render", "--trace", &at("x.json"), "--stats", &at("x.json")]),
+            format!(
+                "--stats {0} and --trace {0} are the same file: each output needs its own",
+                at("x.json")
+            ),
+        ),
+        (
+            words(&["render", "--scene", &scene, "--stats", &scene]),
+            format!("--stats {scene}: would overwrite the scene {scene}"),
+        ),
+    ];
+    for (args, message) in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = spu(&args);
+        assert_eq!(out.status, 2, "spu {args:?}: {}", out.stderr);
+        assert_eq!(out.stderr, format!("spu: {message}\n"), "spu {args:?}");
+        assert_eq!(out.stdout, "", "spu {args:?} did work before refusing");
+    }
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink("c.s", d.join("soft.s")).unwrap();
+        std::fs::hard_link(&src, d.join("hard.s")).unwrap();
+        for link in [at("soft.s"), at("hard.s")] {
+            let out = spu(&["as", &src, "-o", &link]);
+            assert_eq!(out.status, 2, "{}", out.stderr);
+            assert_eq!(
+                out.stderr,
+                format!("spu: -o {link}: would overwrite the input {src}\n")
+            );
+        }
+        // An output through a link that is no input is written through it, whole.
+        std::os::unix::fs::symlink("linked.elf", d.join("link.elf")).unwrap();
+        assert_eq!(spu(&["as", &src, "-o", &at("link.elf")]).status, 0);
+        assert!(std::fs::symlink_metadata(d.join("link.elf"))
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert!(std::fs::read(at("linked.elf"))
+            .unwrap()
+            .starts_with(b"\x7fELF"));
+        std::fs::remove_file(at("linked.elf")).unwrap();
+        std::fs::remove_file(at("link.elf")).unwrap();
+        std::fs::remove_file(at("soft.s")).unwrap();
+        std::fs::remove_file(at("hard.s")).unwrap();
+    }
+    assert_eq!(
+        std::fs::read(&src).unwrap(),
+        original,
+        "the source is intact"
+    );
+    assert_eq!(
+        std::fs::read(&a_o).unwrap(),
+        objects,
+        "the object is intact"
+    );
+    assert_eq!(
+        files_in(&d),
+        ["a.o", "b.o", "c.s", "s.obj"],
+        "nothing else written"
+    );
 }

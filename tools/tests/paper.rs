@@ -345,6 +345,26 @@ fn bad_scenes_and_output_are_named_before_any_work() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--out"), "{err}");
     assert!(!dir.join("jobs").exists());
+    // --list-jobs makes OUT/jobs for the listed renders: one that cannot be made is bad
+    // input too, found before anything is listed.
+    let out = spu(&[
+        "paper",
+        "--scenes",
+        "room",
+        "--list-jobs",
+        "--out",
+        under_file.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "bad input");
+    assert!(out.stdout.is_empty());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.starts_with(&format!(
+            "spu: --out: {}: ",
+            under_file.join("jobs").display()
+        )),
+        "{err}"
+    );
 
     let out = spu(&[
         "paper",

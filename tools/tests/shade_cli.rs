@@ -42,6 +42,16 @@ fn bad_shading_options_exit_2_before_any_work() {
             "{case:?} wrote an image"
         );
     }
+    // A light without shading would be ignored: refused, saying what to add.
+    let run = spu(&[
+        "render", "--width", "8", "--height", "8", "-o", out, "--light", "1,2,3",
+    ]);
+    assert_eq!(run.status.code(), Some(2), "{run:?}");
+    assert_eq!(
+        String::from_utf8_lossy(&run.stderr),
+        "spu: --light lights a shaded frame, and this one is not shaded: add --shade simple or --shade shadows\n"
+    );
+    assert!(!std::path::Path::new(out).exists());
     std::fs::remove_dir_all(&dir).ok();
 }
 

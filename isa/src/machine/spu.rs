@@ -147,6 +147,9 @@ pub struct Spu {
     /// The host promises to feed the inbound mailbox/signals: a read on them blocks
     /// instead of deadlocking.
     pub host_feeds: bool,
+    /// The cycle [`Spu::run`] stops at exactly (`u64::MAX` outside it): nothing issues at
+    /// or after it and no stall runs past it.
+    pub(super) limit: u64,
     pub(super) dec_value: u32,
     pub(super) dec_written_at: u64,
     /// When the decrementer goes from 0 to -1 (raising its event), if it will.
@@ -183,6 +186,10 @@ pub struct Spu {
 
 /// The marker of a stale pre-decoded word: `Unknown` carrying a word that is not unknown
 /// (`il $0,0`), so no real decoding result equals it.
+/// How close to [`Spu::run`]'s limit the timing model is copied before each issue: past
+/// the longest one instruction waits to issue (a branch miss, a fetch, a dependency).
+const LIMIT_REACH: u64 = 1024;
+
 pub(super) const STALE: Inst = Inst {
     op: Op::Unknown,
     rt: 0,
@@ -256,6 +263,7 @@ impl Spu {
             signal: [None, None],
             signal_or_mode: [false, false],
             host_feeds: false,
+            limit: u64::MAX,
             dec_value: 0,
             dec_written_at: 0,
             dec_event_at: None,
@@ -405,7 +413,19 @@ impl Spu {
     }
 
     /// Runs until `max_cycles` or a stop; main memory writes apply immediately after.
+    ///
+    /// The stop at `max_cycles` is exact, with the timing model on or off and under either
+    /// engine: no instruction issues at or after it (one that would is left unexecuted, the
+    /// timing model as before it), a channel stall ends at it, and [`Spu::cycles`] is then
+    /// `max_cycles`, never more. Running again goes on from there.
     pub fn run(&mut self, memory: &mut MainMemory, max_cycles: u64) -> StopReason {
+        self.limit = max_cycles;
+        let stop = self.run_to_limit(memory, max_cycles);
+        self.limit = u64::MAX;
+        stop
+    }
+
+    fn run_to_limit(&mut self, memory: &mut MainMemory, max_cycles: u64) -> StopReason {
         const QUANTUM: u64 = 4096;
         loop {
             let until = self.cycle.saturating_add(QUANTUM).min(max_cycles);
@@ -428,6 +448,11 @@ impl Spu {
     /// Runs until the SPU's clock reaches `until` (returns `None`) or it stops. Main memory
     /// is only read; writes wait for [`apply_quantum`].
     pub fn run_quantum(&mut self, memory: &MainMemory, until: u64) -> Option<StopReason> {
+        // Within reach of [`Spu::run`]'s limit, with the timing model on, each instruction
+        // is timed on a copy of the model kept until it is known to issue before the limit
+        // (memoized blocks that could reach it are not replayed: [`Spu::replay_fits`]).
+        let near_limit =
+            |spu: &Spu| spu.timing.is_some() && spu.cycle.saturating_add(LIMIT_REACH) >= spu.limit;
         while self.cycle < until {
             if self.timing.is_none() {
                 if self.engine == Engine::Jit {
@@ -461,10 +486,25 @@ impl Spu {
                 self.core.event_pending = self.event_status & self.event_mask != 0;
                 self.core.event_pending_known = true;
             }
+            // Boxed: the model is large, and this is on every instruction's path.
+            let before: Option<Box<Timing>> = if near_limit(self) {
+                self.timing.as_ref().map(|t| Box::new(t.clone()))
+            } else {
+                None
+            };
             let issue = match &mut self.timing {
                 Some(t) => t.issue(pc, inst),
                 None => self.cycle,
             };
+            if issue >= self.limit {
+                // It would issue at or after the limit: it does not run, and the clock
+                // stops at the limit.
+                if let Some(model) = before {
+                    self.timing = Some(*model);
+                }
+                self.cycle = self.limit;
+                return None;
+            }
             if !self.core.interrupts_enabled {
                 if let Some(n) = self.timing.as_ref().and_then(|t| t.replay_started()) {
                     if self.replay_block(pc, n, until) {
@@ -510,6 +550,27 @@ impl Spu {
                 }
                 Effect::Channel => match self.channel(inst, issue, memory) {
                     ChannelOutcome::Done => self.pc = (pc + 4) & LS_MASK,
+                    ChannelOutcome::WaitUntil(when) if when >= self.limit => {
+                        // The wait reaches [`Spu::run`]'s limit: the clock stops there, and
+                        // running again starts the instruction over, the model as before it
+                        // where it was kept (within `LIMIT_REACH`), else stalled to the
+                        // cycle before the limit (the instruction then retries, as after a
+                        // quantum's boundary).
+                        let last = self.limit.saturating_sub(1);
+                        if self.events.is_some() {
+                            self.log_channel_wait(issue, last, inst.ra);
+                        }
+                        match before {
+                            Some(model) => self.timing = Some(*model),
+                            None => {
+                                if let Some(t) = &mut self.timing {
+                                    t.channel_stall(pc, inst.ra, last);
+                                }
+                            }
+                        }
+                        self.cycle = self.limit;
+                        return None;
+                    }
                     ChannelOutcome::WaitUntil(when) => {
                         if self.events.is_some() {
                             self.log_channel_wait(issue, when, inst.ra);
@@ -634,6 +695,9 @@ impl Spu {
                 .as_mut()
                 .and_then(|t| t.chained_replay_candidate(pc, epoch))
             {
+                if !self.replay_fits(id) {
+                    return;
+                }
                 self.run_replayed_block(pc, n, id, until);
                 continue;
             }
@@ -657,8 +721,24 @@ impl Spu {
                 let t = self.timing.as_mut().expect("timing");
                 t.set_memo_verified(id, epoch);
             }
+            if !self.replay_fits(id) {
+                return;
+            }
             self.run_replayed_block(pc, n, id, until);
         }
+    }
+
+    /// Whether memo `id`, replayed whole from about now, issues nothing at or after
+    /// [`Spu::run`]'s limit (its entry may wait up to [`LIMIT_REACH`] cycles more).
+    #[inline(always)]
+    fn replay_fits(&self, id: usize) -> bool {
+        self.limit == u64::MAX
+            || self.timing.as_ref().is_some_and(|t| {
+                self.cycle
+                    .saturating_add(t.memo_span(id))
+                    .saturating_add(LIMIT_REACH)
+                    < self.limit
+            })
     }
 
     /// Executes a memoized block whose replay `issue` has just started at `pc` (its first
@@ -677,6 +757,9 @@ impl Spu {
         let Some(id) = t.replay_memo() else {
             return false;
         };
+        if !self.replay_fits(id) {
+            return false;
+        }
         let epoch = self.code_epoch;
         if let Some(t) = self.timing.as_mut() {
             t.set_replay_verified(epoch);

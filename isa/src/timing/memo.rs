@@ -964,6 +964,13 @@ impl Timing {
         (&m.words, m.verified)
     }
 
+    /// Past every cycle memo `id`'s replay issues at, relative to its entry: a replay
+    /// entered at cycle `c` issues nothing at or after `c + memo_span(id)`.
+    #[inline]
+    pub fn memo_span(&self, id: usize) -> u64 {
+        self.memo.memos[id].dma_horizon_rel
+    }
+
     /// What the core kept with memo `id` ([`Timing::set_memo_code`]); zeros for nothing.
     #[inline]
     #[cfg_attr(not(block_compiler), allow(dead_code))]
