@@ -3,7 +3,7 @@
 use crate::exit::{self, Error, Status};
 use crate::options;
 use spu_isa::disasm::{instruction_text, SymbolTable};
-use spu_isa::machine::StopReason;
+use spu_isa::machine::{Spu, StopReason};
 use spu_spe::{Channel, ContextConfig, ContextId, Outcome, Program, Start, State, System};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;

@@ -425,6 +425,13 @@ impl Spu {
         stop
     }
 
+    /// Makes [`Spu::run_quantum`] stop exactly at `limit`, as [`Spu::run`] does at its
+    /// `max_cycles`: for hosts that run quanta themselves (a gang of SPUs) and have a cycle
+    /// limit. `u64::MAX` (the default) sets none.
+    pub fn set_cycle_limit(&mut self, limit: u64) {
+        self.limit = limit;
+    }
+
     fn run_to_limit(&mut self, memory: &mut MainMemory, max_cycles: u64) -> StopReason {
         const QUANTUM: u64 = 4096;
         loop {

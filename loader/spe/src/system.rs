@@ -419,6 +419,10 @@ impl System {
             ..
         } = self;
         let (quantum, threads) = (*quantum, *threads);
+        // The limit is exact on every context, as `Spu::run`'s is, however the quanta fall.
+        for spu in spus.iter_mut() {
+            spu.set_cycle_limit(max_cycles);
+        }
         let result: Result<(), ()> = run_quanta(spus, memory, threads, |spus, memory, outcomes| {
             if let Some(outcomes) = outcomes {
                 apply_quantum(spus, memory);
@@ -476,20 +480,16 @@ impl System {
                 return Ok(Next::Done);
             }
             let until = match quantum {
-                Quantum::Aligned(n) => {
-                    let until = now.saturating_add(n.max(1));
-                    if until > max_cycles {
-                        outcome = Outcome::CycleLimit;
-                        return Ok(Next::Done);
-                    }
-                    until
-                }
+                Quantum::Aligned(n) => now.saturating_add(n.max(1)).min(max_cycles),
                 Quantum::FromSlowest(n) => slowest.saturating_add(n.max(1)).min(max_cycles),
             };
             *now = until;
             Ok(Next::Run { until, running })
         });
         let _ = result;
+        for spu in self.spus.iter_mut() {
+            spu.set_cycle_limit(u64::MAX);
+        }
         if let Outcome::Waiting(_) = outcome {
             outcome = Outcome::Waiting(self.waits());
         }
