@@ -8,6 +8,7 @@
 //! `elf` model ELF; `gas` (split as GNU as is: see its header) and `link` build on both
 //! and not on each other.
 
+pub mod archive;
 pub mod elf;
 mod expand;
 mod expr;
