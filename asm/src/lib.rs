@@ -10,6 +10,7 @@
 
 pub mod archive;
 pub mod elf;
+pub mod executable;
 mod expand;
 mod expr;
 mod gas;
