@@ -219,6 +219,8 @@ pub struct SymbolKind {
     pub addr: u32,
     pub global: bool,
     pub absolute: bool,
+    /// A function or an object (`STT_FUNC`, `STT_OBJECT`), not a bare label.
+    pub typed: bool,
 }
 
 /// Reads an SPU ELF executable; never panics on malformed input.
@@ -332,6 +334,7 @@ pub fn read_elf(bytes: &[u8]) -> Result<LoadedElf, String> {
                             addr: v,
                             global: info >> 4 != 0,
                             absolute: shndx == 0xfff1,
+                            typed: matches!(info & 0xf, 1 | 2),
                         });
                         out.symbols.push((s, v));
                     }

@@ -10,10 +10,14 @@ use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Objects, archives and `-lNAME` libraries, in link order (an archive is searched
-    /// where it stands, for the symbols still undefined there).
-    #[arg(required = true, allow_hyphen_values = true)]
-    input: Vec<String>,
+    /// Objects and archives, in link order (an archive is searched where it stands, for
+    /// the symbols still undefined there).
+    #[arg(required_unless_present = "library")]
+    input: Vec<PathBuf>,
+    /// A library `libNAME.a` from the `-L` directories, searched where it stands among
+    /// the inputs.
+    #[arg(short = 'l')]
+    library: Vec<String>,
     /// Output executable.
     #[arg(short = 'o', long, default_value = "a.out")]
     output: PathBuf,
@@ -44,27 +48,41 @@ fn parse_address(s: &str) -> Result<u32, String> {
     Ok(v)
 }
 
+/// The inputs and `-l` libraries in command-line order, as GNU ld takes them: clap
+/// keeps each list apart, so their positions come from parsing the command line again.
+fn in_order(args: &Args) -> Vec<Result<PathBuf, String>> {
+    let raw: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    let indices = raw.iter().position(|a| a == "ld").and_then(|at| {
+        let cmd = <Args as clap::Args>::augment_args(clap::Command::new("ld"));
+        let m = cmd.try_get_matches_from(&raw[at..]).ok()?;
+        let of = |id: &str| m.indices_of(id).map(|i| i.collect()).unwrap_or_default();
+        let (inputs, libs): (Vec<usize>, Vec<usize>) = (of("input"), of("library"));
+        (inputs.len() == args.input.len() && libs.len() == args.library.len())
+            .then_some((inputs, libs))
+    });
+    // Without positions (not run from the command line): the objects, then the libraries.
+    let (inputs, libs) = indices.unwrap_or_else(|| {
+        let n = args.input.len();
+        ((0..n).collect(), (n..n + args.library.len()).collect())
+    });
+    let mut items: Vec<(usize, Result<PathBuf, String>)> = inputs
+        .into_iter()
+        .zip(&args.input)
+        .map(|(i, p)| (i, Ok(p.clone())))
+        .collect();
+    items.extend(libs.into_iter().zip(&args.library).map(|(i, l)| (i, Err(l.clone()))));
+    items.sort_by_key(|x| x.0);
+    items.into_iter().map(|x| x.1).collect()
+}
+
 /// The files named by the inputs, `-lNAME` found as GNU ld finds `libNAME.a` (the first
-/// `-L` directory holding it), `-l NAME` too.
+/// `-L` directory holding it).
 fn input_paths(args: &Args) -> exit::Result<Vec<PathBuf>> {
     let mut paths = Vec::new();
-    let mut items = args.input.iter();
-    while let Some(item) = items.next() {
-        let lib = match item.strip_prefix("-l") {
-            Some("") => Some(
-                items
-                    .next()
-                    .ok_or_else(|| Error::input("-l: expected a library name"))?
-                    .as_str(),
-            ),
-            Some(name) => Some(name),
-            None if item.starts_with('-') && item.len() > 1 => {
-                return Err(Error::input(format!("{item}: unknown option")));
-            }
-            None => None,
-        };
-        match lib {
-            Some(name) => {
+    for item in in_order(args) {
+        match item {
+            Ok(path) => paths.push(path),
+            Err(name) => {
                 let file = format!("lib{name}.a");
                 let found = args
                     .library_path
@@ -76,7 +94,6 @@ fn input_paths(args: &Args) -> exit::Result<Vec<PathBuf>> {
                     })?;
                 paths.push(found);
             }
-            None => paths.push(PathBuf::from(item)),
         }
     }
     Ok(paths)

@@ -4,6 +4,7 @@
 
 mod cli;
 mod exit_status;
+mod ld_archives;
 mod paper;
 mod ppe_run;
 mod sched_cli;
