@@ -20,6 +20,22 @@ pub const SOURCES: &[(&str, &str)] = &[
         "kernels/runtime/string.s",
         include_str!("../../../kernels/runtime/string.s"),
     ),
+    (
+        "kernels/runtime/malloc.s",
+        include_str!("../../../kernels/runtime/malloc.s"),
+    ),
+    (
+        "kernels/runtime/divdi3.s",
+        include_str!("../../../kernels/runtime/divdi3.s"),
+    ),
+    (
+        "kernels/runtime/divsi3.s",
+        include_str!("../../../kernels/runtime/divsi3.s"),
+    ),
+    (
+        "kernels/runtime/clock.s",
+        include_str!("../../../kernels/runtime/clock.s"),
+    ),
 ];
 
 /// Assembles one runtime source; a failure (a broken runtime) is reported whole.
