@@ -7,6 +7,7 @@ mod exit_status;
 mod ld_archives;
 mod paper;
 mod ppe_run;
+mod runtime_lib;
 mod sched_cli;
 mod shade_cli;
 mod views;

@@ -1,0 +1,423 @@
+//! The runtime's library half (`kernels/runtime/`: malloc.s, divdi3.s, divsi3.s, clock.s)
+//! run under `spu run` in programs written as spu-gcc writes them: the heap's reuse,
+//! merging, growth and every out-of-memory path by exact output, and libgcc's division
+//! helpers against Rust's integer arithmetic on edge cases and many pseudo-random values.
+
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn dir(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("spu-rt-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn spu(args: &[&str], cwd: &Path) -> (String, String, i32) {
+    let out = Command::new(env!("CARGO_BIN_EXE_spu"))
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .unwrap();
+    (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+        out.status.code().unwrap_or(-1),
+    )
+}
+
+/// Builds `source` with the runtime and runs it: stdout and exit status.
+fn run(test: &str, source: &str) -> (String, i32) {
+    let d = dir(test);
+    std::fs::write(d.join("prog.s"), source).unwrap();
+    let (_, err, code) = spu(&["as", "--runtime", "prog.s", "-o", "prog.elf"], &d);
+    assert_eq!(code, 0, "spu as --runtime: {err}");
+    let (out, err, code) = spu(&["run", "-q", "prog.elf"], &d);
+    assert!(err.is_empty(), "{err}");
+    (out, code)
+}
+
+/// main: the heap. Each line of output is one claim about it.
+const HEAP: &str = r#"
+        .section .rodata
+.Lfmt:  .string "%s %d\n"
+.Lgrow: .string "heap grew, available stack fell by"
+.Lfirst: .string "freed block reused (first fit)"
+.Lmerge: .string "freed neighbours merged and reused"
+.Lzero: .string "calloc zeroes a dirty block, sum"
+.Lkeep: .string "realloc kept"
+.Lsame: .string "realloc in place"
+.Lbig:  .string "malloc(0x50000) is null, errno"
+.Lover: .string "calloc(0x10000, 0x10001) is null, errno"
+.Lfull: .string "heap exhausted below the stack reserve, errno"
+.Lfree0: .string "free(0) is harmless"
+.Lhello: .string "hello, heap"
+.Lstr:  .string "%s: %s\n"
+        .text
+        .global main
+        .type   main, @function
+main:   stqd    $lr, 16($sp)
+        stqd    $80, -16($sp)
+        stqd    $81, -32($sp)
+        stqd    $82, -48($sp)
+        stqd    $83, -64($sp)
+        stqd    $84, -80($sp)
+        stqd    $sp, -128($sp)
+        ai      $sp, $sp, -128
+        rotqbyi $84, $sp, 4             # the available stack before
+        il      $3, 100
+        brsl    $lr, malloc
+        ori     $80, $3, 0              # p1: a 128-byte block
+        il      $3, 40
+        brsl    $lr, malloc
+        ori     $81, $3, 0              # p2: 64 bytes after it
+        rotqbyi $4, $sp, 4
+        sf      $4, $4, $84
+        ila     $3, .Lfmt
+        ila     $4, .Lgrow
+        rotqbyi $5, $sp, 4
+        sf      $5, $5, $84
+        brsl    $lr, printf
+        # free p1; malloc(50) takes its place.
+        ori     $3, $80, 0
+        brsl    $lr, free
+        il      $3, 50
+        brsl    $lr, malloc
+        ceq     $5, $3, $80
+        ila     $3, .Lfmt
+        ila     $4, .Lfirst
+        andi    $5, $5, 1
+        brsl    $lr, printf
+        # Dirty p1 (its 50 bytes), free p1 and p2: one 192-byte block again, which
+        # malloc(170) fits exactly.
+        ori     $3, $80, 0
+        il      $4, 0x5a
+        il      $5, 50
+        brsl    $lr, memset
+        ori     $3, $80, 0
+        brsl    $lr, free
+        ori     $3, $81, 0
+        brsl    $lr, free
+        il      $3, 170
+        brsl    $lr, malloc
+        ceq     $5, $3, $80
+        ori     $82, $3, 0
+        ila     $3, .Lfmt
+        ila     $4, .Lmerge
+        andi    $5, $5, 1
+        brsl    $lr, printf
+        # Freed again, calloc(25, 4) gets the dirty block back, zeroed.
+        ori     $3, $82, 0
+        brsl    $lr, free
+        il      $3, 25
+        il      $4, 4
+        brsl    $lr, calloc
+        ori     $82, $3, 0
+        il      $83, 0                  # the sum of its 100 bytes
+        il      $6, 0
+1:      a       $7, $82, $6
+        lqd     $8, 0($7)
+        ai      $9, $7, -3
+        rotqby  $8, $8, $9
+        andi    $8, $8, 0xff
+        a       $83, $83, $8
+        ai      $6, $6, 1
+        ceqi    $9, $6, 100
+        brz     $9, 1b
+        ila     $3, .Lfmt
+        ila     $4, .Lzero
+        ori     $5, $83, 0
+        brsl    $lr, printf
+        # realloc: within the block it stays; past it the contents move.
+        ori     $3, $82, 0
+        il      $4, 112                 # what calloc's 128-byte block holds
+        brsl    $lr, realloc
+        ceq     $5, $3, $82
+        ila     $3, .Lfmt
+        ila     $4, .Lsame
+        andi    $5, $5, 1
+        brsl    $lr, printf
+        ori     $3, $82, 0
+        ila     $4, .Lhello
+        brsl    $lr, strcpy
+        ori     $3, $82, 0
+        il      $4, 1000
+        brsl    $lr, realloc
+        ori     $5, $3, 0
+        ila     $3, .Lstr
+        ila     $4, .Lkeep
+        brsl    $lr, printf
+        # Out of memory: too large, an overflowing calloc, and the heap run into the stack.
+        ilhu    $3, 5
+        brsl    $lr, malloc
+        ori     $80, $3, 0
+        ila     $3, errno
+        lqd     $5, 0($3)
+        a       $5, $5, $80
+        ila     $3, .Lfmt
+        ila     $4, .Lbig
+        brsl    $lr, printf
+        ila     $3, errno
+        il      $4, 0
+        stqd    $4, 0($3)
+        ilhu    $3, 1
+        ilhu    $4, 1
+        ori     $4, $4, 1
+        brsl    $lr, calloc
+        ori     $80, $3, 0
+        ila     $3, errno
+        lqd     $5, 0($3)
+        a       $5, $5, $80
+        ila     $3, .Lover
+        ori     $4, $3, 0
+        ila     $3, .Lfmt
+        brsl    $lr, printf
+        ila     $3, errno
+        il      $4, 0
+        stqd    $4, 0($3)
+2:      il      $3, 0x4000
+        brsl    $lr, malloc
+        ori     $81, $80, 0
+        ori     $80, $3, 0
+        brnz    $3, 2b
+        # The last block ends 4096 bytes or more below the stack; errno is ENOMEM.
+        ila     $5, 0x4000 + 4096
+        a       $4, $81, $5
+        cgt     $4, $4, $sp             # -1 when past the reserve
+        ila     $3, errno
+        lqd     $5, 0($3)
+        a       $5, $5, $4
+        ila     $3, .Lfmt
+        ila     $4, .Lfull
+        brsl    $lr, printf
+        il      $3, 0
+        brsl    $lr, free
+        ila     $3, .Lfmt
+        ila     $4, .Lfree0
+        il      $5, 1
+        brsl    $lr, printf
+        il      $3, 0
+        ai      $sp, $sp, 128
+        lqd     $84, -80($sp)
+        lqd     $83, -64($sp)
+        lqd     $82, -48($sp)
+        lqd     $81, -32($sp)
+        lqd     $80, -16($sp)
+        lqd     $lr, 16($sp)
+        bi      $lr
+        .size   main, .-main
+"#;
+
+#[test]
+fn the_heap_reuses_merges_grows_and_runs_out_cleanly() {
+    let (out, code) = run("heap", HEAP);
+    assert_eq!(
+        out,
+        "heap grew, available stack fell by 192\n\
+         freed block reused (first fit) 1\n\
+         freed neighbours merged and reused 1\n\
+         calloc zeroes a dirty block, sum 0\n\
+         realloc in place 1\n\
+         realloc kept: hello, heap\n\
+         malloc(0x50000) is null, errno 12\n\
+         calloc(0x10000, 0x10001) is null, errno 12\n\
+         heap exhausted below the stack reserve, errno 12\n\
+         free(0) is harmless 1\n"
+    );
+    assert_eq!(code, 0);
+}
+
+/// A simple deterministic generator (xorshift64*), with the bit widths spread so that
+/// small, mid-sized and full-width operands all occur.
+fn values(n: usize, seed: u64) -> Vec<u64> {
+    let mut x = seed;
+    (0..n)
+        .map(|_| {
+            x ^= x >> 12;
+            x ^= x << 25;
+            x ^= x >> 27;
+            let v = x.wrapping_mul(0x2545_f491_4f6c_dd1d);
+            v >> (v % 64)
+        })
+        .collect()
+}
+
+/// main: for each pair in `.Lpairs`, calls the four helpers named and prints their results.
+fn division_program(pairs: &[(u64, u64)], wide: bool) -> String {
+    let mut table = String::new();
+    for (a, b) in pairs {
+        if wide {
+            writeln!(table, "\t.long\t{:#x}, {:#x}, {:#x}, {:#x}", a >> 32, a & 0xffff_ffff, b >> 32, b & 0xffff_ffff).unwrap();
+        } else {
+            writeln!(table, "\t.long\t{:#x}, {:#x}, 0, 0", a & 0xffff_ffff, b & 0xffff_ffff).unwrap();
+        }
+    }
+    let (fmt, helpers, second) = if wide {
+        ("%llx %llx %llx %llx\\n", ["__udivdi3", "__umoddi3", "__divdi3", "__moddi3"], "shlqbyi $4, $3, 8")
+    } else {
+        ("%x %x %x %x\\n", ["__udivsi3", "__umodsi3", "__divsi3", "__modsi3"], "rotqbyi $4, $3, 4")
+    };
+    let mut calls = String::new();
+    for (k, h) in helpers.iter().enumerate() {
+        writeln!(calls, "\tlqd\t$3, 0($80)\n\t{second}\n\tbrsl\t$lr, {h}\n\tori\t${}, $3, 0", 82 + k).unwrap();
+    }
+    format!(
+        r#"
+        .section .rodata
+.Lfmt:  .string "{fmt}"
+        .align  4
+.Lpairs:
+{table}
+        .text
+        .global main
+        .type   main, @function
+main:   stqd    $lr, 16($sp)
+        stqd    $80, -16($sp)
+        stqd    $81, -32($sp)
+        stqd    $82, -48($sp)
+        stqd    $83, -64($sp)
+        stqd    $84, -80($sp)
+        stqd    $85, -96($sp)
+        stqd    $sp, -128($sp)
+        ai      $sp, $sp, -128
+        ila     $80, .Lpairs
+        il      $81, {n}
+1:      brz     $81, 2f
+{calls}
+        ila     $3, .Lfmt
+        ori     $4, $82, 0
+        ori     $5, $83, 0
+        ori     $6, $84, 0
+        ori     $7, $85, 0
+        brsl    $lr, printf
+        ai      $80, $80, 16
+        ai      $81, $81, -1
+        br      1b
+2:      il      $3, 0
+        ai      $sp, $sp, 128
+        lqd     $85, -96($sp)
+        lqd     $84, -80($sp)
+        lqd     $83, -64($sp)
+        lqd     $82, -48($sp)
+        lqd     $81, -32($sp)
+        lqd     $80, -16($sp)
+        lqd     $lr, 16($sp)
+        bi      $lr
+        .size   main, .-main
+"#,
+        n = pairs.len()
+    )
+}
+
+/// The pairs: every combination of the edge cases, then pseudo-random ones.
+fn pairs(edges: &[u64], random: usize, seed: u64) -> Vec<(u64, u64)> {
+    let mut p: Vec<(u64, u64)> = edges
+        .iter()
+        .flat_map(|&a| edges.iter().map(move |&b| (a, b)))
+        .collect();
+    let v = values(2 * random, seed);
+    p.extend(v.chunks(2).map(|c| (c[0], c[1])));
+    p
+}
+
+#[test]
+fn the_64_bit_division_helpers_match_rust() {
+    let edges = [0, 1, 2, 3, 7, u64::MAX, u64::MAX - 1, 1 << 63, (1 << 63) - 1, 1 << 32, 0xffff_ffff, 10];
+    let pairs = pairs(&edges, 120, 0x9e37_79b9_7f4a_7c15);
+    let (out, code) = run("div64", &division_program(&pairs, true));
+    let mut want = String::new();
+    for &(a, b) in &pairs {
+        let (sa, sb) = (a as i64, b as i64);
+        // By zero: the quotient all ones, the remainder the dividend, then the signs.
+        let (uq, ur) = if b == 0 { (u64::MAX, a) } else { (a / b, a % b) };
+        let (sq, sr) = if b == 0 {
+            (if sa < 0 { 1 } else { -1 }, sa)
+        } else {
+            (sa.wrapping_div(sb), sa.wrapping_rem(sb))
+        };
+        writeln!(want, "{uq:x} {ur:x} {:x} {:x}", sq as u64, sr as u64).unwrap();
+    }
+    assert_eq!(out, want);
+    assert_eq!(code, 0);
+}
+
+#[test]
+fn the_32_bit_division_helpers_match_rust() {
+    let edges = [0, 1, 2, 3, 7, 0xffff_ffff, 0xffff_fffe, 0x8000_0000, 0x7fff_ffff, 0x10000, 10];
+    let pairs: Vec<(u64, u64)> = pairs(&edges, 200, 0x2545_f491)
+        .into_iter()
+        .map(|(a, b)| (a & 0xffff_ffff, b & 0xffff_ffff))
+        .collect();
+    let (out, code) = run("div32", &division_program(&pairs, false));
+    let mut want = String::new();
+    for &(a, b) in &pairs {
+        let (a, b) = (a as u32, b as u32);
+        let (sa, sb) = (a as i32, b as i32);
+        let (uq, ur) = if b == 0 { (u32::MAX, a) } else { (a / b, a % b) };
+        let (sq, sr) = if b == 0 {
+            (if sa < 0 { 1 } else { -1 }, sa)
+        } else {
+            (sa.wrapping_div(sb), sa.wrapping_rem(sb))
+        };
+        writeln!(want, "{uq:x} {ur:x} {:x} {:x}", sq as u32, sr as u32).unwrap();
+    }
+    assert_eq!(out, want);
+    assert_eq!(code, 0);
+}
+
+/// clock() counts the simulated cycles: it grows, and never past the run's total.
+#[test]
+fn clock_counts_decrementer_ticks() {
+    let source = r#"
+        .section .rodata
+.Lfmt:  .string "%u %u\n"
+        .text
+        .global main
+        .type   main, @function
+main:   stqd    $lr, 16($sp)
+        stqd    $80, -16($sp)
+        stqd    $sp, -48($sp)
+        ai      $sp, $sp, -48
+        brsl    $lr, clock
+        ori     $80, $3, 0
+        il      $5, 1000
+1:      ai      $5, $5, -1
+        brnz    $5, 1b
+        brsl    $lr, clock
+        ori     $5, $3, 0
+        ori     $4, $80, 0
+        ila     $3, .Lfmt
+        brsl    $lr, printf
+        il      $3, 0
+        ai      $sp, $sp, 48
+        lqd     $80, -16($sp)
+        lqd     $lr, 16($sp)
+        bi      $lr
+"#;
+    let d = dir("clock");
+    std::fs::write(d.join("prog.s"), source).unwrap();
+    let (_, err, code) = spu(&["as", "--runtime", "prog.s", "-o", "prog.elf"], &d);
+    assert_eq!(code, 0, "{err}");
+    let (out, _, code) = spu(&["run", "prog.elf"], &d);
+    assert_eq!(code, 0, "{out}");
+    let mut lines = out.lines();
+    let first: Vec<u64> = lines
+        .next()
+        .unwrap()
+        .split(' ')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let cycles: u64 = out
+        .lines()
+        .find_map(|l| l.strip_prefix("cycles: "))
+        .unwrap()
+        .parse()
+        .unwrap();
+    // The 1000-iteration loop alone is 2000 instructions.
+    assert!(first[0] > 0 && first[1] >= first[0] + 2000, "{out}");
+    assert!(first[1] < cycles, "{out}");
+    // Deterministic: the same figures again.
+    let (again, _, _) = spu(&["run", "prog.elf"], &d);
+    assert_eq!(again, out);
+}
