@@ -4,7 +4,7 @@
 
 use crate::exit::{self, Status};
 use crate::options;
-use spu_isa::machine::MainMemory;
+use spu_isa::machine::{MainMemory, StopReason};
 use spu_isa::profile::{annotated_listing, executed_lines, listing_json, ListingOptions};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -36,7 +36,7 @@ pub struct Args {
 pub fn run(args: Args) -> exit::Result<ExitCode> {
     options::max_cycles(args.max_cycles)?;
     let memory_bytes = options::memory(args.memory)?;
-    let (mut spu, symbols) = crate::cmd_run::load(&args.file)?;
+    let (mut spu, symbols, program_end) = crate::cmd_run::load_program(&args.file)?;
     spu.set_engine(args.engine);
     spu.share_code(&args.compile.cache());
     let address_of = |name: &str| symbols.iter().find(|(n, _)| n == name).map(|(_, a)| *a);
@@ -58,7 +58,26 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     };
     spu.enable_timing(Default::default());
     let mut memory = MainMemory::zeroed(memory_bytes);
-    let stop = spu.run(&mut memory, args.max_cycles);
+    // The start state `spu run` gives (argv = the file), and its PPE-assisted calls
+    // served (no files beyond the standard streams), so a program profiles as it runs.
+    let start = spu_loader::ppe::start::Start::Shell {
+        args: vec![args.file.as_os_str().as_encoded_bytes().to_vec()],
+    };
+    let entry = spu_loader::ppe::start::prepare(&start, program_end, memory.len())
+        .map_err(|e| format!("{}: {e}", args.file.display()))?;
+    spu_loader::ppe::start::apply(&entry, &mut spu, &mut memory);
+    let mut host = spu_loader::ppe::Host::new(None)?;
+    let stop = loop {
+        match spu.run(&mut memory, args.max_cycles) {
+            StopReason::Stop(code) if spu_loader::ppe::CALL_STOPS.contains(&code) => {
+                if let Err(fault) = host.serve(&mut spu, code) {
+                    eprintln!("spu: {}: {fault}", args.file.display());
+                    return Ok(Status::AbnormalStop.into());
+                }
+            }
+            stop => break stop,
+        }
+    };
     let profile = spu
         .timing()
         .map(|t| t.finish_profile())

@@ -74,16 +74,11 @@ fn number(text: &str) -> Result<u64, String> {
     v.map_err(|_| format!("bad number `{text}`"))
 }
 
-/// Loads FILE into a fresh SPU.
-pub fn load(file: &Path) -> Result<(Spu, Vec<(String, u32)>), String> {
-    load_program(file).map(|(spu, symbols, _)| (spu, symbols))
-}
-
 /// A loaded program: the SPU, its symbols and where its code and data end.
 type Loaded = (Spu, Vec<(String, u32)>, u32);
 
 /// Loads FILE into a fresh SPU; also where its code and data end.
-fn load_program(file: &std::path::Path) -> Result<Loaded, String> {
+pub(crate) fn load_program(file: &std::path::Path) -> Result<Loaded, String> {
     let name = file.display();
     let mut spu = Spu::new(0);
     let mut symbols = Vec::new();

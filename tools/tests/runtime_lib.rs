@@ -421,3 +421,42 @@ main:   stqd    $lr, 16($sp)
     let (again, _, _) = spu(&["run", "prog.elf"], &d);
     assert_eq!(again, out);
 }
+
+/// `spu prof` starts the program as `spu run` does (argc, argv, the stack) and serves its
+/// PPE-assisted calls: the program's output comes first, then the profile of its run.
+#[test]
+fn prof_starts_and_serves_the_program_as_run_does() {
+    let source = r#"
+        .section .rodata
+.Lfmt:  .string "argc=%d argv[0]=%s\n"
+        .text
+        .global main
+        .type   main, @function
+main:   stqd    $lr, 16($sp)
+        stqd    $sp, -32($sp)
+        ai      $sp, $sp, -32
+        lqd     $5, 0($4)
+        rotqby  $5, $5, $4
+        ori     $4, $3, 0
+        ila     $3, .Lfmt
+        brsl    $lr, printf
+        il      $3, 0
+        ai      $sp, $sp, 32
+        lqd     $lr, 16($sp)
+        bi      $lr
+        .size   main, .-main
+"#;
+    let d = dir("prof");
+    std::fs::write(d.join("prog.s"), source).unwrap();
+    let (_, err, code) = spu(&["as", "--runtime", "prog.s", "-o", "prog.elf"], &d);
+    assert_eq!(code, 0, "{err}");
+    let (run, _, _) = spu(&["run", "-q", "prog.elf"], &d);
+    assert_eq!(run, "argc=1 argv[0]=prog.elf\n");
+    let (out, err, code) = spu(&["prof", "prog.elf"], &d);
+    assert_eq!((code, err.as_str()), (0, ""));
+    assert!(
+        out.starts_with("argc=1 argv[0]=prog.elf\nprog.elf: stopped with stop 0x2000\n"),
+        "{out}"
+    );
+    assert!(out.contains("<main>") || out.contains("main:"), "{out}");
+}
