@@ -4,7 +4,7 @@ use crate::exit::{self, Error, Status};
 use crate::options;
 use spu_isa::disasm::{instruction_text, SymbolTable};
 use spu_isa::machine::{MainMemory, Spu, StopReason};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(clap::Args)]

@@ -460,3 +460,123 @@ main:   stqd    $lr, 16($sp)
     );
     assert!(out.contains("<main>") || out.contains("main:"), "{out}");
 }
+
+/// main: for each entry {double, int} of `.Lcases`, the four conversions, printed as bits.
+fn conversion_program(cases: &[(u64, u32)]) -> String {
+    let mut table = String::new();
+    for (d, i) in cases {
+        writeln!(table, "\t.long\t{:#x}, {:#x}, {i:#x}, 0", d >> 32, d & 0xffff_ffff).unwrap();
+    }
+    format!(
+        r#"
+        .section .rodata
+.Lfmt:  .string "%x %x %llx %llx\n"
+        .align  4
+.Lcases:
+{table}
+        .text
+        .global main
+        .type   main, @function
+main:   stqd    $lr, 16($sp)
+        stqd    $80, -16($sp)
+        stqd    $81, -32($sp)
+        stqd    $82, -48($sp)
+        stqd    $83, -64($sp)
+        stqd    $84, -80($sp)
+        stqd    $85, -96($sp)
+        stqd    $sp, -128($sp)
+        ai      $sp, $sp, -128
+        ila     $80, .Lcases
+        il      $81, {n}
+1:      brz     $81, 2f
+        lqd     $3, 0($80)
+        brsl    $lr, __fixdfsi
+        ori     $82, $3, 0
+        lqd     $3, 0($80)
+        brsl    $lr, __fixunsdfsi
+        ori     $83, $3, 0
+        lqd     $3, 0($80)
+        rotqbyi $3, $3, 8
+        brsl    $lr, __floatsidf
+        ori     $84, $3, 0
+        lqd     $3, 0($80)
+        rotqbyi $3, $3, 8
+        brsl    $lr, __float_unssidf
+        ori     $85, $3, 0
+        ila     $3, .Lfmt
+        ori     $4, $82, 0
+        ori     $5, $83, 0
+        ori     $6, $84, 0
+        ori     $7, $85, 0
+        brsl    $lr, printf
+        ai      $80, $80, 16
+        ai      $81, $81, -1
+        br      1b
+2:      il      $3, 0
+        ai      $sp, $sp, 128
+        lqd     $85, -96($sp)
+        lqd     $84, -80($sp)
+        lqd     $83, -64($sp)
+        lqd     $82, -48($sp)
+        lqd     $81, -32($sp)
+        lqd     $80, -16($sp)
+        lqd     $lr, 16($sp)
+        bi      $lr
+        .size   main, .-main
+"#,
+        n = cases.len()
+    )
+}
+
+/// libgcc2's __fixunsdfsi: from 2^31 up, x - 2^31 converted and 2^31 added back; below,
+/// __fixdfsi's result (Rust's `as i32`: truncation, saturation, NaN 0) as unsigned.
+fn fixunsdfsi(x: f64) -> u32 {
+    if x >= 2147483648.0 {
+        ((x - 2147483648.0) as i32 as u32).wrapping_add(0x8000_0000)
+    } else {
+        x as i32 as u32
+    }
+}
+
+#[test]
+fn the_conversion_helpers_match_rust() {
+    let mut doubles: Vec<f64> = vec![
+        0.0, -0.0, 0.5, -0.5, 0.999_999, 1.0, -1.0, 1.5, -1.5, 2.5, -2.5, 1e9, -1e9,
+        2147483647.0, 2147483647.5, 2147483648.0, -2147483648.0, -2147483648.5, -2147483649.0,
+        4294967295.0, 4294967295.9, 4294967296.0, 3e9, -3e9, 1e20, -1e20, f64::MAX, f64::MIN,
+        f64::MIN_POSITIVE, 5e-324, -5e-324, f64::INFINITY, f64::NEG_INFINITY, f64::NAN,
+        -f64::NAN, f64::from_bits(0x7ff0_0000_0000_0001), f64::EPSILON, 123456.789,
+    ];
+    let ints: Vec<u32> = values(200, 0x1234_5678).iter().map(|v| *v as u32).collect();
+    doubles.extend(values(160, 0xdead_beef).iter().map(|v| {
+        // Integers-sized values with fractions, both signs, and raw bit patterns.
+        let x = (*v as i64 as f64) / 1024.0;
+        if v % 3 == 0 { f64::from_bits(*v) } else { x }
+    }));
+    let edge_ints = [0u32, 1, 2, 0x7fff_ffff, 0x8000_0000, 0x8000_0001, 0xffff_ffff, 0xffff_fffe, 1 << 20, (1 << 21) - 1];
+    let cases: Vec<(u64, u32)> = doubles
+        .iter()
+        .enumerate()
+        .map(|(k, d)| (d.to_bits(), if k < edge_ints.len() { edge_ints[k] } else { ints[k % ints.len()] }))
+        .collect();
+    let (out, code) = run("conv", &conversion_program(&cases));
+    let mut want = String::new();
+    for &(d, i) in &cases {
+        let x = f64::from_bits(d);
+        writeln!(
+            want,
+            "{:x} {:x} {:x} {:x}",
+            x as i32 as u32,
+            fixunsdfsi(x),
+            (i as i32 as f64).to_bits(),
+            (i as f64).to_bits()
+        )
+        .unwrap();
+    }
+    let got: Vec<&str> = out.lines().collect();
+    for (k, (g, w)) in got.iter().zip(want.lines()).enumerate() {
+        assert_eq!(g, &w, "case {k}: {:?}", f64::from_bits(cases[k].0));
+    }
+    assert_eq!(out, want);
+    assert_eq!(code, 0);
+}

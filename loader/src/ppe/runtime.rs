@@ -36,6 +36,14 @@ pub const SOURCES: &[(&str, &str)] = &[
         "kernels/runtime/clock.s",
         include_str!("../../../kernels/runtime/clock.s"),
     ),
+    (
+        "kernels/runtime/floatsidf.s",
+        include_str!("../../../kernels/runtime/floatsidf.s"),
+    ),
+    (
+        "kernels/runtime/fixdfsi.s",
+        include_str!("../../../kernels/runtime/fixdfsi.s"),
+    ),
 ];
 
 /// Assembles one runtime source; a failure (a broken runtime) is reported whole.
