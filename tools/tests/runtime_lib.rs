@@ -580,3 +580,86 @@ fn the_conversion_helpers_match_rust() {
     assert_eq!(out, want);
     assert_eq!(code, 0);
 }
+
+#[test]
+fn memcmp_orders_bytes_as_unsigned_chars() {
+    let source = r#"
+        .section .rodata
+.Lfmt:  .string "%d %d %d %d\n"
+.La:    .string "abc\x80x"
+.Lb:    .string "abd\x01x"
+        .text
+        .global main
+        .type   main, @function
+main:   stqd    $lr, 16($sp)
+        stqd    $80, -16($sp)
+        stqd    $81, -32($sp)
+        stqd    $82, -48($sp)
+        stqd    $sp, -80($sp)
+        ai      $sp, $sp, -80
+        ila     $3, .La
+        ila     $4, .Lb
+        il      $5, 2
+        brsl    $lr, memcmp
+        ori     $80, $3, 0
+        ila     $3, .La
+        ila     $4, .Lb
+        il      $5, 5
+        brsl    $lr, memcmp
+        ori     $81, $3, 0
+        ila     $3, .La
+        ai      $3, $3, 3
+        ila     $4, .Lb
+        ai      $4, $4, 3
+        il      $5, 1
+        brsl    $lr, memcmp
+        ori     $82, $3, 0
+        ila     $3, .La
+        ila     $4, .Lb
+        il      $5, 0
+        brsl    $lr, memcmp
+        ori     $7, $3, 0
+        ori     $4, $80, 0
+        ori     $5, $81, 0
+        ori     $6, $82, 0
+        ila     $3, .Lfmt
+        brsl    $lr, printf
+        il      $3, 0
+        ai      $sp, $sp, 80
+        lqd     $82, -48($sp)
+        lqd     $81, -32($sp)
+        lqd     $80, -16($sp)
+        lqd     $lr, 16($sp)
+        bi      $lr
+"#;
+    // 'c' - 'd' = -1; 0x80 - 0x01 = 127 (unsigned chars).
+    assert_eq!(run("memcmp", source), ("0 -1 127 0\n".to_string(), 0));
+}
+
+/// The runtime is a library: a program links only the members it calls (GNU ld's archive
+/// search), both through `spu as --runtime` and `spu as -c` + `spu ld --runtime`.
+#[test]
+fn a_program_links_only_the_runtime_members_it_calls() {
+    let source = "\t.section .rodata\n.LC0:\t.string \"hi\"\n\t.text\n\t.global main\n\t.type main, @function\nmain:\tstqd\t$lr, 16($sp)\n\tstqd\t$sp, -32($sp)\n\tai\t$sp, $sp, -32\n\tila\t$3, .LC0\n\tbrsl\t$lr, puts\n\til\t$3, 5\n\tai\t$sp, $sp, 32\n\tlqd\t$lr, 16($sp)\n\tbi\t$lr\n";
+    let d = dir("members");
+    std::fs::write(d.join("prog.s"), source).unwrap();
+    let (_, err, code) = spu(&["as", "-c", "prog.s", "-o", "prog.o"], &d);
+    assert_eq!(code, 0, "{err}");
+    let (_, err, code) = spu(&["ld", "--runtime", "prog.o", "-o", "two.elf"], &d);
+    assert_eq!((code, err.as_str()), (0, ""));
+    let (_, err, code) = spu(&["as", "--runtime", "prog.s", "-o", "one.elf"], &d);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        std::fs::read(d.join("one.elf")).unwrap(),
+        std::fs::read(d.join("two.elf")).unwrap()
+    );
+    let (dis, _, _) = spu(&["dis", "one.elf"], &d);
+    for wanted in ["<_start>:", "<main>:", "<puts>:", "<__send_to_ppe>:", "exit>:"] {
+        assert!(dis.contains(wanted), "{wanted} missing:\n{dis}");
+    }
+    for unwanted in ["<malloc>:", "<__udivdi3>:", "<memcpy>:", "<clock>:", "<__fixdfsi>:"] {
+        assert!(!dis.contains(unwanted), "{unwanted} linked:\n{dis}");
+    }
+    let (out, _, code) = spu(&["run", "-q", "one.elf"], &d);
+    assert_eq!((out.as_str(), code), ("hi\n", 5));
+}
