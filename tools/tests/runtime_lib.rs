@@ -663,3 +663,106 @@ fn a_program_links_only_the_runtime_members_it_calls() {
     let (out, _, code) = spu(&["run", "-q", "one.elf"], &d);
     assert_eq!((out.as_str(), code), ("hi\n", 5));
 }
+
+/// The SPU double unit's division as `docs/running-programs.md` gives it: denormal
+/// operands are zeros, NaN results the default NaN, results below 2^-1022 (rounded with an
+/// unbounded exponent) zeros of their sign, the rest IEEE round-to-nearest-even.
+fn spu_divide(a: f64, b: f64) -> u64 {
+    let flush = |x: f64| if x.is_subnormal() { 0.0f64.copysign(x) } else { x };
+    let (a, b) = (flush(a), flush(b));
+    let q = a / b;
+    if q.is_nan() {
+        return 0x7ff8_0000_0000_0000;
+    }
+    if q != 0.0 && q.abs() < f64::MIN_POSITIVE || q == 0.0 && a != 0.0 && b.is_finite() {
+        // Near or below 2^-1022: the quotient again with a scaled (exact) dividend, whose
+        // rounding is that of an unbounded exponent.
+        let scaled = (a * 2f64.powi(200)) / b;
+        return if scaled.abs() < 2f64.powi(-822) {
+            0.0f64.copysign(q).to_bits()
+        } else {
+            (scaled * 2f64.powi(-200)).to_bits()
+        };
+    }
+    q.to_bits()
+}
+
+#[test]
+fn double_division_matches_the_double_unit() {
+    let specials = [
+        0.0, -0.0, 1.0, -1.0, 3.0, 0.1, 7.0, 1e308, -1e308, f64::MAX, f64::MIN_POSITIVE,
+        f64::MIN_POSITIVE * 1.5, 5e-324, -2.5e-310, f64::INFINITY, f64::NEG_INFINITY,
+        f64::NAN, f64::from_bits(0x7ff0_0000_0000_0001), 1.0 + f64::EPSILON, 2.0 - f64::EPSILON,
+    ];
+    let mut pairs: Vec<(u64, u64)> = specials
+        .iter()
+        .flat_map(|&a| specials.iter().map(move |&b| (f64::to_bits(a), f64::to_bits(b))))
+        .collect();
+    let v = values(400, 0x0bad_cafe);
+    pairs.extend(v.chunks(2).map(|c| {
+        // Random signs and exponents around 1, and raw bit patterns (any exponent).
+        let near = |x: u64| f64::from_bits((x & 0x800f_ffff_ffff_ffff) | ((1023 + (x % 41) - 20) << 52));
+        if c[0] % 4 == 0 {
+            (c[0], c[1] ^ (c[1] << 7))
+        } else {
+            (near(c[0]).to_bits(), near(c[1].rotate_left(17)).to_bits())
+        }
+    }));
+    // Quotients that land at the underflow threshold and at overflow.
+    pairs.push((f64::MIN_POSITIVE.to_bits(), (1.0 + f64::EPSILON).to_bits()));
+    pairs.push(((f64::MIN_POSITIVE * 2.0).to_bits(), 2.0f64.to_bits()));
+    pairs.push((f64::MAX.to_bits(), 0.5f64.to_bits()));
+    pairs.push((1.0f64.to_bits(), 3.0f64.to_bits()));
+    let mut table = String::new();
+    for (a, b) in &pairs {
+        writeln!(table, "\t.long\t{:#x}, {:#x}, {:#x}, {:#x}", a >> 32, a & 0xffff_ffff, b >> 32, b & 0xffff_ffff).unwrap();
+    }
+    let source = format!(
+        r#"
+        .section .rodata
+.Lfmt:  .string "%llx\n"
+        .align  4
+.Lpairs:
+{table}
+        .text
+        .global main
+        .type   main, @function
+main:   stqd    $lr, 16($sp)
+        stqd    $80, -16($sp)
+        stqd    $81, -32($sp)
+        stqd    $sp, -64($sp)
+        ai      $sp, $sp, -64
+        ila     $80, .Lpairs
+        il      $81, {n}
+1:      brz     $81, 2f
+        lqd     $3, 0($80)
+        shlqbyi $4, $3, 8
+        brsl    $lr, __divdf3
+        ori     $4, $3, 0
+        ila     $3, .Lfmt
+        brsl    $lr, printf
+        ai      $80, $80, 16
+        ai      $81, $81, -1
+        br      1b
+2:      il      $3, 0
+        ai      $sp, $sp, 64
+        lqd     $81, -32($sp)
+        lqd     $80, -16($sp)
+        lqd     $lr, 16($sp)
+        bi      $lr
+"#,
+        n = pairs.len()
+    );
+    let (out, code) = run("divdf", &source);
+    let got: Vec<&str> = out.lines().collect();
+    assert_eq!(got.len(), pairs.len(), "{out}");
+    for (k, &(a, b)) in pairs.iter().enumerate() {
+        let (x, y) = (f64::from_bits(a), f64::from_bits(b));
+        assert_eq!(
+            got[k],
+            format!("{:x}", spu_divide(x, y)),
+            "case {k}: {x:e} / {y:e} ({a:#x} / {b:#x})"
+        );
+    }
+    assert_eq!(code, 0);
+}

@@ -44,6 +44,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         "kernels/runtime/fixdfsi.s",
         include_str!("../../../kernels/runtime/fixdfsi.s"),
     ),
+    (
+        "kernels/runtime/divdf3.s",
+        include_str!("../../../kernels/runtime/divdf3.s"),
+    ),
 ];
 
 /// Assembles one runtime source; a failure (a broken runtime) is reported whole.
