@@ -104,9 +104,9 @@ impl Archive {
                 return Err(format!("{name}: bad member header at offset {pos}"));
             }
             let size_field = std::str::from_utf8(&h[48..58]).unwrap_or("").trim();
-            let size: usize = size_field.parse().map_err(|_| {
-                format!("{name}: bad member size {size_field:?} at offset {pos}")
-            })?;
+            let size: usize = size_field
+                .parse()
+                .map_err(|_| format!("{name}: bad member size {size_field:?} at offset {pos}"))?;
             let start = pos + HEADER;
             if size > bytes.len() - start {
                 return Err(format!(
@@ -184,7 +184,8 @@ impl Archive {
             }
         }
         let padded = |n: usize| n + (n & 1);
-        let index_size = 4 + 4 * self.index.len() + self.index.iter().map(|s| s.0.len() + 1).sum::<usize>();
+        let index_size =
+            4 + 4 * self.index.len() + self.index.iter().map(|s| s.0.len() + 1).sum::<usize>();
         let mut at = MAGIC.len();
         if !self.index.is_empty() {
             at += HEADER + padded(index_size);
@@ -291,7 +292,10 @@ mod tests {
         let mut bad = bytes.clone();
         bad[8 + 60 + 4..8 + 60 + 8].copy_from_slice(&7u32.to_be_bytes());
         let e = Archive::read("t.a", &bad).unwrap_err();
-        assert_eq!(e, "t.a: bad symbol index: offset 7 is not a member's header");
+        assert_eq!(
+            e,
+            "t.a: bad symbol index: offset 7 is not a member's header"
+        );
         let mut bad = bytes.clone();
         bad[8 + 60..8 + 64].copy_from_slice(&1000u32.to_be_bytes());
         let e = Archive::read("t.a", &bad).unwrap_err();

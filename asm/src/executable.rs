@@ -92,9 +92,9 @@ pub fn write(image: &[u8], sections: &[Section], symbols: &[Symbol], entry: u32)
     };
     // Symbols: null, one per section, locals, globals.
     let mut symtab = vec![0u8; 16];
-    for k in 0..sections.len() {
+    for (k, section) in sections.iter().enumerate() {
         symtab.extend(be32(0));
-        symtab.extend(be32(sections[k].addr));
+        symtab.extend(be32(section.addr));
         symtab.extend(be32(0));
         symtab.push(3); // STB_LOCAL, STT_SECTION
         symtab.push(0);
@@ -159,7 +159,11 @@ pub fn write(image: &[u8], sections: &[Section], symbols: &[Symbol], entry: u32)
             .map(end)
             .max()
             .unwrap_or(start);
-        let mem_end = sections[first..=last].iter().map(end).max().unwrap_or(start);
+        let mem_end = sections[first..=last]
+            .iter()
+            .map(end)
+            .max()
+            .unwrap_or(start);
         for v in [1, image_off + start, start, start] {
             out.extend(be32(v));
         }
@@ -179,7 +183,10 @@ pub fn write(image: &[u8], sections: &[Section], symbols: &[Symbol], entry: u32)
         let ty = if s.nobits { 8 } else { 1 };
         let flags = (s.flags & (SHF_ALLOC | SHF_WRITE | SHF_EXECINSTR)) as u32;
         let off = image_off + s.addr;
-        sh(&mut out, [n, ty, flags, s.addr, off, s.size, 0, 0, s.align, 0]);
+        sh(
+            &mut out,
+            [n, ty, flags, s.addr, off, s.size, 0, 0, s.align, 0],
+        );
     }
     let symtab_index = sections.len() as u32 + 1;
     sh(

@@ -3,10 +3,10 @@
 //! end of bss), resolving symbols across objects and applying the SPU relocations.
 //! Overlays are not supported.
 
+use crate::archive::Archive;
 use crate::object::{
     placement, Object, RelocTarget, SymSection, SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE, SHT_NOBITS,
 };
-use crate::archive::Archive;
 use std::collections::{HashMap, HashSet};
 
 #[derive(Clone, Debug, Default)]
@@ -413,7 +413,9 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             if s.global || s.name.starts_with(".L") || s.name.is_empty() {
                 continue;
             }
-            if let (SymSection::Section(i), Some(a)) = (s.section, address_of(o, s.section, s.value)) {
+            if let (SymSection::Section(i), Some(a)) =
+                (s.section, address_of(o, s.section, s.value))
+            {
                 out_symbols.push(crate::executable::Symbol {
                     name: s.name.clone(),
                     value: a as u32,
@@ -421,7 +423,10 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                     kind: s.kind,
                     bind: 0,
                     place: crate::executable::Place::Section(
-                        by_addr.iter().position(|x| x.name == output_name(&obj.sections[i].name)).unwrap_or(0),
+                        by_addr
+                            .iter()
+                            .position(|x| x.name == output_name(&obj.sections[i].name))
+                            .unwrap_or(0),
                     ),
                 });
             }
@@ -461,7 +466,10 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         });
     }
     let symbols: Vec<(String, u32)> = {
-        let mut v: Vec<(String, u32)> = out_symbols.iter().map(|s| (s.name.clone(), s.value)).collect();
+        let mut v: Vec<(String, u32)> = out_symbols
+            .iter()
+            .map(|s| (s.name.clone(), s.value))
+            .collect();
         v.sort_by(|a, b| a.1.cmp(&b.1).then(a.0.cmp(&b.0)));
         v
     };

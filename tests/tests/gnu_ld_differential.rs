@@ -76,7 +76,10 @@ const CUBE: &str = "\t.text\n\t.global cube\n\t.type cube, @function\ncube:\tmpy
 )]
 fn executables_match_gnu_ld() {
     let (gas, gld, readelf) = (Path::new(GNU_AS), sibling("ld"), sibling("readelf"));
-    assert!(gld.is_file() && readelf.is_file(), "no ld/readelf beside {GNU_AS}");
+    assert!(
+        gld.is_file() && readelf.is_file(),
+        "no ld/readelf beside {GNU_AS}"
+    );
     let dir = std::env::temp_dir().join(format!("spu-gnu-ld-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let mut objects = Vec::new();

@@ -57,7 +57,9 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         return Err(Error::input("r: expected objects to insert"));
     }
     if args.members.contains(&args.archive) {
-        return Err(Error::input(format!("{name}: the archive is also a member")));
+        return Err(Error::input(format!(
+            "{name}: the archive is also a member"
+        )));
     }
     if existing.is_none() && !op.contains('c') {
         eprintln!("spu ar: creating {name}");

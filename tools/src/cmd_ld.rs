@@ -70,7 +70,11 @@ fn in_order(args: &Args) -> Vec<Result<PathBuf, String>> {
         .zip(&args.input)
         .map(|(i, p)| (i, Ok(p.clone())))
         .collect();
-    items.extend(libs.into_iter().zip(&args.library).map(|(i, l)| (i, Err(l.clone()))));
+    items.extend(
+        libs.into_iter()
+            .zip(&args.library)
+            .map(|(i, l)| (i, Err(l.clone()))),
+    );
     items.sort_by_key(|x| x.0);
     items.into_iter().map(|x| x.1).collect()
 }

@@ -5,10 +5,10 @@
 #[macro_use]
 mod exit;
 
+mod cmd_ar;
 mod cmd_as;
 mod cmd_bench;
 mod cmd_dis;
-mod cmd_ar;
 mod cmd_ld;
 mod cmd_paper;
 mod cmd_prof;

@@ -36,7 +36,10 @@ fn ok(args: &[&str], cwd: &Path) -> String {
 /// Assembles `source` into `dir/name.o`.
 fn object(d: &Path, name: &str, source: &str) {
     std::fs::write(d.join(format!("{name}.s")), source).unwrap();
-    ok(&["as", "-c", &format!("{name}.s"), "-o", &format!("{name}.o")], d);
+    ok(
+        &["as", "-c", &format!("{name}.s"), "-o", &format!("{name}.o")],
+        d,
+    );
 }
 
 const MAIN: &str = "\t.text\n\t.global _start\n\t.type _start, @function\n_start:\tbrsl\t$0, square\n\tstop\t0x2000\n\t.size _start, .-_start\n";
@@ -98,15 +101,31 @@ fn only_the_needed_member_is_linked() {
     // The index GNU ar writes: the defined globals and weaks of each member, in order.
     let bytes = std::fs::read(d.join("lib/libmath.a")).unwrap();
     let archive = spu_asm::archive::Archive::read("libmath.a", &bytes).unwrap();
-    let index: Vec<(&str, usize)> = archive.index.iter().map(|(s, m)| (s.as_str(), *m)).collect();
-    assert_eq!(index, [("cube", 0), ("soft", 0), ("square", 1), ("table", 1)]);
+    let index: Vec<(&str, usize)> = archive
+        .index
+        .iter()
+        .map(|(s, m)| (s.as_str(), *m))
+        .collect();
+    assert_eq!(
+        index,
+        [("cube", 0), ("soft", 0), ("square", 1), ("table", 1)]
+    );
 
-    ok(&["ld", "main.o", "-L", "lib", "-lmath", "-o", "prog.elf"], &d);
+    ok(
+        &["ld", "main.o", "-L", "lib", "-lmath", "-o", "prog.elf"],
+        &d,
+    );
     let elf = std::fs::read(d.join("prog.elf")).unwrap();
     let (phdrs, syms) = headers(&elf);
     let names: Vec<&str> = syms.iter().map(|s| s.0.as_str()).collect();
-    assert!(names.contains(&"square") && names.contains(&"table"), "{names:?}");
-    assert!(!names.contains(&"cube") && !names.contains(&"soft"), "{names:?}");
+    assert!(
+        names.contains(&"square") && names.contains(&"table"),
+        "{names:?}"
+    );
+    assert!(
+        !names.contains(&"cube") && !names.contains(&"soft"),
+        "{names:?}"
+    );
     // main's text (8 bytes), square's at 8 (8), square's data at 0x10: a code segment R+X
     // and a data segment R+W, as GNU ld writes them.
     assert_eq!(phdrs, [[1, 0, 0x10, 0x10, 5], [1, 0x10, 16, 16, 6]]);
@@ -116,8 +135,14 @@ fn only_the_needed_member_is_linked() {
     assert_eq!(sym("table"), ("table".into(), 0x10, 16, 0x11, 2));
     assert_eq!(sym("_start"), ("_start".into(), 0, 8, 0x12, 1));
     // The script's symbols: _edata and __bss_start at the end of .data, _end past it.
-    assert_eq!((sym("_edata").1, sym("__bss_start").1, sym("_end").1), (0x20, 0x20, 0x20));
-    assert!(!names.contains(&"end"), "end is only PROVIDEd when referenced");
+    assert_eq!(
+        (sym("_edata").1, sym("__bss_start").1, sym("_end").1),
+        (0x20, 0x20, 0x20)
+    );
+    assert!(
+        !names.contains(&"end"),
+        "end is only PROVIDEd when referenced"
+    );
     let run = ok(&["run", "prog.elf"], &d);
     assert!(run.contains("stop 0x2000"), "{run}");
 

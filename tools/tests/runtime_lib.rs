@@ -248,19 +248,46 @@ fn division_program(pairs: &[(u64, u64)], wide: bool) -> String {
     let mut table = String::new();
     for (a, b) in pairs {
         if wide {
-            writeln!(table, "\t.long\t{:#x}, {:#x}, {:#x}, {:#x}", a >> 32, a & 0xffff_ffff, b >> 32, b & 0xffff_ffff).unwrap();
+            writeln!(
+                table,
+                "\t.long\t{:#x}, {:#x}, {:#x}, {:#x}",
+                a >> 32,
+                a & 0xffff_ffff,
+                b >> 32,
+                b & 0xffff_ffff
+            )
+            .unwrap();
         } else {
-            writeln!(table, "\t.long\t{:#x}, {:#x}, 0, 0", a & 0xffff_ffff, b & 0xffff_ffff).unwrap();
+            writeln!(
+                table,
+                "\t.long\t{:#x}, {:#x}, 0, 0",
+                a & 0xffff_ffff,
+                b & 0xffff_ffff
+            )
+            .unwrap();
         }
     }
     let (fmt, helpers, second) = if wide {
-        ("%llx %llx %llx %llx\\n", ["__udivdi3", "__umoddi3", "__divdi3", "__moddi3"], "shlqbyi $4, $3, 8")
+        (
+            "%llx %llx %llx %llx\\n",
+            ["__udivdi3", "__umoddi3", "__divdi3", "__moddi3"],
+            "shlqbyi $4, $3, 8",
+        )
     } else {
-        ("%x %x %x %x\\n", ["__udivsi3", "__umodsi3", "__divsi3", "__modsi3"], "rotqbyi $4, $3, 4")
+        (
+            "%x %x %x %x\\n",
+            ["__udivsi3", "__umodsi3", "__divsi3", "__modsi3"],
+            "rotqbyi $4, $3, 4",
+        )
     };
     let mut calls = String::new();
     for (k, h) in helpers.iter().enumerate() {
-        writeln!(calls, "\tlqd\t$3, 0($80)\n\t{second}\n\tbrsl\t$lr, {h}\n\tori\t${}, $3, 0", 82 + k).unwrap();
+        writeln!(
+            calls,
+            "\tlqd\t$3, 0($80)\n\t{second}\n\tbrsl\t$lr, {h}\n\tori\t${}, $3, 0",
+            82 + k
+        )
+        .unwrap();
     }
     format!(
         r#"
@@ -323,14 +350,30 @@ fn pairs(edges: &[u64], random: usize, seed: u64) -> Vec<(u64, u64)> {
 
 #[test]
 fn the_64_bit_division_helpers_match_rust() {
-    let edges = [0, 1, 2, 3, 7, u64::MAX, u64::MAX - 1, 1 << 63, (1 << 63) - 1, 1 << 32, 0xffff_ffff, 10];
+    let edges = [
+        0,
+        1,
+        2,
+        3,
+        7,
+        u64::MAX,
+        u64::MAX - 1,
+        1 << 63,
+        (1 << 63) - 1,
+        1 << 32,
+        0xffff_ffff,
+        10,
+    ];
     let pairs = pairs(&edges, 120, 0x9e37_79b9_7f4a_7c15);
     let (out, code) = run("div64", &division_program(&pairs, true));
     let mut want = String::new();
     for &(a, b) in &pairs {
         let (sa, sb) = (a as i64, b as i64);
         // By zero: the quotient all ones, the remainder the dividend, then the signs.
-        let (uq, ur) = if b == 0 { (u64::MAX, a) } else { (a / b, a % b) };
+        let (uq, ur) = (
+            a.checked_div(b).unwrap_or(u64::MAX),
+            a.checked_rem(b).unwrap_or(a),
+        );
         let (sq, sr) = if b == 0 {
             (if sa < 0 { 1 } else { -1 }, sa)
         } else {
@@ -344,7 +387,19 @@ fn the_64_bit_division_helpers_match_rust() {
 
 #[test]
 fn the_32_bit_division_helpers_match_rust() {
-    let edges = [0, 1, 2, 3, 7, 0xffff_ffff, 0xffff_fffe, 0x8000_0000, 0x7fff_ffff, 0x10000, 10];
+    let edges = [
+        0,
+        1,
+        2,
+        3,
+        7,
+        0xffff_ffff,
+        0xffff_fffe,
+        0x8000_0000,
+        0x7fff_ffff,
+        0x10000,
+        10,
+    ];
     let pairs: Vec<(u64, u64)> = pairs(&edges, 200, 0x2545_f491)
         .into_iter()
         .map(|(a, b)| (a & 0xffff_ffff, b & 0xffff_ffff))
@@ -354,7 +409,10 @@ fn the_32_bit_division_helpers_match_rust() {
     for &(a, b) in &pairs {
         let (a, b) = (a as u32, b as u32);
         let (sa, sb) = (a as i32, b as i32);
-        let (uq, ur) = if b == 0 { (u32::MAX, a) } else { (a / b, a % b) };
+        let (uq, ur) = (
+            a.checked_div(b).unwrap_or(u32::MAX),
+            a.checked_rem(b).unwrap_or(a),
+        );
         let (sq, sr) = if b == 0 {
             (if sa < 0 { 1 } else { -1 }, sa)
         } else {
@@ -465,7 +523,13 @@ main:   stqd    $lr, 16($sp)
 fn conversion_program(cases: &[(u64, u32)]) -> String {
     let mut table = String::new();
     for (d, i) in cases {
-        writeln!(table, "\t.long\t{:#x}, {:#x}, {i:#x}, 0", d >> 32, d & 0xffff_ffff).unwrap();
+        writeln!(
+            table,
+            "\t.long\t{:#x}, {:#x}, {i:#x}, 0",
+            d >> 32,
+            d & 0xffff_ffff
+        )
+        .unwrap();
     }
     format!(
         r#"
@@ -541,23 +605,80 @@ fn fixunsdfsi(x: f64) -> u32 {
 #[test]
 fn the_conversion_helpers_match_rust() {
     let mut doubles: Vec<f64> = vec![
-        0.0, -0.0, 0.5, -0.5, 0.999_999, 1.0, -1.0, 1.5, -1.5, 2.5, -2.5, 1e9, -1e9,
-        2147483647.0, 2147483647.5, 2147483648.0, -2147483648.0, -2147483648.5, -2147483649.0,
-        4294967295.0, 4294967295.9, 4294967296.0, 3e9, -3e9, 1e20, -1e20, f64::MAX, f64::MIN,
-        f64::MIN_POSITIVE, 5e-324, -5e-324, f64::INFINITY, f64::NEG_INFINITY, f64::NAN,
-        -f64::NAN, f64::from_bits(0x7ff0_0000_0000_0001), f64::EPSILON, 123456.789,
+        0.0,
+        -0.0,
+        0.5,
+        -0.5,
+        0.999_999,
+        1.0,
+        -1.0,
+        1.5,
+        -1.5,
+        2.5,
+        -2.5,
+        1e9,
+        -1e9,
+        2147483647.0,
+        2147483647.5,
+        2147483648.0,
+        -2147483648.0,
+        -2147483648.5,
+        -2147483649.0,
+        4294967295.0,
+        4294967295.9,
+        4294967296.0,
+        3e9,
+        -3e9,
+        1e20,
+        -1e20,
+        f64::MAX,
+        f64::MIN,
+        f64::MIN_POSITIVE,
+        5e-324,
+        -5e-324,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+        -f64::NAN,
+        f64::from_bits(0x7ff0_0000_0000_0001),
+        f64::EPSILON,
+        123456.789,
     ];
     let ints: Vec<u32> = values(200, 0x1234_5678).iter().map(|v| *v as u32).collect();
     doubles.extend(values(160, 0xdead_beef).iter().map(|v| {
         // Integers-sized values with fractions, both signs, and raw bit patterns.
         let x = (*v as i64 as f64) / 1024.0;
-        if v % 3 == 0 { f64::from_bits(*v) } else { x }
+        if v % 3 == 0 {
+            f64::from_bits(*v)
+        } else {
+            x
+        }
     }));
-    let edge_ints = [0u32, 1, 2, 0x7fff_ffff, 0x8000_0000, 0x8000_0001, 0xffff_ffff, 0xffff_fffe, 1 << 20, (1 << 21) - 1];
+    let edge_ints = [
+        0u32,
+        1,
+        2,
+        0x7fff_ffff,
+        0x8000_0000,
+        0x8000_0001,
+        0xffff_ffff,
+        0xffff_fffe,
+        1 << 20,
+        (1 << 21) - 1,
+    ];
     let cases: Vec<(u64, u32)> = doubles
         .iter()
         .enumerate()
-        .map(|(k, d)| (d.to_bits(), if k < edge_ints.len() { edge_ints[k] } else { ints[k % ints.len()] }))
+        .map(|(k, d)| {
+            (
+                d.to_bits(),
+                if k < edge_ints.len() {
+                    edge_ints[k]
+                } else {
+                    ints[k % ints.len()]
+                },
+            )
+        })
         .collect();
     let (out, code) = run("conv", &conversion_program(&cases));
     let mut want = String::new();
@@ -654,10 +775,22 @@ fn a_program_links_only_the_runtime_members_it_calls() {
         std::fs::read(d.join("two.elf")).unwrap()
     );
     let (dis, _, _) = spu(&["dis", "one.elf"], &d);
-    for wanted in ["<_start>:", "<main>:", "<puts>:", "<__send_to_ppe>:", "exit>:"] {
+    for wanted in [
+        "<_start>:",
+        "<main>:",
+        "<puts>:",
+        "<__send_to_ppe>:",
+        "exit>:",
+    ] {
         assert!(dis.contains(wanted), "{wanted} missing:\n{dis}");
     }
-    for unwanted in ["<malloc>:", "<__udivdi3>:", "<memcpy>:", "<clock>:", "<__fixdfsi>:"] {
+    for unwanted in [
+        "<malloc>:",
+        "<__udivdi3>:",
+        "<memcpy>:",
+        "<clock>:",
+        "<__fixdfsi>:",
+    ] {
         assert!(!dis.contains(unwanted), "{unwanted} linked:\n{dis}");
     }
     let (out, _, code) = spu(&["run", "-q", "one.elf"], &d);
@@ -668,7 +801,13 @@ fn a_program_links_only_the_runtime_members_it_calls() {
 /// operands are zeros, NaN results the default NaN, results below 2^-1022 (rounded with an
 /// unbounded exponent) zeros of their sign, the rest IEEE round-to-nearest-even.
 fn spu_divide(a: f64, b: f64) -> u64 {
-    let flush = |x: f64| if x.is_subnormal() { 0.0f64.copysign(x) } else { x };
+    let flush = |x: f64| {
+        if x.is_subnormal() {
+            0.0f64.copysign(x)
+        } else {
+            x
+        }
+    };
     let (a, b) = (flush(a), flush(b));
     let q = a / b;
     if q.is_nan() {
@@ -690,18 +829,40 @@ fn spu_divide(a: f64, b: f64) -> u64 {
 #[test]
 fn double_division_matches_the_double_unit() {
     let specials = [
-        0.0, -0.0, 1.0, -1.0, 3.0, 0.1, 7.0, 1e308, -1e308, f64::MAX, f64::MIN_POSITIVE,
-        f64::MIN_POSITIVE * 1.5, 5e-324, -2.5e-310, f64::INFINITY, f64::NEG_INFINITY,
-        f64::NAN, f64::from_bits(0x7ff0_0000_0000_0001), 1.0 + f64::EPSILON, 2.0 - f64::EPSILON,
+        0.0,
+        -0.0,
+        1.0,
+        -1.0,
+        3.0,
+        0.1,
+        7.0,
+        1e308,
+        -1e308,
+        f64::MAX,
+        f64::MIN_POSITIVE,
+        f64::MIN_POSITIVE * 1.5,
+        5e-324,
+        -2.5e-310,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+        f64::from_bits(0x7ff0_0000_0000_0001),
+        1.0 + f64::EPSILON,
+        2.0 - f64::EPSILON,
     ];
     let mut pairs: Vec<(u64, u64)> = specials
         .iter()
-        .flat_map(|&a| specials.iter().map(move |&b| (f64::to_bits(a), f64::to_bits(b))))
+        .flat_map(|&a| {
+            specials
+                .iter()
+                .map(move |&b| (f64::to_bits(a), f64::to_bits(b)))
+        })
         .collect();
     let v = values(400, 0x0bad_cafe);
     pairs.extend(v.chunks(2).map(|c| {
         // Random signs and exponents around 1, and raw bit patterns (any exponent).
-        let near = |x: u64| f64::from_bits((x & 0x800f_ffff_ffff_ffff) | ((1023 + (x % 41) - 20) << 52));
+        let near =
+            |x: u64| f64::from_bits((x & 0x800f_ffff_ffff_ffff) | ((1023 + (x % 41) - 20) << 52));
         if c[0] % 4 == 0 {
             (c[0], c[1] ^ (c[1] << 7))
         } else {
@@ -715,7 +876,15 @@ fn double_division_matches_the_double_unit() {
     pairs.push((1.0f64.to_bits(), 3.0f64.to_bits()));
     let mut table = String::new();
     for (a, b) in &pairs {
-        writeln!(table, "\t.long\t{:#x}, {:#x}, {:#x}, {:#x}", a >> 32, a & 0xffff_ffff, b >> 32, b & 0xffff_ffff).unwrap();
+        writeln!(
+            table,
+            "\t.long\t{:#x}, {:#x}, {:#x}, {:#x}",
+            a >> 32,
+            a & 0xffff_ffff,
+            b >> 32,
+            b & 0xffff_ffff
+        )
+        .unwrap();
     }
     let source = format!(
         r#"

@@ -54,7 +54,12 @@ pub const SOURCES: &[(&str, &str)] = &[
 fn assemble(name: &str, text: &str) -> Result<spu_asm::object::Object, String> {
     spu_asm::assemble_object(text, name, &Default::default())
         .map(|(o, _)| o)
-        .map_err(|d| d.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n"))
+        .map_err(|d| {
+            d.iter()
+                .map(|d| d.to_string())
+                .collect::<Vec<_>>()
+                .join("\n")
+        })
 }
 
 /// The startup object (`crt0.s`), linked before the program's objects.
