@@ -8,7 +8,9 @@
 //! `elf` model ELF; `gas` (split as GNU as is: see its header) and `link` build on both
 //! and not on each other.
 
+pub mod archive;
 pub mod elf;
+pub mod executable;
 mod expand;
 mod expr;
 mod gas;

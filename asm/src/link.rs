@@ -3,10 +3,11 @@
 //! end of bss), resolving symbols across objects and applying the SPU relocations.
 //! Overlays are not supported.
 
+use crate::archive::Archive;
 use crate::object::{
     placement, Object, RelocTarget, SymSection, SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE, SHT_NOBITS,
 };
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 #[derive(Clone, Debug, Default)]
 pub struct LinkOptions {
@@ -14,6 +15,67 @@ pub struct LinkOptions {
     pub text_addr: u32,
     /// Entry symbol: `-e` (default `_start`, else the start of the code).
     pub entry: Option<String>,
+}
+
+/// One input of a link, in command-line order.
+#[derive(Clone, Debug)]
+pub enum Input {
+    /// An object: always linked.
+    Object(Object),
+    /// A library (`name` for messages): searched where it stands, as GNU ld searches.
+    Archive(String, Archive),
+}
+
+/// The objects GNU ld would link from `inputs`: each object, and at each archive's place
+/// the members that define a symbol still undefined there (referenced, not weakly, by an
+/// object before it), the archive searched again until no member is pulled in. A member
+/// is named `lib.a(member.o)`, as GNU ld names it.
+pub fn resolve_inputs(inputs: Vec<Input>) -> Result<Vec<Object>, String> {
+    let mut objects: Vec<Object> = Vec::new();
+    let mut defined: HashSet<String> = HashSet::new();
+    let mut undefined: HashSet<String> = HashSet::new();
+    let add = |o: Object,
+               objects: &mut Vec<Object>,
+               defined: &mut HashSet<String>,
+               undefined: &mut HashSet<String>| {
+        for s in o.symbols.iter().filter(|s| s.global) {
+            if s.section == SymSection::Undefined {
+                if !s.weak && !defined.contains(&s.name) {
+                    undefined.insert(s.name.clone());
+                }
+            } else {
+                undefined.remove(&s.name);
+                defined.insert(s.name.clone());
+            }
+        }
+        objects.push(o);
+    };
+    for input in inputs {
+        match input {
+            Input::Object(o) => add(o, &mut objects, &mut defined, &mut undefined),
+            Input::Archive(name, archive) => {
+                // GNU ld's passes: the index in order, each symbol checked against what
+                // is undefined at that moment; again while a pass pulled a member in.
+                let mut loaded = vec![false; archive.members.len()];
+                let mut pulled = true;
+                while pulled {
+                    pulled = false;
+                    for (sym, m) in &archive.index {
+                        if loaded[*m] || !undefined.contains(sym) {
+                            continue;
+                        }
+                        loaded[*m] = true;
+                        pulled = true;
+                        let member = &archive.members[*m];
+                        let label = format!("{name}({})", member.name);
+                        let o = Object::from_elf(&label, &member.data)?;
+                        add(o, &mut objects, &mut defined, &mut undefined);
+                    }
+                }
+            }
+        }
+    }
+    Ok(objects)
 }
 
 /// A linked program.
@@ -27,7 +89,15 @@ pub struct Linked {
     pub entry: u32,
     /// Output sections: (name, address, size, is code).
     pub sections: Vec<(String, u32, u32, bool)>,
+    /// What GNU ld warns about (a missing entry symbol).
+    pub warnings: Vec<String>,
 }
+
+/// The symbols GNU ld's SPU script defines (`elf32_spu.sh` over the generic `elf.sc`):
+/// always `_edata` and `__bss_start` (the end of the data, where bss starts) and `_end`
+/// (past bss, aligned to 16); `edata`, `end`, `etext`, `_etext`, `__etext` (past the
+/// code) and `__stack` (0x3fff0) only when referenced and not defined (`PROVIDE`).
+const PROVIDED: [&str; 6] = ["edata", "end", "etext", "_etext", "__etext", "__stack"];
 
 const LOCAL_STORE: u64 = 256 * 1024;
 
@@ -59,6 +129,8 @@ struct Definition {
     section: SymSection,
     value: u64,
     weak: bool,
+    size: u64,
+    kind: u8,
 }
 
 /// Links `objects`; errors name the object and symbol concerned.
@@ -122,6 +194,8 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                 section: s.section,
                 value: s.value,
                 weak: s.weak,
+                size: s.size,
+                kind: s.kind,
             };
             match globals.get(&s.name) {
                 Some(prev) if !prev.weak && !s.weak => errors.push(format!(
@@ -208,17 +282,44 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             _ => None,
         }
     };
-    let global_address = |name: &str| -> Option<u64> {
-        if let Some(d) = globals.get(name) {
-            return address_of(d.object, d.section, d.value);
-        }
-        common_at.get(name).map(|a| (bss_addr + a) as u64)
-    };
     let end = outs
         .iter()
         .map(|x| x.addr as u64 + x.size as u64)
         .max()
         .unwrap_or(0);
+    // The script's symbols, where its location counter stands.
+    let end_of = |keep: &dyn Fn(&OutSection) -> bool| {
+        outs.iter()
+            .filter(|x| keep(x))
+            .map(|x| x.addr as u64 + x.size as u64)
+            .max()
+    };
+    let etext = end_of(&|x| x.flags & SHF_EXECINSTR != 0).unwrap_or(opts.text_addr as u64);
+    let edata = end_of(&|x| x.ty != SHT_NOBITS).unwrap_or(opts.text_addr as u64);
+    let script: HashMap<&str, u64> = [
+        ("_edata", edata),
+        ("__bss_start", edata),
+        ("_end", end.max(edata).next_multiple_of(16)),
+        ("edata", edata),
+        ("end", end.max(edata).next_multiple_of(16)),
+        ("etext", etext),
+        ("_etext", etext),
+        ("__etext", etext),
+        ("__stack", 0x3fff0),
+    ]
+    .into_iter()
+    .filter(|(n, _)| !globals.contains_key(*n) && !common_at.contains_key(*n))
+    .filter(|(n, _)| !PROVIDED.contains(n) || referenced(objects, n))
+    .collect();
+    let global_address = |name: &str| -> Option<u64> {
+        if let Some(d) = globals.get(name) {
+            return address_of(d.object, d.section, d.value);
+        }
+        if let Some(a) = common_at.get(name) {
+            return Some((bss_addr + a) as u64);
+        }
+        script.get(name).copied()
+    };
     let mut image = vec![0u8; end as usize];
     for out in &outs {
         for &(o, i, at) in &out.inputs {
@@ -285,33 +386,94 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         errors.dedup();
         return Err(errors);
     }
-    // Symbols of the output.
-    let mut symbols: Vec<(String, u32)> = Vec::new();
-    let mut global_names = Vec::new();
+    // Output sections in address order, and the symbols of the output.
+    let mut by_addr: Vec<&OutSection> = outs.iter().collect();
+    by_addr.sort_by_key(|x| x.addr);
+    let out_sections: Vec<crate::executable::Section> = by_addr
+        .iter()
+        .map(|x| crate::executable::Section {
+            name: x.name.clone(),
+            addr: x.addr,
+            size: x.size,
+            flags: x.flags,
+            nobits: x.ty == SHT_NOBITS,
+            align: x.align,
+        })
+        .collect();
+    let place_of = |addr: u64| {
+        use crate::executable::Place;
+        by_addr
+            .iter()
+            .position(|x| addr >= x.addr as u64 && addr < x.addr as u64 + x.size.max(1) as u64)
+            .map_or(Place::Absolute, Place::Section)
+    };
+    let mut out_symbols = Vec::new();
     for (o, obj) in objects.iter().enumerate() {
         for s in &obj.symbols {
-            if s.name.starts_with(".L") || s.name.is_empty() {
+            if s.global || s.name.starts_with(".L") || s.name.is_empty() {
                 continue;
             }
-            if s.global {
-                continue;
-            }
-            if let Some(a) = address_of(o, s.section, s.value) {
-                if matches!(s.section, SymSection::Section(_)) {
-                    symbols.push((s.name.clone(), a as u32));
-                }
+            if let (SymSection::Section(i), Some(a)) =
+                (s.section, address_of(o, s.section, s.value))
+            {
+                out_symbols.push(crate::executable::Symbol {
+                    name: s.name.clone(),
+                    value: a as u32,
+                    size: s.size as u32,
+                    kind: s.kind,
+                    bind: 0,
+                    place: crate::executable::Place::Section(
+                        by_addr
+                            .iter()
+                            .position(|x| x.name == output_name(&obj.sections[i].name))
+                            .unwrap_or(0),
+                    ),
+                });
             }
         }
     }
-    let mut names: Vec<&String> = globals.keys().chain(common_at.keys()).collect();
+    let mut names: Vec<&str> = globals
+        .keys()
+        .chain(common_at.keys())
+        .map(|n| n.as_str())
+        .chain(script.keys().copied())
+        .collect();
     names.sort();
     for n in names {
-        if let Some(a) = global_address(n) {
-            symbols.push((n.clone(), a as u32));
-            global_names.push(n.clone());
-        }
+        let Some(a) = global_address(n) else { continue };
+        let (size, kind, bind, place) = match (globals.get(n), common_at.contains_key(n)) {
+            (Some(d), _) => {
+                let place = match d.section {
+                    SymSection::Absolute => crate::executable::Place::Absolute,
+                    _ => place_of(a),
+                };
+                (d.size, d.kind, if d.weak { 2 } else { 1 }, place)
+            }
+            (None, true) => {
+                let size = commons.iter().find(|c| c.0 == n).map_or(0, |c| c.1);
+                (size, 1, 1, place_of(a))
+            }
+            // The script's symbols belong to the section they stand in (or after).
+            (None, false) => (0, 0, 1, place_of(a.saturating_sub(1))),
+        };
+        out_symbols.push(crate::executable::Symbol {
+            name: n.to_string(),
+            value: a as u32,
+            size: size as u32,
+            kind,
+            bind,
+            place,
+        });
     }
-    symbols.sort_by(|a, b| a.1.cmp(&b.1).then(a.0.cmp(&b.0)));
+    let symbols: Vec<(String, u32)> = {
+        let mut v: Vec<(String, u32)> = out_symbols
+            .iter()
+            .map(|s| (s.name.clone(), s.value))
+            .collect();
+        v.sort_by(|a, b| a.1.cmp(&b.1).then(a.0.cmp(&b.0)));
+        v
+    };
+    let mut warnings = Vec::new();
     let entry_name = opts.entry.clone().unwrap_or_else(|| "_start".into());
     let entry = match global_address(&entry_name).or_else(|| {
         symbols
@@ -320,33 +482,44 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             .map(|s| s.1 as u64)
     }) {
         Some(a) => a as u32,
-        None if opts.entry.is_some() => {
+        None => match opts.entry.as_deref().and_then(parse_number) {
             // GNU ld: a number is taken as the address.
-            parse_number(&entry_name)
-                .ok_or_else(|| vec![format!("entry symbol `{entry_name}' is not defined")])?
-        }
-        None => order.first().map_or(opts.text_addr, |&k| outs[k].addr),
+            Some(a) => a,
+            None => {
+                // GNU ld: the start of .text, else of the first section, with a warning.
+                let a = outs
+                    .iter()
+                    .find(|x| x.name == ".text")
+                    .or_else(|| order.first().map(|&k| &outs[k]))
+                    .map_or(opts.text_addr, |x| x.addr);
+                warnings.push(format!(
+                    "cannot find entry symbol {entry_name}; defaulting to {a:08x}"
+                ));
+                a
+            }
+        },
     };
-    let mut sections = Vec::new();
-    let mut nobits = Vec::new();
-    let mut by_addr: Vec<&OutSection> = outs.iter().collect();
-    by_addr.sort_by_key(|x| x.addr);
-    for out in by_addr {
-        sections.push((
-            out.name.clone(),
-            out.addr,
-            out.size,
-            out.flags & SHF_EXECINSTR != 0,
-        ));
-        nobits.push(out.ty == SHT_NOBITS);
-    }
-    let elf = crate::elf::write_elf(&image, &sections, &nobits, &symbols, &global_names, entry);
+    let sections = out_sections
+        .iter()
+        .map(|x| (x.name.clone(), x.addr, x.size, x.flags & SHF_EXECINSTR != 0))
+        .collect();
+    let elf = crate::executable::write(&image, &out_sections, &out_symbols, entry);
     Ok(Linked {
         image,
         elf,
         symbols,
         entry,
         sections,
+        warnings,
+    })
+}
+
+/// Whether some object refers to `name` without defining it.
+fn referenced(objects: &[Object], name: &str) -> bool {
+    objects.iter().any(|o| {
+        o.symbols
+            .iter()
+            .any(|s| s.name == name && s.section == SymSection::Undefined)
     })
 }
 

@@ -110,3 +110,29 @@ strcpy:
         brnz    $7, 1b
         bi      $0
         .size   strcpy, .-strcpy
+
+# int memcmp(const void *a, const void *b, size_t n): the difference of the first bytes
+# that differ, as unsigned chars; 0 when the n bytes are equal.
+        .global memcmp
+        .type   memcmp, @function
+memcmp:
+1:      brz     $5, 2f
+        lqd     $7, 0($3)
+        ai      $8, $3, -3
+        rotqby  $7, $7, $8
+        andi    $7, $7, 0xff
+        lqd     $9, 0($4)
+        ai      $8, $4, -3
+        rotqby  $9, $9, $8
+        andi    $9, $9, 0xff
+        sf      $10, $9, $7
+        brnz    $10, 3f
+        ai      $3, $3, 1
+        ai      $4, $4, 1
+        ai      $5, $5, -1
+        br      1b
+2:      il      $3, 0
+        bi      $0
+3:      ori     $3, $10, 0
+        bi      $0
+        .size   memcmp, .-memcmp

@@ -12,6 +12,7 @@ mod core_snapshots;
 mod engines_differential;
 mod frame_cycles;
 mod gnu_differential;
+mod gnu_ld_differential;
 mod golden_forms;
 mod kernel_caches;
 mod kernel_modules;

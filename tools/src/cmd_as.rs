@@ -2,7 +2,7 @@
 //! image, or (`-c`) a relocatable object; several sources are assembled and linked.
 
 use crate::exit::{self, Error, Status};
-use spu_asm::link::{link, LinkOptions};
+use spu_asm::link::{link, resolve_inputs, Input, LinkOptions};
 use spu_asm::{assemble_file, assemble_object_file, Diagnostic, Options, Severity};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -118,12 +118,6 @@ fn objects(args: &Args, opts: &Options) -> exit::Result<ExitCode> {
         ));
     }
     let mut objects = Vec::new();
-    if args.runtime {
-        match spu_loader::ppe::runtime::objects() {
-            Ok(mut runtime) => objects.append(&mut runtime),
-            Err(d) => return Ok(report(&d)),
-        }
-    }
     for input in &args.input {
         match assemble_object_file(input, opts) {
             Ok((obj, warnings)) => {
@@ -134,6 +128,15 @@ fn objects(args: &Args, opts: &Options) -> exit::Result<ExitCode> {
             }
             Err(d) => return Ok(report(&d)),
         }
+    }
+    if args.runtime {
+        // As `spu ld --runtime`: crt0 first, the rest of the runtime searched after.
+        let crt0 = spu_loader::ppe::runtime::start_file().map_err(Error::failure)?;
+        let lib = spu_loader::ppe::runtime::library().map_err(Error::failure)?;
+        let mut inputs = vec![Input::Object(crt0)];
+        inputs.extend(objects.drain(..).map(Input::Object));
+        inputs.push(Input::Archive("libspu.a".into(), lib));
+        objects = resolve_inputs(inputs).map_err(Error::failure)?;
     }
     if args.object {
         let bytes = objects[0].to_elf().map_err(Error::failure)?;

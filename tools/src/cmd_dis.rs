@@ -19,13 +19,14 @@ pub fn run(args: Args) -> crate::exit::Result<ExitCode> {
     let name = args.file.display();
     if !args.raw && bytes.starts_with(b"\x7fELF") {
         let elf = spu_spe::elf::read_elf(&bytes).map_err(|e| format!("{name}: {e}"))?;
-        // objdump names an address after a symbol of its section, a global one before
-        // local labels; absolute symbols name nothing.
+        // objdump names an address after a symbol of its section: a function or object
+        // before a bare global (the linker's `__bss_start`), a global before local labels;
+        // absolute symbols name nothing.
         let symbols = SymbolTable::ranked(
             elf.symbol_kinds
                 .iter()
                 .filter(|s| !s.absolute)
-                .map(|s| (s.addr, s.name.clone(), if s.global { 0 } else { 1 }))
+                .map(|s| (s.addr, s.name.clone(), 2 * !s.global as u8 + !s.typed as u8))
                 .collect(),
         );
         out!("\n{name}:     file format elf32-spu\n\n");

@@ -5,6 +5,7 @@
 #[macro_use]
 mod exit;
 
+mod cmd_ar;
 mod cmd_as;
 mod cmd_bench;
 mod cmd_dis;
@@ -51,6 +52,8 @@ enum Command {
     Dis(cmd_dis::Args),
     /// Link relocatable SPU objects into an executable.
     Ld(cmd_ld::Args),
+    /// Build or list a static library of SPU objects (GNU ar's rcs and t).
+    Ar(cmd_ar::Args),
     /// Run a program on one simulated SPU and print how it stopped.
     Run(cmd_run::Args),
     /// Run a program with the timing model and print an annotated profile.
@@ -73,6 +76,7 @@ fn main() -> ExitCode {
         Command::As(args) => cmd_as::run(args),
         Command::Dis(args) => cmd_dis::run(args),
         Command::Ld(args) => cmd_ld::run(args),
+        Command::Ar(args) => cmd_ar::run(args),
         Command::Run(args) => cmd_run::run(args),
         Command::Prof(args) => cmd_prof::run(args),
         Command::Timing(args) => cmd_timing::run(args),

@@ -4,9 +4,11 @@
 
 mod cli;
 mod exit_status;
+mod ld_archives;
 mod paper;
 mod ppe_run;
 mod run_input;
+mod runtime_lib;
 mod sched_cli;
 mod shade_cli;
 mod views;

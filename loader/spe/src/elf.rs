@@ -34,6 +34,8 @@ pub struct SymbolKind {
     pub global: bool,
     /// Absolute (`SHN_ABS`): in no section.
     pub absolute: bool,
+    /// A function or an object (`STT_FUNC`, `STT_OBJECT`), not a bare label.
+    pub typed: bool,
 }
 
 /// Reads an SPU ELF executable; never panics on malformed input.
@@ -147,6 +149,7 @@ pub fn read_elf(bytes: &[u8]) -> Result<LoadedElf, String> {
                             addr: v,
                             global: info >> 4 != 0,
                             absolute: shndx == 0xfff1,
+                            typed: matches!(info & 0xf, 1 | 2),
                         });
                         out.symbols.push((s, v));
                     }

@@ -1,0 +1,238 @@
+//! The executable ELF file `spu ld` writes, laid out as GNU ld lays out an SPU program:
+//! one loadable segment per run of sections with the same permissions (code and
+//! read-only data R+X, data and bss R+W), section flags and alignments from the inputs,
+//! section symbols, then the locals, then the globals with their types, sizes and
+//! bindings kept, so that `readelf -a` reads the two linkers' outputs alike.
+
+use crate::object::{SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE};
+
+const EM_SPU: u16 = 23;
+/// GNU ld's page size for the SPU (`MAXPAGESIZE`): segments start at file offsets
+/// congruent to their addresses modulo this.
+pub const PAGE: u32 = 0x80;
+
+/// One output section.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Section {
+    pub name: String,
+    pub addr: u32,
+    pub size: u32,
+    /// SHF_* flags.
+    pub flags: u64,
+    /// `.bss`-like: takes no file space.
+    pub nobits: bool,
+    /// The largest alignment of its inputs.
+    pub align: u32,
+}
+
+/// Where a symbol of the output is defined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Place {
+    /// Index into the sections.
+    Section(usize),
+    Absolute,
+}
+
+/// One symbol of the output.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Symbol {
+    pub name: String,
+    pub value: u32,
+    pub size: u32,
+    /// STT_* type.
+    pub kind: u8,
+    /// STB_* binding: 0 local, 1 global, 2 weak.
+    pub bind: u8,
+    pub place: Place,
+}
+
+fn be16(v: u16) -> [u8; 2] {
+    v.to_be_bytes()
+}
+fn be32(v: u32) -> [u8; 4] {
+    v.to_be_bytes()
+}
+
+/// The program headers: (flags, first section, last section) for each run of allocated
+/// sections (in address order) with the same permissions.
+fn segments(sections: &[Section]) -> Vec<(u32, usize, usize)> {
+    let mut out: Vec<(u32, usize, usize)> = Vec::new();
+    for (i, s) in sections.iter().enumerate() {
+        if s.flags & SHF_ALLOC == 0 {
+            continue;
+        }
+        let flags = if s.flags & SHF_WRITE != 0 {
+            6 // R+W
+        } else {
+            5 // R+X: read-only data shares the code's segment, as GNU ld puts it
+        };
+        match out.last_mut() {
+            Some(last) if last.0 == flags => last.2 = i,
+            _ => out.push((flags, i, i)),
+        }
+    }
+    out
+}
+
+/// The ELF file: `image` is local store from 0; `sections` in address order; `symbols`
+/// locals first.
+pub fn write(image: &[u8], sections: &[Section], symbols: &[Symbol], entry: u32) -> Vec<u8> {
+    let segs = segments(sections);
+    let ehsize = 52u32;
+    let phoff = ehsize;
+    // The image at an offset congruent to address 0 modulo the page, after the headers.
+    let image_off = (ehsize + 32 * segs.len() as u32).div_ceil(PAGE) * PAGE;
+    let mut shstr = vec![0u8];
+    let mut strtab = vec![0u8];
+    let add_name = |s: &str, table: &mut Vec<u8>| {
+        let off = table.len() as u32;
+        table.extend(s.as_bytes());
+        table.push(0);
+        off
+    };
+    // Symbols: null, one per section, locals, globals.
+    let mut symtab = vec![0u8; 16];
+    for (k, section) in sections.iter().enumerate() {
+        symtab.extend(be32(0));
+        symtab.extend(be32(section.addr));
+        symtab.extend(be32(0));
+        symtab.push(3); // STB_LOCAL, STT_SECTION
+        symtab.push(0);
+        symtab.extend(be16(k as u16 + 1));
+    }
+    let mut ordered: Vec<&Symbol> = symbols.iter().filter(|s| s.bind == 0).collect();
+    let first_global = sections.len() + 1 + ordered.len();
+    ordered.extend(symbols.iter().filter(|s| s.bind != 0));
+    for s in ordered {
+        let n = add_name(&s.name, &mut strtab);
+        symtab.extend(be32(n));
+        symtab.extend(be32(s.value));
+        symtab.extend(be32(s.size));
+        symtab.push((s.bind << 4) | (s.kind & 0xf));
+        symtab.push(0);
+        symtab.extend(be16(match s.place {
+            Place::Section(k) => k as u16 + 1,
+            Place::Absolute => 0xfff1,
+        }));
+    }
+    let mut body = image.to_vec();
+    let align4 = |v: &mut Vec<u8>| v.resize(v.len().next_multiple_of(4), 0);
+    align4(&mut body);
+    let symtab_off = image_off + body.len() as u32;
+    body.extend(&symtab);
+    let strtab_off = image_off + body.len() as u32;
+    body.extend(&strtab);
+    let names: Vec<u32> = sections
+        .iter()
+        .map(|s| add_name(&s.name, &mut shstr))
+        .collect();
+    let symtab_name = add_name(".symtab", &mut shstr);
+    let strtab_name = add_name(".strtab", &mut shstr);
+    let shstrtab_name = add_name(".shstrtab", &mut shstr);
+    let shstr_off = image_off + body.len() as u32;
+    body.extend(&shstr);
+    align4(&mut body);
+    let shoff = image_off + body.len() as u32;
+    let shnum = sections.len() as u16 + 4;
+    let mut out = Vec::new();
+    out.extend([0x7f, b'E', b'L', b'F', 1, 2, 1, 0]);
+    out.extend([0u8; 8]);
+    out.extend(be16(2)); // ET_EXEC
+    out.extend(be16(EM_SPU));
+    out.extend(be32(1));
+    out.extend(be32(entry));
+    out.extend(be32(if segs.is_empty() { 0 } else { phoff }));
+    out.extend(be32(shoff));
+    out.extend(be32(0));
+    out.extend(be16(ehsize as u16));
+    out.extend(be16(32));
+    out.extend(be16(segs.len() as u16));
+    out.extend(be16(40));
+    out.extend(be16(shnum));
+    out.extend(be16(shnum - 1));
+    for &(flags, first, last) in &segs {
+        let start = sections[first].addr;
+        let end = |s: &Section| s.addr + s.size;
+        let file_end = sections[first..=last]
+            .iter()
+            .filter(|s| !s.nobits)
+            .map(end)
+            .max()
+            .unwrap_or(start);
+        let mem_end = sections[first..=last]
+            .iter()
+            .map(end)
+            .max()
+            .unwrap_or(start);
+        for v in [1, image_off + start, start, start] {
+            out.extend(be32(v));
+        }
+        for v in [file_end - start, mem_end - start, flags, PAGE] {
+            out.extend(be32(v));
+        }
+    }
+    out.resize(image_off as usize, 0);
+    out.extend(&body);
+    let sh = |out: &mut Vec<u8>, fields: [u32; 10]| {
+        for v in fields {
+            out.extend(be32(v));
+        }
+    };
+    sh(&mut out, [0; 10]);
+    for (s, &n) in sections.iter().zip(&names) {
+        let ty = if s.nobits { 8 } else { 1 };
+        let flags = (s.flags & (SHF_ALLOC | SHF_WRITE | SHF_EXECINSTR)) as u32;
+        let off = image_off + s.addr;
+        sh(
+            &mut out,
+            [n, ty, flags, s.addr, off, s.size, 0, 0, s.align, 0],
+        );
+    }
+    let symtab_index = sections.len() as u32 + 1;
+    sh(
+        &mut out,
+        [
+            symtab_name,
+            2,
+            0,
+            0,
+            symtab_off,
+            symtab.len() as u32,
+            symtab_index + 1,
+            first_global as u32,
+            4,
+            16,
+        ],
+    );
+    sh(
+        &mut out,
+        [
+            strtab_name,
+            3,
+            0,
+            0,
+            strtab_off,
+            strtab.len() as u32,
+            0,
+            0,
+            1,
+            0,
+        ],
+    );
+    sh(
+        &mut out,
+        [
+            shstrtab_name,
+            3,
+            0,
+            0,
+            shstr_off,
+            shstr.len() as u32,
+            0,
+            0,
+            1,
+            0,
+        ],
+    );
+    out
+}
