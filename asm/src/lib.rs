@@ -9,6 +9,7 @@
 //! and not on each other.
 
 pub mod elf;
+pub mod elf_check;
 mod expand;
 mod expr;
 mod gas;

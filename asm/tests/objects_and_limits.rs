@@ -239,3 +239,35 @@ fn mutated_objects_never_panic() {
         }
     }
 }
+
+/// Issue #31: seven lines with `.section .bss` and `.space` gave an object whose section
+/// headers ran past the end of the file (the aligned `.bss` offset was reserved but its
+/// padding never written). Every header and every section now lies inside the file, and
+/// `.bss` sits at its aligned offset with no bytes of its own, as GNU as places it.
+#[test]
+fn bss_after_text_lies_inside_the_file() {
+    let src = ".text\n\
+               il $3, 1\n\
+               .section .bss\n\
+               .p2align 4\n\
+               buf: .space 100\n\
+               .data\n\
+               .byte 1\n";
+    assert_eq!(src.lines().count(), 7);
+    let obj = object(src);
+    let elf = obj.to_elf().unwrap();
+    assert_eq!(spu_asm::elf_check::layout_errors(&elf), Vec::<String>::new());
+    let word = |at: usize| u32::from_be_bytes(elf[at..at + 4].try_into().unwrap());
+    let shoff = word(32) as usize;
+    let shnum = u16::from_be_bytes([elf[48], elf[49]]) as usize;
+    assert_eq!(shoff + shnum * 40, elf.len());
+    // .text at 52 (4 bytes), .data at 56 (1 byte), .bss at 64 (aligned to 16, NOBITS, its
+    // 100 bytes padded to the alignment as every section is).
+    let header = |i: usize| {
+        let at = shoff + i * 40;
+        (word(at + 4), word(at + 16), word(at + 20), word(at + 32))
+    };
+    assert_eq!(header(1), (1, 52, 4, 1));
+    assert_eq!(header(2), (1, 56, 1, 1));
+    assert_eq!(header(3), (8, 64, 112, 16));
+}
