@@ -172,4 +172,6 @@ asm_files! {
     errors => "errors.s",
     gnu_directives => "gnu_directives.s",
     bad_input => "bad_input.s",
+    gnu_warnings => "gnu_warnings.s",
+    symbol_loops => "symbol_loops.s",
 }

@@ -122,6 +122,10 @@ struct Assembler<'o> {
     /// start give the same schedule when every register name the scheduler resolved
     /// still resolves the same (layout passes repeat each block unchanged).
     schedules: HashMap<SchedKey, SchedEntry>,
+    /// Names the expression being evaluated used before their definition in this walk
+    /// (through `.set` symbols too), and each `.set` symbol's: symbol definition loops.
+    forward_refs: std::cell::RefCell<Vec<String>>,
+    set_forward: HashMap<String, Vec<String>>,
 }
 
 /// What a `.sched` block's schedule is made from: its lines, options and start address.
@@ -177,6 +181,8 @@ impl<'o> Assembler<'o> {
             macro_depth: 0,
             exitm: false,
             schedules: HashMap::new(),
+            forward_refs: Default::default(),
+            set_forward: HashMap::new(),
         };
         // gas always has .text, .data and .bss, in that order.
         for name in [".text", ".data", ".bss"] {
@@ -199,6 +205,7 @@ impl<'o> Assembler<'o> {
         self.expanded = 0;
         self.exitm = false;
         self.defined.clear();
+        self.set_forward.clear();
         if pass == 2 {
             self.bytes.clear();
             self.relocs.clear();

@@ -219,8 +219,9 @@ impl Assembler<'_> {
             return out;
         }
         for part in split_top(args, ',') {
-            match self.eval(part.trim()) {
-                Ok((v, _)) => out.push(v),
+            let col = operand_column(line, &part, col);
+            match self.eval_reported(part.trim(), line, col) {
+                Ok(v) => out.push(v.v),
                 Err((c, m)) => {
                     self.diag(Severity::Error, line, col + c, m);
                     out.push(0);
@@ -496,8 +497,9 @@ impl Assembler<'_> {
                     return;
                 }
                 for part in split_top(args, ',') {
-                    let (v, c) = match self.eval_val(part.trim()) {
-                        Ok((v, _, _)) => (v, col),
+                    let col = operand_column(line, &part, col);
+                    let (v, c) = match self.eval_reported(part.trim(), line, col) {
+                        Ok(v) => (v, col),
                         Err((c, m)) => {
                             self.diag(Severity::Error, line, col + c, m);
                             (Val::abs(0), col)
@@ -522,6 +524,7 @@ impl Assembler<'_> {
                         self.emit(&vec![0; size]);
                         continue;
                     }
+                    self.truncation_warning(v.v, size, line, c);
                     let b = v.v.to_be_bytes();
                     self.emit(&b[8 - size..]);
                 }
@@ -752,6 +755,16 @@ fn is_directive(name: &str) -> bool {
                 | ".endif"
                 | ".exitm"
         )
+}
+
+/// The column of operand `part` in `line` (1-based; `fallback` when it is not found as
+/// written, as after macro substitution).
+pub(super) fn operand_column(line: &Line, part: &str, fallback: usize) -> usize {
+    let p = part.trim();
+    if p.is_empty() {
+        return fallback;
+    }
+    line.text.get(fallback.saturating_sub(1)..).and_then(|t| t.find(p)).map_or(fallback, |c| c + fallback)
 }
 
 /// LEB128 bytes of `v` (signed or unsigned), as `.sleb128`/`.uleb128` write them.
