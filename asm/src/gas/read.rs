@@ -420,6 +420,7 @@ impl Assembler<'_> {
                 self.align_pattern(d, args, line, col)
             }
             ".reloc" => self.reloc_directive(args, line, col),
+            ".purgem" => self.purge_macro(args, line, col),
             ".extern" | ".file" | ".ident" | ".loc" | ".loc_mark_labels" | ".local" | ".brinfo"
             | ".end" | ".nolist" | ".list" | ".eject" | ".psize" | ".title" | ".sbttl"
             | ".version" | ".gnu_attribute" | ".lflags" => {}
@@ -697,6 +698,7 @@ const DIRECTIVES: &[&str] = &[
     ".p2alignl",
     ".p2alignw",
     ".popsection",
+    ".purgem",
     ".previous",
     ".protected",
     ".pushsection",
@@ -734,6 +736,7 @@ const DIRECTIVES: &[&str] = &[
 
 fn is_directive(name: &str) -> bool {
     DIRECTIVES.contains(&name)
+        || super::cond::CONDITIONALS.contains(&name)
         || name.starts_with(".cfi_")
         || matches!(
             name,
@@ -743,13 +746,6 @@ fn is_directive(name: &str) -> bool {
                 | ".endr"
                 | ".irp"
                 | ".irpc"
-                | ".if"
-                | ".ifdef"
-                | ".ifndef"
-                | ".ifeq"
-                | ".ifne"
-                | ".ifc"
-                | ".ifnc"
                 | ".elseif"
                 | ".else"
                 | ".endif"
