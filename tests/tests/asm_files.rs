@@ -174,4 +174,6 @@ asm_files! {
     bad_input => "bad_input.s",
     gnu_warnings => "gnu_warnings.s",
     symbol_loops => "symbol_loops.s",
+    gnu_directives2 => "gnu_directives2.s",
+    gnu_directive_errors => "gnu_directive_errors.s",
 }

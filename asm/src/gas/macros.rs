@@ -183,7 +183,10 @@ impl Assembler<'_> {
             .filter(|v| !v.is_empty());
             if value.is_none() && m.required.contains(name) {
                 missing = true;
-                let col = line.text.find(args.trim()).map_or(1, |c| c + 1);
+                let col = match args.trim() {
+                    "" => line.text.len() - line.text.trim_start().len() + 1,
+                    a => line.text.find(a).map_or(1, |c| c + 1),
+                };
                 self.diag(
                     Severity::Error,
                     line,

@@ -126,6 +126,11 @@ struct Assembler<'o> {
     /// (through `.set` symbols too), and each `.set` symbol's: symbol definition loops.
     forward_refs: std::cell::RefCell<Vec<String>>,
     set_forward: HashMap<String, Vec<String>>,
+    /// `.struct`: the offset in gas's absolute section, where labels are numbers and
+    /// data only advances the offset, until a section directive leaves it.
+    absolute: Option<u32>,
+    /// A statement in the absolute section tried to store bytes other than zero.
+    nonzero_in_absolute: bool,
 }
 
 /// What a `.sched` block's schedule is made from: its lines, options and start address.
@@ -183,6 +188,8 @@ impl<'o> Assembler<'o> {
             schedules: HashMap::new(),
             forward_refs: Default::default(),
             set_forward: HashMap::new(),
+            absolute: None,
+            nonzero_in_absolute: false,
         };
         // gas always has .text, .data and .bss, in that order.
         for name in [".text", ".data", ".bss"] {
@@ -206,6 +213,7 @@ impl<'o> Assembler<'o> {
         self.exitm = false;
         self.defined.clear();
         self.set_forward.clear();
+        self.absolute = None;
         if pass == 2 {
             self.bytes.clear();
             self.relocs.clear();

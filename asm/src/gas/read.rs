@@ -186,6 +186,14 @@ impl Assembler<'_> {
             } else {
                 self.instruction(&lw, &args, line, col);
             }
+            if std::mem::take(&mut self.nonzero_in_absolute) {
+                self.diag(
+                    Severity::Error,
+                    line,
+                    col,
+                    "attempt to store non-zero value in section `*ABS*'",
+                );
+            }
             if self.pass == 2 {
                 let after = self.offsets.get(&before.0).copied().unwrap_or(0);
                 if after > before.1 && self.sect == before.0 {
@@ -229,6 +237,91 @@ impl Assembler<'_> {
             }
         }
         out
+    }
+
+    /// `.incbin "FILE"[, SKIP[, COUNT]]` (read.c s_incbin): the file's bytes from SKIP,
+    /// COUNT of them (all the rest by default); the file is looked for as named, then in
+    /// the source's directory and each `-I` directory.
+    fn incbin(&mut self, args: &str, line: &Line, col: usize) {
+        let parts = split_top(args, ',');
+        let Some(name) = parts.first().and_then(|p| unquote(p.trim())) else {
+            self.diag(Severity::Error, line, col, "missing file name for .incbin");
+            return;
+        };
+        let name: String = name.iter().map(|&b| b as char).collect();
+        let mut numbers = Vec::new();
+        for p in parts.iter().skip(1) {
+            let c = operand_column(line, p, col);
+            match self.eval_reported(p.trim(), line, c) {
+                Ok(v) => numbers.push(v.v),
+                Err((k, m)) => {
+                    self.diag(Severity::Error, line, c + k, m);
+                    return;
+                }
+            }
+        }
+        let Some((path, file_len)) = self.find_binary(&name) else {
+            self.diag(Severity::Error, line, col, format!("file not found: {name}"));
+            return;
+        };
+        let skip = numbers.first().copied().unwrap_or(0);
+        let count = numbers.get(1).copied().unwrap_or(file_len as i64 - skip);
+        if skip < 0 || count < 0 || skip.saturating_add(count) > file_len as i64 {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("skip ({skip}) or count ({count}) invalid for file size ({file_len})"),
+            );
+            return;
+        }
+        if count > 2 * LOCAL_STORE as i64 {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!(".incbin of {count} bytes is more than the local store holds"),
+            );
+            return;
+        }
+        let bytes = match &path {
+            Ok(p) => {
+                use std::io::{Read, Seek};
+                let read = std::fs::File::open(p).and_then(|mut f| {
+                    f.seek(std::io::SeekFrom::Start(skip as u64))?;
+                    let mut buf = Vec::with_capacity(count as usize);
+                    f.take(count as u64).read_to_end(&mut buf)?;
+                    Ok(buf)
+                });
+                match read {
+                    Ok(b) if b.len() == count as usize => b,
+                    Ok(_) | Err(_) => {
+                        self.diag(Severity::Error, line, col, format!("can't read {name}"));
+                        return;
+                    }
+                }
+            }
+            Err(text) => text[skip as usize..(skip + count) as usize].to_vec(),
+        };
+        self.emit(&bytes);
+    }
+
+    /// A binary file for `.incbin`: a path on disk (or an in-memory file's bytes) and its
+    /// length.
+    #[allow(clippy::type_complexity)]
+    fn find_binary(&self, name: &str) -> Option<(Result<std::path::PathBuf, Vec<u8>>, u64)> {
+        if let Some((_, text)) = self.opts.virtual_files.iter().find(|(n, _)| n == name) {
+            let bytes = text.as_bytes().to_vec();
+            let len = bytes.len() as u64;
+            return Some((Err(bytes), len));
+        }
+        let named = std::path::Path::new(name).to_path_buf();
+        std::iter::once(named)
+            .chain(self.opts.include_dirs.iter().map(|d| d.join(name)))
+            .find_map(|p| {
+                let meta = std::fs::metadata(&p).ok().filter(|m| m.is_file())?;
+                Some((Ok(p), meta.len()))
+            })
     }
 
     /// `.org EXPR` and `. = EXPR`: move forward to an offset in the current section.
@@ -421,6 +514,20 @@ impl Assembler<'_> {
             }
             ".reloc" => self.reloc_directive(args, line, col),
             ".purgem" => self.purge_macro(args, line, col),
+            ".struct" => {
+                // read.c s_struct: into the absolute section at the offset given.
+                let off = self.data_values(args, line, col).first().copied().unwrap_or(0);
+                if !(0..=2 * LOCAL_STORE as i64).contains(&off) {
+                    self.diag(Severity::Error, line, col, format!("bad .struct offset {off}"));
+                    return;
+                }
+                self.absolute = Some(off as u32);
+            }
+            ".incbin" => self.incbin(args, line, col),
+            ".popsection" | ".previous" if self.absolute.is_some() => {
+                self.absolute = None;
+                self.elf_directive(d, args, line, col);
+            }
             ".extern" | ".file" | ".ident" | ".loc" | ".loc_mark_labels" | ".local" | ".brinfo"
             | ".end" | ".nolist" | ".list" | ".eject" | ".psize" | ".title" | ".sbttl"
             | ".version" | ".gnu_attribute" | ".lflags" => {}
@@ -699,6 +806,8 @@ const DIRECTIVES: &[&str] = &[
     ".p2alignw",
     ".popsection",
     ".purgem",
+    ".struct",
+    ".incbin",
     ".previous",
     ".protected",
     ".pushsection",

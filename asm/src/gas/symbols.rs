@@ -47,6 +47,9 @@ impl Env for Assembler<'_> {
         Some(self.value_of(name, self.symbols.get(name)?))
     }
     fn dot(&self) -> Val {
+        if let Some(off) = self.absolute {
+            return Val::abs(off as i64);
+        }
         Val {
             v: self.here() as i64,
             reloc: true,
@@ -170,6 +173,12 @@ impl Assembler<'_> {
     }
 
     pub(super) fn define_label(&mut self, name: &str, line: &Line) {
+        if let Some(off) = self.absolute {
+            // A label in the absolute section (`.struct`) is a number.
+            self.symbols
+                .insert(name.to_string(), SymVal::Abs(Val::abs(off as i64)));
+            return;
+        }
         let off = self.offsets.get(&self.sect).copied().unwrap_or(0);
         if let Ok(n) = name.parse::<u32>() {
             if self.pass == 1 {

@@ -34,6 +34,7 @@ impl Assembler<'_> {
     }
 
     pub(super) fn switch_to(&mut self, chunk: Sect) {
+        self.absolute = None;
         if chunk != self.sect {
             self.prev_sect = self.sect;
             self.sect = chunk;
@@ -71,11 +72,20 @@ impl Assembler<'_> {
     }
 
     pub(super) fn here(&self) -> u32 {
+        if let Some(off) = self.absolute {
+            return off;
+        }
         self.bases.get(&self.sect).copied().unwrap_or(0)
             + self.offsets.get(&self.sect).copied().unwrap_or(0)
     }
 
     pub(super) fn emit(&mut self, data: &[u8]) {
+        if let Some(off) = self.absolute.as_mut() {
+            // The absolute section (`.struct`) has no bytes: only the offset moves.
+            *off = off.saturating_add(data.len() as u32).min(2 * LOCAL_STORE as u32);
+            self.nonzero_in_absolute |= data.iter().any(|&b| b != 0);
+            return;
+        }
         let nobits = self.is_nobits(self.sect);
         let off = self.offsets.entry(self.sect).or_insert(0);
         // Past the local store nothing can load: stop growing (the size check reports it).
