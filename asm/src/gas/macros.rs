@@ -4,7 +4,7 @@
 //! substitution) is `crate::expand`, shared with `spu sched`.
 
 use super::read::block_word;
-use super::{Assembler, Severity, MAX_EXPANDED};
+use super::{Assembler, Severity, MAX_EXPANDED, MAX_MACRO_NEST};
 use crate::expand::{block_end, irp_values, macro_argument, substitute};
 use crate::lex::{split_top, strip_comment, Line};
 use std::collections::HashMap;
@@ -127,6 +127,10 @@ impl Assembler<'_> {
     }
 
     pub(super) fn expand_macro(&mut self, m: &Macro, args: &str, line: &Line) {
+        if self.macro_depth >= MAX_MACRO_NEST {
+            self.diag(Severity::Error, line, 1, "macros nested too deeply");
+            return;
+        }
         let body = self.macro_lines(m, args, line);
         self.macro_depth += 1;
         self.run_lines(&body);

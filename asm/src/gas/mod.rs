@@ -147,6 +147,13 @@ type Res<T> = Result<T, (usize, String)>;
 /// nested repetitions cannot run for ever.
 const MAX_EXPANDED: usize = 1_000_000;
 
+/// Files, macro expansions and repetitions open inside one another: past GNU's macro
+/// limit (100) and deep enough for any include chain, within the host's stack.
+const MAX_NESTING: usize = 256;
+
+/// gas's `max_macro_nest`: macro expansions inside one another.
+const MAX_MACRO_NEST: usize = 100;
+
 /// Bytes of SPU local store: the most a program can occupy.
 const LOCAL_STORE: usize = 256 * 1024;
 

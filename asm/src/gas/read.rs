@@ -4,7 +4,7 @@
 //! `.set`, `.include`, `.reloc`, messages.
 
 use super::macros::collect_block;
-use super::{Assembler, Macro, Severity, LOCAL_STORE, MAX_EXPANDED};
+use super::{Assembler, Macro, Severity, LOCAL_STORE, MAX_EXPANDED, MAX_NESTING};
 use crate::expr::{is_ident, Val};
 use crate::lex::{bytes_as_text, read_source, split_top, strip_comment, to_lines, unquote, Line};
 use spu_isa::table::forms_named;
@@ -31,7 +31,7 @@ impl Assembler<'_> {
             return;
         }
         self.depth += 1;
-        if self.depth > 64 {
+        if self.depth > MAX_NESTING {
             if let Some(l) = lines.first() {
                 self.diag(
                     Severity::Error,
