@@ -224,6 +224,31 @@ impl Assembler<'_> {
         self.sect = here;
     }
 
+    /// `.ident "TEXT"` (obj-elf.c obj_elf_ident): the string into `.comment` (mergeable
+    /// strings), after one zero byte the first time, without changing the section.
+    pub(super) fn ident(&mut self, args: &str, line: &Line, col: usize) {
+        let Some(mut text) = crate::lex::unquote(args.trim()) else {
+            self.diag(Severity::Error, line, col, "expected a string");
+            return;
+        };
+        let def = SectionDef {
+            name: ".comment".into(),
+            ty: crate::object::SHT_PROGBITS,
+            flags: 0x30, // SHF_MERGE | SHF_STRINGS
+            entsize: 1,
+        };
+        let (here, absolute) = (self.sect, self.absolute.take());
+        let c = self.chunk(def, 0);
+        self.sect = c;
+        if self.offsets.get(&c).copied().unwrap_or(0) == 0 {
+            self.emit(&[0]);
+        }
+        text.push(0);
+        self.emit(&text);
+        self.sect = here;
+        self.absolute = absolute;
+    }
+
     /// The section and symbol-attribute directives; whether `d` was one.
     pub(super) fn elf_directive(&mut self, d: &str, args: &str, line: &Line, col: usize) -> bool {
         match d {

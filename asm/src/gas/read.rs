@@ -494,7 +494,104 @@ impl Assembler<'_> {
     /// Records a relocation at `offset` in the section of chunk `sect` (pass 2): in an
     /// A directive other than the block and conditional ones (handled in `run_lines`).
     fn directive(&mut self, d: &str, args: &str, line: &Line, col: usize) {
+        // Other names gas gives the same directives (tc-spu.c's `.def` is `.set`;
+        // read.c's `.offset` is `.struct`, `.dc.*` are the data directives; obj-elf.c's
+        // `.sect`, `.section.s` and `.common`).
+        let d = match d {
+            ".def" => ".set",
+            ".offset" => ".struct",
+            ".dc.b" => ".byte",
+            ".dc" | ".dc.w" => ".short",
+            ".dc.l" | ".dc.a" => ".long",
+            ".dc.s" => ".float",
+            ".dc.d" => ".double",
+            ".sect" | ".sect.s" | ".section.s" => ".section",
+            ".common" | ".common.s" => ".comm",
+            other => other,
+        };
         match d {
+            ".ds" | ".ds.b" | ".ds.w" | ".ds.l" | ".ds.d" | ".ds.s" | ".ds.p" => {
+                // read.c s_space with a unit: `.ds.l 3` is 12 zero bytes.
+                let unit: i64 = match d {
+                    ".ds.b" => 1,
+                    ".ds" | ".ds.w" => 2,
+                    ".ds.d" => 8,
+                    ".ds.p" => 12,
+                    _ => 4,
+                };
+                let vals = self.data_values(args, line, col);
+                let n = vals.first().copied().unwrap_or(0).saturating_mul(unit);
+                if !(0..=LOCAL_STORE as i64 * 2).contains(&n) {
+                    self.diag(Severity::Error, line, col, format!("bad {d} size {n}"));
+                    return;
+                }
+                let fill = vals.get(1).copied().unwrap_or(0);
+                let mut bytes = Vec::with_capacity(n as usize);
+                for _ in 0..n / unit {
+                    bytes.extend_from_slice(&fill.to_be_bytes()[8 - unit.min(8) as usize..]);
+                    bytes.resize(bytes.len() + (unit - unit.min(8)) as usize, 0);
+                }
+                self.emit(&bytes);
+            }
+            ".dcb" | ".dcb.b" | ".dcb.w" | ".dcb.l" => {
+                // `.dcb.w N, V`: N copies of V, each of the unit's size.
+                let unit = match d {
+                    ".dcb.b" => 1,
+                    ".dcb.l" => 4,
+                    _ => 2,
+                };
+                let vals = self.data_values(args, line, col);
+                let n = vals.first().copied().unwrap_or(0);
+                if !(0..=LOCAL_STORE as i64 * 2 / unit as i64).contains(&n) {
+                    self.diag(Severity::Error, line, col, format!("bad {d} count {n}"));
+                    return;
+                }
+                let v = vals.get(1).copied().unwrap_or(0);
+                self.truncation_warning(v, unit, line, col);
+                let word = &v.to_be_bytes()[8 - unit..];
+                let bytes: Vec<u8> = (0..n).flat_map(|_| word.iter().copied()).collect();
+                self.emit(&bytes);
+            }
+            ".octa" => {
+                // 16 bytes, big-endian, the value sign-extended.
+                for v in self.data_values(args, line, col) {
+                    let fill = if v < 0 { [0xff; 8] } else { [0; 8] };
+                    self.emit(&fill);
+                    self.emit(&v.to_be_bytes());
+                }
+            }
+            ".nops" => {
+                // read.c s_nops: SIZE bytes of the target's no-ops (SPU: whole nop words).
+                let n = self.data_values(args, line, col).first().copied().unwrap_or(0);
+                if !(0..=LOCAL_STORE as i64).contains(&n) || n % 4 != 0 {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!(".nops size {n} is not a whole number of SPU instructions"),
+                    );
+                    return;
+                }
+                let bytes = super::target::code_padding(self.here(), n as u32);
+                self.emit(&bytes);
+            }
+            ".abort" => self.diag(
+                Severity::Error,
+                line,
+                col,
+                ".abort detected.  Abandoning ship.",
+            ),
+            ".fail" => {
+                // read.c s_fail: a warning from 500 up, an error below.
+                let v = self.data_values(args, line, col).first().copied().unwrap_or(0);
+                let sev = if v >= 500 {
+                    Severity::Warning
+                } else {
+                    Severity::Error
+                };
+                self.diag(sev, line, col, format!(".fail {v} encountered"));
+            }
+            ".ident" => self.ident(args, line, col),
             ".org" => {
                 let parts = split_top(args, ',');
                 let fill = match parts.get(1) {
@@ -528,9 +625,14 @@ impl Assembler<'_> {
                 self.absolute = None;
                 self.elf_directive(d, args, line, col);
             }
-            ".extern" | ".file" | ".ident" | ".loc" | ".loc_mark_labels" | ".local" | ".brinfo"
-            | ".end" | ".nolist" | ".list" | ".eject" | ".psize" | ".title" | ".sbttl"
-            | ".version" | ".gnu_attribute" | ".lflags" => {}
+            ".extern" | ".file" | ".loc" | ".loc_mark_labels" | ".local" | ".brinfo" | ".end"
+            | ".nolist" | ".list" | ".eject" | ".psize" | ".title" | ".sbttl" | ".version"
+            | ".gnu_attribute" | ".lflags" => {}
+            // read.c's s_ignore entries (COFF debugging and MRI listing control), and
+            // `.func`/`.endfunc`, which emit nothing without stabs debugging.
+            ".debug" | ".dim" | ".endef" | ".scl" | ".tag" | ".val" | ".ln" | ".func"
+            | ".endfunc" | ".page" | ".plen" | ".spc" | ".ttl" | ".nopage" | ".noformat"
+            | ".format" | ".name" => {}
             // spu-elf-as 2.40 has no CFI support and says so.
             c if c.starts_with(".cfi_") => self.diag(
                 Severity::Error,
@@ -760,6 +862,52 @@ impl Assembler<'_> {
 
 /// Directives `directive` handles (block directives and conditionals are handled before).
 const DIRECTIVES: &[&str] = &[
+    ".def",
+    ".offset",
+    ".dc",
+    ".dc.a",
+    ".dc.b",
+    ".dc.d",
+    ".dc.l",
+    ".dc.s",
+    ".dc.w",
+    ".dcb",
+    ".dcb.b",
+    ".dcb.l",
+    ".dcb.w",
+    ".ds",
+    ".ds.b",
+    ".ds.d",
+    ".ds.l",
+    ".ds.p",
+    ".ds.s",
+    ".ds.w",
+    ".sect",
+    ".sect.s",
+    ".section.s",
+    ".common",
+    ".common.s",
+    ".octa",
+    ".nops",
+    ".abort",
+    ".fail",
+    ".debug",
+    ".dim",
+    ".endef",
+    ".scl",
+    ".tag",
+    ".val",
+    ".ln",
+    ".func",
+    ".endfunc",
+    ".page",
+    ".plen",
+    ".spc",
+    ".ttl",
+    ".nopage",
+    ".noformat",
+    ".format",
+    ".name",
     ".2byte",
     ".4byte",
     ".8byte",
