@@ -22,3 +22,5 @@
 	.long 1				# error: 22:2: attempt to store non-zero value in section `*ABS*'
 	.data
 	.byte 3
+	.text
+	.nops 8				# error: 26:2: unimplemented .nops directive

@@ -176,4 +176,5 @@ asm_files! {
     symbol_loops => "symbol_loops.s",
     gnu_directives2 => "gnu_directives2.s",
     gnu_directive_errors => "gnu_directive_errors.s",
+    gnu_altmacro => "gnu_altmacro.s",
 }

@@ -5,7 +5,7 @@
 
 use super::read::block_word;
 use super::{Assembler, Severity, MAX_EXPANDED, MAX_MACRO_NEST};
-use crate::expand::{block_end, irp_values, macro_argument, substitute};
+use crate::expand::{alt_arguments, block_end, irp_values, macro_argument, substitute, substitute_bare};
 use crate::lex::{split_top, strip_comment, Line};
 use std::collections::HashMap;
 
@@ -148,7 +148,22 @@ impl Assembler<'_> {
         } else {
             split_top(args, ',')
         };
-        let given: Vec<String> = pieces.iter().map(|s| macro_argument(s.trim())).collect();
+        let given: Vec<String> = if self.altmacro {
+            let mut given = alt_arguments(args);
+            for g in &mut given {
+                // `%EXPR`: the expression's value, in decimal.
+                if let Some(e) = g.strip_prefix('%') {
+                    match self.eval(e) {
+                        Ok((v, _)) => *g = v.to_string(),
+                        Err((_, m)) => self.diag(Severity::Error, line, 1, m),
+                    }
+                }
+            }
+            given
+        } else {
+            pieces.iter().map(|s| macro_argument(s.trim())).collect()
+        };
+        let pieces = if self.altmacro { given.clone() } else { pieces };
         let mut subst = Vec::new();
         let mut missing = false;
         let mut next_positional = 0;
@@ -209,8 +224,26 @@ impl Assembler<'_> {
             return body; // macro.c expands nothing when a required argument is missing
         }
         for l in &m.body {
+            if self.altmacro {
+                // `LOCAL a, b`: each name a new label of its own per expansion.
+                let t = strip_comment(&l.text);
+                let t = t.trim();
+                if t.len() > 6 && t[..6].eq_ignore_ascii_case("local ") {
+                    for name in t[6..].split(',').map(str::trim).filter(|n| !n.is_empty()) {
+                        self.local_counter += 1;
+                        subst.push((name.to_string(), format!(".LL{:04x}", self.local_counter)));
+                    }
+                    continue;
+                }
+            }
+            let text = substitute(&l.text, &subst, Some(&counter));
+            let text = if self.altmacro {
+                substitute_bare(&text, &subst)
+            } else {
+                text
+            };
             body.push(Line {
-                text: substitute(&l.text, &subst, Some(&counter)),
+                text,
                 file: line.file.clone(),
                 line: line.line,
             });

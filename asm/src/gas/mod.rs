@@ -131,6 +131,10 @@ struct Assembler<'o> {
     absolute: Option<u32>,
     /// A statement in the absolute section tried to store bytes other than zero.
     nonzero_in_absolute: bool,
+    /// `.altmacro` is on: `<...>` and `%expr` arguments, `LOCAL`, bare parameter names.
+    altmacro: bool,
+    /// `LOCAL` names made so far (`.LL0001`, ...), as macro.c's `loccnt`.
+    local_counter: usize,
 }
 
 /// What a `.sched` block's schedule is made from: its lines, options and start address.
@@ -197,6 +201,8 @@ impl<'o> Assembler<'o> {
             set_forward: HashMap::new(),
             absolute: None,
             nonzero_in_absolute: false,
+            altmacro: false,
+            local_counter: 0,
         };
         // gas always has .text, .data and .bss, in that order.
         for name in [".text", ".data", ".bss"] {
@@ -221,6 +227,8 @@ impl<'o> Assembler<'o> {
         self.defined.clear();
         self.set_forward.clear();
         self.absolute = None;
+        self.altmacro = false;
+        self.local_counter = 0;
         if pass == 2 {
             self.bytes.clear();
             self.relocs.clear();

@@ -560,21 +560,9 @@ impl Assembler<'_> {
                     self.emit(&v.to_be_bytes());
                 }
             }
-            ".nops" => {
-                // read.c s_nops: SIZE bytes of the target's no-ops (SPU: whole nop words).
-                let n = self.data_values(args, line, col).first().copied().unwrap_or(0);
-                if !(0..=LOCAL_STORE as i64).contains(&n) || n % 4 != 0 {
-                    self.diag(
-                        Severity::Error,
-                        line,
-                        col,
-                        format!(".nops size {n} is not a whole number of SPU instructions"),
-                    );
-                    return;
-                }
-                let bytes = super::target::code_padding(self.here(), n as u32);
-                self.emit(&bytes);
-            }
+            // write.c without md_generate_nops (only x86 has one): gas 2.40 for SPU
+            // refuses `.nops` when it writes the frag.
+            ".nops" => self.diag(Severity::Error, line, col, "unimplemented .nops directive"),
             ".abort" => self.diag(
                 Severity::Error,
                 line,
@@ -592,6 +580,8 @@ impl Assembler<'_> {
                 self.diag(sev, line, col, format!(".fail {v} encountered"));
             }
             ".ident" => self.ident(args, line, col),
+            ".altmacro" => self.altmacro = true,
+            ".noaltmacro" => self.altmacro = false,
             ".org" => {
                 let parts = split_top(args, ',');
                 let fill = match parts.get(1) {
@@ -862,6 +852,8 @@ impl Assembler<'_> {
 
 /// Directives `directive` handles (block directives and conditionals are handled before).
 const DIRECTIVES: &[&str] = &[
+    ".altmacro",
+    ".noaltmacro",
     ".def",
     ".offset",
     ".dc",
