@@ -271,3 +271,48 @@ fn bss_after_text_lies_inside_the_file() {
     assert_eq!(header(2), (1, 56, 1, 1));
     assert_eq!(header(3), (8, 64, 112, 16));
 }
+
+/// tc-spu.c's decisions (md_apply_fix with the generic force-relocation rules): a branch
+/// to a global or weak symbol defined in the same file stays a relocation against that
+/// symbol, for the linker (another definition may win); one to a local label resolves;
+/// an address of a local label is relocated against its section. The object still links
+/// into the program one assembly gives.
+#[test]
+fn global_branches_stay_relocations_against_the_symbol() {
+    let src = "\t.globl _start\n\t.text\n_start:\tnop\n\tbr _start\n\tbrsl $0, _start\n\tila $3, _start\n\t.weak w\nw:\tnop\n\tbr w\nl:\tbr l\n\tila $4, l\n\t.data\n\t.long _start, l\n";
+    let obj = object(src);
+    let text = &obj.sections[0];
+    let got: Vec<(u32, u32, RelocTarget, i64)> = text
+        .relocs
+        .iter()
+        .map(|r| (r.offset, r.kind, r.target.clone(), r.addend))
+        .collect();
+    let sym = |n: &str| RelocTarget::Symbol(n.into());
+    assert_eq!(
+        got,
+        vec![
+            (0x4, R_SPU_REL16, sym("_start"), 0),
+            (0x8, R_SPU_REL16, sym("_start"), 0),
+            (0xc, R_SPU_ADDR18, sym("_start"), 0),
+            (0x14, R_SPU_REL16, sym("w"), 0),
+            (0x1c, R_SPU_ADDR18, RelocTarget::Section(0), 0x18),
+        ]
+    );
+    // `l: br l` resolved in place: br 0.
+    assert_eq!(&text.data[0x18..0x1c], &0x3200_0000u32.to_be_bytes());
+    let data: Vec<(u32, u32, RelocTarget, i64)> = obj.sections[1]
+        .relocs
+        .iter()
+        .map(|r| (r.offset, r.kind, r.target.clone(), r.addend))
+        .collect();
+    assert_eq!(
+        data,
+        vec![
+            (0, R_SPU_ADDR32, sym("_start"), 0),
+            (4, R_SPU_ADDR32, RelocTarget::Section(0), 0x18),
+        ]
+    );
+    let linked = link(&[obj], &LinkOptions::default()).unwrap();
+    let one = assemble(src, "one.s", &Options::default()).unwrap();
+    assert_eq!(linked.image, one.image);
+}
