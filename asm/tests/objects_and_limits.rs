@@ -316,3 +316,32 @@ fn global_branches_stay_relocations_against_the_symbol() {
     let one = assemble(src, "one.s", &Options::default()).unwrap();
     assert_eq!(linked.image, one.image);
 }
+
+/// `.symver` (obj-elf.c): a defined symbol gets its versioned alias at the same place and
+/// binding (`local`, `hidden` and `remove` as 2.40 reads them); a reference to an
+/// undefined one names the versioned symbol; an alias without a version is an error.
+#[test]
+fn symver_aliases_and_versioned_references() {
+    let obj = object(
+        "\t.globl f\n\t.text\n\tnop\nf:\tnop\n\t.symver f, f@VERS_1\n\t.symver f, f_h@@VERS_2, hidden\n\t.symver ext, ext@VERS_3\n\tbrsl $0, ext\n",
+    );
+    let find = |n: &str| obj.symbols.iter().find(|s| s.name == n).cloned();
+    let f = find("f").unwrap();
+    let v1 = find("f@VERS_1").unwrap();
+    assert_eq!((v1.value, v1.section, v1.global, v1.hidden), (4, f.section, true, false));
+    let v2 = find("f_h@@VERS_2").unwrap();
+    assert_eq!((v2.value, v2.global, v2.hidden), (4, true, true));
+    assert_eq!(
+        obj.sections[0].relocs[0].target,
+        RelocTarget::Symbol("ext@VERS_3".into())
+    );
+    assert!(find("ext").is_none());
+    assert_eq!(find("ext@VERS_3").unwrap().section, SymSection::Undefined);
+    let removed = object("\t.globl g\ng:\tnop\n\t.symver g, g@V, remove\n");
+    assert!(removed.symbols.iter().all(|s| s.name != "g"));
+    assert!(removed.symbols.iter().any(|s| s.name == "g@V"));
+    assert_eq!(
+        errors("\t.symver g, gv\ng:\tnop\n"),
+        vec!["missing version name in `gv' for symbol `g'".to_string()]
+    );
+}

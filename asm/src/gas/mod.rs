@@ -135,6 +135,9 @@ struct Assembler<'o> {
     altmacro: bool,
     /// `LOCAL` names made so far (`.LL0001`, ...), as macro.c's `loccnt`.
     local_counter: usize,
+    /// `.symver NAME, NAME2@VERSION[, local|hidden|remove]` (final walk): the versioned
+    /// names objects give symbols.
+    symvers: Vec<(String, String, String)>,
 }
 
 /// What a `.sched` block's schedule is made from: its lines, options and start address.
@@ -203,6 +206,7 @@ impl<'o> Assembler<'o> {
             nonzero_in_absolute: false,
             altmacro: false,
             local_counter: 0,
+            symvers: Vec::new(),
         };
         // gas always has .text, .data and .bss, in that order.
         for name in [".text", ".data", ".bss"] {

@@ -289,6 +289,34 @@ impl Assembler<'_> {
                 std::mem::swap(&mut self.sect, &mut self.prev_sect);
             }
             ".lcomm" | ".comm" => self.common(d, args, line, col),
+            ".symver" => {
+                // obj-elf.c obj_elf_symver: `NAME, ALIAS@VERSION` (or `@@`, `@@@`), then
+                // an optional visibility for the alias.
+                let parts = split_top(args, ',');
+                let name = parts.first().map(|p| p.trim()).unwrap_or("");
+                let alias = parts.get(1).map(|p| p.trim()).unwrap_or("");
+                let vis = parts.get(2).map(|p| p.trim()).unwrap_or("");
+                if name.is_empty() || alias.is_empty() {
+                    self.diag(Severity::Error, line, col, "expected comma after name in .symver");
+                } else if !alias.contains('@') {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("missing version name in `{alias}' for symbol `{name}'"),
+                    );
+                } else if !matches!(vis, "" | "local" | "hidden" | "remove") {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("unknown visibility `{vis}' for .symver (local, hidden or remove)"),
+                    );
+                } else if self.pass == 2 {
+                    self.symvers
+                        .push((name.to_string(), alias.to_string(), vis.to_string()));
+                }
+            }
             ".weak" | ".hidden" | ".internal" | ".protected" | ".global" | ".globl" => {
                 for n in split_top(args, ',') {
                     let n = n.trim();

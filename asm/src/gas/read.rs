@@ -852,6 +852,7 @@ impl Assembler<'_> {
 
 /// Directives `directive` handles (block directives and conditionals are handled before).
 const DIRECTIVES: &[&str] = &[
+    ".symver",
     ".altmacro",
     ".noaltmacro",
     ".def",

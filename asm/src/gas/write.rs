@@ -469,6 +469,42 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
             kind: attrs.kind,
         });
     }
+    // `.symver`: a defined symbol gets its versioned alias beside it (the same place,
+    // binding and type; `local`/`hidden` make the alias so, `remove` drops the original);
+    // references to an undefined one name the versioned symbol instead.
+    for (name, alias, vis) in &asm.symvers {
+        if asm.symbols.contains_key(name) {
+            let Some(k) = obj.symbols.iter().position(|s| &s.name == name) else {
+                continue;
+            };
+            let mut a = obj.symbols[k].clone();
+            a.name = alias.replace("@@@", "@@");
+            match vis.as_str() {
+                "local" => {
+                    a.global = false;
+                    a.weak = false;
+                }
+                "hidden" => a.hidden = true,
+                "remove" => {
+                    obj.symbols.remove(k);
+                }
+                _ => {}
+            }
+            obj.symbols.push(a);
+        } else {
+            let versioned = alias.replace("@@@", "@");
+            for s in &mut obj.sections {
+                for r in &mut s.relocs {
+                    if r.target == RelocTarget::Symbol(name.clone()) {
+                        r.target = RelocTarget::Symbol(versioned.clone());
+                    }
+                }
+            }
+            if referenced.remove(name) {
+                referenced.insert(versioned);
+            }
+        }
+    }
     for name in referenced {
         if !asm.symbols.contains_key(&name) {
             let attrs = asm.attrs.get(&name).cloned().unwrap_or_default();
