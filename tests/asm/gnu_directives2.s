@@ -56,5 +56,14 @@ f_size:
 	.ifnotdef nothing
 	.byte 0x38			# => 38
 	.endif
+	.irep r, 5, 6
+	.byte \r			# => 05060a0a0708
+	.endr
+	.rep 2
+	.byte 0x0a
+	.endr
+	.irepc c, 78
+	.byte \c
+	.endr
 	.text
 	il $3, f_size			# => 40800803

@@ -1041,6 +1041,14 @@ fn leb128(mut v: i64, signed: bool) -> Vec<u8> {
 /// for SPU reads pseudo-ops, unless it is a macro or an instruction.
 pub(super) fn block_word(word: &str, macros: &HashMap<String, Macro>) -> String {
     let lw = word.to_ascii_lowercase();
+    // read.c's other spellings of the block directives.
+    let lw = match lw.as_str() {
+        ".irep" => ".irp".to_string(),
+        ".irepc" => ".irpc".to_string(),
+        ".rep" => ".rept".to_string(),
+        ".mexit" => ".exitm".to_string(),
+        _ => lw,
+    };
     if lw.starts_with('.') || macros.contains_key(&lw) || forms_named(&lw).next().is_some() {
         return lw;
     }
