@@ -765,7 +765,17 @@ impl Assembler<'_> {
             ".space" | ".skip" | ".zero" => {
                 let vals = self.data_values(args, line, col);
                 let n = vals.first().copied().unwrap_or(0);
-                if !(0..=LOCAL_STORE as i64 * 2).contains(&n) {
+                // read.c s_space: a count of zero or below is ignored with a warning.
+                if n <= 0 {
+                    let m = if n == 0 {
+                        ".space repeat count is zero, ignored"
+                    } else {
+                        ".space repeat count is negative, ignored"
+                    };
+                    self.diag(Severity::Warning, line, col, m);
+                    return;
+                }
+                if n > LOCAL_STORE as i64 * 2 {
                     self.diag(Severity::Error, line, col, format!("bad .space size {n}"));
                     return;
                 }
@@ -776,9 +786,22 @@ impl Assembler<'_> {
                 let vals = self.data_values(args, line, col);
                 let (n, size, value) = (
                     vals.first().copied().unwrap_or(0),
-                    vals.get(1).copied().unwrap_or(1).clamp(0, 8),
+                    vals.get(1).copied().unwrap_or(1),
                     vals.get(2).copied().unwrap_or(0),
                 );
+                // read.c s_fill's leniencies: ignored or clamped, with a warning.
+                if n < 0 {
+                    self.diag(Severity::Warning, line, col, "repeat < 0; .fill ignored");
+                    return;
+                }
+                if size < 0 {
+                    self.diag(Severity::Warning, line, col, "size negative; .fill ignored");
+                    return;
+                }
+                if size > 8 && n > 0 {
+                    self.diag(Severity::Warning, line, col, ".fill size clamped to 8");
+                }
+                let size = size.min(8);
                 for _ in 0..n.clamp(0, LOCAL_STORE as i64 * 2) {
                     let b = value.to_be_bytes();
                     let s = size as usize;
