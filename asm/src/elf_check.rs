@@ -14,7 +14,8 @@ pub fn layout_errors(data: &[u8]) -> Vec<String> {
         return vec!["not 32-bit big-endian ELF".into()];
     }
     let half = |at: usize| u16::from_be_bytes([data[at], data[at + 1]]) as u64;
-    let word = |at: usize| u32::from_be_bytes([data[at], data[at + 1], data[at + 2], data[at + 3]]) as u64;
+    let word =
+        |at: usize| u32::from_be_bytes([data[at], data[at + 1], data[at + 2], data[at + 3]]) as u64;
     let len = data.len() as u64;
     let (phoff, shoff) = (word(28), word(32));
     let (phentsize, phnum) = (half(42), half(44));
@@ -54,7 +55,9 @@ pub fn layout_errors(data: &[u8]) -> Vec<String> {
         return errors;
     }
     if shstrndx >= shnum {
-        errors.push(format!("section name table index {shstrndx} of {shnum} sections"));
+        errors.push(format!(
+            "section name table index {shstrndx} of {shnum} sections"
+        ));
     }
     for i in 1..shnum {
         let at = (shoff + i * 40) as usize;
@@ -66,7 +69,9 @@ pub fn layout_errors(data: &[u8]) -> Vec<String> {
             ));
         }
         if ty == SHT_NOBITS && offset > len {
-            errors.push(format!("NOBITS section {i} at {offset:#x} is past the end of the file"));
+            errors.push(format!(
+                "NOBITS section {i} at {offset:#x} is past the end of the file"
+            ));
         }
         if link >= shnum {
             errors.push(format!("section {i} links to section {link} of {shnum}"));
@@ -75,7 +80,9 @@ pub fn layout_errors(data: &[u8]) -> Vec<String> {
         if ty == 4 || ty == 9 {
             let info = word(at + 28);
             if info == 0 || info >= shnum {
-                errors.push(format!("relocation section {i} applies to section {info} of {shnum}"));
+                errors.push(format!(
+                    "relocation section {i} applies to section {info} of {shnum}"
+                ));
             }
         }
     }

@@ -301,7 +301,10 @@ impl Object {
         drop(w);
         let broken = crate::elf_check::layout_errors(&out);
         if !broken.is_empty() {
-            return Err(format!("internal error: object layout: {}", broken.join("; ")));
+            return Err(format!(
+                "internal error: object layout: {}",
+                broken.join("; ")
+            ));
         }
         Ok(out)
     }

@@ -178,7 +178,10 @@ fn nesting_as_deep_as_gnu_allows() {
     let data = &o.image[o.sections[1].1 as usize..][..99];
     assert_eq!(data[0], 99);
     assert_eq!(data[98], 1);
-    assert_eq!(errors(&deep(100)), vec!["macros nested too deeply".to_string()]);
+    assert_eq!(
+        errors(&deep(100)),
+        vec!["macros nested too deeply".to_string()]
+    );
     let mut src = String::from(".data\n");
     for _ in 0..200 {
         src.push_str(".rept 1\n");

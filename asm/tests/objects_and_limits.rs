@@ -256,7 +256,10 @@ fn bss_after_text_lies_inside_the_file() {
     assert_eq!(src.lines().count(), 7);
     let obj = object(src);
     let elf = obj.to_elf().unwrap();
-    assert_eq!(spu_asm::elf_check::layout_errors(&elf), Vec::<String>::new());
+    assert_eq!(
+        spu_asm::elf_check::layout_errors(&elf),
+        Vec::<String>::new()
+    );
     let word = |at: usize| u32::from_be_bytes(elf[at..at + 4].try_into().unwrap());
     let shoff = word(32) as usize;
     let shnum = u16::from_be_bytes([elf[48], elf[49]]) as usize;
@@ -328,7 +331,10 @@ fn symver_aliases_and_versioned_references() {
     let find = |n: &str| obj.symbols.iter().find(|s| s.name == n).cloned();
     let f = find("f").unwrap();
     let v1 = find("f@VERS_1").unwrap();
-    assert_eq!((v1.value, v1.section, v1.global, v1.hidden), (4, f.section, true, false));
+    assert_eq!(
+        (v1.value, v1.section, v1.global, v1.hidden),
+        (4, f.section, true, false)
+    );
     let v2 = find("f_h@@VERS_2").unwrap();
     assert_eq!((v2.value, v2.global, v2.hidden), (4, true, true));
     assert_eq!(

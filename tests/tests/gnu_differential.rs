@@ -438,9 +438,10 @@ fn disassembly_matches_objdump() {
         text.lines()
             .filter(|l| {
                 let t = l.trim_start();
-                t.split(':').next().is_some_and(|a| {
-                    !a.is_empty() && a.chars().all(|c| c.is_ascii_hexdigit())
-                }) && t.contains('\t')
+                t.split(':')
+                    .next()
+                    .is_some_and(|a| !a.is_empty() && a.chars().all(|c| c.is_ascii_hexdigit()))
+                    && t.contains('\t')
             })
             .map(|l| l.split_whitespace().collect::<Vec<_>>().join(" "))
             .collect()
@@ -498,7 +499,10 @@ fn generated_corpus_assembles_into_sound_objects() {
             Err(e) => {
                 failures.push(format!(
                     "{name}: {}",
-                    e.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n")
+                    e.iter()
+                        .map(|d| d.to_string())
+                        .collect::<Vec<_>>()
+                        .join("\n")
                 ));
                 continue;
             }

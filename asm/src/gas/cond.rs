@@ -10,8 +10,22 @@ use crate::lex::{split_top, unquote, Line};
 
 /// The conditionals gas knows (cond.c's, as read.c's table names them).
 pub(super) const CONDITIONALS: &[&str] = &[
-    ".if", ".ifdef", ".ifndef", ".ifnotdef", ".ifeq", ".ifne", ".ifge", ".ifgt", ".ifle",
-    ".iflt", ".ifc", ".ifnc", ".ifeqs", ".ifnes", ".ifb", ".ifnb",
+    ".if",
+    ".ifdef",
+    ".ifndef",
+    ".ifnotdef",
+    ".ifeq",
+    ".ifne",
+    ".ifge",
+    ".ifgt",
+    ".ifle",
+    ".iflt",
+    ".ifc",
+    ".ifnc",
+    ".ifeqs",
+    ".ifnes",
+    ".ifb",
+    ".ifnb",
 ];
 
 impl Assembler<'_> {
@@ -85,7 +99,12 @@ impl Assembler<'_> {
                 let active = cond.iter().all(|c| c.0);
                 if active {
                     let col = line.text.find(w).map_or(1, |c| c + 1);
-                    self.diag(Severity::Error, line, col, format!("unknown pseudo-op: `{w}`"));
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("unknown pseudo-op: `{w}`"),
+                    );
                 }
                 // Its lines are assembled (as gas goes on after an unknown pseudo-op) and
                 // its `.else`/`.endif` are its own.

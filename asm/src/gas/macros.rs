@@ -5,7 +5,9 @@
 
 use super::read::block_word;
 use super::{Assembler, Severity, MAX_EXPANDED, MAX_MACRO_NEST};
-use crate::expand::{alt_arguments, block_end, irp_values, macro_argument, substitute, substitute_bare};
+use crate::expand::{
+    alt_arguments, block_end, irp_values, macro_argument, substitute, substitute_bare,
+};
 use crate::lex::{split_top, strip_comment, Line};
 use std::collections::HashMap;
 
@@ -88,7 +90,9 @@ impl Assembler<'_> {
                             Severity::Error,
                             line,
                             1,
-                            format!("Only the last formal of macro `{name}' may be :vararg ({pname})"),
+                            format!(
+                                "Only the last formal of macro `{name}' may be :vararg ({pname})"
+                            ),
                         ),
                         q => self.diag(
                             Severity::Error,

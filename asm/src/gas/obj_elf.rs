@@ -297,7 +297,12 @@ impl Assembler<'_> {
                 let alias = parts.get(1).map(|p| p.trim()).unwrap_or("");
                 let vis = parts.get(2).map(|p| p.trim()).unwrap_or("");
                 if name.is_empty() || alias.is_empty() {
-                    self.diag(Severity::Error, line, col, "expected comma after name in .symver");
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        "expected comma after name in .symver",
+                    );
                 } else if !alias.contains('@') {
                     self.diag(
                         Severity::Error,

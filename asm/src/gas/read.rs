@@ -261,7 +261,12 @@ impl Assembler<'_> {
             }
         }
         let Some((path, file_len)) = self.find_binary(&name) else {
-            self.diag(Severity::Error, line, col, format!("file not found: {name}"));
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("file not found: {name}"),
+            );
             return;
         };
         let skip = numbers.first().copied().unwrap_or(0);
@@ -571,7 +576,11 @@ impl Assembler<'_> {
             ),
             ".fail" => {
                 // read.c s_fail: a warning from 500 up, an error below.
-                let v = self.data_values(args, line, col).first().copied().unwrap_or(0);
+                let v = self
+                    .data_values(args, line, col)
+                    .first()
+                    .copied()
+                    .unwrap_or(0);
                 let sev = if v >= 500 {
                     Severity::Warning
                 } else {
@@ -603,9 +612,18 @@ impl Assembler<'_> {
             ".purgem" => self.purge_macro(args, line, col),
             ".struct" => {
                 // read.c s_struct: into the absolute section at the offset given.
-                let off = self.data_values(args, line, col).first().copied().unwrap_or(0);
+                let off = self
+                    .data_values(args, line, col)
+                    .first()
+                    .copied()
+                    .unwrap_or(0);
                 if !(0..=2 * LOCAL_STORE as i64).contains(&off) {
-                    self.diag(Severity::Error, line, col, format!("bad .struct offset {off}"));
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("bad .struct offset {off}"),
+                    );
                     return;
                 }
                 self.absolute = Some(off as u32);
@@ -1033,7 +1051,10 @@ pub(super) fn operand_column(line: &Line, part: &str, fallback: usize) -> usize 
     if p.is_empty() {
         return fallback;
     }
-    line.text.get(fallback.saturating_sub(1)..).and_then(|t| t.find(p)).map_or(fallback, |c| c + fallback)
+    line.text
+        .get(fallback.saturating_sub(1)..)
+        .and_then(|t| t.find(p))
+        .map_or(fallback, |c| c + fallback)
 }
 
 /// LEB128 bytes of `v` (signed or unsigned), as `.sleb128`/`.uleb128` write them.

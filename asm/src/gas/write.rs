@@ -82,7 +82,9 @@ impl Assembler<'_> {
     pub(super) fn emit(&mut self, data: &[u8]) {
         if let Some(off) = self.absolute.as_mut() {
             // The absolute section (`.struct`) has no bytes: only the offset moves.
-            *off = off.saturating_add(data.len() as u32).min(2 * LOCAL_STORE as u32);
+            *off = off
+                .saturating_add(data.len() as u32)
+                .min(2 * LOCAL_STORE as u32);
             self.nonzero_in_absolute |= data.iter().any(|&b| b != 0);
             return;
         }
