@@ -198,6 +198,13 @@ const STATEMENTS: &[&str] = &[
     ".data\n.byte 1 ; .byte 2 ; .byte 3\n",
     ".data\nlab: lab2: .byte 1\n",
     ".data\n/* comment */ .byte 1 # trailing\n",
+    ".altmacro\n.macro m v, s\nLOCAL l\nl: .byte v\n.long l\n.endm\n.data\nm %3+4, <9>\n",
+    ".globl f\n.text\nf: nop\n.symver f, f@V1\n",
+    ".ident \"one\"\n.ident \"two\"\n.text\nnop\n",
+    ".data\n.dc.l 1\n.dcb.b 2, 3\n.ds.w 1\n.octa 5\n",
+    ".data\n.irep r, 1, 2\n.byte \\r\n.endr\n.rep 2\n.byte 0\n.endr\n",
+    ".def dv, 7\n.data\n.byte dv\n",
+    ".offset 4\nof: .space 4\n.data\n.long of\n",
 ];
 
 /// The generated corpus: (name, source), hundreds of small files, each assembling here.
