@@ -138,6 +138,8 @@ struct Assembler<'o> {
     /// `.symver NAME, NAME2@VERSION[, local|hidden|remove]` (final walk): the versioned
     /// names objects give symbols.
     symvers: Vec<(String, String, String)>,
+    /// The one warning that `.file N`/`.loc` write no line table has been given.
+    no_line_table_warned: bool,
 }
 
 /// What a `.sched` block's schedule is made from: its lines, options and start address.
@@ -207,6 +209,7 @@ impl<'o> Assembler<'o> {
             altmacro: false,
             local_counter: 0,
             symvers: Vec::new(),
+            no_line_table_warned: false,
         };
         // gas always has .text, .data and .bss, in that order.
         for name in [".text", ".data", ".bss"] {

@@ -633,6 +633,21 @@ impl Assembler<'_> {
                 self.absolute = None;
                 self.elf_directive(d, args, line, col);
             }
+            ".loc" | ".file"
+                if (d == ".loc" || args.trim_start().starts_with(|c: char| c.is_ascii_digit()))
+                    && self.pass == 2
+                    && !self.no_line_table_warned =>
+            {
+                // GNU as writes `.debug_line` from these; this assembler does not yet, and
+                // says so once rather than leave the object short without a word.
+                self.no_line_table_warned = true;
+                self.diag(
+                    Severity::Warning,
+                    line,
+                    col,
+                    format!("{d} is accepted but no .debug_line is written (DWARF line tables are not implemented)"),
+                );
+            }
             ".extern" | ".file" | ".loc" | ".loc_mark_labels" | ".local" | ".brinfo" | ".end"
             | ".nolist" | ".list" | ".eject" | ".psize" | ".title" | ".sbttl" | ".version"
             | ".gnu_attribute" | ".lflags" => {}
