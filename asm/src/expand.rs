@@ -3,7 +3,7 @@
 //! of an `.irp`/`.irpc`, and where a block ends. What a statement means is the assembler's
 //! (`gas::macros`); here is only how the text is taken apart and put together.
 
-use crate::expr::is_ident;
+use crate::expr::{is_ident, is_ident_start};
 use crate::lex::split_top;
 
 /// A macro or `.irp` argument as gas's `get_any_string` takes it: a double-quoted
@@ -110,4 +110,84 @@ pub(crate) fn block_end<T>(
         }
     }
     None
+}
+
+/// `.altmacro` arguments (macro.c in alternate mode): split at commas outside `<...>`,
+/// quotes and parentheses; `<text>` is `text` with `!` quoting the next character. An
+/// argument starting `%` is returned with its `%` for the caller to evaluate.
+pub(crate) fn alt_arguments(args: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let (mut angle, mut paren, mut quote) = (0usize, 0usize, false);
+    let mut chars = args.chars();
+    while let Some(c) = chars.next() {
+        match c {
+            '!' if angle > 0 => {
+                if let Some(n) = chars.next() {
+                    cur.push(n);
+                }
+                continue;
+            }
+            '"' if angle == 0 => quote = !quote,
+            '<' if !quote => {
+                angle += 1;
+                if angle == 1 {
+                    continue;
+                }
+            }
+            '>' if !quote && angle > 0 => {
+                angle -= 1;
+                if angle == 0 {
+                    continue;
+                }
+            }
+            '(' if !quote && angle == 0 => paren += 1,
+            ')' if !quote && angle == 0 => paren = paren.saturating_sub(1),
+            ',' if !quote && angle == 0 && paren == 0 => {
+                out.push(cur.trim().to_string());
+                cur.clear();
+                continue;
+            }
+            _ => {}
+        }
+        cur.push(c);
+    }
+    if !cur.trim().is_empty() || !out.is_empty() {
+        out.push(cur.trim().to_string());
+    }
+    out
+}
+
+/// Replaces whole identifiers that name a parameter (`.altmacro` bodies may name them
+/// without a backslash), outside double-quoted strings.
+pub(crate) fn substitute_bare(text: &str, vars: &[(String, String)]) -> String {
+    let mut out = String::new();
+    let chars: Vec<char> = text.chars().collect();
+    let mut i = 0;
+    let mut quote = false;
+    while i < chars.len() {
+        let c = chars[i];
+        if c == '"' {
+            quote = !quote;
+        }
+        let starts = !quote
+            && is_ident_start(c)
+            && (i == 0 || !(is_ident(chars[i - 1]) || chars[i - 1] == '\\'));
+        if starts {
+            let mut end = i + 1;
+            while end < chars.len() && is_ident(chars[end]) {
+                end += 1;
+            }
+            let word: String = chars[i..end].iter().collect();
+            match vars.iter().find(|(n, _)| *n == word) {
+                Some((_, v)) => out.push_str(v),
+                None => out.push_str(&word),
+            }
+            i = end;
+            continue;
+        }
+        out.push(c);
+        i += 1;
+    }
+    out
 }

@@ -10,6 +10,7 @@
 
 pub mod archive;
 pub mod elf;
+pub mod elf_check;
 pub mod executable;
 mod expand;
 mod expr;

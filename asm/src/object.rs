@@ -189,9 +189,11 @@ impl Object {
         })
         .map_err(|e| e.to_string())?;
         for (k, s) in self.sections.iter().enumerate() {
+            // A NOBITS section's offset is aligned too (`reserve` aligned it): the padding
+            // must be written, or every offset after it points past what was written.
+            w.write_align(s.align.max(1) as usize as u64);
+            debug_assert_eq!(w.len(), offsets[k]);
             if s.ty != SHT_NOBITS {
-                w.write_align(s.align.max(1) as usize as u64);
-                debug_assert_eq!(w.len(), offsets[k]);
                 w.write(&s.data);
             }
         }
@@ -297,6 +299,13 @@ impl Object {
         w.write_strtab_section_header();
         w.write_shstrtab_section_header();
         drop(w);
+        let broken = crate::elf_check::layout_errors(&out);
+        if !broken.is_empty() {
+            return Err(format!(
+                "internal error: object layout: {}",
+                broken.join("; ")
+            ));
+        }
         Ok(out)
     }
 

@@ -163,3 +163,49 @@ fn syntax_errors_name_the_argument_like_gas() {
     assert_eq!(e, ["Error in argument 3.  Expecting:  \"ai\treg,reg,IMM\""]);
     assert_eq!(errors("frob $3"), ["Invalid mnemonic 'frob'"]);
 }
+
+/// GNU's nesting limits, not lower ones: 100 macro expansions inside one another
+/// (macro.c's max_macro_nest) assemble, the 101st is "macros nested too deeply"; and
+/// repetitions nest 200 deep. On a test thread's stack, so the host's stack holds them.
+#[test]
+fn nesting_as_deep_as_gnu_allows() {
+    let deep = |levels: i64| {
+        format!(
+            ".macro down n\n.if \\n\n.byte \\n\ndown \\n-1\n.endif\n.endm\n.data\ndown {levels}\n"
+        )
+    };
+    let o = out(&deep(99)); // 100 expansions: 99 .. 1, then 0
+    let data = &o.image[o.sections[1].1 as usize..][..99];
+    assert_eq!(data[0], 99);
+    assert_eq!(data[98], 1);
+    assert_eq!(
+        errors(&deep(100)),
+        vec!["macros nested too deeply".to_string()]
+    );
+    let mut src = String::from(".data\n");
+    for _ in 0..200 {
+        src.push_str(".rept 1\n");
+    }
+    src.push_str(".byte 7\n");
+    for _ in 0..200 {
+        src.push_str(".endr\n");
+    }
+    let out = out(&src);
+    assert_eq!(out.image[out.sections[1].1 as usize], 7);
+}
+
+/// A file that includes itself stops at the nesting bound with an error, not a stack
+/// overflow (on a test thread's stack).
+#[test]
+fn self_inclusion_stops_at_the_bound() {
+    let opts = Options {
+        virtual_files: vec![("self.s".into(), ".include \"self.s\"\n".into())],
+        ..Default::default()
+    };
+    let e = assemble(".include \"self.s\"\n", "t.s", &opts).unwrap_err();
+    assert!(
+        e.iter()
+            .any(|d| d.message == "macros, includes or repetitions nested too deeply"),
+        "{e:?}"
+    );
+}

@@ -239,3 +239,115 @@ fn mutated_objects_never_panic() {
         }
     }
 }
+
+/// Issue #31: seven lines with `.section .bss` and `.space` gave an object whose section
+/// headers ran past the end of the file (the aligned `.bss` offset was reserved but its
+/// padding never written). Every header and every section now lies inside the file, and
+/// `.bss` sits at its aligned offset with no bytes of its own, as GNU as places it.
+#[test]
+fn bss_after_text_lies_inside_the_file() {
+    let src = ".text\n\
+               il $3, 1\n\
+               .section .bss\n\
+               .p2align 4\n\
+               buf: .space 100\n\
+               .data\n\
+               .byte 1\n";
+    assert_eq!(src.lines().count(), 7);
+    let obj = object(src);
+    let elf = obj.to_elf().unwrap();
+    assert_eq!(
+        spu_asm::elf_check::layout_errors(&elf),
+        Vec::<String>::new()
+    );
+    let word = |at: usize| u32::from_be_bytes(elf[at..at + 4].try_into().unwrap());
+    let shoff = word(32) as usize;
+    let shnum = u16::from_be_bytes([elf[48], elf[49]]) as usize;
+    assert_eq!(shoff + shnum * 40, elf.len());
+    // .text at 52 (4 bytes), .data at 56 (1 byte), .bss at 64 (aligned to 16, NOBITS, its
+    // 100 bytes padded to the alignment as every section is).
+    let header = |i: usize| {
+        let at = shoff + i * 40;
+        (word(at + 4), word(at + 16), word(at + 20), word(at + 32))
+    };
+    assert_eq!(header(1), (1, 52, 4, 1));
+    assert_eq!(header(2), (1, 56, 1, 1));
+    assert_eq!(header(3), (8, 64, 112, 16));
+}
+
+/// tc-spu.c's decisions (md_apply_fix with the generic force-relocation rules): a branch
+/// to a global or weak symbol defined in the same file stays a relocation against that
+/// symbol, for the linker (another definition may win); one to a local label resolves;
+/// an address of a local label is relocated against its section. The object still links
+/// into the program one assembly gives.
+#[test]
+fn global_branches_stay_relocations_against_the_symbol() {
+    let src = "\t.globl _start\n\t.text\n_start:\tnop\n\tbr _start\n\tbrsl $0, _start\n\tila $3, _start\n\t.weak w\nw:\tnop\n\tbr w\nl:\tbr l\n\tila $4, l\n\t.data\n\t.long _start, l\n";
+    let obj = object(src);
+    let text = &obj.sections[0];
+    let got: Vec<(u32, u32, RelocTarget, i64)> = text
+        .relocs
+        .iter()
+        .map(|r| (r.offset, r.kind, r.target.clone(), r.addend))
+        .collect();
+    let sym = |n: &str| RelocTarget::Symbol(n.into());
+    assert_eq!(
+        got,
+        vec![
+            (0x4, R_SPU_REL16, sym("_start"), 0),
+            (0x8, R_SPU_REL16, sym("_start"), 0),
+            (0xc, R_SPU_ADDR18, sym("_start"), 0),
+            (0x14, R_SPU_REL16, sym("w"), 0),
+            (0x1c, R_SPU_ADDR18, RelocTarget::Section(0), 0x18),
+        ]
+    );
+    // `l: br l` resolved in place: br 0.
+    assert_eq!(&text.data[0x18..0x1c], &0x3200_0000u32.to_be_bytes());
+    let data: Vec<(u32, u32, RelocTarget, i64)> = obj.sections[1]
+        .relocs
+        .iter()
+        .map(|r| (r.offset, r.kind, r.target.clone(), r.addend))
+        .collect();
+    assert_eq!(
+        data,
+        vec![
+            (0, R_SPU_ADDR32, sym("_start"), 0),
+            (4, R_SPU_ADDR32, RelocTarget::Section(0), 0x18),
+        ]
+    );
+    let linked = link(&[obj], &LinkOptions::default()).unwrap();
+    let one = assemble(src, "one.s", &Options::default()).unwrap();
+    assert_eq!(linked.image, one.image);
+}
+
+/// `.symver` (obj-elf.c): a defined symbol gets its versioned alias at the same place and
+/// binding (`local`, `hidden` and `remove` as 2.40 reads them); a reference to an
+/// undefined one names the versioned symbol; an alias without a version is an error.
+#[test]
+fn symver_aliases_and_versioned_references() {
+    let obj = object(
+        "\t.globl f\n\t.text\n\tnop\nf:\tnop\n\t.symver f, f@VERS_1\n\t.symver f, f_h@@VERS_2, hidden\n\t.symver ext, ext@VERS_3\n\tbrsl $0, ext\n",
+    );
+    let find = |n: &str| obj.symbols.iter().find(|s| s.name == n).cloned();
+    let f = find("f").unwrap();
+    let v1 = find("f@VERS_1").unwrap();
+    assert_eq!(
+        (v1.value, v1.section, v1.global, v1.hidden),
+        (4, f.section, true, false)
+    );
+    let v2 = find("f_h@@VERS_2").unwrap();
+    assert_eq!((v2.value, v2.global, v2.hidden), (4, true, true));
+    assert_eq!(
+        obj.sections[0].relocs[0].target,
+        RelocTarget::Symbol("ext@VERS_3".into())
+    );
+    assert!(find("ext").is_none());
+    assert_eq!(find("ext@VERS_3").unwrap().section, SymSection::Undefined);
+    let removed = object("\t.globl g\ng:\tnop\n\t.symver g, g@V, remove\n");
+    assert!(removed.symbols.iter().all(|s| s.name != "g"));
+    assert!(removed.symbols.iter().any(|s| s.name == "g@V"));
+    assert_eq!(
+        errors("\t.symver g, gv\ng:\tnop\n"),
+        vec!["missing version name in `gv' for symbol `g'".to_string()]
+    );
+}

@@ -7,7 +7,8 @@
 //!
 //! Every diagnostic must be expected, and every expected one must be reported.
 
-use spu_asm::{assemble_file, Options, Severity};
+use spu_asm::elf_check::layout_errors;
+use spu_asm::{assemble_file, assemble_object_file, Options, Severity};
 use std::path::Path;
 
 struct Expected {
@@ -22,6 +23,7 @@ fn check(name: &str) {
     let source = std::fs::read_to_string(&path).expect("test file");
     let mut words: Vec<(usize, String, Vec<u8>)> = Vec::new();
     let mut diags: Vec<Expected> = Vec::new();
+    let mut failures_early: Vec<String> = Vec::new();
     for (i, line) in source.lines().enumerate() {
         if let Some((code, hex)) = line.rsplit_once("# =>") {
             let mut bytes = Vec::new();
@@ -55,7 +57,23 @@ fn check(name: &str) {
             }
         }
     }
+    // Every object and executable the file gives lies inside its own bytes.
+    if let Ok((obj, _)) = assemble_object_file(&path, &Options::default()) {
+        match obj.to_elf() {
+            Ok(elf) => {
+                for e in layout_errors(&elf) {
+                    failures_early.push(format!("object: {e}"));
+                }
+            }
+            Err(e) => failures_early.push(format!("object: {e}")),
+        }
+    }
     let result = assemble_file(&path, &Options::default());
+    if let Ok(out) = &result {
+        for e in layout_errors(&out.elf) {
+            failures_early.push(format!("executable: {e}"));
+        }
+    }
     let (out, reported) = match result {
         Ok(out) => {
             let w = out.warnings.clone();
@@ -63,7 +81,7 @@ fn check(name: &str) {
         }
         Err(d) => (None, d),
     };
-    let mut failures = Vec::new();
+    let mut failures = failures_early;
     // Diagnostics: each reported one must be expected and vice versa.
     let mut matched = vec![false; diags.len()];
     for d in &reported {
@@ -154,4 +172,9 @@ asm_files! {
     errors => "errors.s",
     gnu_directives => "gnu_directives.s",
     bad_input => "bad_input.s",
+    gnu_warnings => "gnu_warnings.s",
+    symbol_loops => "symbol_loops.s",
+    gnu_directives2 => "gnu_directives2.s",
+    gnu_directive_errors => "gnu_directive_errors.s",
+    gnu_altmacro => "gnu_altmacro.s",
 }

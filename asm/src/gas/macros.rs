@@ -4,15 +4,22 @@
 //! substitution) is `crate::expand`, shared with `spu sched`.
 
 use super::read::block_word;
-use super::{Assembler, Severity, MAX_EXPANDED};
-use crate::expand::{block_end, irp_values, macro_argument, substitute};
+use super::{Assembler, Severity, MAX_EXPANDED, MAX_MACRO_NEST};
+use crate::expand::{
+    alt_arguments, block_end, irp_values, macro_argument, substitute, substitute_bare,
+};
 use crate::lex::{split_top, strip_comment, Line};
 use std::collections::HashMap;
 
 /// A `.macro`: its parameters (with defaults) and its body.
 #[derive(Clone, Debug)]
 pub(super) struct Macro {
+    pub(super) name: String,
     pub(super) params: Vec<(String, Option<String>)>,
+    /// Parameters qualified `:req` (a call must give them).
+    pub(super) required: Vec<String>,
+    /// The last parameter qualified `:vararg` takes the rest of the arguments as written.
+    pub(super) vararg: bool,
     pub(super) body: Vec<Line>,
 }
 
@@ -59,23 +66,75 @@ impl Assembler<'_> {
                 // .macro NAME params
                 let mut it = args.splitn(2, |c: char| c.is_whitespace() || c == ',');
                 let name = it.next().unwrap_or("").to_string();
-                let params = it
+                let mut params = Vec::new();
+                let mut required = Vec::new();
+                let mut vararg = false;
+                let words: Vec<&str> = it
                     .next()
                     .unwrap_or("")
                     .split(|c: char| c == ',' || c.is_whitespace())
                     .filter(|s| !s.is_empty())
-                    .map(|p| match p.split_once('=') {
-                        Some((n, d)) => (n.trim().to_string(), Some(d.trim().to_string())),
-                        None => (p.trim().to_string(), None),
-                    })
                     .collect();
-                self.macros
-                    .insert(name.to_ascii_lowercase(), Macro { params, body });
+                for (k, p) in words.iter().enumerate() {
+                    let (head, default) = match p.split_once('=') {
+                        Some((n, d)) => (n.trim(), Some(d.trim().to_string())),
+                        None => (p.trim(), None),
+                    };
+                    // macro.c do_formals: `name:req` and `name:vararg` (the last only).
+                    let (pname, qual) = head.split_once(':').unwrap_or((head, ""));
+                    match qual {
+                        "" => {}
+                        "req" => required.push(pname.to_string()),
+                        "vararg" if k + 1 == words.len() => vararg = true,
+                        "vararg" => self.diag(
+                            Severity::Error,
+                            line,
+                            1,
+                            format!(
+                                "Only the last formal of macro `{name}' may be :vararg ({pname})"
+                            ),
+                        ),
+                        q => self.diag(
+                            Severity::Error,
+                            line,
+                            1,
+                            format!("`{q}' is not a valid parameter qualifier for `{pname}'"),
+                        ),
+                    }
+                    params.push((pname.to_string(), default));
+                }
+                self.macros.insert(
+                    name.to_ascii_lowercase(),
+                    Macro {
+                        name,
+                        params,
+                        required,
+                        vararg,
+                        body,
+                    },
+                );
             }
         }
     }
 
+    /// `.purgem NAME`: forgets a macro (gas warns when there is none).
+    pub(super) fn purge_macro(&mut self, args: &str, line: &Line, col: usize) {
+        let name = args.trim().to_ascii_lowercase();
+        if self.macros.remove(&name).is_none() {
+            self.diag(
+                Severity::Warning,
+                line,
+                col,
+                format!("Attempt to purge non-existing macro `{}'", args.trim()),
+            );
+        }
+    }
+
     pub(super) fn expand_macro(&mut self, m: &Macro, args: &str, line: &Line) {
+        if self.macro_depth >= MAX_MACRO_NEST {
+            self.diag(Severity::Error, line, 1, "macros nested too deeply");
+            return;
+        }
         let body = self.macro_lines(m, args, line);
         self.macro_depth += 1;
         self.run_lines(&body);
@@ -88,32 +147,107 @@ impl Assembler<'_> {
         // `\@` is the number of expansions before this one (GNU as counts from 0).
         let counter = self.macro_counter.to_string();
         self.macro_counter += 1;
-        let given: Vec<String> = if args.trim().is_empty() {
+        let pieces = if args.trim().is_empty() {
             vec![]
         } else {
             split_top(args, ',')
-                .iter()
-                .map(|s| macro_argument(s.trim()))
-                .collect()
         };
+        let given: Vec<String> = if self.altmacro {
+            let mut given = alt_arguments(args);
+            for g in &mut given {
+                // `%EXPR`: the expression's value, in decimal.
+                if let Some(e) = g.strip_prefix('%') {
+                    match self.eval(e) {
+                        Ok((v, _)) => *g = v.to_string(),
+                        Err((_, m)) => self.diag(Severity::Error, line, 1, m),
+                    }
+                }
+            }
+            given
+        } else {
+            pieces.iter().map(|s| macro_argument(s.trim())).collect()
+        };
+        let pieces = if self.altmacro { given.clone() } else { pieces };
         let mut subst = Vec::new();
-        let mut positional = given.iter();
-        for (name, default) in &m.params {
+        let mut missing = false;
+        let mut next_positional = 0;
+        for (k, (name, default)) in m.params.iter().enumerate() {
+            if m.vararg && k + 1 == m.params.len() {
+                // The rest of the arguments as written, commas and all.
+                let rest = pieces.get(next_positional..).unwrap_or(&[]).join(",");
+                let rest = rest.trim().to_string();
+                let value = if rest.is_empty() {
+                    default.clone().unwrap_or_default()
+                } else {
+                    rest
+                };
+                subst.push((name.clone(), value));
+                continue;
+            }
             let named = given.iter().find_map(|g| {
                 g.split_once('=')
                     .filter(|(n, _)| n.trim() == name)
                     .map(|(_, v)| v.trim().to_string())
             });
-            let value = named
-                .or_else(|| positional.next().filter(|g| !g.contains('=')).cloned())
-                .or_else(|| default.clone())
-                .unwrap_or_default();
+            let positional = || {
+                let g = given.get(next_positional).filter(|g| !g.contains('='))?;
+                Some(g.clone())
+            };
+            let value = match named {
+                Some(v) => Some(v),
+                None => {
+                    let p = positional();
+                    if p.is_some() {
+                        next_positional += 1;
+                    }
+                    p
+                }
+            }
+            .filter(|v| !v.is_empty());
+            if value.is_none() && m.required.contains(name) {
+                missing = true;
+                let col = match args.trim() {
+                    "" => line.text.len() - line.text.trim_start().len() + 1,
+                    a => line.text.find(a).map_or(1, |c| c + 1),
+                };
+                self.diag(
+                    Severity::Error,
+                    line,
+                    col,
+                    format!(
+                        "Missing value for required parameter `{name}' of macro `{}'",
+                        m.name
+                    ),
+                );
+            }
+            let value = value.or_else(|| default.clone()).unwrap_or_default();
             subst.push((name.clone(), value));
         }
         let mut body = Vec::new();
+        if missing {
+            return body; // macro.c expands nothing when a required argument is missing
+        }
         for l in &m.body {
+            if self.altmacro {
+                // `LOCAL a, b`: each name a new label of its own per expansion.
+                let t = strip_comment(&l.text);
+                let t = t.trim();
+                if t.len() > 6 && t[..6].eq_ignore_ascii_case("local ") {
+                    for name in t[6..].split(',').map(str::trim).filter(|n| !n.is_empty()) {
+                        self.local_counter += 1;
+                        subst.push((name.to_string(), format!(".LL{:04x}", self.local_counter)));
+                    }
+                    continue;
+                }
+            }
+            let text = substitute(&l.text, &subst, Some(&counter));
+            let text = if self.altmacro {
+                substitute_bare(&text, &subst)
+            } else {
+                text
+            };
             body.push(Line {
-                text: substitute(&l.text, &subst, Some(&counter)),
+                text,
                 file: line.file.clone(),
                 line: line.line,
             });

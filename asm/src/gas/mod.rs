@@ -122,6 +122,24 @@ struct Assembler<'o> {
     /// start give the same schedule when every register name the scheduler resolved
     /// still resolves the same (layout passes repeat each block unchanged).
     schedules: HashMap<SchedKey, SchedEntry>,
+    /// Names the expression being evaluated used before their definition in this walk
+    /// (through `.set` symbols too), and each `.set` symbol's: symbol definition loops.
+    forward_refs: std::cell::RefCell<Vec<String>>,
+    set_forward: HashMap<String, Vec<String>>,
+    /// `.struct`: the offset in gas's absolute section, where labels are numbers and
+    /// data only advances the offset, until a section directive leaves it.
+    absolute: Option<u32>,
+    /// A statement in the absolute section tried to store bytes other than zero.
+    nonzero_in_absolute: bool,
+    /// `.altmacro` is on: `<...>` and `%expr` arguments, `LOCAL`, bare parameter names.
+    altmacro: bool,
+    /// `LOCAL` names made so far (`.LL0001`, ...), as macro.c's `loccnt`.
+    local_counter: usize,
+    /// `.symver NAME, NAME2@VERSION[, local|hidden|remove]` (final walk): the versioned
+    /// names objects give symbols.
+    symvers: Vec<(String, String, String)>,
+    /// The one warning that `.file N`/`.loc` write no line table has been given.
+    no_line_table_warned: bool,
 }
 
 /// What a `.sched` block's schedule is made from: its lines, options and start address.
@@ -137,6 +155,13 @@ type Res<T> = Result<T, (usize, String)>;
 /// Statements that macros, `.rept` and `.irp` may expand to in all: a bound on work, so
 /// nested repetitions cannot run for ever.
 const MAX_EXPANDED: usize = 1_000_000;
+
+/// Files, macro expansions and repetitions open inside one another: past GNU's macro
+/// limit (100) and deep enough for any include chain, within the host's stack.
+const MAX_NESTING: usize = 256;
+
+/// gas's `max_macro_nest`: macro expansions inside one another.
+const MAX_MACRO_NEST: usize = 100;
 
 /// Bytes of SPU local store: the most a program can occupy.
 const LOCAL_STORE: usize = 256 * 1024;
@@ -177,6 +202,14 @@ impl<'o> Assembler<'o> {
             macro_depth: 0,
             exitm: false,
             schedules: HashMap::new(),
+            forward_refs: Default::default(),
+            set_forward: HashMap::new(),
+            absolute: None,
+            nonzero_in_absolute: false,
+            altmacro: false,
+            local_counter: 0,
+            symvers: Vec::new(),
+            no_line_table_warned: false,
         };
         // gas always has .text, .data and .bss, in that order.
         for name in [".text", ".data", ".bss"] {
@@ -199,6 +232,10 @@ impl<'o> Assembler<'o> {
         self.expanded = 0;
         self.exitm = false;
         self.defined.clear();
+        self.set_forward.clear();
+        self.absolute = None;
+        self.altmacro = false;
+        self.local_counter = 0;
         if pass == 2 {
             self.bytes.clear();
             self.relocs.clear();

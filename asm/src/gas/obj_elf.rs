@@ -224,6 +224,31 @@ impl Assembler<'_> {
         self.sect = here;
     }
 
+    /// `.ident "TEXT"` (obj-elf.c obj_elf_ident): the string into `.comment` (mergeable
+    /// strings), after one zero byte the first time, without changing the section.
+    pub(super) fn ident(&mut self, args: &str, line: &Line, col: usize) {
+        let Some(mut text) = crate::lex::unquote(args.trim()) else {
+            self.diag(Severity::Error, line, col, "expected a string");
+            return;
+        };
+        let def = SectionDef {
+            name: ".comment".into(),
+            ty: crate::object::SHT_PROGBITS,
+            flags: 0x30, // SHF_MERGE | SHF_STRINGS
+            entsize: 1,
+        };
+        let (here, absolute) = (self.sect, self.absolute.take());
+        let c = self.chunk(def, 0);
+        self.sect = c;
+        if self.offsets.get(&c).copied().unwrap_or(0) == 0 {
+            self.emit(&[0]);
+        }
+        text.push(0);
+        self.emit(&text);
+        self.sect = here;
+        self.absolute = absolute;
+    }
+
     /// The section and symbol-attribute directives; whether `d` was one.
     pub(super) fn elf_directive(&mut self, d: &str, args: &str, line: &Line, col: usize) -> bool {
         match d {
@@ -264,6 +289,39 @@ impl Assembler<'_> {
                 std::mem::swap(&mut self.sect, &mut self.prev_sect);
             }
             ".lcomm" | ".comm" => self.common(d, args, line, col),
+            ".symver" => {
+                // obj-elf.c obj_elf_symver: `NAME, ALIAS@VERSION` (or `@@`, `@@@`), then
+                // an optional visibility for the alias.
+                let parts = split_top(args, ',');
+                let name = parts.first().map(|p| p.trim()).unwrap_or("");
+                let alias = parts.get(1).map(|p| p.trim()).unwrap_or("");
+                let vis = parts.get(2).map(|p| p.trim()).unwrap_or("");
+                if name.is_empty() || alias.is_empty() {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        "expected comma after name in .symver",
+                    );
+                } else if !alias.contains('@') {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("missing version name in `{alias}' for symbol `{name}'"),
+                    );
+                } else if !matches!(vis, "" | "local" | "hidden" | "remove") {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("unknown visibility `{vis}' for .symver (local, hidden or remove)"),
+                    );
+                } else if self.pass == 2 {
+                    self.symvers
+                        .push((name.to_string(), alias.to_string(), vis.to_string()));
+                }
+            }
             ".weak" | ".hidden" | ".internal" | ".protected" | ".global" | ".globl" => {
                 for n in split_top(args, ',') {
                     let n = n.trim();

@@ -4,7 +4,7 @@
 //! `.set`, `.include`, `.reloc`, messages.
 
 use super::macros::collect_block;
-use super::{Assembler, Macro, Severity, LOCAL_STORE, MAX_EXPANDED};
+use super::{Assembler, Macro, Severity, LOCAL_STORE, MAX_EXPANDED, MAX_NESTING};
 use crate::expr::{is_ident, Val};
 use crate::lex::{bytes_as_text, read_source, split_top, strip_comment, to_lines, unquote, Line};
 use spu_isa::table::forms_named;
@@ -31,7 +31,7 @@ impl Assembler<'_> {
             return;
         }
         self.depth += 1;
-        if self.depth > 64 {
+        if self.depth > MAX_NESTING {
             if let Some(l) = lines.first() {
                 self.diag(
                     Severity::Error,
@@ -186,6 +186,14 @@ impl Assembler<'_> {
             } else {
                 self.instruction(&lw, &args, line, col);
             }
+            if std::mem::take(&mut self.nonzero_in_absolute) {
+                self.diag(
+                    Severity::Error,
+                    line,
+                    col,
+                    "attempt to store non-zero value in section `*ABS*'",
+                );
+            }
             if self.pass == 2 {
                 let after = self.offsets.get(&before.0).copied().unwrap_or(0);
                 if after > before.1 && self.sect == before.0 {
@@ -219,8 +227,9 @@ impl Assembler<'_> {
             return out;
         }
         for part in split_top(args, ',') {
-            match self.eval(part.trim()) {
-                Ok((v, _)) => out.push(v),
+            let col = operand_column(line, &part, col);
+            match self.eval_reported(part.trim(), line, col) {
+                Ok(v) => out.push(v.v),
                 Err((c, m)) => {
                     self.diag(Severity::Error, line, col + c, m);
                     out.push(0);
@@ -228,6 +237,96 @@ impl Assembler<'_> {
             }
         }
         out
+    }
+
+    /// `.incbin "FILE"[, SKIP[, COUNT]]` (read.c s_incbin): the file's bytes from SKIP,
+    /// COUNT of them (all the rest by default); the file is looked for as named, then in
+    /// the source's directory and each `-I` directory.
+    fn incbin(&mut self, args: &str, line: &Line, col: usize) {
+        let parts = split_top(args, ',');
+        let Some(name) = parts.first().and_then(|p| unquote(p.trim())) else {
+            self.diag(Severity::Error, line, col, "missing file name for .incbin");
+            return;
+        };
+        let name: String = name.iter().map(|&b| b as char).collect();
+        let mut numbers = Vec::new();
+        for p in parts.iter().skip(1) {
+            let c = operand_column(line, p, col);
+            match self.eval_reported(p.trim(), line, c) {
+                Ok(v) => numbers.push(v.v),
+                Err((k, m)) => {
+                    self.diag(Severity::Error, line, c + k, m);
+                    return;
+                }
+            }
+        }
+        let Some((path, file_len)) = self.find_binary(&name) else {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("file not found: {name}"),
+            );
+            return;
+        };
+        let skip = numbers.first().copied().unwrap_or(0);
+        let count = numbers.get(1).copied().unwrap_or(file_len as i64 - skip);
+        if skip < 0 || count < 0 || skip.saturating_add(count) > file_len as i64 {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("skip ({skip}) or count ({count}) invalid for file size ({file_len})"),
+            );
+            return;
+        }
+        if count > 2 * LOCAL_STORE as i64 {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!(".incbin of {count} bytes is more than the local store holds"),
+            );
+            return;
+        }
+        let bytes = match &path {
+            Ok(p) => {
+                use std::io::{Read, Seek};
+                let read = std::fs::File::open(p).and_then(|mut f| {
+                    f.seek(std::io::SeekFrom::Start(skip as u64))?;
+                    let mut buf = Vec::with_capacity(count as usize);
+                    f.take(count as u64).read_to_end(&mut buf)?;
+                    Ok(buf)
+                });
+                match read {
+                    Ok(b) if b.len() == count as usize => b,
+                    Ok(_) | Err(_) => {
+                        self.diag(Severity::Error, line, col, format!("can't read {name}"));
+                        return;
+                    }
+                }
+            }
+            Err(text) => text[skip as usize..(skip + count) as usize].to_vec(),
+        };
+        self.emit(&bytes);
+    }
+
+    /// A binary file for `.incbin`: a path on disk (or an in-memory file's bytes) and its
+    /// length.
+    #[allow(clippy::type_complexity)]
+    fn find_binary(&self, name: &str) -> Option<(Result<std::path::PathBuf, Vec<u8>>, u64)> {
+        if let Some((_, text)) = self.opts.virtual_files.iter().find(|(n, _)| n == name) {
+            let bytes = text.as_bytes().to_vec();
+            let len = bytes.len() as u64;
+            return Some((Err(bytes), len));
+        }
+        let named = std::path::Path::new(name).to_path_buf();
+        std::iter::once(named)
+            .chain(self.opts.include_dirs.iter().map(|d| d.join(name)))
+            .find_map(|p| {
+                let meta = std::fs::metadata(&p).ok().filter(|m| m.is_file())?;
+                Some((Ok(p), meta.len()))
+            })
     }
 
     /// `.org EXPR` and `. = EXPR`: move forward to an offset in the current section.
@@ -400,7 +499,98 @@ impl Assembler<'_> {
     /// Records a relocation at `offset` in the section of chunk `sect` (pass 2): in an
     /// A directive other than the block and conditional ones (handled in `run_lines`).
     fn directive(&mut self, d: &str, args: &str, line: &Line, col: usize) {
+        // Other names gas gives the same directives (tc-spu.c's `.def` is `.set`;
+        // read.c's `.offset` is `.struct`, `.dc.*` are the data directives; obj-elf.c's
+        // `.sect`, `.section.s` and `.common`).
+        let d = match d {
+            ".def" => ".set",
+            ".offset" => ".struct",
+            ".dc.b" => ".byte",
+            ".dc" | ".dc.w" => ".short",
+            ".dc.l" | ".dc.a" => ".long",
+            ".dc.s" => ".float",
+            ".dc.d" => ".double",
+            ".sect" | ".sect.s" | ".section.s" => ".section",
+            ".common" | ".common.s" => ".comm",
+            other => other,
+        };
         match d {
+            ".ds" | ".ds.b" | ".ds.w" | ".ds.l" | ".ds.d" | ".ds.s" | ".ds.p" => {
+                // read.c s_space with a unit: `.ds.l 3` is 12 zero bytes.
+                let unit: i64 = match d {
+                    ".ds.b" => 1,
+                    ".ds" | ".ds.w" => 2,
+                    ".ds.d" => 8,
+                    ".ds.p" => 12,
+                    _ => 4,
+                };
+                let vals = self.data_values(args, line, col);
+                let n = vals.first().copied().unwrap_or(0).saturating_mul(unit);
+                if !(0..=LOCAL_STORE as i64 * 2).contains(&n) {
+                    self.diag(Severity::Error, line, col, format!("bad {d} size {n}"));
+                    return;
+                }
+                let fill = vals.get(1).copied().unwrap_or(0);
+                let mut bytes = Vec::with_capacity(n as usize);
+                for _ in 0..n / unit {
+                    bytes.extend_from_slice(&fill.to_be_bytes()[8 - unit.min(8) as usize..]);
+                    bytes.resize(bytes.len() + (unit - unit.min(8)) as usize, 0);
+                }
+                self.emit(&bytes);
+            }
+            ".dcb" | ".dcb.b" | ".dcb.w" | ".dcb.l" => {
+                // `.dcb.w N, V`: N copies of V, each of the unit's size.
+                let unit = match d {
+                    ".dcb.b" => 1,
+                    ".dcb.l" => 4,
+                    _ => 2,
+                };
+                let vals = self.data_values(args, line, col);
+                let n = vals.first().copied().unwrap_or(0);
+                if !(0..=LOCAL_STORE as i64 * 2 / unit as i64).contains(&n) {
+                    self.diag(Severity::Error, line, col, format!("bad {d} count {n}"));
+                    return;
+                }
+                let v = vals.get(1).copied().unwrap_or(0);
+                self.truncation_warning(v, unit, line, col);
+                let word = &v.to_be_bytes()[8 - unit..];
+                let bytes: Vec<u8> = (0..n).flat_map(|_| word.iter().copied()).collect();
+                self.emit(&bytes);
+            }
+            ".octa" => {
+                // 16 bytes, big-endian, the value sign-extended.
+                for v in self.data_values(args, line, col) {
+                    let fill = if v < 0 { [0xff; 8] } else { [0; 8] };
+                    self.emit(&fill);
+                    self.emit(&v.to_be_bytes());
+                }
+            }
+            // write.c without md_generate_nops (only x86 has one): gas 2.40 for SPU
+            // refuses `.nops` when it writes the frag.
+            ".nops" => self.diag(Severity::Error, line, col, "unimplemented .nops directive"),
+            ".abort" => self.diag(
+                Severity::Error,
+                line,
+                col,
+                ".abort detected.  Abandoning ship.",
+            ),
+            ".fail" => {
+                // read.c s_fail: a warning from 500 up, an error below.
+                let v = self
+                    .data_values(args, line, col)
+                    .first()
+                    .copied()
+                    .unwrap_or(0);
+                let sev = if v >= 500 {
+                    Severity::Warning
+                } else {
+                    Severity::Error
+                };
+                self.diag(sev, line, col, format!(".fail {v} encountered"));
+            }
+            ".ident" => self.ident(args, line, col),
+            ".altmacro" => self.altmacro = true,
+            ".noaltmacro" => self.altmacro = false,
             ".org" => {
                 let parts = split_top(args, ',');
                 let fill = match parts.get(1) {
@@ -419,9 +609,53 @@ impl Assembler<'_> {
                 self.align_pattern(d, args, line, col)
             }
             ".reloc" => self.reloc_directive(args, line, col),
-            ".extern" | ".file" | ".ident" | ".loc" | ".loc_mark_labels" | ".local" | ".brinfo"
-            | ".end" | ".nolist" | ".list" | ".eject" | ".psize" | ".title" | ".sbttl"
-            | ".version" | ".gnu_attribute" | ".lflags" => {}
+            ".purgem" => self.purge_macro(args, line, col),
+            ".struct" => {
+                // read.c s_struct: into the absolute section at the offset given.
+                let off = self
+                    .data_values(args, line, col)
+                    .first()
+                    .copied()
+                    .unwrap_or(0);
+                if !(0..=2 * LOCAL_STORE as i64).contains(&off) {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("bad .struct offset {off}"),
+                    );
+                    return;
+                }
+                self.absolute = Some(off as u32);
+            }
+            ".incbin" => self.incbin(args, line, col),
+            ".popsection" | ".previous" if self.absolute.is_some() => {
+                self.absolute = None;
+                self.elf_directive(d, args, line, col);
+            }
+            ".loc" | ".file"
+                if (d == ".loc" || args.trim_start().starts_with(|c: char| c.is_ascii_digit()))
+                    && self.pass == 2
+                    && !self.no_line_table_warned =>
+            {
+                // GNU as writes `.debug_line` from these; this assembler does not yet, and
+                // says so once rather than leave the object short without a word.
+                self.no_line_table_warned = true;
+                self.diag(
+                    Severity::Warning,
+                    line,
+                    col,
+                    format!("{d} is accepted but no .debug_line is written (DWARF line tables are not implemented)"),
+                );
+            }
+            ".extern" | ".file" | ".loc" | ".loc_mark_labels" | ".local" | ".brinfo" | ".end"
+            | ".nolist" | ".list" | ".eject" | ".psize" | ".title" | ".sbttl" | ".version"
+            | ".gnu_attribute" | ".lflags" => {}
+            // read.c's s_ignore entries (COFF debugging and MRI listing control), and
+            // `.func`/`.endfunc`, which emit nothing without stabs debugging.
+            ".debug" | ".dim" | ".endef" | ".scl" | ".tag" | ".val" | ".ln" | ".func"
+            | ".endfunc" | ".page" | ".plen" | ".spc" | ".ttl" | ".nopage" | ".noformat"
+            | ".format" | ".name" => {}
             // spu-elf-as 2.40 has no CFI support and says so.
             c if c.starts_with(".cfi_") => self.diag(
                 Severity::Error,
@@ -496,8 +730,9 @@ impl Assembler<'_> {
                     return;
                 }
                 for part in split_top(args, ',') {
-                    let (v, c) = match self.eval_val(part.trim()) {
-                        Ok((v, _, _)) => (v, col),
+                    let col = operand_column(line, &part, col);
+                    let (v, c) = match self.eval_reported(part.trim(), line, col) {
+                        Ok(v) => (v, col),
                         Err((c, m)) => {
                             self.diag(Severity::Error, line, col + c, m);
                             (Val::abs(0), col)
@@ -522,6 +757,7 @@ impl Assembler<'_> {
                         self.emit(&vec![0; size]);
                         continue;
                     }
+                    self.truncation_warning(v.v, size, line, c);
                     let b = v.v.to_be_bytes();
                     self.emit(&b[8 - size..]);
                 }
@@ -562,7 +798,17 @@ impl Assembler<'_> {
             ".space" | ".skip" | ".zero" => {
                 let vals = self.data_values(args, line, col);
                 let n = vals.first().copied().unwrap_or(0);
-                if !(0..=LOCAL_STORE as i64 * 2).contains(&n) {
+                // read.c s_space: a count of zero or below is ignored with a warning.
+                if n <= 0 {
+                    let m = if n == 0 {
+                        ".space repeat count is zero, ignored"
+                    } else {
+                        ".space repeat count is negative, ignored"
+                    };
+                    self.diag(Severity::Warning, line, col, m);
+                    return;
+                }
+                if n > LOCAL_STORE as i64 * 2 {
                     self.diag(Severity::Error, line, col, format!("bad .space size {n}"));
                     return;
                 }
@@ -573,9 +819,22 @@ impl Assembler<'_> {
                 let vals = self.data_values(args, line, col);
                 let (n, size, value) = (
                     vals.first().copied().unwrap_or(0),
-                    vals.get(1).copied().unwrap_or(1).clamp(0, 8),
+                    vals.get(1).copied().unwrap_or(1),
                     vals.get(2).copied().unwrap_or(0),
                 );
+                // read.c s_fill's leniencies: ignored or clamped, with a warning.
+                if n < 0 {
+                    self.diag(Severity::Warning, line, col, "repeat < 0; .fill ignored");
+                    return;
+                }
+                if size < 0 {
+                    self.diag(Severity::Warning, line, col, "size negative; .fill ignored");
+                    return;
+                }
+                if size > 8 && n > 0 {
+                    self.diag(Severity::Warning, line, col, ".fill size clamped to 8");
+                }
+                let size = size.min(8);
                 for _ in 0..n.clamp(0, LOCAL_STORE as i64 * 2) {
                     let b = value.to_be_bytes();
                     let s = size as usize;
@@ -649,6 +908,55 @@ impl Assembler<'_> {
 
 /// Directives `directive` handles (block directives and conditionals are handled before).
 const DIRECTIVES: &[&str] = &[
+    ".symver",
+    ".altmacro",
+    ".noaltmacro",
+    ".def",
+    ".offset",
+    ".dc",
+    ".dc.a",
+    ".dc.b",
+    ".dc.d",
+    ".dc.l",
+    ".dc.s",
+    ".dc.w",
+    ".dcb",
+    ".dcb.b",
+    ".dcb.l",
+    ".dcb.w",
+    ".ds",
+    ".ds.b",
+    ".ds.d",
+    ".ds.l",
+    ".ds.p",
+    ".ds.s",
+    ".ds.w",
+    ".sect",
+    ".sect.s",
+    ".section.s",
+    ".common",
+    ".common.s",
+    ".octa",
+    ".nops",
+    ".abort",
+    ".fail",
+    ".debug",
+    ".dim",
+    ".endef",
+    ".scl",
+    ".tag",
+    ".val",
+    ".ln",
+    ".func",
+    ".endfunc",
+    ".page",
+    ".plen",
+    ".spc",
+    ".ttl",
+    ".nopage",
+    ".noformat",
+    ".format",
+    ".name",
     ".2byte",
     ".4byte",
     ".8byte",
@@ -694,6 +1002,9 @@ const DIRECTIVES: &[&str] = &[
     ".p2alignl",
     ".p2alignw",
     ".popsection",
+    ".purgem",
+    ".struct",
+    ".incbin",
     ".previous",
     ".protected",
     ".pushsection",
@@ -731,6 +1042,7 @@ const DIRECTIVES: &[&str] = &[
 
 fn is_directive(name: &str) -> bool {
     DIRECTIVES.contains(&name)
+        || super::cond::CONDITIONALS.contains(&name)
         || name.starts_with(".cfi_")
         || matches!(
             name,
@@ -740,18 +1052,24 @@ fn is_directive(name: &str) -> bool {
                 | ".endr"
                 | ".irp"
                 | ".irpc"
-                | ".if"
-                | ".ifdef"
-                | ".ifndef"
-                | ".ifeq"
-                | ".ifne"
-                | ".ifc"
-                | ".ifnc"
                 | ".elseif"
                 | ".else"
                 | ".endif"
                 | ".exitm"
         )
+}
+
+/// The column of operand `part` in `line` (1-based; `fallback` when it is not found as
+/// written, as after macro substitution).
+pub(super) fn operand_column(line: &Line, part: &str, fallback: usize) -> usize {
+    let p = part.trim();
+    if p.is_empty() {
+        return fallback;
+    }
+    line.text
+        .get(fallback.saturating_sub(1)..)
+        .and_then(|t| t.find(p))
+        .map_or(fallback, |c| c + fallback)
 }
 
 /// LEB128 bytes of `v` (signed or unsigned), as `.sleb128`/`.uleb128` write them.
@@ -782,6 +1100,14 @@ fn leb128(mut v: i64, signed: bool) -> Vec<u8> {
 /// for SPU reads pseudo-ops, unless it is a macro or an instruction.
 pub(super) fn block_word(word: &str, macros: &HashMap<String, Macro>) -> String {
     let lw = word.to_ascii_lowercase();
+    // read.c's other spellings of the block directives.
+    let lw = match lw.as_str() {
+        ".irep" => ".irp".to_string(),
+        ".irepc" => ".irpc".to_string(),
+        ".rep" => ".rept".to_string(),
+        ".mexit" => ".exitm".to_string(),
+        _ => lw,
+    };
     if lw.starts_with('.') || macros.contains_key(&lw) || forms_named(&lw).next().is_some() {
         return lw;
     }

@@ -30,6 +30,13 @@ pub(super) struct SymAttrs {
 
 impl Env for Assembler<'_> {
     fn symbol(&self, name: &str) -> Option<Val> {
+        if !self.symbols.contains_key(name) {
+            self.forward_refs.borrow_mut().push(name.to_string());
+        } else if let Some(deps) = self.set_forward.get(name) {
+            // A `.set` symbol that itself waits on later definitions: this expression
+            // waits on them too (how `.set a,b` / `.set b,a` is seen to loop).
+            self.forward_refs.borrow_mut().extend(deps.iter().cloned());
+        }
         if !self.symbols.contains_key(name) && (self.pass == 2 || !self.pass1_symbols.is_empty()) {
             // A `.set`/`.equ` symbol used before its definition: its final value.
             return match self.pass1_symbols.get(name)? {
@@ -40,6 +47,9 @@ impl Env for Assembler<'_> {
         Some(self.value_of(name, self.symbols.get(name)?))
     }
     fn dot(&self) -> Val {
+        if let Some(off) = self.absolute {
+            return Val::abs(off as i64);
+        }
         Val {
             v: self.here() as i64,
             reloc: true,
@@ -145,6 +155,7 @@ impl Assembler<'_> {
     /// `expression()` leaves it.
     pub(super) fn eval_prefix<'t>(&self, text: &'t str) -> Res<(Val, &'t str, bool, Vec<String>)> {
         let lead = text.len() - text.trim_start().len();
+        self.forward_refs.borrow_mut().clear();
         let Some((ast, rest)) = crate::expr::parse(text) else {
             return Err((lead, "expected an expression".into()));
         };
@@ -162,6 +173,12 @@ impl Assembler<'_> {
     }
 
     pub(super) fn define_label(&mut self, name: &str, line: &Line) {
+        if let Some(off) = self.absolute {
+            // A label in the absolute section (`.struct`) is a number.
+            self.symbols
+                .insert(name.to_string(), SymVal::Abs(Val::abs(off as i64)));
+            return;
+        }
         let off = self.offsets.get(&self.sect).copied().unwrap_or(0);
         if let Ok(n) = name.parse::<u32>() {
             if self.pass == 1 {
@@ -192,11 +209,52 @@ impl Assembler<'_> {
             self.org(expr, 0, line, col);
             return;
         }
-        match self.eval_val(expr) {
-            Ok((v, _, _)) => {
+        let col = line.text.find(expr).map_or(1, |c| c + 1);
+        let result = self.eval_reported(expr, line, col);
+        let forward: Vec<String> = std::mem::take(&mut *self.forward_refs.borrow_mut());
+        match result {
+            Ok(v) => {
                 self.symbols.insert(name.to_string(), SymVal::Abs(v));
             }
             Err((c, m)) => self.diag(Severity::Error, line, c + 1, m),
+        }
+        if forward.iter().any(|f| f == name) {
+            // gas's resolve_symbol_value finds this when it resolves the symbol.
+            self.diag(
+                Severity::Error,
+                line,
+                1,
+                format!("symbol definition loop encountered at `{name}'"),
+            );
+        }
+        self.set_forward.insert(name.to_string(), forward);
+    }
+
+    /// Evaluates `text` (at column `col` of `line`), reporting its warnings there.
+    pub(super) fn eval_reported(&mut self, text: &str, line: &Line, col: usize) -> Res<Val> {
+        let (v, _, warnings) = self.eval_val(text)?;
+        for w in warnings {
+            self.diag(Severity::Warning, line, col, w);
+        }
+        Ok(v)
+    }
+
+    /// gas's `emit_expr`: a value whose bits above `size` bytes are neither all zeros nor
+    /// all ones is stored truncated, with a warning in gas's words.
+    pub(super) fn truncation_warning(&mut self, v: i64, size: usize, line: &Line, col: usize) {
+        if size >= 8 {
+            return;
+        }
+        let mask = !0u64 << (8 * size);
+        let high = v as u64 & mask;
+        if high != 0 && high != mask {
+            let kept = v as u64 & !mask;
+            self.diag(
+                Severity::Warning,
+                line,
+                col,
+                format!("value {:#x} truncated to {kept:#x}", v as u64),
+            );
         }
     }
 }

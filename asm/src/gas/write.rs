@@ -34,6 +34,7 @@ impl Assembler<'_> {
     }
 
     pub(super) fn switch_to(&mut self, chunk: Sect) {
+        self.absolute = None;
         if chunk != self.sect {
             self.prev_sect = self.sect;
             self.sect = chunk;
@@ -71,11 +72,22 @@ impl Assembler<'_> {
     }
 
     pub(super) fn here(&self) -> u32 {
+        if let Some(off) = self.absolute {
+            return off;
+        }
         self.bases.get(&self.sect).copied().unwrap_or(0)
             + self.offsets.get(&self.sect).copied().unwrap_or(0)
     }
 
     pub(super) fn emit(&mut self, data: &[u8]) {
+        if let Some(off) = self.absolute.as_mut() {
+            // The absolute section (`.struct`) has no bytes: only the offset moves.
+            *off = off
+                .saturating_add(data.len() as u32)
+                .min(2 * LOCAL_STORE as u32);
+            self.nonzero_in_absolute |= data.iter().any(|&b| b != 0);
+            return;
+        }
         let nobits = self.is_nobits(self.sect);
         let off = self.offsets.entry(self.sect).or_insert(0);
         // Past the local store nothing can load: stop growing (the size check reports it).
@@ -458,6 +470,42 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
             hidden: attrs.hidden,
             kind: attrs.kind,
         });
+    }
+    // `.symver`: a defined symbol gets its versioned alias beside it (the same place,
+    // binding and type; `local`/`hidden` make the alias so, `remove` drops the original);
+    // references to an undefined one name the versioned symbol instead.
+    for (name, alias, vis) in &asm.symvers {
+        if asm.symbols.contains_key(name) {
+            let Some(k) = obj.symbols.iter().position(|s| &s.name == name) else {
+                continue;
+            };
+            let mut a = obj.symbols[k].clone();
+            a.name = alias.replace("@@@", "@@");
+            match vis.as_str() {
+                "local" => {
+                    a.global = false;
+                    a.weak = false;
+                }
+                "hidden" => a.hidden = true,
+                "remove" => {
+                    obj.symbols.remove(k);
+                }
+                _ => {}
+            }
+            obj.symbols.push(a);
+        } else {
+            let versioned = alias.replace("@@@", "@");
+            for s in &mut obj.sections {
+                for r in &mut s.relocs {
+                    if r.target == RelocTarget::Symbol(name.clone()) {
+                        r.target = RelocTarget::Symbol(versioned.clone());
+                    }
+                }
+            }
+            if referenced.remove(name) {
+                referenced.insert(versioned);
+            }
+        }
     }
     for name in referenced {
         if !asm.symbols.contains_key(&name) {
