@@ -470,7 +470,7 @@ fn parse_line(
         text: line_text,
         origin,
         pipe: unit.pipe(),
-        latency: unit.latency(),
+        latency: op.info().latency(),
         src,
         dst,
         after,

@@ -291,6 +291,7 @@ fn raytrace_kernel_times_the_same_with_and_without_block_memoization() {
                 max_cycles: 20_000_000_000,
                 event_log: false,
                 code: &CodeCache::default(),
+                extensions: Default::default(),
             },
             &mut |_, _| {},
         )

@@ -17,6 +17,8 @@ pub struct Args {
     engine: spu_isa::jit::Engine,
     #[command(flatten)]
     compile: crate::options::CompileOption,
+    #[command(flatten)]
+    ext: crate::options::ExtOption,
     /// Program: SPU assembly (.s), an SPU ELF or a flat image.
     file: PathBuf,
     /// Print JSON for tools.
@@ -37,6 +39,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     options::max_cycles(args.max_cycles)?;
     let memory_bytes = options::memory(args.memory)?;
     let (mut spu, symbols) = crate::cmd_run::load(&args.file)?;
+    spu.set_extensions(args.ext.ext);
     spu.set_engine(args.engine);
     spu.share_code(&args.compile.cache());
     let address_of = |name: &str| symbols.iter().find(|(n, _)| n == name).map(|(_, a)| *a);

@@ -2,7 +2,7 @@
 
 use crate::exit::{self, Error, Status};
 use crate::options;
-use spu_isa::disasm::{instruction_text, SymbolTable};
+use spu_isa::disasm::{instruction_text_ext, SymbolTable};
 use spu_isa::machine::{MainMemory, Spu, StopReason};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -15,6 +15,8 @@ pub struct Args {
     engine: spu_isa::jit::Engine,
     #[command(flatten)]
     compile: crate::options::CompileOption,
+    #[command(flatten)]
+    ext: crate::options::ExtOption,
     /// An SPU ELF, a raw image loaded at 0, or an assembly source (.s).
     file: PathBuf,
     /// Stop after this many cycles.
@@ -200,6 +202,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         mailbox.push(value);
     }
     let (mut spu, symbols, program_end) = load_program(&args.file)?;
+    spu.set_extensions(args.ext.ext);
     spu.set_engine(args.engine);
     spu.share_code(&args.compile.cache());
     let start = start_mode(&args)?;
@@ -377,7 +380,7 @@ fn trace(
         let stop = spu.run(memory, spu.cycles() + 1);
         let mut line = format!(
             "{pc:05x}: {word:08x}  {}",
-            instruction_text(word, pc, symbols)
+            instruction_text_ext(word, pc, symbols, spu.extensions())
         );
         for (n, old) in before.iter().enumerate() {
             let r = spu.reg(n);

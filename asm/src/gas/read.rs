@@ -419,6 +419,12 @@ impl Assembler<'_> {
                 self.align_pattern(d, args, line, col)
             }
             ".reloc" => self.reloc_directive(args, line, col),
+            // The paper's ISA extensions (`docs/extensions.md`), on from here.
+            ".spu_ext" => {
+                if let Err(m) = self.extensions.add(args.trim()) {
+                    self.diag(Severity::Error, line, col, format!(".spu_ext: {m}"));
+                }
+            }
             ".extern" | ".file" | ".ident" | ".loc" | ".loc_mark_labels" | ".local" | ".brinfo"
             | ".end" | ".nolist" | ".list" | ".eject" | ".psize" | ".title" | ".sbttl"
             | ".version" | ".gnu_attribute" | ".lflags" => {}
@@ -705,6 +711,7 @@ const DIRECTIVES: &[&str] = &[
     ".single",
     ".size",
     ".skip",
+    ".spu_ext",
     ".sleb128",
     ".space",
     ".string",
