@@ -97,9 +97,11 @@ impl Extensions {
                 ("multihint", None) => self.hint_entries = DEFAULT_HINT_ENTRIES,
                 ("multihint", Some(v)) => match v.parse::<u8>() {
                     Ok(n) if (1..=MAX_HINT_ENTRIES).contains(&n) => self.hint_entries = n,
-                    _ => return Err(format!(
+                    _ => {
+                        return Err(format!(
                         "multihint={v}: the number of hint entries must be 1 to {MAX_HINT_ENTRIES}"
-                    )),
+                    ))
+                    }
                 },
                 ("", None) => return Err("an empty extension name".into()),
                 _ => {

@@ -13,6 +13,7 @@ mod engines_differential;
 mod frame_cycles;
 mod gnu_differential;
 mod golden_forms;
+mod isa_extensions;
 mod kernel_caches;
 mod kernel_modules;
 mod runtime_frames;
