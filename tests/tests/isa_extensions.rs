@@ -326,3 +326,22 @@ back:   brnz    $11, loop
         assert_eq!(per(&memo), per(&plain.1), "{engine:?}");
     }
 }
+
+/// `spu timing` times a gather as the model does: odd pipe, 9 cycles to its result, and
+/// the next instruction held three cycles behind it.
+#[test]
+fn the_static_listing_times_gathers() {
+    let t = spu_isa::static_timing::analyze_source(GATHER, None).unwrap();
+    let texts: Vec<&str> = t.rows.iter().map(|r| r.text.as_str()).collect();
+    let row = |mnemonic: &str| {
+        let r = t
+            .rows
+            .iter()
+            .find(|r| r.text.starts_with(mnemonic))
+            .unwrap_or_else(|| panic!("{mnemonic}: {texts:?}"));
+        (r.pipe, r.issue, r.stall, r.latency)
+    };
+    assert_eq!(row("lgw\t"), (1, 6, 4, 9));
+    assert_eq!(row("lgwx"), (1, 10, 3, 9));
+    assert_eq!(row("a\t"), (0, 19, 8, 2));
+}
