@@ -133,6 +133,17 @@ impl RenderConfig {
         }
     }
 
+    /// [`RenderConfig::kernel_for`] on SPUs with the extensions `ext`: primary rays with
+    /// several hint entries run the kernel that hints for them.
+    pub fn kernel_with(fill: bool, mode: ShadeMode, ext: spu_isa::Extensions) -> KernelVariant {
+        match Self::kernel_for(fill, mode) {
+            KernelVariant::Primary if ext.enables(spu_isa::Extension::MultiHint) => {
+                KernelVariant::PrimaryMultihint
+            }
+            kernel => kernel,
+        }
+    }
+
     /// The kernel that runs a frame with `mode`: the fill program where `fill`, else the
     /// primary kernel, shaded where `mode` shades.
     pub fn kernel_for(fill: bool, mode: ShadeMode) -> KernelVariant {

@@ -103,6 +103,11 @@ fn measure_frame(
         height: size,
         engine,
         extensions: ext,
+        kernel: spu_loader::render::RenderConfig::kernel_with(
+            false,
+            spu_loader::shading::ShadeMode::None,
+            ext,
+        ),
         ..spu_loader::render::RenderConfig::new(&room.name)
     };
     let started = Instant::now();

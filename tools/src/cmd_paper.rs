@@ -296,9 +296,12 @@ fn run_jobs(jobs: &[Job], dir: &Path, threads: usize, ext: spu_isa::Extensions) 
 /// The frame `job` renders, on SPUs with the ISA extensions `ext` (`--ext`: every run of
 /// the report with them; docs/extensions.md).
 fn with_ext(job: &Job, ext: spu_isa::Extensions) -> spu_loader::render::RenderConfig {
-    spu_loader::render::RenderConfig {
+    use spu_loader::render::RenderConfig;
+    let config = job.config();
+    RenderConfig {
+        kernel: RenderConfig::kernel_with(!config.kernel.traces(), config.shading.mode, ext),
         extensions: ext,
-        ..job.config()
+        ..config
     }
 }
 

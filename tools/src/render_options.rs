@@ -234,7 +234,7 @@ impl Args {
                 vertex_cache: self.vertex_cache,
                 material_cache: self.material_cache,
             },
-            kernel: RenderConfig::kernel_for(self.fill, self.shade),
+            kernel: RenderConfig::kernel_with(self.fill, self.shade, self.ext.ext),
             engine: self.engine,
             timing: self.timing,
             max_cycles: self.max_cycles,
