@@ -237,7 +237,7 @@ pub fn line(word: u32, pc: u32, section_end: u32, symbols: &dyn Symbolizer) -> S
     line_ext(word, pc, section_end, symbols, Extensions::NONE)
 }
 
-/// [`line`] with the instructions of the extensions `ext` known.
+/// [`line()`] with the instructions of the extensions `ext` known.
 pub fn line_ext(
     word: u32,
     pc: u32,
