@@ -146,6 +146,9 @@ struct Inst {
     origin: usize,
     pipe: Pipe,
     latency: u32,
+    /// Cycles it holds issue: 1, but for a gather load (its four local-store reads,
+    /// docs/extensions.md).
+    issue_cycles: u32,
     src: Vec<Reg>,
     dst: Vec<Reg>,
     after: Vec<Reg>,
@@ -470,7 +473,12 @@ fn parse_line(
         text: line_text,
         origin,
         pipe: unit.pipe(),
-        latency: unit.latency(),
+        latency: op.info().latency(),
+        issue_cycles: if op.info().ext == Some(spu_isa::Extension::Gather) {
+            spu_isa::ext::GATHER_LS_CYCLES
+        } else {
+            1
+        },
         src,
         dst,
         after,
@@ -736,7 +744,7 @@ fn list_schedule(
                     pair_cycles.push(t);
                     fetch_pending &= insts[i].uses_ls();
                     idle = 0;
-                    t += 1;
+                    t += insts[i].issue_cycles;
                     continue;
                 }
             }
@@ -762,7 +770,7 @@ fn list_schedule(
         }
         pair_cycles.push(t);
         fetch_pending &= odd.is_some_and(|o| insts[o].uses_ls());
-        t += 1;
+        t += odd.map_or(1, |o| insts[o].issue_cycles);
     }
     Ok((slots, pair_cycles, t))
 }

@@ -405,3 +405,30 @@ fn a_register_named_after_the_block_is_scheduled_with_its_value() {
     let zero = asm(&block(true).replace(".set BASE, 3", ".set BASE, 0")).unwrap();
     assert_ne!(zero[..8], before[..8]);
 }
+
+#[test]
+fn a_gather_holds_issue_for_its_four_reads() {
+    // lgw (the gather extension, docs/extensions.md): 9 cycles to its result, and nothing
+    // issues in the 3 cycles after it, so the independent lqd waits to cycle 4 and the fa
+    // to the gather's result at 9.
+    let (out, cycles) = run(
+        "lgw %a, $3\nai $4, $4, 1\nfa %b, %a, $6\nlqd $7, 0($8)\nstqd %b, 0($5)",
+        &pool("20-23"),
+        None,
+    );
+    assert_eq!(
+        out,
+        [
+            ".align 3",
+            "ai $4, $4, 1",
+            "lgw $20, $3",
+            "nop",
+            "lqd $7, 0($8)",
+            "fa $21, $20, $6",
+            "lnop",
+            "nop",
+            "stqd $21, 0($5)",
+        ]
+    );
+    assert_eq!(cycles, 16);
+}

@@ -127,9 +127,13 @@ pub fn is_hint(op: Op) -> bool {
     matches!(op, Op::Hbr | Op::Hbra | Op::Hbrr)
 }
 
-/// Whether `op` is a quadword load from local store (`lqd`, `lqx`, `lqa`, `lqr`).
+/// Whether `op` is a load from local store (`lqd`, `lqx`, `lqa`, `lqr`, and the gather
+/// extension's `lgw`, `lgwx`).
 pub fn is_load(op: Op) -> bool {
-    matches!(op, Op::Lqd | Op::Lqx | Op::Lqa | Op::Lqr)
+    matches!(
+        op,
+        Op::Lqd | Op::Lqx | Op::Lqa | Op::Lqr | Op::Lgw | Op::Lgwx
+    )
 }
 
 /// Whether `op` is a quadword store to local store (`stqd`, `stqx`, `stqa`, `stqr`).

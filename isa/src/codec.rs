@@ -7,6 +7,7 @@
 //! one of the 2^32 words means. Decoding never fails: a word that matches nothing decodes
 //! to [`Op::Unknown`] carrying the word.
 
+use crate::ext::{Extension, Extensions};
 use crate::table::{FormInfo, Format, Op, OperandKind, FORMS, OP_INFO};
 
 /// A decoded instruction: its operation and its fields, pre-extracted for the interpreter.
@@ -69,7 +70,8 @@ const fn build_primary() -> [Op; 2048] {
     while i < Op::ALL.len() {
         let op = Op::ALL[i];
         let o = OP_INFO[op as usize].opcode11 as usize;
-        if matches!(primary[o], Op::Unknown) {
+        // The extensions' rows decode through [`EXT_DECODE_TABLE`] only.
+        if matches!(primary[o], Op::Unknown) && OP_INFO[op as usize].ext.is_none() {
             primary[o] = op;
         }
         i += 1;
@@ -114,10 +116,58 @@ const fn build_decode_table() -> [Op; 2048] {
 /// The operation of every possible top-11-bit value.
 pub static DECODE_TABLE: [Op; 2048] = build_decode_table();
 
-/// Decodes one instruction word. Never fails; see [`Op::Unknown`].
+const fn build_ext_table() -> [Op; 2048] {
+    let mut table = [Op::Unknown; 2048];
+    let mut k = 0;
+    while k < Op::ALL.len() {
+        let info = &OP_INFO[Op::ALL[k] as usize];
+        if info.ext.is_some() {
+            let mut i = 0;
+            while i < 2048 {
+                if i as u16 & info.format.opcode_mask() == info.opcode11 {
+                    table[i] = info.op;
+                }
+                i += 1;
+            }
+        }
+        k += 1;
+    }
+    table
+}
+
+/// The extension operation of every top-11-bit value where [`DECODE_TABLE`] has none (a
+/// test over the table shows the two never overlap: no real opcode decodes there).
+pub static EXT_DECODE_TABLE: [Op; 2048] = build_ext_table();
+
+/// Decodes one instruction word as the real SPU does. Never fails; see [`Op::Unknown`]
+/// (the extensions' words are unknown here: [`decode_ext`]).
 #[inline]
 pub fn decode(word: u32) -> Inst {
-    let op = DECODE_TABLE[(word >> 21) as usize];
+    fields(DECODE_TABLE[(word >> 21) as usize], word)
+}
+
+/// Decodes one instruction word with the extensions `ext` on: a word of an extension that
+/// is off stays [`Op::Unknown`], as on the real SPU.
+#[inline]
+pub fn decode_ext(word: u32, ext: Extensions) -> Inst {
+    let inst = decode(word);
+    if inst.op != Op::Unknown || ext.is_none() {
+        return inst;
+    }
+    match extension_of(word) {
+        Some(e) if ext.enables(e) => fields(EXT_DECODE_TABLE[(word >> 21) as usize], word),
+        _ => inst,
+    }
+}
+
+/// The extension whose instruction `word` is, if it is one (messages name it when the
+/// word is met with that extension off).
+pub fn extension_of(word: u32) -> Option<Extension> {
+    EXT_DECODE_TABLE[(word >> 21) as usize].info().ext
+}
+
+#[inline(always)]
+fn fields(op: Op, word: u32) -> Inst {
     let low7 = (word & 0x7f) as u8;
     let ra = ((word >> 7) & 0x7f) as u8;
     let rb = ((word >> 14) & 0x7f) as u8;
@@ -303,5 +353,41 @@ mod tests {
         // mtspr and syscall share an opcode; mtspr comes first.
         assert_eq!(decode(encode(form("syscall"), &[1, 2, 3], 0)).op, Op::Mtspr);
         assert_eq!(primary_form_of(decode(0x04000285)).unwrap().mnemonic, "ori");
+    }
+
+    /// The extensions' opcodes lie where no real operation decodes, in every word they
+    /// cover; there, the real SPU's decoding is `Unknown` and only [`decode_ext`] with the
+    /// extension on finds them.
+    #[test]
+    fn extension_opcodes_are_unused_by_the_real_isa() {
+        let mut covered = 0;
+        for i in 0..2048usize {
+            if EXT_DECODE_TABLE[i] != Op::Unknown {
+                covered += 1;
+                assert_eq!(DECODE_TABLE[i], Op::Unknown, "top bits {i:#x}");
+            }
+        }
+        assert_eq!(covered, 2);
+        for op in crate::table::real_ops() {
+            let info = op.info();
+            for i in 0..2048u16 {
+                if i & info.format.opcode_mask() == info.opcode11 {
+                    assert_eq!(EXT_DECODE_TABLE[i as usize], Op::Unknown, "{}", info.name);
+                }
+            }
+        }
+        let w = encode(form("lgwx"), &[3, 4, 5], 0);
+        assert_eq!(w, 0x38c14203);
+        assert_eq!(decode(w).op, Op::Unknown);
+        assert_eq!(decode_ext(w, Extensions::NONE).op, Op::Unknown);
+        let multihint_only = Extensions::parse("multihint=2").unwrap();
+        assert_eq!(decode_ext(w, multihint_only).op, Op::Unknown);
+        let i = decode_ext(w, Extensions::parse("gather").unwrap());
+        assert_eq!((i.op, i.rt, i.ra, i.rb), (Op::Lgwx, 3, 4, 5));
+        assert_eq!(extension_of(w), Some(Extension::Gather));
+        assert_eq!(extension_of(0x00f00000), None);
+        let w = encode(form("lgw"), &[3, 4], 0);
+        assert_eq!(w, 0x38a00203);
+        assert_eq!(decode_ext(w, Extensions::ALL).op, Op::Lgw);
     }
 }

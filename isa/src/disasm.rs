@@ -8,7 +8,8 @@
 //! above 16, or a relative branch target above 16, is followed by a `# hex` comment;
 //! unknown words print as `.long 0x...`.
 
-use crate::codec::{decode, operand_value};
+use crate::codec::{decode_ext, operand_value};
+use crate::ext::Extensions;
 use crate::table::{Op, OperandKind};
 
 /// Names addresses for the disassembler.
@@ -112,7 +113,18 @@ pub fn format_address(addr: u32, symbols: &dyn Symbolizer) -> String {
 
 /// The instruction text of `word` at `pc` (mnemonic, tab, operands, optional comment).
 pub fn instruction_text(word: u32, pc: u32, symbols: &dyn Symbolizer) -> String {
-    let inst = decode(word);
+    instruction_text_ext(word, pc, symbols, Extensions::NONE)
+}
+
+/// [`instruction_text`] with the instructions of the extensions `ext` known (the others'
+/// words print as `.long`, as the real SPU's disassembler prints them).
+pub fn instruction_text_ext(
+    word: u32,
+    pc: u32,
+    symbols: &dyn Symbolizer,
+    ext: Extensions,
+) -> String {
+    let inst = decode_ext(word, ext);
     let Some(form) = crate::codec::primary_form_of(inst) else {
         return format!(".long 0x{word:x}");
     };
@@ -222,6 +234,17 @@ fn skipped_address_chars(end: u32) -> usize {
 
 /// One disassembly line: `   0:\t40 80 15 03 \til\t$3,42\t# 2a`.
 pub fn line(word: u32, pc: u32, section_end: u32, symbols: &dyn Symbolizer) -> String {
+    line_ext(word, pc, section_end, symbols, Extensions::NONE)
+}
+
+/// [`line()`] with the instructions of the extensions `ext` known.
+pub fn line_ext(
+    word: u32,
+    pc: u32,
+    section_end: u32,
+    symbols: &dyn Symbolizer,
+    ext: Extensions,
+) -> String {
     let skip = skipped_address_chars(section_end);
     let full = format!("{pc:08x}");
     let digits = &full[skip..];
@@ -234,7 +257,7 @@ pub fn line(word: u32, pc: u32, section_end: u32, symbols: &dyn Symbolizer) -> S
         b[1],
         b[2],
         b[3],
-        instruction_text(word, pc, symbols),
+        instruction_text_ext(word, pc, symbols, ext),
         width = digits.len()
     )
 }
@@ -242,6 +265,11 @@ pub fn line(word: u32, pc: u32, section_end: u32, symbols: &dyn Symbolizer) -> S
 /// Disassembles `bytes` loaded at `base`, with objdump's `<symbol>:` headers where the
 /// table has symbols. A trailing partial word is printed as bytes.
 pub fn listing(bytes: &[u8], base: u32, symbols: &SymbolTable) -> String {
+    listing_ext(bytes, base, symbols, Extensions::NONE)
+}
+
+/// [`listing`] with the instructions of the extensions `ext` known.
+pub fn listing_ext(bytes: &[u8], base: u32, symbols: &SymbolTable, ext: Extensions) -> String {
     let mut out = String::new();
     let end = base.wrapping_add(bytes.len() as u32);
     for (i, chunk) in bytes.chunks(4).enumerate() {
@@ -251,7 +279,7 @@ pub fn listing(bytes: &[u8], base: u32, symbols: &SymbolTable) -> String {
         }
         if chunk.len() == 4 {
             let word = u32::from_be_bytes([chunk[0], chunk[1], chunk[2], chunk[3]]);
-            out.push_str(&line(word, pc, end, symbols));
+            out.push_str(&line_ext(word, pc, end, symbols, ext));
         } else {
             let hex: Vec<String> = chunk.iter().map(|b| format!("{b:02x}")).collect();
             out.push_str(&format!("{pc:>4x}:\t{} ", hex.join(" ")));

@@ -8,6 +8,7 @@
 pub mod analysis;
 pub mod codec;
 pub mod disasm;
+pub mod ext;
 pub mod float;
 pub mod jit;
 pub mod machine;
@@ -17,5 +18,6 @@ pub mod static_timing;
 pub mod table;
 pub mod timing;
 
-pub use codec::{decode, encode, operand_values, Inst};
+pub use codec::{decode, decode_ext, encode, operand_values, Inst};
+pub use ext::{Extension, Extensions};
 pub use table::{FormInfo, Format, Op, OperandKind, Pipe, Unit, Visitor, FORMS, OP_INFO};

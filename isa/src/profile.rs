@@ -715,7 +715,7 @@ mod listing {
         image: &[u8],
         symbols: &[(String, u32)],
     ) -> Vec<ListingLine> {
-        use crate::disasm::{instruction_text, SymbolTable};
+        use crate::disasm::{instruction_text_ext, SymbolTable};
         let table = SymbolTable::new(symbols.iter().map(|(n, a)| (*a, n.clone())).collect());
         let mut addresses: Vec<u32> = profile.addresses().map(|(a, _)| a).collect();
         addresses.sort_unstable();
@@ -729,7 +729,9 @@ mod listing {
                 .map_or(0, |b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
             lines.push(ListingLine::Inst {
                 addr,
-                text: instruction_text(word, addr, &table).replace('\t', " "),
+                // An executed extension instruction ran with its extension on.
+                text: instruction_text_ext(word, addr, &table, crate::Extensions::ALL)
+                    .replace('\t', " "),
             });
         }
         lines

@@ -2,7 +2,8 @@
 //! are timed as straight-line code (no branches taken, no fetch or local-store contention),
 //! in address order, with the dual-issue and latency rules of the timing model.
 
-use crate::codec::{decode, encode, Inst};
+use crate::codec::{decode_ext, encode, Inst};
+use crate::ext::Extensions;
 use crate::profile::*;
 use crate::table::{forms_named, OperandKind, Pipe};
 use crate::timing::{Timing, TimingConfig};
@@ -179,7 +180,8 @@ pub fn statement_inst(mnemonic: &str, operands: &str, addr: u32) -> Option<Inst>
             }
         })
         .collect();
-    Some(decode(encode(form, &ops, addr)))
+    // Every extension's instructions are read (`spu timing` times what it is given).
+    Some(decode_ext(encode(form, &ops, addr), Extensions::ALL))
 }
 
 /// Reads assembly source: labels, instructions and their addresses in the text section
@@ -459,7 +461,7 @@ pub fn analyze_source(src: &str, label: Option<&str>) -> Result<StaticTiming, St
             dual: rec.dual,
             mark: if rec.dual { 'D' } else { ' ' },
             latency: if unit.latency() > 0 {
-                unit.latency()
+                si.inst.op.info().latency()
             } else {
                 1
             },

@@ -7,8 +7,13 @@
 //! wasmtime's Pulley `for_each_op!`). Rows follow the order of the GNU binutils SPU opcode
 //! table, because the disassembler prints the first form listed for an encoding.
 //!
-//! Row syntax: `Variant snake FORMAT opcode11 UNIT { forms }`; each form is
-//! `"mnemonic" [+extra_bits] [as FORMAT] [operand kinds] [= "alias_of"]`.
+//! Row syntax: `Variant snake FORMAT opcode11 UNIT { forms } [@Extension]`; each form is
+//! `"mnemonic" [+extra_bits] [as FORMAT] [operand kinds] [= "alias_of"]`. A row tagged
+//! `@Extension` is an instruction of one of the paper's proposed extensions
+//! ([`crate::ext`]), in encoding space the real SPU leaves unused; it decodes only where
+//! that extension is on. Those rows come last, after the binutils table.
+
+use crate::ext::Extension;
 
 /// Calls `$cb!` with the whole instruction table (see the module docs for the syntax).
 #[macro_export]
@@ -214,6 +219,8 @@ macro_rules! for_each_op {
         Dfcgt     dfcgt     RR   0x2c3 FX2  { "dfcgt" [Rt, Ra, Rb] }
         Dfcmgt    dfcmgt    RR   0x2cb FX2  { "dfcmgt" [Rt, Ra, Rb] }
         Dftsv     dftsv     RI7  0x3bf FX2  { "dftsv" [Rt, Ra, U7] }
+        Lgw       lgw       RR   0x1c5 LS   { "lgw" [Rt, Ra] } @Gather
+        Lgwx      lgwx      RR   0x1c6 LS   { "lgwx" [Rt, Ra, Rb] } @Gather
         }
     };
 }
@@ -415,6 +422,19 @@ pub struct OpInfo {
     pub opcode11: u16,
     /// The execution class, which decides the pipe and the result latency.
     pub unit: Unit,
+    /// The extension this operation belongs to (`None`: the real SPU's).
+    pub ext: Option<Extension>,
+}
+
+impl OpInfo {
+    /// Cycles from issue until a dependent instruction may issue: the unit's latency, but
+    /// for the gather loads, whose four local-store reads take [`crate::ext::GATHER_LATENCY`].
+    pub const fn latency(&self) -> u32 {
+        match self.ext {
+            Some(Extension::Gather) => crate::ext::GATHER_LATENCY,
+            _ => self.unit.latency(),
+        }
+    }
 }
 
 /// One assembler form: a mnemonic and operand list that encodes to an opcode.
@@ -450,6 +470,15 @@ macro_rules! __opt_str {
     };
 }
 
+macro_rules! __opt_ext {
+    () => {
+        None
+    };
+    ($e:ident) => {
+        Some(Extension::$e)
+    };
+}
+
 macro_rules! __fmt_or {
     ($f:ident) => {
         Format::$f
@@ -463,7 +492,7 @@ macro_rules! define_table {
     ($(
         $Name:ident $snake:ident $fmt:ident $opc:literal $unit:ident {
             $( $mn:literal $(+ $extra:literal)? $(as $ffmt:ident)? [ $($k:ident),* ] $(= $alias:literal)? ),+
-        }
+        } $(@ $ext:ident)?
     )*) => {
         /// One SPU machine operation (an opcode; feature-bit variants such as `bid` share
         /// the operation of `bi`). `Unknown` stands for a word that matches no opcode.
@@ -488,8 +517,8 @@ macro_rules! define_table {
 
         /// Per-operation facts, indexed by `Op as usize`; the last entry is `Unknown`.
         pub static OP_INFO: &[OpInfo] = &[
-            $(OpInfo { op: Op::$Name, name: stringify!($snake), format: Format::$fmt, opcode11: $opc, unit: Unit::$unit },)*
-            OpInfo { op: Op::Unknown, name: ".long", format: Format::RR, opcode11: 0, unit: Unit::NOP },
+            $(OpInfo { op: Op::$Name, name: stringify!($snake), format: Format::$fmt, opcode11: $opc, unit: Unit::$unit, ext: __opt_ext!($($ext)?) },)*
+            OpInfo { op: Op::Unknown, name: ".long", format: Format::RR, opcode11: 0, unit: Unit::NOP, ext: None },
         ];
 
         /// Every assembler form, in binutils table order within each operation.
@@ -532,8 +561,14 @@ macro_rules! define_table {
 
 for_each_op!(define_table);
 
-/// Number of real operations (199 for the SPU ISA 1.2 as binutils knows it).
+/// Number of operations in the table, the extensions' included.
 pub const OP_COUNT: usize = Op::ALL.len();
+
+/// The real SPU's operations (the rows without an extension tag), in table order: 199 for
+/// the SPU ISA 1.2 as binutils knows it.
+pub fn real_ops() -> impl Iterator<Item = Op> {
+    Op::ALL.iter().copied().filter(|op| op.info().ext.is_none())
+}
 
 /// Looks up every form spelled `mnemonic`, in table order (alternate forms follow).
 pub fn forms_named(mnemonic: &str) -> impl Iterator<Item = &'static FormInfo> + '_ {
@@ -563,9 +598,17 @@ mod tests {
 
     #[test]
     fn table_has_every_opcode_and_form() {
-        assert_eq!(OP_COUNT, 199);
-        assert_eq!(FORMS.len(), 243);
-        assert_eq!(OP_INFO.len(), 200);
+        assert_eq!(real_ops().count(), 199);
+        assert_eq!(OP_COUNT, 201);
+        assert_eq!(
+            FORMS.iter().filter(|f| f.op.info().ext.is_none()).count(),
+            243
+        );
+        assert_eq!(FORMS.len(), 245);
+        assert_eq!(OP_INFO.len(), 202);
+        // The extension rows come after every real one.
+        let first_ext = Op::ALL.iter().position(|op| op.info().ext.is_some());
+        assert_eq!(first_ext, Some(199));
         for (i, info) in OP_INFO.iter().enumerate() {
             assert_eq!(info.op as usize, i);
         }

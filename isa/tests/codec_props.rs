@@ -2,7 +2,7 @@
 //! word never panics and re-encodes to the bits it uses.
 
 use proptest::prelude::*;
-use spu_isa::codec::{decode, encode, operand_values, primary_form_of};
+use spu_isa::codec::{decode, decode_ext, encode, operand_values, primary_form_of};
 use spu_isa::disasm::{instruction_text, NoSymbols};
 use spu_isa::table::{FormInfo, Format, OperandKind, FORMS};
 
@@ -68,7 +68,9 @@ proptest! {
         let pc = pc_words * 4;
         let values: Vec<i64> = form.operands.iter().zip(raws).map(|(k, r)| value_for(*k, r, pc)).collect();
         let word = encode(form, &values, pc);
-        let inst = decode(word);
+        // The extensions' forms decode with their extension on (and only then).
+        let inst = decode_ext(word, spu_isa::Extensions::ALL);
+        prop_assert_eq!(decode(word).op == inst.op, form.op.info().ext.is_none());
         prop_assert_eq!(inst.op, form.op, "{} decoded as {:?}", form.mnemonic, inst.op);
         // The same form reads back the same values.
         prop_assert_eq!(operand_values(form, word, pc), values.clone(), "{}", form.mnemonic);

@@ -141,6 +141,9 @@ trav:
         lqa     $114, k_epshi
         ila     $88, CTX_RAY_RX
         a       $88, $88, RAYS
+        .ifdef  EXT_MULTIHINT
+        hbrr    .Lff_none\@, 3f               # the search's exit when no ray enters, hinted
+        .endif                                # ahead: the loop's hint keeps its own entry
         # two vectors per pass (scheduled into even/odd pairs)
         .sched  pool=91-96,98-102,105-111,116,118-124,127,87 scratch=66-127
 1:
@@ -203,6 +206,7 @@ trav:
       ! brz     $104, 1b
         .endsched
         il      $97, -1
+.Lff_none\@:
         br      3f
 2:      clz     $103, $103                    # 8 lanes: the first = clz - 24
         ai      $103, $103, -32               # (less the 8 rays $117 has moved on)

@@ -102,6 +102,8 @@ pub struct RenderConfig {
     pub max_cycles: u64,
     /// Log every SPU's MFC commands and channel waits (heat maps, timelines).
     pub event_log: bool,
+    /// The ISA extensions the SPUs run with (`docs/extensions.md`; none: the real SPU).
+    pub extensions: spu_isa::Extensions,
 }
 
 impl RenderConfig {
@@ -127,6 +129,18 @@ impl RenderConfig {
             timing: true,
             max_cycles: 200_000_000_000,
             event_log: false,
+            extensions: spu_isa::Extensions::NONE,
+        }
+    }
+
+    /// [`RenderConfig::kernel_for`] on SPUs with the extensions `ext`: primary rays with
+    /// several hint entries run the kernel that hints for them.
+    pub fn kernel_with(fill: bool, mode: ShadeMode, ext: spu_isa::Extensions) -> KernelVariant {
+        match Self::kernel_for(fill, mode) {
+            KernelVariant::Primary if ext.enables(spu_isa::Extension::MultiHint) => {
+                KernelVariant::PrimaryMultihint
+            }
+            kernel => kernel,
         }
     }
 
@@ -397,6 +411,7 @@ pub fn render_with(
             max_cycles: config.max_cycles,
             event_log: config.event_log,
             code,
+            extensions: config.extensions,
         },
         progress,
     )?;

@@ -292,6 +292,8 @@ pub struct Frame<'a> {
     /// The compiled blocks the SPEs share, and add to: earlier frames' blocks are reused.
     /// The frame's results do not depend on it, only how much runs compiled and how soon.
     pub code: &'a spu_isa::jit::CodeCache,
+    /// The ISA extensions the SPUs run with (their hint entries override `timing`'s).
+    pub extensions: spu_isa::Extensions,
 }
 
 /// Runs `frame` with its SPUs on its host threads; `progress` hears the number of tiles
@@ -338,6 +340,7 @@ pub fn run_frame(
             engine: frame.engine,
             timing: frame.timed.then(|| frame.timing.clone()),
             code: Some(code.clone()),
+            extensions: frame.extensions,
         });
         let spu = system.spu_mut(id);
         spu.load_image(&program.image);

@@ -16,14 +16,19 @@ pub enum KernelVariant {
     Shaded,
     /// The fill pattern that exercises the runtime without tracing (`kernels/fill.s`).
     Fill,
+    /// [`KernelVariant::Primary`] for SPUs with several hint entries (the `multihint`
+    /// extension, `docs/extensions.md`): branches hinted before the loops whose own hints
+    /// would replace theirs on the real SPU (`kernels/primary.s` with `EXT_MULTIHINT`).
+    PrimaryMultihint,
 }
 
 impl KernelVariant {
     /// Every variant, in the order the build assembles them.
-    pub const ALL: [KernelVariant; 3] = [
+    pub const ALL: [KernelVariant; 4] = [
         KernelVariant::Primary,
         KernelVariant::Shaded,
         KernelVariant::Fill,
+        KernelVariant::PrimaryMultihint,
     ];
 
     /// A short name: prebuilt file names, messages.
@@ -32,13 +37,16 @@ impl KernelVariant {
             KernelVariant::Primary => "primary",
             KernelVariant::Shaded => "shaded",
             KernelVariant::Fill => "fill",
+            KernelVariant::PrimaryMultihint => "primary-multihint",
         }
     }
 
     /// The source file, relative to `kernels/`.
     pub const fn file(self) -> &'static str {
         match self {
-            KernelVariant::Primary | KernelVariant::Shaded => "primary.s",
+            KernelVariant::Primary | KernelVariant::Shaded | KernelVariant::PrimaryMultihint => {
+                "primary.s"
+            }
             KernelVariant::Fill => "fill.s",
         }
     }
@@ -46,7 +54,9 @@ impl KernelVariant {
     /// The name diagnostics and the sources' hash use.
     pub const fn name(self) -> &'static str {
         match self {
-            KernelVariant::Primary | KernelVariant::Shaded => "kernels/primary.s",
+            KernelVariant::Primary | KernelVariant::Shaded | KernelVariant::PrimaryMultihint => {
+                "kernels/primary.s"
+            }
             KernelVariant::Fill => "kernels/fill.s",
         }
     }
@@ -55,6 +65,7 @@ impl KernelVariant {
     pub const fn defines(self) -> &'static [(&'static str, i64)] {
         match self {
             KernelVariant::Shaded => &[("SHADE", 1)],
+            KernelVariant::PrimaryMultihint => &[("EXT_MULTIHINT", 1)],
             KernelVariant::Primary | KernelVariant::Fill => &[],
         }
     }

@@ -14,6 +14,7 @@ mod frame_cycles;
 mod gnu_differential;
 mod gnu_ld_differential;
 mod golden_forms;
+mod isa_extensions;
 mod kernel_caches;
 mod kernel_modules;
 mod runtime_frames;

@@ -291,6 +291,7 @@ fn raytrace_kernel_times_the_same_with_and_without_block_memoization() {
                 max_cycles: 20_000_000_000,
                 event_log: false,
                 code: &CodeCache::default(),
+                extensions: Default::default(),
             },
             &mut |_, _| {},
         )
@@ -321,7 +322,9 @@ fn every_kernel_variant_renders_and_validates() {
             ..config("room", 64, 64, 2, 2)
         };
         config.shading.mode = match variant {
-            KernelVariant::Primary | KernelVariant::Fill => spu_loader::shading::ShadeMode::None,
+            KernelVariant::Primary | KernelVariant::Fill | KernelVariant::PrimaryMultihint => {
+                spu_loader::shading::ShadeMode::None
+            }
             KernelVariant::Shaded => spu_loader::shading::ShadeMode::Shadows,
         };
         let frame = render(&room, &config, &CodeCache::default()).unwrap();
@@ -331,7 +334,7 @@ fn every_kernel_variant_renders_and_validates() {
             .unwrap()
             .contains(if variant.traces() { "trav" } else { "_start" }));
         match variant {
-            KernelVariant::Primary | KernelVariant::Shaded => {
+            KernelVariant::Primary | KernelVariant::Shaded | KernelVariant::PrimaryMultihint => {
                 let v = spu_loader::render::validate(&room, &config, &frame).unwrap();
                 assert!(v.passed(), "{variant:?}: {:?}", v.messages);
                 assert_eq!(v.pixels, 64 * 64);

@@ -34,6 +34,8 @@ pub struct Args {
     /// `exit`, `printf` and the other PPE-assisted calls; docs/running-programs.md).
     #[arg(long, conflicts_with = "object")]
     runtime: bool,
+    #[command(flatten)]
+    ext: crate::options::ExtOption,
 }
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
@@ -54,6 +56,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     files.check()?;
     let mut opts = Options {
         include_dirs: args.include.clone(),
+        extensions: args.ext.ext,
         ..Default::default()
     };
     for d in &args.defsym {

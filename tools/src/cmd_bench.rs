@@ -20,6 +20,8 @@ pub struct Args {
     engine: Option<Engine>,
     #[command(flatten)]
     compile: crate::options::CompileOption,
+    #[command(flatten)]
+    ext: crate::options::ExtOption,
     /// Also a SIZExSIZE frame of the room on one SPE with the timing model (0: none).
     #[arg(long, default_value_t = 128)]
     frame: u32,
@@ -58,6 +60,7 @@ fn measure(
     timing: bool,
     engine: Engine,
     compile: &options::CompileOption,
+    ext: spu_isa::Extensions,
 ) -> exit::Result<(u64, u64, f64)> {
     let opts = spu_asm::Options {
         defines: vec![("ITER".into(), iterations as i64)],
@@ -69,6 +72,7 @@ fn measure(
     spu.load_image(&program.image);
     spu.set_pc(program.entry);
     spu.set_engine(engine);
+    spu.set_extensions(ext);
     spu.share_code(&compile.cache());
     if timing {
         spu.enable_timing(Default::default());
@@ -92,11 +96,18 @@ fn measure_frame(
     size: u32,
     engine: Engine,
     compile: &options::CompileOption,
+    ext: spu_isa::Extensions,
 ) -> exit::Result<(u64, u64, f64)> {
     let config = spu_loader::render::RenderConfig {
         width: size,
         height: size,
         engine,
+        extensions: ext,
+        kernel: spu_loader::render::RenderConfig::kernel_with(
+            false,
+            spu_loader::shading::ShadeMode::None,
+            ext,
+        ),
         ..spu_loader::render::RenderConfig::new(&room.name)
     };
     let started = Instant::now();
@@ -118,8 +129,10 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     outln!("mixed loop: {} iterations", args.iterations);
     let mut rates = Vec::new();
     for &engine in &engines {
-        let (n_off, _, s_off) = measure(args.iterations, false, engine, &args.compile)?;
-        let (n_on, cycles, s_on) = measure(args.iterations, true, engine, &args.compile)?;
+        let (n_off, _, s_off) =
+            measure(args.iterations, false, engine, &args.compile, args.ext.ext)?;
+        let (n_on, cycles, s_on) =
+            measure(args.iterations, true, engine, &args.compile, args.ext.ext)?;
         let off = n_off as f64 / s_off.max(1e-9) / 1e6;
         let on = n_on as f64 / s_on.max(1e-9) / 1e6;
         outln!("{engine:6} timing off: {off:8.1} M simulated instructions per host second ({n_off} instructions)");
@@ -138,7 +151,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         let room = spu_loader::render::prepare("room").map_err(exit::Error::failure)?;
         let size = args.frame;
         for &engine in &engines {
-            let (n, cycles, s) = measure_frame(&room, size, engine, &args.compile)?;
+            let (n, cycles, s) = measure_frame(&room, size, engine, &args.compile, args.ext.ext)?;
             outln!(
                 "{engine:6} room {size}x{size} frame: {:8.1} M simulated instructions per host second ({n} instructions, {cycles} cycles)",
                 n as f64 / s.max(1e-9) / 1e6

@@ -1,7 +1,7 @@
 //! `spu dis`: objdump-style disassembly of an SPU ELF (its code sections, with symbols) or
 //! of a raw image loaded at address 0.
 
-use spu_isa::disasm::{listing, SymbolTable};
+use spu_isa::disasm::{listing_ext, SymbolTable};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -12,6 +12,8 @@ pub struct Args {
     /// Treat the file as a raw image even if it looks like an ELF.
     #[arg(long)]
     raw: bool,
+    #[command(flatten)]
+    ext: crate::options::ExtOption,
 }
 
 pub fn run(args: Args) -> crate::exit::Result<ExitCode> {
@@ -34,12 +36,12 @@ pub fn run(args: Args) -> crate::exit::Result<ExitCode> {
             if *code {
                 out!(
                     "\nDisassembly of section {section}:\n{}",
-                    listing(data, *addr, &symbols)
+                    listing_ext(data, *addr, &symbols, args.ext.ext)
                 );
             }
         }
     } else {
-        out!("\n{name}:     file format binary\n\n\nDisassembly of section .data:\n\n00000000 <.data>:\n{}", listing(&bytes, 0, &SymbolTable::default()));
+        out!("\n{name}:     file format binary\n\n\nDisassembly of section .data:\n\n00000000 <.data>:\n{}", listing_ext(&bytes, 0, &SymbolTable::default(), args.ext.ext));
     }
     Ok(ExitCode::SUCCESS)
 }

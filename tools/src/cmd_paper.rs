@@ -20,6 +20,8 @@ use std::sync::Mutex;
 
 #[derive(clap::Args)]
 pub struct Args {
+    #[command(flatten)]
+    ext: crate::options::ExtOption,
     /// Directory for the report, the figures and the jobs' files (jobs/).
     #[arg(long, default_value = "paper-report")]
     out: PathBuf,
@@ -90,7 +92,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             let words: Vec<String> = std::iter::once(exe.clone())
                 .chain(std::iter::once("render".to_string()))
                 .chain(crate::render_options::words(
-                    &job.config(),
+                    &with_ext(job, args.ext.ext),
                     &job.outputs(&jobs_dir),
                 ))
                 .map(|w| shell_word(&w))
@@ -114,7 +116,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         }
         None => {
             std::fs::create_dir_all(&jobs_dir).map_err(|e| Error::output(&jobs_dir, e))?;
-            run_jobs(&jobs, &jobs_dir, threads);
+            run_jobs(&jobs, &jobs_dir, threads, args.ext.ext);
             jobs_dir
         }
     };
@@ -259,7 +261,7 @@ fn write(path: &Path, text: &str) -> exit::Result<()> {
 
 /// Runs the jobs on `threads` host threads, one bar over all of them; a job that fails
 /// leaves no stats file and the report names it.
-fn run_jobs(jobs: &[Job], dir: &Path, threads: usize) {
+fn run_jobs(jobs: &[Job], dir: &Path, threads: usize, ext: spu_isa::Extensions) {
     // the heaviest scenes first, so that no long job starts last
     let mut order: Vec<&Job> = jobs.iter().collect();
     order.sort_by_key(|j| std::cmp::Reverse(weight(j)));
@@ -293,7 +295,7 @@ fn run_jobs(jobs: &[Job], dir: &Path, threads: usize) {
                     r.insert(name.clone());
                     show(&r);
                 }
-                if let Err(e) = run_job(job, dir, &kept) {
+                if let Err(e) = run_job(job, dir, &kept, ext) {
                     if let Ok(mut f) = failures.lock() {
                         f.push(format!("{name}: {e}"));
                     }
@@ -319,6 +321,18 @@ fn run_jobs(jobs: &[Job], dir: &Path, threads: usize) {
     }
 }
 
+/// The frame `job` renders, on SPUs with the ISA extensions `ext` (`--ext`: every run of
+/// the report with them; docs/extensions.md).
+fn with_ext(job: &Job, ext: spu_isa::Extensions) -> spu_loader::render::RenderConfig {
+    use spu_loader::render::RenderConfig;
+    let config = job.config();
+    RenderConfig {
+        kernel: RenderConfig::kernel_with(!config.kernel.traces(), config.shading.mode, ext),
+        extensions: ext,
+        ..config
+    }
+}
+
 /// A rough cost for ordering: rays times the scene's heaviness.
 fn weight(job: &Job) -> u64 {
     let scene = match job.scene_id.as_str() {
@@ -330,12 +344,17 @@ fn weight(job: &Job) -> u64 {
 
 /// One job in this process, as `spu render` renders and writes a frame; its stats file is
 /// removed first so that a failed run leaves none.
-fn run_job(job: &Job, dir: &Path, kept: &Kept) -> Result<(), String> {
+fn run_job(job: &Job, dir: &Path, kept: &Kept, ext: spu_isa::Extensions) -> Result<(), String> {
     let stats = job.stats_path(dir);
     let _ = std::fs::remove_file(&stats);
     let prepared = kept.prepare(&job.scene_arg)?;
-    crate::cmd_render::frame(&prepared, &job.config(), &job.outputs(dir), &kept.code)
-        .map_err(|e| e.message.unwrap_or_default())?;
+    crate::cmd_render::frame(
+        &prepared,
+        &with_ext(job, ext),
+        &job.outputs(dir),
+        &kept.code,
+    )
+    .map_err(|e| e.message.unwrap_or_default())?;
     Ok(())
 }
 

@@ -17,6 +17,8 @@ pub struct Args {
     engine: spu_isa::jit::Engine,
     #[command(flatten)]
     compile: crate::options::CompileOption,
+    #[command(flatten)]
+    ext: crate::options::ExtOption,
     /// Program: SPU assembly (.s), an SPU ELF or a flat image.
     file: PathBuf,
     /// Print JSON for tools.
@@ -61,6 +63,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         engine: args.engine,
         timing: Some(Default::default()),
         code: Some(args.compile.cache()),
+        extensions: args.ext.ext,
     });
     let start = Start::Shell {
         args: vec![args.file.as_os_str().as_encoded_bytes().to_vec()],

@@ -2,7 +2,7 @@
 
 use crate::exit::{self, Error, Status};
 use crate::options;
-use spu_isa::disasm::{instruction_text, SymbolTable};
+use spu_isa::disasm::{instruction_text_ext, SymbolTable};
 use spu_isa::machine::{Spu, StopReason};
 use spu_spe::{Channel, ContextConfig, ContextId, Outcome, Program, Start, State, System};
 use std::path::{Path, PathBuf};
@@ -16,6 +16,8 @@ pub struct Args {
     engine: spu_isa::jit::Engine,
     #[command(flatten)]
     compile: crate::options::CompileOption,
+    #[command(flatten)]
+    ext: crate::options::ExtOption,
     /// An SPU ELF, a raw image loaded at 0, or an assembly source (.s).
     file: PathBuf,
     /// Stop after this many cycles.
@@ -213,6 +215,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         engine: args.engine,
         timing: args.timing.then(Default::default),
         code: Some(args.compile.cache()),
+        extensions: args.ext.ext,
     });
     let entry = system
         .load(id, &program, &start)
@@ -423,7 +426,7 @@ fn trace(
         let spu = system.spu(id);
         let mut line = format!(
             "{pc:05x}: {word:08x}  {}",
-            instruction_text(word, pc, symbols)
+            instruction_text_ext(word, pc, symbols, spu.extensions())
         );
         for (n, old) in before.iter().enumerate() {
             let r = spu.reg(n);

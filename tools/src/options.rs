@@ -32,6 +32,20 @@ pub fn read_input(path: &Path, limit: u64) -> Result<Vec<u8>, String> {
     Ok(bytes)
 }
 
+/// `--ext`, for the commands that assemble, disassemble or run SPU code.
+#[derive(clap::Args, Clone, Copy, Debug)]
+pub struct ExtOption {
+    /// ISA extensions the paper proposes (docs/extensions.md), comma-separated:
+    /// multihint[=N] (a branch target buffer of N hint entries, 1 to 8; 4 without N),
+    /// gather (the gather loads lgw, lgwx), none.
+    #[arg(long = "ext", value_name = "LIST", default_value = "none", value_parser = extensions)]
+    pub ext: spu_isa::Extensions,
+}
+
+fn extensions(text: &str) -> Result<spu_isa::Extensions, String> {
+    spu_isa::Extensions::parse(text)
+}
+
 /// `--compile`, for the commands that run SPUs.
 #[derive(clap::Args)]
 pub struct CompileOption {

@@ -20,6 +20,8 @@ pub struct Args {
     pub engine: Engine,
     #[command(flatten)]
     pub compile: crate::options::CompileOption,
+    #[command(flatten)]
+    pub ext: crate::options::ExtOption,
     /// A built-in scene (room, conference, beetle) or an OBJ/PLY file (optionally .gz).
     #[arg(long, default_value = "room")]
     pub scene: String,
@@ -237,11 +239,12 @@ impl Args {
                 vertex_cache: self.vertex_cache,
                 material_cache: self.material_cache,
             },
-            kernel: RenderConfig::kernel_for(self.fill, self.shade),
+            kernel: RenderConfig::kernel_with(self.fill, self.shade, self.ext.ext),
             engine: self.engine,
             timing: self.timing,
             max_cycles: self.max_cycles,
             event_log: self.heatmap.is_some() || self.trace.is_some(),
+            extensions: self.ext.ext,
             ..RenderConfig::new(&self.scene)
         };
         let outputs = Outputs {
@@ -350,6 +353,9 @@ pub fn words(config: &RenderConfig, outputs: &Outputs) -> Vec<String> {
     }
     if config.max_cycles != defaults.max_cycles {
         option("--max-cycles", config.max_cycles.to_string());
+    }
+    if !config.extensions.is_none() {
+        option("--ext", config.extensions.to_string());
     }
     let paths = [
         ("--heatmap", &outputs.heatmap),

@@ -4,6 +4,7 @@
 
 mod cli;
 mod exit_status;
+mod ext_cli;
 mod ld_archives;
 mod paper;
 mod ppe_run;

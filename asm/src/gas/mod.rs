@@ -47,6 +47,8 @@ pub struct Options {
     pub virtual_files: Vec<(String, String)>,
     /// Symbols defined before the source (like `--defsym`).
     pub defines: Vec<(String, i64)>,
+    /// ISA extensions on from the first line (`--ext`; `.spu_ext` adds more).
+    pub extensions: spu_isa::Extensions,
 }
 
 /// The assembled program.
@@ -140,6 +142,8 @@ struct Assembler<'o> {
     symvers: Vec<(String, String, String)>,
     /// The one warning that `.file N`/`.loc` write no line table has been given.
     no_line_table_warned: bool,
+    /// The ISA extensions on at this point of the walk (the options', then `.spu_ext`).
+    extensions: spu_isa::Extensions,
 }
 
 /// What a `.sched` block's schedule is made from: its lines, options and start address.
@@ -169,6 +173,7 @@ const LOCAL_STORE: usize = 256 * 1024;
 impl<'o> Assembler<'o> {
     fn new(opts: &'o Options, object: bool) -> Assembler<'o> {
         let mut asm = Assembler {
+            extensions: opts.extensions,
             opts,
             pass: 1,
             sect: 0,
@@ -255,6 +260,7 @@ impl<'o> Assembler<'o> {
         for (n, v) in &self.opts.defines {
             self.symbols.insert(n.clone(), SymVal::Abs(Val::abs(*v)));
         }
+        self.extensions = self.opts.extensions;
         self.run_lines(lines);
         self.finish_sections();
         if pass == 1 {

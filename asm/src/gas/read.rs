@@ -609,6 +609,12 @@ impl Assembler<'_> {
                 self.align_pattern(d, args, line, col)
             }
             ".reloc" => self.reloc_directive(args, line, col),
+            // The paper's ISA extensions (`docs/extensions.md`), on from here.
+            ".spu_ext" => {
+                if let Err(m) = self.extensions.add(args.trim()) {
+                    self.diag(Severity::Error, line, col, format!(".spu_ext: {m}"));
+                }
+            }
             ".purgem" => self.purge_macro(args, line, col),
             ".struct" => {
                 // read.c s_struct: into the absolute section at the offset given.
@@ -1016,6 +1022,7 @@ const DIRECTIVES: &[&str] = &[
     ".single",
     ".size",
     ".skip",
+    ".spu_ext",
     ".sleb128",
     ".space",
     ".string",

@@ -387,6 +387,19 @@ impl Assembler<'_> {
             self.emit(&[0; 4]);
             return;
         }
+        if let Some(ext) = forms[0].op.info().ext {
+            if !self.extensions.enables(ext) {
+                let name = ext.name();
+                self.diag(
+                    Severity::Error,
+                    line,
+                    col,
+                    format!("'{mnemonic}' is an instruction of the {name} extension, which is off (`.spu_ext {name}` or `--ext {name}` turns it on)"),
+                );
+                self.emit(&[0; 4]);
+                return;
+            }
+        }
         let arg_col = line
             .text
             .find(args.trim())

@@ -236,6 +236,14 @@ impl Core {
         }
     }
 
+    /// The word at local-store byte address `addr` (wrapped into the local store, low 2
+    /// bits ignored), as the gather loads read each slot.
+    #[inline(always)]
+    pub fn load_word(&self, addr: u32) -> u32 {
+        let a = (addr & LS_MASK & !3) as usize;
+        u32::from_be_bytes(self.ls[a..a + 4].try_into().unwrap())
+    }
+
     #[inline(always)]
     /// The quadword at local-store byte address `addr` (wrapped into the local store, low 4 bits ignored).
     pub fn load_quad(&self, addr: u32) -> Reg {
@@ -424,6 +432,9 @@ pub(crate) fn execute_in<const TRUNCATING: bool>(core: &mut Core, inst: Inst, pc
         // ---- loads and stores
         Lqd => w!(core.load_quad(ra!()[0].wrapping_add((imm << 4) as u32))),
         Lqx => w!(core.load_quad(ra!()[0].wrapping_add(rb!()[0]))),
+        // The gather extension (decoded only where it is on): each word slot's address.
+        Lgw => w!(ra!().map(|a| core.load_word(a))),
+        Lgwx => w!(zip(ra!(), rb!(), |a, b| core.load_word(a.wrapping_add(b)))),
         Lqa => w!(core.load_quad((imm << 2) as u32)),
         Lqr => w!(core.load_quad(pc.wrapping_add((imm << 2) as u32))),
         Stqd | Stqx | Stqa | Stqr => {

@@ -9,7 +9,8 @@ use super::channels::ChannelOutcome;
 use super::compiled::CompiledBlocks;
 use super::memory::MainMemory;
 use super::mfc::{DmaCommand, LoggedWrite};
-use crate::codec::{decode, Inst};
+use crate::codec::{decode, decode_ext, extension_of, Inst};
+use crate::ext::Extensions;
 use crate::jit::Engine;
 use crate::machine::exec::{
     execute, execute_in, Core, Effect, Reg, TruncatingFloats, LS_MASK, LS_SIZE,
@@ -84,7 +85,15 @@ impl std::fmt::Display for StopReason {
             StopReason::Stop(code) => write!(f, "stop {code:#x}"),
             StopReason::Halt { pc } => write!(f, "halt at {pc:#x}"),
             StopReason::IllegalInstruction { pc, word } => {
-                write!(f, "illegal instruction {word:#010x} at {pc:#x}")
+                write!(f, "illegal instruction {word:#010x} at {pc:#x}")?;
+                match extension_of(*word) {
+                    Some(e) => write!(
+                        f,
+                        " (an instruction of the {0} extension, which is off: --ext {0})",
+                        e.name()
+                    ),
+                    None => Ok(()),
+                }
             }
             StopReason::DmaError {
                 pc,
@@ -178,6 +187,8 @@ pub struct Spu {
     pub(super) writes: Vec<LoggedWrite>,
     pub(super) seq: u64,
     pub(super) timing_config: TimingConfig,
+    /// The ISA extensions this SPU decodes and times ([`Spu::set_extensions`]).
+    pub(super) extensions: Extensions,
     /// The command being issued, for a DmaError: (cmd, lsa, ea, size, tag).
     pub(super) dma_ctx: (u8, u32, u64, u32, u32),
     /// The event log, when on (see `events.rs`).
@@ -285,6 +296,7 @@ impl Spu {
             writes: Vec::new(),
             seq: 0,
             timing_config: TimingConfig::default(),
+            extensions: Extensions::NONE,
             dma_ctx: (0, 0, 0, 0, 0),
             events: None,
         }
@@ -331,7 +343,10 @@ impl Spu {
             return inst;
         }
         let b = &self.core.ls[4 * w..4 * w + 4];
-        let fresh = decode(u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
+        let fresh = decode_ext(
+            u32::from_be_bytes([b[0], b[1], b[2], b[3]]),
+            self.extensions,
+        );
         self.decoded[w] = fresh;
         self.code_quads[w / 4] = 1;
         fresh
@@ -406,10 +421,29 @@ impl Spu {
         self.timing.as_mut()
     }
 
-    /// Turns the cycle-level timing model on.
-    pub fn enable_timing(&mut self, config: TimingConfig) {
+    /// Turns the cycle-level timing model on (with the branch target buffer of the SPU's
+    /// extensions, whatever `config.hint_entries` says).
+    pub fn enable_timing(&mut self, mut config: TimingConfig) {
+        config.hint_entries = self.extensions.hint_entries;
         self.timing_config = config.clone();
         self.timing = Some(Timing::new(config));
+    }
+
+    /// Switches the ISA extensions (`docs/extensions.md`); call it before running. A word of
+    /// an extension that is off stays an illegal instruction, whose stop names the extension.
+    /// With the timing model on, it starts again (at cycle 0) with the new hint entries.
+    pub fn set_extensions(&mut self, extensions: Extensions) {
+        self.extensions = extensions;
+        self.redecode(0, LS_SIZE as u32);
+        if let Some(t) = &self.timing {
+            let config = t.config.clone();
+            self.enable_timing(config);
+        }
+    }
+
+    /// The ISA extensions this SPU runs with.
+    pub fn extensions(&self) -> Extensions {
+        self.extensions
     }
 
     /// Runs until `max_cycles` or a stop; main memory writes apply immediately after.
@@ -873,6 +907,7 @@ impl Spu {
         let core = &mut self.core;
         let decoded = &mut *self.decoded;
         let code_quads = &mut *self.code_quads;
+        let extensions = self.extensions;
         while done < budget {
             let w = (pc >> 2) as usize & (LS_SIZE / 4 - 1);
             let inst = decoded[w];
@@ -883,7 +918,7 @@ impl Spu {
                 // Decode the stale word and take it again from the array (one path
                 // into the dispatch keeps the instruction in registers).
                 let b = &core.ls[4 * w..4 * w + 4];
-                let fresh = decode(u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
+                let fresh = decode_ext(u32::from_be_bytes([b[0], b[1], b[2], b[3]]), extensions);
                 decoded[w] = fresh;
                 code_quads[w / 4] = 1;
                 if fresh.op == Op::Unknown {

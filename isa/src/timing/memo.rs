@@ -1174,7 +1174,7 @@ impl Timing {
         let e = &rec.entry;
         let now = e.now as i64;
         let class = self.classes[inst.op as usize];
-        if class.flags & F_FPD != 0 {
+        if class.flags & (F_FPD | F_GATHER) != 0 {
             rec.dp_changed = true;
         }
         if class.flags & F_HINT != 0 && !is_hbrp(inst) {
@@ -1268,7 +1268,8 @@ impl Timing {
         let mut branch_pc = NO_PC;
         let mut inner = Vec::new();
         for (k, &word) in rec.words.iter().enumerate() {
-            let inst = crate::codec::decode(word);
+            // A recorded block ran: its extension words were on.
+            let inst = crate::codec::decode_ext(word, crate::ext::Extensions::ALL);
             let c = self.classes[inst.op as usize];
             let mut read = |r: u8| {
                 let r = r & 127;

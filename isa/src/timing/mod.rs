@@ -52,7 +52,12 @@ pub struct TimingConfig {
     /// instructions may issue (6: the local-store access pipeline a load also takes).
     pub fetch_latency: u32,
     /// Replay the timing of basic blocks whose entry state repeats (exact; only a speed-up).
+    /// The block memo knows one hint entry: with `hint_entries > 1` the model runs without
+    /// it ([`Timing::new`]).
     pub memoize: bool,
+    /// Entries of the branch target buffer: 1 is the real SPU's one hint; more is the
+    /// `multihint` extension (`docs/extensions.md`).
+    pub hint_entries: u8,
 }
 
 impl Default for TimingConfig {
@@ -69,6 +74,7 @@ impl Default for TimingConfig {
             model_fetch: true,
             fetch_latency: 6,
             memoize: true,
+            hint_entries: 1,
         }
     }
 }
@@ -127,6 +133,9 @@ const F_HINT: u16 = 8;
 const F_LS: u16 = 16;
 const F_NOP: u16 = 32;
 const F_MEM: u16 = 64;
+/// A gather load: it takes the local store for [`crate::ext::GATHER_LS_CYCLES`] cycles,
+/// during which nothing else issues (counted with the double-precision issue block).
+pub(crate) const F_GATHER: u16 = 128;
 
 /// What the model needs to know about one operation.
 #[derive(Clone, Copy, Debug)]
@@ -175,13 +184,16 @@ fn build_classes() -> Vec<OpClass> {
             if analysis::is_load(op) || analysis::is_store(op) {
                 flags |= F_LS | F_MEM;
             }
+            if info.ext == Some(crate::ext::Extension::Gather) {
+                flags |= F_GATHER;
+            }
             if analysis::is_nop(op) {
                 flags |= F_NOP;
             }
             OpClass {
                 regs,
                 flags,
-                latency: info.unit.latency() as u8,
+                latency: info.latency() as u8,
                 unit: info.unit,
             }
         })
@@ -306,6 +318,9 @@ pub struct Timing {
     /// Nothing issues before this cycle after a double-precision instruction (R3).
     dp_until: u64,
     hint: HintEntry,
+    /// The other entries of a `multihint` branch target buffer (`hint_entries - 1` at most,
+    /// newest first; `hint` is the newest of all). Always empty with one entry.
+    more_hints: Vec<HintEntry>,
     /// Executed instructions so far.
     index: u64,
     fetch: Fetch,
@@ -346,8 +361,12 @@ impl Fetch {
 }
 
 impl Timing {
-    /// A model at cycle 0 with every register ready, using `config`.
-    pub fn new(config: TimingConfig) -> Self {
+    /// A model at cycle 0 with every register ready, using `config` (without the block
+    /// memo when the branch target buffer has more than one entry: the memo's record
+    /// holds one hint entry, so the model times every instruction itself, exactly).
+    pub fn new(mut config: TimingConfig) -> Self {
+        config.hint_entries = config.hint_entries.clamp(1, crate::ext::MAX_HINT_ENTRIES);
+        config.memoize &= config.hint_entries == 1;
         Timing {
             config,
             classes: classes(),
@@ -378,6 +397,7 @@ impl Timing {
                 issued: 0,
                 index: 0,
             },
+            more_hints: Vec::new(),
             index: 0,
             fetch: Fetch::new(),
             profile: Profile::new(),
@@ -452,10 +472,15 @@ impl Timing {
         let mut hinted: Option<u32> = None;
         let mut hint_ready = 0u64;
         if flags & F_BRANCH != 0 {
-            let h = &self.hint;
-            if h.valid
-                && h.branch == pc
-                && self.index - h.index >= self.config.hint_min_distance as u64
+            // With several entries, the one naming this branch (at most one does); each
+            // entry has its own distance and window.
+            let h = if self.hint.branch == pc {
+                Some(&self.hint)
+            } else {
+                self.more_hints.iter().find(|h| h.branch == pc)
+            };
+            if let Some(h) = h
+                .filter(|h| h.valid && self.index - h.index >= self.config.hint_min_distance as u64)
             {
                 hinted = Some(h.target);
                 hint_ready = h.issued + self.config.hint_window as u64;
@@ -564,6 +589,13 @@ impl Timing {
                 // hbrp takes its own local-store cycle for the inline prefetch (R8).
                 self.fetch.pending = false;
                 self.fetch.next_ready = issue + self.config.fetch_latency as u64;
+            } else if flags & F_GATHER != 0 {
+                // A gather's four reads take the cycles from its issue on.
+                let end = issue + crate::ext::GATHER_LS_CYCLES as u64;
+                if (issue..end).contains(&self.fetch.probe) {
+                    self.profile.totals.ls_contention += end - self.fetch.probe;
+                    self.fetch.probe = end;
+                }
             } else if flags & F_LS != 0 && self.fetch.probe == issue {
                 // This load/store/hint takes the cycle; the prefetch waits.
                 self.fetch.probe = issue + 1;
@@ -582,16 +614,20 @@ impl Timing {
         if flags & F_FPD != 0 {
             self.dp_until = issue + 1 + self.config.dp_issue_block as u64;
         }
+        if flags & F_GATHER != 0 {
+            // The local store is busy with the gather's reads: nothing issues meanwhile.
+            self.dp_until = issue + crate::ext::GATHER_LS_CYCLES as u64;
+        }
         let hbrp = is_hbrp(inst);
         if flags & F_HINT != 0 && !hbrp {
             // hbra/hbrr name their target; hbr's comes through the `hint` hook.
-            self.hint = HintEntry {
+            self.set_hint(HintEntry {
                 valid: true,
                 branch: hint_branch_address(pc, inst),
                 target: hint_static_target(pc, inst).unwrap_or(UNKNOWN_TARGET),
                 issued: issue,
                 index: self.index,
-            };
+            });
         }
 
         // Counters.
@@ -744,13 +780,30 @@ impl Timing {
         } else {
             (self.now, self.index)
         };
-        self.hint = HintEntry {
+        self.set_hint(HintEntry {
             valid: true,
             branch: branch & 0x3_ffff,
             target: target & 0x3_ffff,
             issued,
             index,
-        };
+        });
+    }
+
+    /// Fills a hint entry: the real SPU's one entry is replaced; a `multihint` buffer
+    /// replaces the entry of the same branch, or else its oldest-filled one once full.
+    #[inline]
+    fn set_hint(&mut self, new: HintEntry) {
+        let others = self.config.hint_entries as usize - 1;
+        if others == 0 {
+            self.hint = new;
+            return;
+        }
+        let old = std::mem::replace(&mut self.hint, new);
+        self.more_hints.retain(|h| h.branch != new.branch);
+        if old.valid && old.branch != new.branch {
+            self.more_hints.insert(0, old);
+            self.more_hints.truncate(others);
+        }
     }
 
     /// The instruction just issued at `pc` could not complete before cycle `until` because

@@ -30,6 +30,9 @@ pub struct ContextConfig {
     /// Compiled blocks shared with other contexts (and other systems): a block is
     /// compiled once for every context running the same code. `None`: the context's own.
     pub code: Option<CodeCache>,
+    /// The ISA extensions the context decodes and times (`docs/extensions.md`); none
+    /// by default, as on the real SPU.
+    pub extensions: spu_isa::Extensions,
 }
 
 /// When quanta end. Within a quantum every SPU runs on its own; main-memory writes and
@@ -211,6 +214,7 @@ impl System {
         let mut spu = Spu::new(id.0 as u32);
         spu.host_feeds = true;
         spu.set_engine(config.engine);
+        spu.set_extensions(config.extensions);
         if let Some(code) = &config.code {
             spu.share_code(code);
         }
@@ -622,6 +626,7 @@ loop:   a       $12, $12, $20
                     engine,
                     timing: timing.then(TimingConfig::default),
                     code: None,
+                    extensions: Default::default(),
                 });
                 let start = Start::Api {
                     argp: 0x10 * i,
