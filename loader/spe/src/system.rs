@@ -484,7 +484,14 @@ impl System {
                 return Ok(Next::Done);
             }
             let until = match quantum {
-                Quantum::Aligned(n) => now.saturating_add(n.max(1)).min(max_cycles),
+                Quantum::Aligned(n) => {
+                    let until = now.saturating_add(n.max(1));
+                    if until > max_cycles {
+                        outcome = Outcome::CycleLimit;
+                        return Ok(Next::Done);
+                    }
+                    until
+                }
                 Quantum::FromSlowest(n) => slowest.saturating_add(n.max(1)).min(max_cycles),
             };
             *now = until;
