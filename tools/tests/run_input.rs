@@ -114,6 +114,28 @@ fn an_empty_file_is_refused() {
 }
 
 #[test]
+fn a_relocatable_object_is_refused_until_linked() {
+    let d = dir("object");
+    let source = write(&d, "p.s", "_start: nop\n stop 0x2005\n");
+    let object = d.join("p.o").display().to_string();
+    let (status, _, stderr) = spu(&["as", "-c", &source, "-o", &object]);
+    assert_eq!(status, 0, "{stderr}");
+    let (status, _, stderr) = spu(&["run", &object]);
+    assert_eq!(status, 2, "{stderr}");
+    assert_eq!(
+        stderr,
+        format!(
+            "spu: {object}: a relocatable object, not an SPU program: link it first (spu ld \
+             OBJ.o -o PROG)\n"
+        )
+    );
+    let program = d.join("p.elf").display().to_string();
+    let (status, _, stderr) = spu(&["ld", &object, "-o", &program]);
+    assert_eq!(status, 0, "{stderr}");
+    assert_eq!(spu(&["run", "-q", &program]).0, 5);
+}
+
+#[test]
 fn text_given_as_an_image_is_refused() {
     let d = dir("text");
     let source = "_start:\n\tstop 0x2000\n";

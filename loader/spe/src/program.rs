@@ -41,6 +41,23 @@ impl Program {
             return Err(LoadError("an empty file: nothing to run".into()));
         }
         let elf = read_elf(bytes).map_err(LoadError)?;
+        // e_type: only an executable has its addresses settled; an object's are not.
+        match bytes.get(16..18).map(|t| u16::from_be_bytes([t[0], t[1]])) {
+            Some(2) => {}
+            Some(1) => {
+                return Err(LoadError(
+                    "a relocatable object, not an SPU program: link it first (spu ld OBJ.o \
+                     -o PROG)"
+                        .into(),
+                ))
+            }
+            other => {
+                return Err(LoadError(format!(
+                    "ELF type {} is not an executable (ET_EXEC)",
+                    other.unwrap_or(0)
+                )))
+            }
+        }
         let mut spans: Vec<(u64, u64)> = Vec::new();
         for (addr, data) in &elf.segments {
             let (start, end) = (*addr as u64, *addr as u64 + data.len() as u64);
