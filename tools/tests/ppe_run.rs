@@ -103,7 +103,7 @@ fn dump_entry_shows_the_start_state() {
     assert_eq!(
         out,
         "entry registers (all others zero):\n\
-         $1: 0003ffd0 0003ffc0 00000000 00000000\n\
+         $1: 0003ffd0 0003ff50 00000000 00000000\n\
          $3: 00000002 00000000 00000000 00000000\n\
          $4: 0003ffe0 00000000 000fff80 00000020\n\
          argv region: 32 bytes at local store 0x3ffe0, main memory 0xfff80\n\
@@ -782,9 +782,17 @@ fn time_is_the_simulated_clock() {
     );
     let d = dir("time");
     build(&d, &source);
-    for mode in [["--engine", "interp"], ["--engine", "jit"], ["--engine", "interp"]] {
+    for mode in [
+        ["--engine", "interp"],
+        ["--engine", "jit"],
+        ["--engine", "interp"],
+    ] {
         let (out, err, code) = spu(&["run", "-q", mode[0], mode[1], "prog.elf"], &d);
-        assert_eq!((out.as_str(), err.as_str(), code), (WANT_TIME, "", 0), "{mode:?}");
+        assert_eq!(
+            (out.as_str(), err.as_str(), code),
+            (WANT_TIME, "", 0),
+            "{mode:?}"
+        );
     }
     let (out, err, code) = spu(&["run", "-q", "--timing", "prog.elf"], &d);
     assert_eq!((out.as_str(), err.as_str(), code), (WANT_TIMED, "", 0));
