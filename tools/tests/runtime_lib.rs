@@ -534,19 +534,19 @@ fn conversion_program(cases: &[(u64, u32)]) -> String {
     conversion_program_calling(
         &table,
         cases.len(),
-        ["__fixdfsi", "__fixunsdfsi", "__floatsidf", "__float_unssidf"],
+        [
+            "__fixdfsi",
+            "__fixunsdfsi",
+            "__floatsidf",
+            "__float_unssidf",
+        ],
         "%x %x %llx %llx",
     )
 }
 
 /// main: for each quadword of `table` ({double, integer}), calls the four helpers named
 /// (two taking the double, two the integer) and prints their results with `format`.
-fn conversion_program_calling(
-    table: &str,
-    n: usize,
-    calls: [&str; 4],
-    format: &str,
-) -> String {
+fn conversion_program_calling(table: &str, n: usize, calls: [&str; 4], format: &str) -> String {
     let [f0, f1, f2, f3] = calls;
     format!(
         r#"
@@ -736,7 +736,12 @@ fn wide_conversion_program(cases: &[(u64, u64)]) -> String {
     conversion_program_calling(
         &table,
         cases.len(),
-        ["__fixdfdi", "__fixunsdfdi", "__floatdidf", "__float_unsdidf"],
+        [
+            "__fixdfdi",
+            "__fixunsdfdi",
+            "__floatdidf",
+            "__float_unsdidf",
+        ],
         "%llx %llx %llx %llx",
     )
 }
@@ -826,7 +831,12 @@ fn the_64_bit_conversion_helpers_match_rust() {
         .collect();
     let (out, code) = run("conv64", &wide_conversion_program(&cases));
     for (k, (g, &(d, i))) in out.lines().zip(&cases).enumerate() {
-        assert_eq!(g, wide_conversions(d, i), "case {k}: {:?} {i:#x}", f64::from_bits(d));
+        assert_eq!(
+            g,
+            wide_conversions(d, i),
+            "case {k}: {:?} {i:#x}",
+            f64::from_bits(d)
+        );
     }
     assert_eq!(out.lines().count(), cases.len(), "{out}");
     assert_eq!(code, 0);
