@@ -5,7 +5,8 @@
 
 use crate::archive::Archive;
 use crate::object::{
-    placement, Object, RelocTarget, SymSection, SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE, SHT_NOBITS,
+    placement, Object, RelocTarget, SymSection, DATA_SEGMENT_ALIGN, SHF_ALLOC, SHF_EXECINSTR,
+    SHF_WRITE, SHT_NOBITS,
 };
 use std::collections::{HashMap, HashSet};
 
@@ -240,7 +241,15 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
     let mut order: Vec<usize> = (0..outs.len()).collect();
     order.sort_by_key(|&k| (placement(&outs[k].name, outs[k].ty, outs[k].flags), k));
     let mut addr = opts.text_addr as u64;
+    // GNU ld's `. = DATA_ADDR` after the read-only sections: the first writable section
+    // starts there, and `_edata` and `_end` stand past it even when there is none.
+    let mut data_start = None;
     for (n, &k) in order.iter().enumerate() {
+        let class = placement(&outs[k].name, outs[k].ty, outs[k].flags).0;
+        if data_start.is_none() && matches!(class, 2 | 3) {
+            addr = addr.next_multiple_of(DATA_SEGMENT_ALIGN as u64);
+            data_start = Some(addr);
+        }
         let a = outs[k].align.max(16) as u64;
         if n > 0 || !addr.is_multiple_of(a) {
             addr = addr.div_ceil(a) * a;
@@ -248,6 +257,7 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         outs[k].addr = addr.min(u32::MAX as u64) as u32;
         addr += outs[k].size as u64;
     }
+    let data_start = data_start.unwrap_or_else(|| addr.next_multiple_of(DATA_SEGMENT_ALIGN as u64));
     // Overlaps and the local store.
     for (i, a) in outs.iter().enumerate() {
         let a_end = a.addr as u64 + a.size as u64;
@@ -295,7 +305,9 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             .max()
     };
     let etext = end_of(&|x| x.flags & SHF_EXECINSTR != 0).unwrap_or(opts.text_addr as u64);
-    let edata = end_of(&|x| x.ty != SHT_NOBITS).unwrap_or(opts.text_addr as u64);
+    let edata = end_of(&|x| x.ty != SHT_NOBITS)
+        .unwrap_or(opts.text_addr as u64)
+        .max(data_start);
     let script: HashMap<&str, u64> = [
         ("_edata", edata),
         ("__bss_start", edata),

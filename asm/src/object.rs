@@ -38,6 +38,10 @@ pub enum RelocTarget {
     Symbol(String),
 }
 
+/// Where the data segment (the first writable section, data or bss) starts: GNU ld's SPU
+/// script sets `DATA_ADDR` to `ALIGN(MAXPAGESIZE)`, 0x80, after the read-only sections.
+pub(crate) const DATA_SEGMENT_ALIGN: u32 = 0x80;
+
 /// Where a section goes in local store (sorted by this, then by first appearance), for
 /// the linker's output sections and the assembler's executables alike: the
 /// order of GNU ld's SPU script (`.interrupt`, `.init`, `.text`, `.fini`, read-only

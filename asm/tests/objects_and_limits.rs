@@ -127,7 +127,40 @@ fn linked_objects_equal_one_assembly() {
     .unwrap();
     assert_eq!(moved.entry, 0x110);
     assert_eq!(&moved.image[0x100..0x104], &out.image[0..4]); // brsl is relative
-    assert_eq!(&moved.image[0x104..0x108], &0x4200_9004u32.to_be_bytes()); // ila $4,0x120
+                                                              // ila $4,0x180: the data segment starts at ALIGN(0x80) past the text (0x118), as in
+                                                              // GNU ld.
+    assert_eq!(&moved.image[0x104..0x108], &0x4200_c004u32.to_be_bytes());
+}
+
+/// The data segment starts as GNU ld's SPU script starts it, at `ALIGN(0x80)` past the
+/// read-only sections (`DATA_ADDR`), in `spu ld` and single-source `spu as` alike; bss
+/// follows the data at its own alignment; `_edata` and `_end` stand at that boundary even
+/// when a program has no data at all.
+#[test]
+fn the_data_segment_starts_at_align_0x80() {
+    let src = "\t.text\n\t.global _start\n_start:\tila\t$3, tab\n\tila\t$4, _edata\n\tila\t$5, _end\n\tstop\t0x2000\n\t.section .rodata\nro:\t.long\t1\n\t.data\ntab:\t.long\t2\n\t.bss\nb:\t.space\t4\n";
+    let linked = link(&[object(src)], &LinkOptions::default()).unwrap();
+    let at = |n: &str| linked.symbols.iter().find(|s| s.0 == n).unwrap().1;
+    let sect = |n: &str| linked.sections.iter().find(|s| s.0 == n).unwrap().1;
+    // text 0..0x10, .rodata at 0x10 (4 bytes), then data at 0x80 (not 0x20).
+    assert_eq!(
+        (sect(".rodata"), sect(".data"), sect(".bss")),
+        (0x10, 0x80, 0x90)
+    );
+    assert_eq!((at("tab"), at("_edata"), at("_end")), (0x80, 0x84, 0xa0));
+    // One source assembled as an executable lays out the same (it defines no script
+    // symbols, so they are left out of it).
+    let plain = src.replace("_edata", "0").replace("_end", "0");
+    let one = assemble(&plain, "one.s", &Options::default()).unwrap();
+    let linked = link(&[object(&plain)], &LinkOptions::default()).unwrap();
+    assert_eq!(one.image, linked.image);
+    assert_eq!(&one.image[0x80..0x84], &2u32.to_be_bytes());
+    // No data: `_edata` and `_end` at the aligned boundary past the text.
+    let bare =
+        "\t.text\n\t.global _start\n_start:\tila\t$4, _edata\n\tila\t$5, _end\n\tstop\t0x2000\n";
+    let linked = link(&[object(bare)], &LinkOptions::default()).unwrap();
+    let at = |n: &str| linked.symbols.iter().find(|s| s.0 == n).unwrap().1;
+    assert_eq!((at("_edata"), at("_end")), (0x80, 0x80));
 }
 
 #[test]

@@ -10,8 +10,8 @@ here:	.byte v
 	.long here
 	.endm
 	.data
-	emit %1+2, <ab>			# => 03616200000010
-	emit <4>, <x!>y>		# => 04783e7900000017
+	emit %1+2, <ab>			# => 03616200000080
+	emit <4>, <x!>y>		# => 04783e7900000087
 	.noaltmacro
 	.macro plain v
 	.byte \v

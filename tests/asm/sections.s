@@ -12,11 +12,11 @@ start:	il $3,1			# => 40800083
 	il $7,5			# => 40800287
 	.p2align 4,,8		# => 40200000 00200000
 	.balign 16		/* already aligned, so no bytes */
-	# Executable layout as GNU ld's default script: code, then .rodata, .data and
-	# .bss, each at its alignment (at least 16): .rodata at 0x40, .data at 0x50,
-	# .bss at 0x70.
-	ila $6,dval		# => 42002806
-	ila $7,bval		# => 42003807
+	# Executable layout as GNU ld's SPU script: code, then .rodata, then the data
+	# segment from ALIGN(0x80), .data and .bss, each at its alignment (at least 16):
+	# .rodata at 0x40, .data at 0x80, .bss at 0xa0.
+	ila $6,dval		# => 42004006
+	ila $7,bval		# => 42005007
 	ila $8,rval		# => 42002008
 	.data
 dval:	.byte 1			# => 01

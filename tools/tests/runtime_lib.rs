@@ -531,10 +531,27 @@ fn conversion_program(cases: &[(u64, u32)]) -> String {
         )
         .unwrap();
     }
+    conversion_program_calling(
+        &table,
+        cases.len(),
+        [
+            "__fixdfsi",
+            "__fixunsdfsi",
+            "__floatsidf",
+            "__float_unssidf",
+        ],
+        "%x %x %llx %llx",
+    )
+}
+
+/// main: for each quadword of `table` ({double, integer}), calls the four helpers named
+/// (two taking the double, two the integer) and prints their results with `format`.
+fn conversion_program_calling(table: &str, n: usize, calls: [&str; 4], format: &str) -> String {
+    let [f0, f1, f2, f3] = calls;
     format!(
         r#"
         .section .rodata
-.Lfmt:  .string "%x %x %llx %llx\n"
+.Lfmt:  .string "{format}\n"
         .align  4
 .Lcases:
 {table}
@@ -554,18 +571,18 @@ main:   stqd    $lr, 16($sp)
         il      $81, {n}
 1:      brz     $81, 2f
         lqd     $3, 0($80)
-        brsl    $lr, __fixdfsi
+        brsl    $lr, {f0}
         ori     $82, $3, 0
         lqd     $3, 0($80)
-        brsl    $lr, __fixunsdfsi
+        brsl    $lr, {f1}
         ori     $83, $3, 0
         lqd     $3, 0($80)
         rotqbyi $3, $3, 8
-        brsl    $lr, __floatsidf
+        brsl    $lr, {f2}
         ori     $84, $3, 0
         lqd     $3, 0($80)
         rotqbyi $3, $3, 8
-        brsl    $lr, __float_unssidf
+        brsl    $lr, {f3}
         ori     $85, $3, 0
         ila     $3, .Lfmt
         ori     $4, $82, 0
@@ -588,7 +605,6 @@ main:   stqd    $lr, 16($sp)
         bi      $lr
         .size   main, .-main
 "#,
-        n = cases.len()
     )
 }
 
@@ -699,6 +715,130 @@ fn the_conversion_helpers_match_rust() {
         assert_eq!(g, &w, "case {k}: {:?}", f64::from_bits(cases[k].0));
     }
     assert_eq!(out, want);
+    assert_eq!(code, 0);
+}
+
+/// main: for each entry {double, long long} of `.Lcases`, the four 64-bit conversions,
+/// printed as bits.
+fn wide_conversion_program(cases: &[(u64, u64)]) -> String {
+    let mut table = String::new();
+    for (d, i) in cases {
+        writeln!(
+            table,
+            "\t.long\t{:#x}, {:#x}, {:#x}, {:#x}",
+            d >> 32,
+            d & 0xffff_ffff,
+            i >> 32,
+            i & 0xffff_ffff
+        )
+        .unwrap();
+    }
+    conversion_program_calling(
+        &table,
+        cases.len(),
+        [
+            "__fixdfdi",
+            "__fixunsdfdi",
+            "__floatdidf",
+            "__float_unsdidf",
+        ],
+        "%llx %llx %llx %llx",
+    )
+}
+
+/// The 64-bit conversions' expected results: truncation with Rust's saturation (NaN 0)
+/// and conversion rounded to nearest even, as Rust's `as` does both.
+fn wide_conversions(d: u64, i: u64) -> String {
+    let x = f64::from_bits(d);
+    format!(
+        "{:x} {:x} {:x} {:x}",
+        x as i64 as u64,
+        x as u64,
+        (i as i64 as f64).to_bits(),
+        (i as f64).to_bits()
+    )
+}
+
+#[test]
+fn the_64_bit_conversion_helpers_match_rust() {
+    let p63 = 9223372036854775808.0f64;
+    let mut doubles: Vec<f64> = vec![
+        0.0,
+        -0.0,
+        0.5,
+        -0.5,
+        1.0,
+        -1.0,
+        -1.5,
+        4294967295.5,
+        4294967296.0,
+        -4294967296.5,
+        9007199254740993.0,
+        p63,
+        -p63,
+        p63 - 1024.0,
+        -(p63 - 1024.0),
+        p63 * 2.0,
+        p63 * 2.0 - 2048.0,
+        p63 * 4.0,
+        -p63 * 2.0,
+        1e300,
+        -1e300,
+        f64::MAX,
+        f64::MIN_POSITIVE,
+        -5e-324,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+        -f64::NAN,
+        f64::from_bits(0x7ff0_0000_0000_0001),
+        123456789.987,
+    ];
+    let edge_ints = [
+        0u64,
+        1,
+        u64::MAX,
+        i64::MAX as u64,
+        i64::MIN as u64,
+        i64::MIN as u64 + 1,
+        (1 << 53) + 1,
+        (1 << 53) - 1,
+        (1 << 54) + 2,
+        (1 << 54) + 6,
+        0xffff_ffff,
+        0x1_0000_0000,
+        0x8000_0000,
+        0xffff_ffff_0000_0000,
+        u64::MAX - 1023,
+        u64::MAX - 1024,
+        0x0020_0000_0000_0401,
+        0x0020_0000_0000_0c01,
+    ];
+    doubles.extend(values(200, 0xfeed_f00d).iter().map(|v| {
+        // Values across the whole 64-bit range, with fractions, both signs, and raw bits.
+        let x = (*v as i64 as f64) / if v % 5 == 0 { 1024.0 } else { 1.0 };
+        if v % 3 == 0 {
+            f64::from_bits(*v)
+        } else {
+            x
+        }
+    }));
+    let ints = values(300, 0x0bad_cafe);
+    let cases: Vec<(u64, u64)> = doubles
+        .iter()
+        .enumerate()
+        .map(|(k, d)| (d.to_bits(), edge_ints.get(k).copied().unwrap_or(ints[k])))
+        .collect();
+    let (out, code) = run("conv64", &wide_conversion_program(&cases));
+    for (k, (g, &(d, i))) in out.lines().zip(&cases).enumerate() {
+        assert_eq!(
+            g,
+            wide_conversions(d, i),
+            "case {k}: {:?} {i:#x}",
+            f64::from_bits(d)
+        );
+    }
+    assert_eq!(out.lines().count(), cases.len(), "{out}");
     assert_eq!(code, 0);
 }
 

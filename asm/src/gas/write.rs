@@ -10,8 +10,8 @@ use super::{Assembler, Diagnostic, Location, Output, Sect, Severity, LOCAL_STORE
 use crate::expr::Val;
 use crate::lex::{display_text, Line};
 use crate::object::{
-    placement, ObjSection, ObjSymbol, Object, Reloc, RelocTarget, SymSection, SHF_ALLOC,
-    SHF_EXECINSTR, SHT_NOBITS,
+    placement, ObjSection, ObjSymbol, Object, Reloc, RelocTarget, SymSection, DATA_SEGMENT_ALIGN,
+    SHF_ALLOC, SHF_EXECINSTR, SHT_NOBITS,
 };
 
 impl Assembler<'_> {
@@ -196,7 +196,8 @@ impl Assembler<'_> {
     }
 
     /// Gives every chunk its address: in an executable, code sections from 0, then
-    /// read-only data, data and bss, each section at its alignment (at least 16) and its
+    /// read-only data, then data from the next multiple of 0x80 (as GNU ld lays them out)
+    /// and bss, each section at its alignment (at least 16) and its
     /// subsections in order; in an object, offsets within each section.
     pub(super) fn lay_out(&mut self) {
         let class = |d: &SectionDef| placement(&d.name, d.ty, d.flags).0;
@@ -206,6 +207,7 @@ impl Assembler<'_> {
             (placement(&def.name, def.ty, def.flags), d)
         });
         let mut addr = 0u32;
+        let mut data_placed = false;
         self.bases.clear();
         for d in order {
             let mut chunks: Vec<Sect> = (0..self.chunks.len())
@@ -217,6 +219,11 @@ impl Assembler<'_> {
                 .map(|c| self.align.get(c).copied().unwrap_or(1))
                 .max()
                 .unwrap_or(1);
+            if !self.object && matches!(class(&self.defs[d]), 2 | 3) && !data_placed {
+                // GNU ld's SPU script starts the data segment at `ALIGN(0x80)`.
+                addr = addr.next_multiple_of(DATA_SEGMENT_ALIGN);
+                data_placed = true;
+            }
             let mut at = if self.object || class(&self.defs[d]) == 4 {
                 0
             } else {

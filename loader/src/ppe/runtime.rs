@@ -48,6 +48,14 @@ pub const SOURCES: &[(&str, &str)] = &[
         "kernels/runtime/divdf3.s",
         include_str!("../../../kernels/runtime/divdf3.s"),
     ),
+    (
+        "kernels/runtime/floatdidf.s",
+        include_str!("../../../kernels/runtime/floatdidf.s"),
+    ),
+    (
+        "kernels/runtime/fixdfdi.s",
+        include_str!("../../../kernels/runtime/fixdfdi.s"),
+    ),
 ];
 
 /// Assembles one runtime source; a failure (a broken runtime) is reported whole.

@@ -98,6 +98,8 @@ pub(crate) fn check(addr: u32, len: u64, what: &str) -> Result<(), Fault> {
 pub(crate) struct Args<'a> {
     pub ls: Ls<'a>,
     pub base: u32,
+    /// The SPU's clock when it stopped (the simulated time `time` and friends answer).
+    pub cycles: u64,
 }
 
 impl Args<'_> {
@@ -158,7 +160,11 @@ impl Host {
         let data = u32::from_be_bytes(data.try_into().unwrap());
         let op = data >> 24;
         let base = data & 0xff_ffff;
-        let args = Args { ls, base };
+        let args = Args {
+            ls,
+            base,
+            cycles: spu.cycles(),
+        };
         let mut writes = Writes::new();
         let reply = match code {
             C99_CLASS => c99::call(self, op, &args, &mut writes)?,

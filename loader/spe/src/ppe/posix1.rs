@@ -181,10 +181,17 @@ fn reply<T>(r: Result<T, i32>, ok: impl FnOnce(T) -> u32) -> Reply {
     }
 }
 
-fn now() -> std::time::Duration {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .unwrap_or_default()
+/// The simulated clock's rate: the Cell's SPU clock, 3.2 GHz.
+pub const CLOCK_HZ: u64 = 3_200_000_000;
+
+/// The simulated wall clock a program sees through `time` and `gettimeofday`: 1970-01-01
+/// 00:00:00 UTC (the Unix epoch, time 0) when the program was loaded, plus the SPU's
+/// elapsed cycles at [`CLOCK_HZ`]. Never the host's clock, so a program's output is the
+/// same on every run and every engine. Returns (seconds, microseconds).
+pub fn simulated_time(cycles: u64) -> (u32, u32) {
+    let secs = cycles / CLOCK_HZ;
+    let micros = (cycles % CLOCK_HZ) / (CLOCK_HZ / 1_000_000);
+    (secs as u32, micros as u32)
 }
 
 /// Serves POSIX.1 opcode `op`.
@@ -249,9 +256,9 @@ pub fn call(host: &mut Host, op: u32, a: &Args, w: &mut Writes) -> Result<Option
             let tv = a.word(0)?;
             if tv != 0 {
                 super::check(tv, 8, "gettimeofday's timeval")?;
-                let t = now();
-                let mut b = (t.as_secs() as u32).to_be_bytes().to_vec();
-                b.extend_from_slice(&t.subsec_micros().to_be_bytes());
+                let (secs, micros) = simulated_time(a.cycles);
+                let mut b = secs.to_be_bytes().to_vec();
+                b.extend_from_slice(&micros.to_be_bytes());
                 w.push((tv, b));
             }
             Reply::ok(0)
@@ -370,7 +377,7 @@ pub fn call(host: &mut Host, op: u32, a: &Args, w: &mut Writes) -> Result<Option
         // time(t)
         31 => {
             let t = a.word(0)?;
-            let secs = now().as_secs() as u32;
+            let secs = simulated_time(a.cycles).0;
             if t != 0 {
                 super::check(t, 4, "time's result")?;
                 w.push((t, secs.to_be_bytes().to_vec()));
@@ -412,5 +419,19 @@ impl CloseExt for Reply {
             fds.table.remove(&fd);
         }
         self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_simulated_clock_counts_cycles_at_3_2_ghz_from_the_epoch() {
+        assert_eq!(simulated_time(0), (0, 0));
+        assert_eq!(simulated_time(3199), (0, 0));
+        assert_eq!(simulated_time(3200), (0, 1));
+        assert_eq!(simulated_time(5 * CLOCK_HZ + 7 * 3200 + 3199), (5, 7));
+        assert_eq!(simulated_time(2 * CLOCK_HZ - 1), (1, 999_999));
     }
 }
