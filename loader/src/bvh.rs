@@ -515,7 +515,15 @@ fn build_recursive(
     let extent = cmax - cmin;
     let leaf_cost = config.intersection_cost * count as f32;
     let split = if depth < SAH_DEPTH_LIMIT && extent.max_element() > 0.0 {
-        best_binned_split(primitives, config, order, (min, max), cmin, extent, data_parallel)
+        best_binned_split(
+            primitives,
+            config,
+            order,
+            (min, max),
+            cmin,
+            extent,
+            data_parallel,
+        )
     } else {
         None
     };
@@ -547,7 +555,8 @@ fn build_recursive(
     };
 
     let (left_order, right_order) = order.split_at_mut(mid);
-    let mut left = move || build_recursive(primitives, config, left_order, start, depth + 1, parallel);
+    let mut left =
+        move || build_recursive(primitives, config, left_order, start, depth + 1, parallel);
     let mut right = move || {
         build_recursive(
             primitives,
@@ -826,7 +835,10 @@ pub(crate) mod tests {
         for threads in [2, 3, 8] {
             let other = build(threads);
             assert_eq!(one.nodes, other.nodes, "{threads} threads");
-            assert_eq!(one.triangle_order, other.triangle_order, "{threads} threads");
+            assert_eq!(
+                one.triangle_order, other.triangle_order,
+                "{threads} threads"
+            );
             assert_eq!(one.sah_cost.to_bits(), other.sah_cost.to_bits());
         }
     }

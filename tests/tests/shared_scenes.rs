@@ -143,6 +143,9 @@ fn a_real_scene_builds_the_same_hierarchy_on_any_thread_count() {
     for threads in [2, 5] {
         let other = build(threads);
         assert_eq!(one.nodes, other.nodes, "{threads} threads");
-        assert_eq!(one.triangle_order, other.triangle_order, "{threads} threads");
+        assert_eq!(
+            one.triangle_order, other.triangle_order,
+            "{threads} threads"
+        );
     }
 }
