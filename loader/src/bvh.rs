@@ -217,8 +217,8 @@ fn packet_area(min: Vec3A, max: Vec3A, growth: Vec3A) -> f32 {
 }
 
 /// Subtrees smaller than this are built on the thread that reached them (a rayon task
-/// costs about a microsecond; a subtree of 4096 triangles takes about a millisecond).
-const PARALLEL_THRESHOLD: usize = 4096;
+/// costs microseconds; a subtree of 16384 triangles takes milliseconds).
+const PARALLEL_THRESHOLD: usize = 16 * 1024;
 
 /// Triangles per task where a node bins and bounds its triangles in parallel (nodes of
 /// fewer than twice this do it on one thread).
@@ -295,21 +295,41 @@ impl Bvh {
         let boxes = |index: usize| {
             let [a, b, c] = scene.triangle_positions(index).map(Vec3A::from);
             let (min, max) = (a.min(b).min(c), a.max(b).max(c));
-            (min, max, (min + max) * 0.5)
+            (min, (max, (min + max) * 0.5))
         };
-        let triangle_boxes: Vec<(Vec3A, Vec3A, Vec3A)> = if parallel {
+        let (mut min, mut max, mut centroid) = (
+            vec![Vec3A::ZERO; n],
+            vec![Vec3A::ZERO; n],
+            vec![Vec3A::ZERO; n],
+        );
+        let fill = |(first, ((min, max), centroid)): (
+            usize,
+            ((&mut [Vec3A], &mut [Vec3A]), &mut [Vec3A]),
+        )| {
+            for (i, ((min, max), centroid)) in min.iter_mut().zip(max).zip(centroid).enumerate() {
+                (*min, (*max, *centroid)) = boxes(first * PARALLEL_CHUNK + i);
+            }
+        };
+        if parallel {
             use rayon::prelude::*;
-            (0..n).into_par_iter().map(boxes).collect()
+            min.par_chunks_mut(PARALLEL_CHUNK)
+                .zip(max.par_chunks_mut(PARALLEL_CHUNK))
+                .zip(centroid.par_chunks_mut(PARALLEL_CHUNK))
+                .enumerate()
+                .for_each(fill);
         } else {
-            (0..n).map(boxes).collect()
-        };
+            min.chunks_mut(PARALLEL_CHUNK)
+                .zip(max.chunks_mut(PARALLEL_CHUNK))
+                .zip(centroid.chunks_mut(PARALLEL_CHUNK))
+                .enumerate()
+                .for_each(fill);
+        }
         let mut primitives = Primitives {
-            min: triangle_boxes.iter().map(|b| b.0).collect(),
-            max: triangle_boxes.iter().map(|b| b.1).collect(),
-            centroid: triangle_boxes.iter().map(|b| b.2).collect(),
+            min,
+            max,
+            centroid,
             growth: Vec3A::ZERO,
         };
-        drop(triangle_boxes);
         let (scene_min, scene_max) = primitives.min.iter().zip(&primitives.max).fold(
             (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
             |(lo, hi), (&min, &max)| (lo.min(min), hi.max(max)),
