@@ -302,10 +302,9 @@ impl Bvh {
             vec![Vec3A::ZERO; n],
             vec![Vec3A::ZERO; n],
         );
-        let fill = |(first, ((min, max), centroid)): (
-            usize,
-            ((&mut [Vec3A], &mut [Vec3A]), &mut [Vec3A]),
-        )| {
+        // one chunk's boxes: its number, and its minima, maxima and centroids
+        type Chunk<'a> = (usize, ((&'a mut [Vec3A], &'a mut [Vec3A]), &'a mut [Vec3A]));
+        let fill = |(first, ((min, max), centroid)): Chunk| {
             for (i, ((min, max), centroid)) in min.iter_mut().zip(max).zip(centroid).enumerate() {
                 (*min, (*max, *centroid)) = boxes(first * PARALLEL_CHUNK + i);
             }

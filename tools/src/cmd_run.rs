@@ -262,7 +262,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     let spu = system.spu_mut(id);
     let out_mbox = spu.read_outbound_mailbox();
     if args.json {
-        json_report(&spu, &stop, out_mbox, &dumps)?;
+        json_report(spu, &stop, out_mbox, &dumps)?;
     } else {
         if !args.quiet {
             outln!("stopped: {}", describe(&stop));
