@@ -274,8 +274,9 @@ impl Bvh {
             ..*config
         };
         if config.threads > 1 {
-            // A pool of exactly `threads` (not rayon's global one, sized by the host), so
-            // that `--threads` bounds the build as it bounds the frame.
+            // A pool of exactly `threads`, not rayon's global one (sized by the host), so
+            // that the caller's thread count holds; a pool that cannot start (no threads
+            // left) builds on this thread, with the same result.
             if let Ok(pool) = rayon::ThreadPoolBuilder::new()
                 .num_threads(config.threads)
                 .thread_name(|i| format!("bvh-{i}"))
@@ -304,9 +305,9 @@ impl Bvh {
         );
         // one chunk's boxes: its number, and its minima, maxima and centroids
         type Chunk<'a> = (usize, ((&'a mut [Vec3A], &'a mut [Vec3A]), &'a mut [Vec3A]));
-        let fill = |(first, ((min, max), centroid)): Chunk| {
+        let fill = |(chunk, ((min, max), centroid)): Chunk| {
             for (i, ((min, max), centroid)) in min.iter_mut().zip(max).zip(centroid).enumerate() {
-                (*min, (*max, *centroid)) = boxes(first * PARALLEL_CHUNK + i);
+                (*min, (*max, *centroid)) = boxes(chunk * PARALLEL_CHUNK + i);
             }
         };
         if parallel {
