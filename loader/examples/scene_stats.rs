@@ -1,7 +1,10 @@
 //! Loads (or generates) scenes and reports load, BVH build and reference render times — the
 //! figures quoted for the host side. Run in release:
 //!
-//! `cargo run --release -p spu-loader --example scene_stats -- [room|conference|beetle|PATH]... [--render N] [--png DIR]`
+//! `cargo run --release -p spu-loader --example scene_stats -- [room|conference|beetle|PATH]... [--render N] [--png DIR] [--bvh-threads 1,2,...]`
+//!
+//! `--bvh-threads` also times the BVH build on each of those thread counts (the median of 7
+//! builds), the benchmark of the parallel build (docs/parallel.md).
 //!
 //! `--png DIR` also writes each reference eye-light image as `DIR/<scene>.png` (grayscale), to
 //! eyeball the default cameras.
@@ -29,6 +32,14 @@ fn main() {
             render_size = 512;
         }
     }
+    let mut bvh_threads: Vec<usize> = Vec::new();
+    if let Some(i) = args.iter().position(|a| a == "--bvh-threads") {
+        bvh_threads = args
+            .get(i + 1)
+            .map(|list| list.split(',').filter_map(|n| n.parse().ok()).collect())
+            .unwrap_or_default();
+        args.drain(i..(i + 2).min(args.len()));
+    }
     if args.is_empty() {
         args = vec!["room".into(), "conference".into(), "beetle".into()];
     }
@@ -48,6 +59,25 @@ fn main() {
         let start = Instant::now();
         let bvh = Bvh::build(&scene, &BvhConfig::default());
         let build = start.elapsed();
+        for &threads in &bvh_threads {
+            let config = BvhConfig {
+                threads,
+                ..BvhConfig::default()
+            };
+            let mut seconds: Vec<f64> = (0..7)
+                .map(|_| {
+                    let start = Instant::now();
+                    let again = Bvh::build(&scene, &config);
+                    assert_eq!(again.nodes, bvh.nodes, "{threads} threads");
+                    start.elapsed().as_secs_f64()
+                })
+                .collect();
+            seconds.sort_by(f64::total_cmp);
+            println!(
+                "{name}: BVH build on {threads} thread(s): median {:.3} s (min {:.3}, max {:.3}, 7 builds)",
+                seconds[3], seconds[0], seconds[6]
+            );
+        }
         let stats = bvh.stats();
         let start = Instant::now();
         let staged = StagedScene::new(&scene, &bvh, 0x10_0000).expect("staging");

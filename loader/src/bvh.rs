@@ -36,9 +36,14 @@
 //! centroid axis instead, which bounds the depth by `SAH_DEPTH_LIMIT + log2(N)` — the kernels'
 //! traversal stack can be sized from [`Bvh::max_depth`].
 //!
-//! The top levels build their two subtrees on separate threads (`std::thread::scope`); every
-//! subtree is a pure function of its triangle set, and the flat array is laid out afterwards
-//! in one deterministic pass, so the result is bit-identical whatever the thread count.
+//! With more than one thread ([`BvhConfig::threads`]) the build runs on a rayon pool of
+//! that many threads: large nodes bin and bound their triangles in parallel chunks, and the
+//! two subtrees of a large node are built as a `rayon::join` (work stealing keeps both cores
+//! busy where the halves are uneven, which a fixed split of the top levels did not). Bins and
+//! bounds are minima, maxima and integer counts, which come out the same in any order; the
+//! partition of a node stays one sequential pass; every subtree is a pure function of its
+//! triangle set, and the flat array is laid out afterwards in one deterministic pass. So the
+//! result is bit-identical whatever the thread count.
 //!
 //! # Flat layout
 //!
@@ -211,8 +216,54 @@ fn packet_area(min: Vec3A, max: Vec3A, growth: Vec3A) -> f32 {
     }
 }
 
-/// Subtrees smaller than this are not worth a thread.
-const PARALLEL_THRESHOLD: usize = 20_000;
+/// Subtrees smaller than this are built on the thread that reached them (a rayon task
+/// costs microseconds; a subtree of 16384 triangles takes milliseconds).
+const PARALLEL_THRESHOLD: usize = 16 * 1024;
+
+/// Triangles per task where a node bins and bounds its triangles in parallel (nodes of
+/// fewer than twice this do it on one thread).
+const PARALLEL_CHUNK: usize = 16 * 1024;
+
+/// A node's box and its triangles' centroids' box.
+#[derive(Clone, Copy)]
+struct Bounds {
+    min: Vec3A,
+    max: Vec3A,
+    cmin: Vec3A,
+    cmax: Vec3A,
+}
+
+impl Bounds {
+    const EMPTY: Bounds = Bounds {
+        min: Vec3A::splat(f32::INFINITY),
+        max: Vec3A::splat(f32::NEG_INFINITY),
+        cmin: Vec3A::splat(f32::INFINITY),
+        cmax: Vec3A::splat(f32::NEG_INFINITY),
+    };
+
+    fn of(primitives: &Primitives, order: &[u32]) -> Bounds {
+        order.iter().fold(Bounds::EMPTY, |b, &t| {
+            let t = t as usize;
+            Bounds {
+                min: b.min.min(primitives.min[t]),
+                max: b.max.max(primitives.max[t]),
+                cmin: b.cmin.min(primitives.centroid[t]),
+                cmax: b.cmax.max(primitives.centroid[t]),
+            }
+        })
+    }
+
+    /// The bounds of both: minima and maxima of finite coordinates (a scene's are checked
+    /// finite), the same in whatever order chunks are joined.
+    fn union(a: Bounds, b: Bounds) -> Bounds {
+        Bounds {
+            min: a.min.min(b.min),
+            max: a.max.max(b.max),
+            cmin: a.cmin.min(b.cmin),
+            cmax: a.cmax.max(b.cmax),
+        }
+    }
+}
 
 impl Bvh {
     /// Builds the hierarchy over all triangles of `scene`.
@@ -222,21 +273,63 @@ impl Bvh {
             threads: config.threads.max(1),
             ..*config
         };
-        let n = scene.triangles.len();
+        if config.threads > 1 {
+            // A pool of exactly `threads`, not rayon's global one (sized by the host), so
+            // that the caller's thread count holds; a pool that cannot start (no threads
+            // left) builds on this thread, with the same result.
+            if let Ok(pool) = rayon::ThreadPoolBuilder::new()
+                .num_threads(config.threads)
+                .thread_name(|i| format!("bvh-{i}"))
+                .build()
+            {
+                return pool.install(|| Bvh::build_with(scene, &config, true));
+            }
+        }
+        Bvh::build_with(scene, &config, false)
+    }
+
+    /// [`Bvh::build`] with its checked `config`, in parallel (on the current rayon pool)
+    /// where `parallel`.
+    fn build_with(scene: &Scene, config: &BvhConfig, parallel: bool) -> Bvh {
+        let config = *config;
+        let n = scene.triangle_count();
+        let boxes = |index: usize| {
+            let [a, b, c] = scene.triangle_positions(index).map(Vec3A::from);
+            let (min, max) = (a.min(b).min(c), a.max(b).max(c));
+            (min, (max, (min + max) * 0.5))
+        };
+        let (mut min, mut max, mut centroid) = (
+            vec![Vec3A::ZERO; n],
+            vec![Vec3A::ZERO; n],
+            vec![Vec3A::ZERO; n],
+        );
+        // one chunk's boxes: its number, and its minima, maxima and centroids
+        type Chunk<'a> = (usize, ((&'a mut [Vec3A], &'a mut [Vec3A]), &'a mut [Vec3A]));
+        let fill = |(chunk, ((min, max), centroid)): Chunk| {
+            for (i, ((min, max), centroid)) in min.iter_mut().zip(max).zip(centroid).enumerate() {
+                (*min, (*max, *centroid)) = boxes(chunk * PARALLEL_CHUNK + i);
+            }
+        };
+        if parallel {
+            use rayon::prelude::*;
+            min.par_chunks_mut(PARALLEL_CHUNK)
+                .zip(max.par_chunks_mut(PARALLEL_CHUNK))
+                .zip(centroid.par_chunks_mut(PARALLEL_CHUNK))
+                .enumerate()
+                .for_each(fill);
+        } else {
+            min.chunks_mut(PARALLEL_CHUNK)
+                .zip(max.chunks_mut(PARALLEL_CHUNK))
+                .zip(centroid.chunks_mut(PARALLEL_CHUNK))
+                .enumerate()
+                .for_each(fill);
+        }
         let mut primitives = Primitives {
-            min: Vec::with_capacity(n),
-            max: Vec::with_capacity(n),
-            centroid: Vec::with_capacity(n),
+            min,
+            max,
+            centroid,
             growth: Vec3A::ZERO,
         };
-        for index in 0..n {
-            let [a, b, c] = scene.triangle_positions(index).map(Vec3A::from);
-            let min = a.min(b).min(c);
-            let max = a.max(b).max(c);
-            primitives.min.push(min);
-            primitives.max.push(max);
-            primitives.centroid.push((min + max) * 0.5);
-        }
         let (scene_min, scene_max) = primitives.min.iter().zip(&primitives.max).fold(
             (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
             |(lo, hi), (&min, &max)| (lo.min(min), hi.max(max)),
@@ -248,8 +341,6 @@ impl Bvh {
         };
         primitives.growth = Vec3A::splat(0.5 * diagonal * config.packet_footprint.max(0.0));
         let mut order: Vec<u32> = (0..n as u32).collect();
-        let parallel_depth = (usize::BITS - 1 - config.threads.leading_zeros()) as usize
-            + usize::from(!config.threads.is_power_of_two());
         let root = if n == 0 {
             // An inverted (min > max) box that every ray misses: the root of an empty scene.
             // Its count is 0, so it reads as an inner node, but it is never entered.
@@ -260,7 +351,7 @@ impl Bvh {
                 count: 0,
             }
         } else {
-            build_recursive(&primitives, &config, &mut order, 0, 0, parallel_depth)
+            build_recursive(&primitives, &config, &mut order, 0, 0, parallel)
         };
 
         let mut nodes = vec![BvhNode::empty(); 2];
@@ -413,20 +504,24 @@ fn build_recursive(
     order: &mut [u32],
     start: usize,
     depth: usize,
-    parallel_depth: usize,
+    parallel: bool,
 ) -> BuildNode {
     let count = order.len();
-    let mut min = Vec3A::splat(f32::INFINITY);
-    let mut max = Vec3A::splat(f32::NEG_INFINITY);
-    let mut cmin = Vec3A::splat(f32::INFINITY);
-    let mut cmax = Vec3A::splat(f32::NEG_INFINITY);
-    for &t in order.iter() {
-        let t = t as usize;
-        min = min.min(primitives.min[t]);
-        max = max.max(primitives.max[t]);
-        cmin = cmin.min(primitives.centroid[t]);
-        cmax = cmax.max(primitives.centroid[t]);
-    }
+    let data_parallel = parallel && count >= PARALLEL_CHUNK * 2;
+    let Bounds {
+        min,
+        max,
+        cmin,
+        cmax,
+    } = if data_parallel {
+        use rayon::prelude::*;
+        order
+            .par_chunks(PARALLEL_CHUNK)
+            .map(|chunk| Bounds::of(primitives, chunk))
+            .reduce(|| Bounds::EMPTY, Bounds::union)
+    } else {
+        Bounds::of(primitives, order)
+    };
     let leaf = || BuildNode::Leaf {
         min,
         max,
@@ -440,7 +535,15 @@ fn build_recursive(
     let extent = cmax - cmin;
     let leaf_cost = config.intersection_cost * count as f32;
     let split = if depth < SAH_DEPTH_LIMIT && extent.max_element() > 0.0 {
-        best_binned_split(primitives, config, order, min, max, cmin, extent)
+        best_binned_split(
+            primitives,
+            config,
+            order,
+            (min, max),
+            cmin,
+            extent,
+            data_parallel,
+        )
     } else {
         None
     };
@@ -472,47 +575,23 @@ fn build_recursive(
     };
 
     let (left_order, right_order) = order.split_at_mut(mid);
-    let children = if depth < parallel_depth && count >= PARALLEL_THRESHOLD {
-        std::thread::scope(|scope| {
-            let left = scope.spawn(|| {
-                build_recursive(
-                    primitives,
-                    config,
-                    left_order,
-                    start,
-                    depth + 1,
-                    parallel_depth,
-                )
-            });
-            let right = build_recursive(
-                primitives,
-                config,
-                right_order,
-                start + mid,
-                depth + 1,
-                parallel_depth,
-            );
-            [left.join().expect("BVH build thread panicked"), right]
-        })
+    let mut left =
+        move || build_recursive(primitives, config, left_order, start, depth + 1, parallel);
+    let mut right = move || {
+        build_recursive(
+            primitives,
+            config,
+            right_order,
+            start + mid,
+            depth + 1,
+            parallel,
+        )
+    };
+    let children = if parallel && count >= PARALLEL_THRESHOLD {
+        let (left, right) = rayon::join(left, right);
+        [left, right]
     } else {
-        [
-            build_recursive(
-                primitives,
-                config,
-                left_order,
-                start,
-                depth + 1,
-                parallel_depth,
-            ),
-            build_recursive(
-                primitives,
-                config,
-                right_order,
-                start + mid,
-                depth + 1,
-                parallel_depth,
-            ),
-        ]
+        [left(), right()]
     };
     BuildNode::Inner {
         min,
@@ -532,12 +611,11 @@ fn best_binned_split(
     primitives: &Primitives,
     config: &BvhConfig,
     order: &[u32],
-    min: Vec3A,
-    max: Vec3A,
+    (min, max): (Vec3A, Vec3A),
     cmin: Vec3A,
     extent: Vec3A,
+    parallel: bool,
 ) -> Option<(f32, usize, usize)> {
-    let mut bins = [[Bin::EMPTY; BIN_COUNT]; 3];
     let scale = Vec3A::new(
         if extent.x > 0.0 {
             BIN_COUNT as f32 / extent.x
@@ -555,14 +633,32 @@ fn best_binned_split(
             0.0
         },
     );
-    for &t in order {
-        let t = t as usize;
-        let c = primitives.centroid[t];
-        for axis in 0..3 {
-            let b = bin_index(c[axis], cmin[axis], scale[axis]);
-            bins[axis][b].grow(primitives.min[t], primitives.max[t], 1);
+    let fill = |order: &[u32]| {
+        let mut bins = [[Bin::EMPTY; BIN_COUNT]; 3];
+        for &t in order {
+            let t = t as usize;
+            let c = primitives.centroid[t];
+            for axis in 0..3 {
+                let b = bin_index(c[axis], cmin[axis], scale[axis]);
+                bins[axis][b].grow(primitives.min[t], primitives.max[t], 1);
+            }
         }
-    }
+        bins
+    };
+    let bins = if parallel {
+        use rayon::prelude::*;
+        order.par_chunks(PARALLEL_CHUNK).map(fill).reduce(
+            || [[Bin::EMPTY; BIN_COUNT]; 3],
+            |mut a, b| {
+                for (a, b) in a.iter_mut().flatten().zip(b.iter().flatten()) {
+                    a.grow(b.min, b.max, b.count);
+                }
+                a
+            },
+        )
+    } else {
+        fill(order)
+    };
     let growth = primitives.growth;
     let parent_area = packet_area(min, max, growth);
     let mut best: Option<(f32, usize, usize)> = None;
@@ -740,6 +836,31 @@ pub(crate) mod tests {
         assert_eq!(one.nodes, four.nodes);
         assert_eq!(one.triangle_order, four.triangle_order);
         one.validate(&scene).unwrap();
+    }
+
+    #[test]
+    fn a_procedural_scene_builds_the_same_nodes_on_any_thread_count() {
+        let scene = crate::procedural::by_name("beetle").unwrap();
+        let build = |threads| {
+            Bvh::build(
+                &scene,
+                &BvhConfig {
+                    threads,
+                    ..Default::default()
+                },
+            )
+        };
+        let one = build(1);
+        one.validate(&scene).unwrap();
+        for threads in [2, 3, 8] {
+            let other = build(threads);
+            assert_eq!(one.nodes, other.nodes, "{threads} threads");
+            assert_eq!(
+                one.triangle_order, other.triangle_order,
+                "{threads} threads"
+            );
+            assert_eq!(one.sah_cost.to_bits(), other.sah_cost.to_bits());
+        }
     }
 
     #[test]

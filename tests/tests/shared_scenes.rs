@@ -122,3 +122,30 @@ fn cornell_suzanne_matches_brute_force() {
         hits.len()
     );
 }
+
+#[test]
+#[cfg_attr(
+    not(has_shared_scenes),
+    ignore = "needs the scenes in ../shared/scenes beside the repository"
+)]
+fn a_real_scene_builds_the_same_hierarchy_on_any_thread_count() {
+    let scene = Scene::load(scene_path("conference.obj.gz")).unwrap_or_else(|e| panic!("{e}"));
+    let build = |threads| {
+        Bvh::build(
+            &scene,
+            &BvhConfig {
+                threads,
+                ..BvhConfig::default()
+            },
+        )
+    };
+    let one = build(1);
+    for threads in [2, 5] {
+        let other = build(threads);
+        assert_eq!(one.nodes, other.nodes, "{threads} threads");
+        assert_eq!(
+            one.triangle_order, other.triangle_order,
+            "{threads} threads"
+        );
+    }
+}

@@ -64,11 +64,11 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             args.max_spes
         )));
     }
-    let threads = match args.threads {
-        Some(0) => return Err(Error::input("--threads 0: must be at least 1")),
-        Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    if let Some(threads) = args.threads {
+        // checked before --list-jobs too; what more threads than runs or cores means is
+        // said below, where the runs are known
+        crate::options::threads(Some(threads), threads, ("run", "runs"), threads)?;
+    }
     let (scenes, notes) = select_scenes(args.scenes.as_deref(), &args.shared_scenes)?;
     let setup = Setup {
         scenes,
@@ -102,6 +102,16 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
 
+    let (threads, thread_notes) = if args.collect.is_some() {
+        (1, Vec::new())
+    } else {
+        crate::options::threads(
+            args.threads,
+            jobs.len(),
+            ("run", "runs"),
+            crate::options::host_cores(),
+        )?
+    };
     prepare_out(&args.out)?;
     let stats_dir = match &args.collect {
         Some(dir) => {
@@ -115,6 +125,9 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             dir.clone()
         }
         None => {
+            for note in thread_notes {
+                eprintln!("spu: {note}");
+            }
             std::fs::create_dir_all(&jobs_dir).map_err(|e| Error::output(&jobs_dir, e))?;
             run_jobs(&jobs, &jobs_dir, threads, args.ext.ext);
             jobs_dir

@@ -14,7 +14,7 @@ use spu_loader::runtime::FrameError;
 use spu_loader::shading;
 use std::path::Path;
 use std::process::ExitCode;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
     let (config, outputs) = args.config()?;
@@ -41,16 +41,21 @@ pub fn frame(
     code: &CodeCache,
 ) -> exit::Result<Status> {
     let (width, height) = (config.width, config.height);
-    let bar = indicatif::ProgressBar::new(0);
+    // hidden until the frame has run long enough to be worth one (shows_progress)
+    let bar =
+        indicatif::ProgressBar::with_draw_target(Some(0), indicatif::ProgressDrawTarget::hidden());
     bar.set_style(
         indicatif::ProgressStyle::with_template("{spinner} tiles {pos}/{len} {wide_bar} {elapsed}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    if outputs.quiet {
-        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-    }
+    let on_terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let mut shown = false;
     let sim_started = Instant::now();
     let result = render::render_with(prepared, config, code, &mut |taken, tiles| {
+        if !shown && shows_progress(outputs.quiet, on_terminal, sim_started.elapsed()) {
+            bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+            shown = true;
+        }
         bar.set_length(tiles as u64);
         bar.set_position(taken as u64)
     });
@@ -127,6 +132,16 @@ pub fn frame(
     Ok(validation_status(validation.as_ref()))
 }
 
+/// A frame shows a progress bar once it has run [`PROGRESS_AFTER`], where standard error is
+/// a terminal and the frame is not one of many (`quiet`): a short frame ends before a bar
+/// would be read, and a log or a pipe gets no bar's redraws.
+fn shows_progress(quiet: bool, stderr_is_terminal: bool, elapsed: Duration) -> bool {
+    !quiet && stderr_is_terminal && elapsed >= PROGRESS_AFTER
+}
+
+/// How long a frame runs before it shows its progress.
+const PROGRESS_AFTER: Duration = Duration::from_secs(1);
+
 /// The line `--validate` prints.
 fn validation_summary(v: &Validation) -> String {
     let (n, bad) = (v.pixels, v.mismatches);
@@ -175,6 +190,23 @@ fn write_png(path: &Path, colours: &[u32], width: u32, height: u32) -> exit::Res
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_bar_shows_after_a_second_on_a_terminal_unless_quiet() {
+        let second = Duration::from_secs(1);
+        assert!(shows_progress(false, true, second));
+        assert!(shows_progress(false, true, 5 * second));
+        assert!(!shows_progress(
+            false,
+            true,
+            second - Duration::from_millis(1)
+        ));
+        assert!(
+            !shows_progress(false, false, 5 * second),
+            "no terminal: no bar"
+        );
+        assert!(!shows_progress(true, true, 5 * second), "quiet: no bar");
+    }
 
     #[test]
     fn differing_pixels_make_validation_exit_3() {

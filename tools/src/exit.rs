@@ -24,6 +24,9 @@ pub enum Status {
     /// A simulated SPU stopped abnormally: illegal instruction, DMA error, deadlock,
     /// invalid channel, halt (134, as a process killed by SIGABRT appears to a shell).
     AbnormalStop = 134,
+    /// Interrupted (SIGINT, control-C) before the end: no output was left half-written
+    /// (130, as a process killed by SIGINT appears to a shell).
+    Interrupted = 130,
 }
 
 impl From<Status> for ExitCode {
@@ -165,16 +168,63 @@ pub fn write_file_with(
     let target = crate::outputs::resolve_links(path);
     let tmp = temp_path(&target);
     let result = (|| {
-        let mut file = std::fs::File::create(&tmp)?;
+        let mut file = create_temporary(&tmp)?;
         produce(&mut file)?;
         file.flush()?;
         drop(file);
         std::fs::rename(&tmp, &target)
     })();
-    result.map_err(|e| {
+    if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
-        Error::output(path, e)
-    })
+    }
+    forget_temporary(&tmp);
+    result.map_err(|e| Error::output(path, e))
+}
+
+/// The temporary files being written ([`write_file_with`], [`check_writable`]): what an
+/// interrupt removes before the command ends.
+static TEMPORARIES: std::sync::Mutex<Vec<std::path::PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Creates the temporary file `tmp` and notes it, both under the lock an interrupt takes,
+/// so that an interrupt either comes before the file exists or finds it noted.
+fn create_temporary(tmp: &Path) -> io::Result<std::fs::File> {
+    let mut temporaries = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
+    let file = std::fs::File::create(tmp)?;
+    temporaries.push(tmp.to_path_buf());
+    Ok(file)
+}
+
+/// `tmp` is gone (renamed into place or removed): no more an interrupt's to remove.
+fn forget_temporary(tmp: &Path) {
+    let mut temporaries = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
+    temporaries.retain(|noted| noted != tmp);
+}
+
+/// Removes the temporary files being written, and keeps the lock (returned) so that no
+/// other is created until the process ends.
+fn remove_temporaries() -> std::sync::MutexGuard<'static, Vec<std::path::PathBuf>> {
+    let temporaries = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
+    remove_each(&temporaries);
+    temporaries
+}
+
+fn remove_each(temporaries: &[std::path::PathBuf]) {
+    for tmp in temporaries {
+        let _ = std::fs::remove_file(tmp);
+    }
+}
+
+/// Makes SIGINT (control-C) end the command with [`Status::Interrupted`] after removing
+/// the temporary files of outputs being written: an interrupted command leaves each output
+/// as it was before, never half-written. Outputs are only ever written whole through a
+/// temporary file and a rename, so this is the only file an interrupt could leave behind.
+pub fn on_interrupt_remove_temporaries() {
+    // Without the handler (a host that refuses one) SIGINT ends the process as before.
+    let _ = ctrlc::set_handler(|| {
+        let _held = remove_temporaries();
+        eprintln!("spu: interrupted");
+        std::process::exit(Status::Interrupted as i32);
+    });
 }
 
 /// Checks before the work starts that `path` can be written: its directory exists and
@@ -187,9 +237,10 @@ pub fn check_writable(path: &Path) -> Result<()> {
         return Ok(());
     }
     let tmp = temp_path(&crate::outputs::resolve_links(path));
-    match std::fs::File::create(&tmp) {
+    match create_temporary(&tmp) {
         Ok(_) => {
             let _ = std::fs::remove_file(&tmp);
+            forget_temporary(&tmp);
             Ok(())
         }
         Err(e) => Err(Error::input(format!(
@@ -210,4 +261,52 @@ fn temp_path(path: &Path) -> std::path::PathBuf {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_interrupt_removes_the_temporary_files_being_written() {
+        let dir = std::env::temp_dir().join(format!("spu-exit-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (writing, written) = (dir.join("writing.png"), dir.join("written.png"));
+        let writing_tmp = temp_path(&writing);
+        let file = create_temporary(&writing_tmp).unwrap();
+        write_file(&written, b"whole").unwrap();
+        assert!(writing_tmp.is_file());
+        // the handler removes every noted file; other tests write too, so only this
+        // test's are removed here
+        let noted: Vec<_> = TEMPORARIES
+            .lock()
+            .unwrap()
+            .iter()
+            .filter(|p| p.starts_with(&dir))
+            .cloned()
+            .collect();
+        assert_eq!(
+            noted,
+            vec![writing_tmp.clone()],
+            "the written one is forgotten"
+        );
+        remove_each(&noted);
+        drop(file);
+        assert!(
+            !writing_tmp.exists(),
+            "the temporary being written is removed"
+        );
+        assert_eq!(
+            std::fs::read(&written).unwrap(),
+            b"whole",
+            "a finished output stays"
+        );
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name())
+            .collect();
+        assert_eq!(left, vec![std::ffi::OsString::from("written.png")]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -72,6 +72,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    exit::on_interrupt_remove_temporaries();
     let result = match cli.command {
         Command::As(args) => cmd_as::run(args),
         Command::Dis(args) => cmd_dis::run(args),

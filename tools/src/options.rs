@@ -109,3 +109,94 @@ pub fn count<T: PartialOrd + std::fmt::Display + Copy>(
     }
     Ok(())
 }
+
+/// Most host threads a command takes (`--threads`).
+pub const MAX_THREADS: usize = 1024;
+
+/// `--threads` of `spu render` and `spu paper`: the host threads to use and what to say
+/// about them on standard error, checked before any work. `None` takes the host's `cores`.
+/// 0 or more than [`MAX_THREADS`] is bad input. More than the `units` of work that can run
+/// at once (`unit`: singular and plural, ("SPE", "SPEs") or ("run", "runs")) is allowed: the extra threads would idle, and the note
+/// says how many do the work. More than the host's `cores` is allowed too (results never
+/// depend on threads), with a note that it is likely slower than `cores`.
+pub fn threads(
+    requested: Option<usize>,
+    units: usize,
+    unit: (&str, &str),
+    cores: usize,
+) -> exit::Result<(usize, Vec<String>)> {
+    let Some(threads) = requested else {
+        return Ok((cores.max(1), Vec::new()));
+    };
+    if threads == 0 {
+        return Err(Error::input("--threads 0: must be at least 1"));
+    }
+    count("--threads", threads, 1..=MAX_THREADS)?;
+    let mut notes = Vec::new();
+    if threads > units {
+        let (unit, threads_run) = if units == 1 {
+            (unit.0, "host thread runs it")
+        } else {
+            (unit.1, "host threads run them")
+        };
+        notes.push(format!(
+            "--threads {threads}: only {units} {unit} to run at once, so {units} {threads_run}"
+        ));
+    }
+    if threads > cores {
+        notes.push(format!(
+            "--threads {threads}: more than this host's {cores} cores; the results are the same, the run likely slower than with --threads {cores}"
+        ));
+    }
+    Ok((threads, notes))
+}
+
+/// The host's cores (1 where it cannot tell).
+pub fn host_cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::exit::Status;
+
+    const SPES: (&str, &str) = ("SPE", "SPEs");
+    const RUNS: (&str, &str) = ("run", "runs");
+
+    #[test]
+    fn threads_zero_and_too_many_are_bad_input_and_extra_threads_are_said() {
+        let error = threads(Some(0), 4, SPES, 2).unwrap_err();
+        assert_eq!(error.status, Status::BadInput);
+        assert_eq!(
+            error.message.as_deref(),
+            Some("--threads 0: must be at least 1")
+        );
+        let error = threads(Some(1025), 4, SPES, 2).unwrap_err();
+        assert_eq!(
+            error.message.as_deref(),
+            Some("--threads 1025: must be 1 to 1024")
+        );
+        assert_eq!(threads(None, 4, SPES, 2).unwrap(), (2, vec![]));
+        assert_eq!(threads(Some(2), 4, SPES, 2).unwrap(), (2, vec![]));
+        assert_eq!(
+            threads(Some(4), 1, SPES, 8).unwrap(),
+            (
+                4,
+                vec![
+                    "--threads 4: only 1 SPE to run at once, so 1 host thread runs it".to_string()
+                ]
+            )
+        );
+        assert_eq!(
+            threads(Some(3), 2, RUNS, 2).unwrap(),
+            (
+                3,
+                vec![
+                    "--threads 3: only 2 runs to run at once, so 2 host threads run them".to_string(),
+                    "--threads 3: more than this host's 2 cores; the results are the same, the run likely slower than with --threads 2".to_string()
+                ]
+            )
+        );
+    }
+}

@@ -180,9 +180,12 @@ impl Args {
         options::count("--spes", self.spes, 1..=16)?;
         options::count("--width", self.width, 1..=8192)?;
         options::count("--height", self.height, 1..=8192)?;
-        if let Some(threads) = self.threads {
-            options::count("--threads", threads, 1..=1024)?;
-        }
+        let (threads, thread_notes) = options::threads(
+            self.threads,
+            self.spes,
+            ("SPE", "SPEs"),
+            options::host_cores(),
+        )?;
         options::clock_ghz(self.clock)?;
         options::max_cycles(self.max_cycles)?;
         if self.fill && self.validate {
@@ -223,9 +226,7 @@ impl Args {
             width: self.width,
             height: self.height,
             spes: self.spes,
-            threads: self
-                .threads
-                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+            threads,
             clock_ghz: self.clock,
             dma_latency_ns: self.dma_latency_ns,
             bvh_cache: self.bvh_cache,
@@ -256,6 +257,10 @@ impl Args {
             validate: self.validate,
             quiet: false,
         };
+        // said once, after every check passed and before any work
+        for note in thread_notes {
+            eprintln!("spu: {note}");
+        }
         Ok((config, outputs))
     }
 }

@@ -12,6 +12,7 @@ mod run_input;
 mod runtime_lib;
 mod sched_cli;
 mod shade_cli;
+mod threads_cli;
 mod views;
 
 /// The size and 8-bit RGB pixels of a PNG file the `spu` command wrote.

@@ -196,7 +196,15 @@ fn numeric_options_are_checked_before_any_work() {
         ),
         (
             &["render", "--threads", "0"],
-            "--threads 0: must be 1 to 1024",
+            "--threads 0: must be at least 1",
+        ),
+        (
+            &["render", "--threads", "1025"],
+            "--threads 1025: must be 1 to 1024",
+        ),
+        (
+            &["paper", "--threads", "0", "--list-jobs"],
+            "--threads 0: must be at least 1",
         ),
         (
             &["render", "--max-cycles", "0"],
