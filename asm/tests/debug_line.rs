@@ -630,3 +630,169 @@ fn objects_with_debug_line_link_to_the_same_program() {
     assert_eq!(linked.entry, plain.entry);
     assert_eq!(linked.symbols, plain.symbols);
 }
+
+fn section<'o>(obj: &'o Object, name: &str) -> &'o spu_asm::object::ObjSection {
+    obj.sections
+        .iter()
+        .find(|s| s.name == name)
+        .unwrap_or_else(|| panic!("no {name}"))
+}
+
+/// A section's relocations as (offset, target section or symbol name, addend).
+fn relocs(obj: &Object, name: &str) -> Vec<(u32, String, i64)> {
+    section(obj, name)
+        .relocs
+        .iter()
+        .map(|r| {
+            assert_eq!(r.kind, R_SPU_ADDR32);
+            let t = match &r.target {
+                RelocTarget::Section(k) => obj.sections[*k].name.clone(),
+                RelocTarget::Symbol(n) => n.clone(),
+            };
+            (r.offset, t, r.addend)
+        })
+        .collect()
+}
+
+#[test]
+fn gas_adds_a_compilation_unit_around_the_line_table() {
+    // dwarf2_finish: with rows and no .debug_info of the source's own, gas writes a
+    // DWARF 3 unit naming the first file, the working directory and itself, covering
+    // the code of the one section with rows (low_pc; high_pc is where its contents end,
+    // an explicit `.align` included: that is an alignment frag of the contents).
+    let obj = object("\t.file 1 \"src/a.c\"\n\t.loc 1 3\n\til $3,1\n\tnop\n\t.align 4\n");
+    let cwd = std::env::current_dir().unwrap();
+    let pwd = std::env::var("PWD")
+        .ok()
+        .filter(|p| std::path::Path::new(p).canonicalize().ok() == cwd.canonicalize().ok())
+        .unwrap_or_else(|| cwd.to_string_lossy().into_owned());
+    let strs = format!("src/a.c\0{pwd}\0GNU AS 2.40\0");
+    assert_eq!(section(&obj, ".debug_str").data, strs.as_bytes());
+    assert_eq!(
+        (
+            section(&obj, ".debug_str").flags,
+            section(&obj, ".debug_str").entsize
+        ),
+        (0x30, 1)
+    );
+    // compile_unit, no children: stmt_list data4, low_pc/high_pc addr, name, comp_dir and
+    // producer strp, language data2.
+    assert_eq!(
+        hex(&section(&obj, ".debug_abbrev").data),
+        "011100100611011201030e1b0e250e1305 0000 00".replace(' ', "")
+    );
+    assert_eq!(
+        hex(&section(&obj, ".debug_info").data),
+        concat!(
+            "00000022", "0003", "00000000", "04", "01", "00000000", "00000000", "00000000",
+            "00000000", "00000000", "00000000", "8001"
+        )
+    );
+    let p = (9 + pwd.len()) as i64;
+    assert_eq!(
+        relocs(&obj, ".debug_info"),
+        vec![
+            (6, ".debug_abbrev".into(), 0),
+            (12, ".debug_line".into(), 0),
+            (16, ".text".into(), 0),
+            (20, ".text".into(), 16),
+            (24, ".debug_str".into(), 0),
+            (28, ".debug_str".into(), 8),
+            (32, ".debug_str".into(), p),
+        ]
+    );
+    // aranges: version 2, the header padded to 16, (.text, 16), the terminator.
+    let ar = section(&obj, ".debug_aranges");
+    assert_eq!(ar.align, 8);
+    assert_eq!(
+        hex(&ar.data),
+        concat!(
+            "0000001c",
+            "0002",
+            "00000000",
+            "04",
+            "00",
+            "00000000",
+            "00000000",
+            "00000010",
+            "0000000000000000"
+        )
+    );
+    assert_eq!(
+        relocs(&obj, ".debug_aranges"),
+        vec![(6, ".debug_info".into(), 0), (16, ".text".into(), 0)]
+    );
+    assert!(obj.sections.iter().all(|s| s.name != ".debug_ranges"));
+}
+
+#[test]
+fn sized_functions_are_subprograms_and_two_sections_use_ranges() {
+    let obj = object(
+        "\t.file 1 \"a.c\"\n\
+         \t.global f\n\
+         \t.type f,@function\n\
+         f:\t.loc 1 1\n\
+         \til $3,1\n\
+         \tbi $0\n\
+         \t.size f,.-f\n\
+         \t.section .text.b,\"ax\",@progbits\n\
+         \t.type g,@function\n\
+         g:\t.loc 1 9\n\
+         \tbi $0\n\
+         \t.size g,4\n",
+    );
+    // Abbreviations 2 (subprogram: name, external flag, type, low_pc, high_pc) and 3
+    // (unspecified type); the unit has children and DW_AT_ranges.
+    assert_eq!(
+        hex(&section(&obj, ".debug_abbrev").data),
+        concat!(
+            "01110110065506030e1b0e250e1305 0000",
+            "022e00030e3f0c491511011201 0000",
+            "033b000000",
+            "00"
+        )
+        .replace(' ', "")
+    );
+    let info = &section(&obj, ".debug_info").data;
+    // After the unit's fixed part (4+2+4+1+1 + 4 stmt_list + 4 ranges + 12 strings + 2):
+    // f (external) and g (local), each pointing at the unspecified type at 0x40.
+    assert_eq!(
+        hex(&info[34..]),
+        concat!(
+            "02", "00000000", "01", "40", "00000000", "00000000", "02", "00000000", "00", "40",
+            "00000000", "00000000", "03", "00"
+        )
+    );
+    assert_eq!(info.len(), 0x42);
+    let r = relocs(&obj, ".debug_info");
+    assert!(r.contains(&(16, ".debug_ranges".into(), 0)), "{r:?}");
+    assert!(
+        r.contains(&(41, "f".into(), 0)) && r.contains(&(45, "f".into(), 8)),
+        "{r:?}"
+    );
+    assert!(
+        r.contains(&(56, "g".into(), 0)) && r.contains(&(60, "g".into(), 4)),
+        "{r:?}"
+    );
+    let ranges = section(&obj, ".debug_ranges");
+    assert_eq!(
+        hex(&ranges.data),
+        concat!(
+            "ffffffff00000000",
+            "0000000000000000",
+            "0000000000000000",
+            "0000000000000000"
+        )
+    );
+    assert_eq!(
+        relocs(&obj, ".debug_ranges"),
+        vec![
+            (8, ".text".into(), 0),
+            (12, ".text".into(), 8),
+            (16, ".text.b".into(), 0),
+            (20, ".text.b".into(), 4)
+        ]
+    );
+    let strs = &section(&obj, ".debug_str").data;
+    assert!(strs.ends_with(b"GNU AS 2.40\0f\0g\0"));
+}

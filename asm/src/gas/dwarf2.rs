@@ -802,3 +802,273 @@ fn advance(out: &mut Vec<u8>, line_delta: Option<i32>, addr_delta: u64) {
     out.extend(leb128(addr_delta as i64, false));
     out.push(if need_copy { DW_LNS_COPY } else { tmp as u8 });
 }
+
+/// gas's producer string (`"GNU AS " VERSION`): the version whose output this matches.
+const PRODUCER: &str = "GNU AS 2.40";
+
+const DW_TAG_COMPILE_UNIT: u8 = 0x11;
+const DW_TAG_SUBPROGRAM: u8 = 0x2e;
+const DW_TAG_UNSPECIFIED_TYPE: u8 = 0x3b;
+const DW_AT_NAME: u8 = 0x03;
+const DW_AT_STMT_LIST: u8 = 0x10;
+const DW_AT_LOW_PC: u8 = 0x11;
+const DW_AT_HIGH_PC: u8 = 0x12;
+const DW_AT_LANGUAGE: u8 = 0x13;
+const DW_AT_COMP_DIR: u8 = 0x1b;
+const DW_AT_PRODUCER: u8 = 0x25;
+const DW_AT_EXTERNAL: u8 = 0x3f;
+const DW_AT_TYPE: u8 = 0x49;
+const DW_AT_RANGES: u8 = 0x55;
+const DW_FORM_ADDR: u8 = 0x01;
+const DW_FORM_DATA2: u8 = 0x05;
+const DW_FORM_DATA4: u8 = 0x06;
+const DW_FORM_FLAG: u8 = 0x0c;
+const DW_FORM_STRP: u8 = 0x0e;
+const DW_FORM_REF_UDATA: u8 = 0x15;
+/// gas's `DW_LANG_Mips_Assembler`.
+const DW_LANG_MIPS_ASSEMBLER: u16 = 0x8001;
+
+/// A debugging section gas adds: name, alignment, flags, entry size, contents and
+/// relocations.
+pub(super) struct DebugSection {
+    pub name: &'static str,
+    pub align: u32,
+    pub flags: u64,
+    pub entsize: u64,
+    pub data: Vec<u8>,
+    pub relocs: Vec<Reloc>,
+}
+
+/// gas's `getpwd`: `$PWD` where it names the current directory, else the current
+/// directory (`DW_AT_comp_dir`).
+fn working_directory() -> Vec<u8> {
+    let cwd = std::env::current_dir().unwrap_or_default();
+    let pwd = std::env::var_os("PWD")
+        .map(std::path::PathBuf::from)
+        .filter(|p| p.is_absolute())
+        .filter(|p| p.canonicalize().ok() == cwd.canonicalize().ok());
+    pwd.unwrap_or(cwd).to_string_lossy().as_bytes().to_vec()
+}
+
+impl Assembler<'_> {
+    /// The unit gas writes around its line table when the source has no `.debug_info` of
+    /// its own (`dwarf2_finish`'s `emit_other_sections`): `.debug_info` (one
+    /// compilation unit, DWARF 3, with a subprogram per sized function), `.debug_abbrev`,
+    /// `.debug_aranges`, `.debug_str` and, for code in more than one section,
+    /// `.debug_ranges`. `first` is the object section index the first of them gets
+    /// (`.debug_line` is at `first - 1`).
+    pub(super) fn debug_unit(&self, first: usize) -> Vec<DebugSection> {
+        if !self.dwarf.has_rows() || self.defs.iter().any(|d| d.name == ".debug_info") {
+            return Vec::new();
+        }
+        // In the order they are pushed below (`.debug_aranges` is `first + 2`).
+        let (line, info, abbrev, strs, ranges) =
+            (first - 1, first, first + 1, first + 3, first + 4);
+        let reloc = |offset: usize, target: RelocTarget, addend: i64| Reloc {
+            offset: offset as u32,
+            kind: crate::reloc::R_SPU_ADDR32,
+            target,
+            addend,
+        };
+        // Sections with rows, in the order they got their first, and where each ends.
+        let mut segs: Vec<(usize, u32)> = Vec::new();
+        for r in &self.dwarf.rows {
+            let d = self.chunks[r.chunk].0;
+            if !segs.iter().any(|s| s.0 == d) {
+                segs.push((d, self.dwarf.content_end.get(&d).copied().unwrap_or(0)));
+            }
+        }
+        // Defined functions with a size, in address order; whether any is external.
+        let mut funcs: Vec<(usize, u32, String, bool, i64)> = self
+            .symbols
+            .iter()
+            .filter_map(|(name, v)| {
+                let a = self.attrs.get(name)?;
+                let super::symbols::SymVal::Label(c, off) = v else {
+                    return None;
+                };
+                let size = a.size.filter(|&s| s != 0)?;
+                (a.kind == 2).then(|| {
+                    let at = self.bases.get(c).copied().unwrap_or(0) + off;
+                    (
+                        self.chunks[*c].0,
+                        at,
+                        name.clone(),
+                        a.global && !a.weak,
+                        size,
+                    )
+                })
+            })
+            .collect();
+        funcs.sort();
+        let have_efunc = funcs.iter().any(|f| f.3);
+
+        // .debug_str: the unit's name, directory and producer, then function names.
+        let mut str_data = Vec::new();
+        let name_at = str_data.len();
+        if let Some(Some((file, dir))) = self.dwarf.files.get(1) {
+            if let Some(Some(d)) = self.dwarf.dirs.get(*dir as usize) {
+                str_data.extend_from_slice(d);
+                str_data.push(b'/');
+            }
+            str_data.extend_from_slice(file);
+        }
+        str_data.push(0);
+        let comp_dir_at = str_data.len();
+        str_data.extend(working_directory());
+        str_data.push(0);
+        let producer_at = str_data.len();
+        str_data.extend_from_slice(PRODUCER.as_bytes());
+        str_data.push(0);
+
+        // .debug_abbrev.
+        let mut ab = vec![1, DW_TAG_COMPILE_UNIT, u8::from(!funcs.is_empty())];
+        ab.extend_from_slice(&[DW_AT_STMT_LIST, DW_FORM_DATA4]);
+        if segs.len() == 1 {
+            ab.extend_from_slice(&[DW_AT_LOW_PC, DW_FORM_ADDR, DW_AT_HIGH_PC, DW_FORM_ADDR]);
+        } else {
+            ab.extend_from_slice(&[DW_AT_RANGES, DW_FORM_DATA4]);
+        }
+        ab.extend_from_slice(&[
+            DW_AT_NAME,
+            DW_FORM_STRP,
+            DW_AT_COMP_DIR,
+            DW_FORM_STRP,
+            DW_AT_PRODUCER,
+            DW_FORM_STRP,
+            DW_AT_LANGUAGE,
+            DW_FORM_DATA2,
+            0,
+            0,
+        ]);
+        if !funcs.is_empty() {
+            ab.extend_from_slice(&[2, DW_TAG_SUBPROGRAM, 0, DW_AT_NAME, DW_FORM_STRP]);
+            if have_efunc {
+                ab.extend_from_slice(&[DW_AT_EXTERNAL, DW_FORM_FLAG]);
+            }
+            ab.extend_from_slice(&[
+                DW_AT_TYPE,
+                DW_FORM_REF_UDATA,
+                DW_AT_LOW_PC,
+                DW_FORM_ADDR,
+                DW_AT_HIGH_PC,
+                DW_FORM_ADDR,
+                0,
+                0,
+            ]);
+            ab.extend_from_slice(&[3, DW_TAG_UNSPECIFIED_TYPE, 0, 0, 0]);
+        }
+        ab.push(0);
+
+        // .debug_info.
+        let mut di = vec![0; 4];
+        let mut di_relocs = Vec::new();
+        di.extend_from_slice(&3u16.to_be_bytes());
+        di_relocs.push(reloc(di.len(), RelocTarget::Section(abbrev), 0));
+        di.extend_from_slice(&[0; 4]);
+        di.push(4); // address size
+        di.push(1); // the compilation unit's abbreviation
+        di_relocs.push(reloc(di.len(), RelocTarget::Section(line), 0));
+        di.extend_from_slice(&[0; 4]);
+        if let [(d, end)] = segs[..] {
+            di_relocs.push(reloc(di.len(), RelocTarget::Section(d), 0));
+            di.extend_from_slice(&[0; 4]);
+            di_relocs.push(reloc(di.len(), RelocTarget::Section(d), end as i64));
+            di.extend_from_slice(&[0; 4]);
+        } else {
+            di_relocs.push(reloc(di.len(), RelocTarget::Section(ranges), 0));
+            di.extend_from_slice(&[0; 4]);
+        }
+        for at in [name_at, comp_dir_at, producer_at] {
+            di_relocs.push(reloc(di.len(), RelocTarget::Section(strs), at as i64));
+            di.extend_from_slice(&[0; 4]);
+        }
+        di.extend_from_slice(&DW_LANG_MIPS_ASSEMBLER.to_be_bytes());
+        if !funcs.is_empty() {
+            // Where the unspecified type's entry will be: after every subprogram, whose
+            // DW_AT_type (a ULEB128) holds that very offset.
+            let per_func = 1 + 4 + usize::from(have_efunc) + 4 + 4;
+            let mut tag = di.len() + funcs.len() * (per_func + 1);
+            while tag != di.len() + funcs.len() * (per_func + leb128(tag as i64, false).len()) {
+                tag = di.len() + funcs.len() * (per_func + leb128(tag as i64, false).len());
+            }
+            for (_, _, name, external, size) in &funcs {
+                di.push(2);
+                di_relocs.push(reloc(
+                    di.len(),
+                    RelocTarget::Section(strs),
+                    str_data.len() as i64,
+                ));
+                di.extend_from_slice(&[0; 4]);
+                str_data.extend_from_slice(name.as_bytes());
+                str_data.push(0);
+                if have_efunc {
+                    di.push(u8::from(*external));
+                }
+                di.extend(leb128(tag as i64, false));
+                di_relocs.push(reloc(di.len(), RelocTarget::Symbol(name.clone()), 0));
+                di.extend_from_slice(&[0; 4]);
+                di_relocs.push(reloc(di.len(), RelocTarget::Symbol(name.clone()), *size));
+                di.extend_from_slice(&[0; 4]);
+            }
+            debug_assert_eq!(di.len(), tag);
+            di.push(3);
+            di.push(0); // end of the unit's children
+        }
+        let len = (di.len() - 4) as u32;
+        di[..4].copy_from_slice(&len.to_be_bytes());
+
+        // .debug_aranges: version 2, the header padded to twice the address size.
+        let mut ar = vec![0; 4];
+        let mut ar_relocs = Vec::new();
+        ar.extend_from_slice(&2u16.to_be_bytes());
+        ar_relocs.push(reloc(ar.len(), RelocTarget::Section(info), 0));
+        ar.extend_from_slice(&[0; 4]);
+        ar.extend_from_slice(&[4, 0, 0, 0, 0, 0]);
+        for &(d, end) in &segs {
+            ar_relocs.push(reloc(ar.len(), RelocTarget::Section(d), 0));
+            ar.extend_from_slice(&[0; 4]);
+            ar.extend_from_slice(&end.to_be_bytes());
+        }
+        ar.extend_from_slice(&[0; 8]);
+        let len = (ar.len() - 4) as u32;
+        ar[..4].copy_from_slice(&len.to_be_bytes());
+
+        let debug = |name, align, data, relocs| DebugSection {
+            name,
+            align,
+            flags: 0,
+            entsize: 0,
+            data,
+            relocs,
+        };
+        let mut out = vec![
+            debug(".debug_info", 1, di, di_relocs),
+            debug(".debug_abbrev", 1, ab, Vec::new()),
+            debug(".debug_aranges", 8, ar, ar_relocs),
+            DebugSection {
+                name: ".debug_str",
+                align: 1,
+                flags: 0x30, // SHF_MERGE | SHF_STRINGS
+                entsize: 1,
+                data: str_data,
+                relocs: Vec::new(),
+            },
+        ];
+        if segs.len() > 1 {
+            // .debug_ranges: a base address selection entry (base 0), each section's
+            // start and end, and the end of the list.
+            let mut rg = vec![0xff, 0xff, 0xff, 0xff, 0, 0, 0, 0];
+            let mut rg_relocs = Vec::new();
+            for &(d, end) in &segs {
+                rg_relocs.push(reloc(rg.len(), RelocTarget::Section(d), 0));
+                rg.extend_from_slice(&[0; 4]);
+                rg_relocs.push(reloc(rg.len(), RelocTarget::Section(d), end as i64));
+                rg.extend_from_slice(&[0; 4]);
+            }
+            rg.extend_from_slice(&[0; 8]);
+            out.push(debug(".debug_ranges", 8, rg, rg_relocs));
+        }
+        out
+    }
+}

@@ -428,6 +428,18 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
             data,
             relocs,
         });
+        for s in asm.debug_unit(obj.sections.len()) {
+            obj.sections.push(ObjSection {
+                name: s.name.into(),
+                ty: crate::object::SHT_PROGBITS,
+                flags: s.flags,
+                entsize: s.entsize,
+                align: s.align,
+                size: s.data.len() as u32,
+                data: s.data,
+                relocs: s.relocs,
+            });
+        }
     }
     for (d, r, _, _) in &asm.relocs {
         let mut r = r.clone();
