@@ -134,9 +134,26 @@ fn decode(obj: &Object) -> Table {
         assert_eq!(&b[at..at + 4], &[0; 4], "the field is left zero for RELA");
         b[at..at + 4].copy_from_slice(&(r.addend as u32).to_be_bytes());
     }
+    let units = units(&b);
+    assert_eq!(units.len(), 1, "one unit, the whole section");
+    units.into_iter().next().unwrap()
+}
+
+/// Every unit of a `.debug_line` (relocated) in order.
+fn units(all: &[u8]) -> Vec<Table> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    while start < all.len() {
+        let len = u32::from_be_bytes(all[start..start + 4].try_into().unwrap()) as usize;
+        out.push(unit(&all[start..start + 4 + len]));
+        start += 4 + len;
+    }
+    out
+}
+
+/// One unit of a line table.
+fn unit(b: &[u8]) -> Table {
     let be32 = |at: usize| u32::from_be_bytes(b[at..at + 4].try_into().unwrap());
-    let unit_length = be32(0) as usize;
-    assert_eq!(unit_length + 4, b.len(), "one unit, the whole section");
     assert_eq!(u16::from_be_bytes([b[4], b[5]]), 3, "version");
     let header_length = be32(6) as usize;
     let program = 10 + header_length;
@@ -156,14 +173,14 @@ fn decode(obj: &Object) -> Table {
     let mut at = 27;
     let mut dirs = Vec::new();
     while b[at] != 0 {
-        dirs.push(cstr(&b, &mut at));
+        dirs.push(cstr(b, &mut at));
     }
     at += 1;
     let mut files = Vec::new();
     while b[at] != 0 {
-        let name = cstr(&b, &mut at);
-        let dir = uleb(&b, &mut at);
-        assert_eq!((uleb(&b, &mut at), uleb(&b, &mut at)), (0, 0), "time, size");
+        let name = cstr(b, &mut at);
+        let dir = uleb(b, &mut at);
+        assert_eq!((uleb(b, &mut at), uleb(b, &mut at)), (0, 0), "time, size");
         files.push((name, dir));
     }
     at += 1;
@@ -183,7 +200,7 @@ fn decode(obj: &Object) -> Table {
         };
         match op {
             0 => {
-                let len = uleb(&b, &mut at) as usize;
+                let len = uleb(b, &mut at) as usize;
                 let next = at + len;
                 match b[at] {
                     1 => {
@@ -197,17 +214,17 @@ fn decode(obj: &Object) -> Table {
                     }
                     4 => {
                         let mut k = at + 1;
-                        r.discriminator = uleb(&b, &mut k) as u32;
+                        r.discriminator = uleb(b, &mut k) as u32;
                     }
                     e => panic!("extended opcode {e}"),
                 }
                 at = next;
             }
             1 => emit(&mut r, &mut rows),
-            2 => r.address += uleb(&b, &mut at) as u32,
-            3 => r.line = (r.line as i64 + sleb(&b, &mut at)) as u32,
-            4 => r.file = uleb(&b, &mut at) as u32,
-            5 => r.column = uleb(&b, &mut at) as u32,
+            2 => r.address += uleb(b, &mut at) as u32,
+            3 => r.line = (r.line as i64 + sleb(b, &mut at)) as u32,
+            4 => r.file = uleb(b, &mut at) as u32,
+            5 => r.column = uleb(b, &mut at) as u32,
             6 => r.is_stmt = !r.is_stmt,
             7 => r.basic_block = true,
             8 => r.address += ((255 - opcode_base) / line_range) as u32,
@@ -217,7 +234,7 @@ fn decode(obj: &Object) -> Table {
             }
             10 => r.prologue_end = true,
             11 => r.epilogue_begin = true,
-            12 => r.isa = uleb(&b, &mut at) as u32,
+            12 => r.isa = uleb(b, &mut at) as u32,
             special => {
                 let adjusted = (special - opcode_base) as i64;
                 r.address += (adjusted / line_range as i64) as u32;
@@ -629,6 +646,36 @@ fn objects_with_debug_line_link_to_the_same_program() {
     assert_eq!(linked.image, plain.image);
     assert_eq!(linked.entry, plain.entry);
     assert_eq!(linked.symbols, plain.symbols);
+    // The executable keeps the debugging sections, joined and relocated as GNU ld does:
+    // the second unit's rows are where `f` was placed, and its .debug_info's stmt_list is
+    // the offset of its line table in the joined .debug_line.
+    assert!(spu_asm::elf_check::layout_errors(&linked.elf).is_empty());
+    use object::read::elf::ElfFile32;
+    use object::{Object as _, ObjectSection as _};
+    let elf = ElfFile32::<object::BigEndian>::parse(&linked.elf[..]).unwrap();
+    let data = |name: &str| elf.section_by_name(name).unwrap().data().unwrap().to_vec();
+    let f = linked.symbols.iter().find(|s| s.0 == "f").unwrap().1;
+    let lines = units(&data(".debug_line"));
+    assert_eq!(lines.len(), 2);
+    // Line 3 of each source is its first line without a label: `brsl` at 4, `bi` at f+4.
+    assert_eq!(lines[0].rows[0], row(4, 1, 3, 0));
+    assert_eq!(lines[1].rows[0], row(f + 4, 1, 3, 0));
+    let info = data(".debug_info");
+    let first_unit = 4 + u32::from_be_bytes(info[0..4].try_into().unwrap()) as usize;
+    let first_lines = 4 + u32::from_be_bytes(data(".debug_line")[0..4].try_into().unwrap());
+    let stmt_list = &info[first_unit + 12..first_unit + 16];
+    assert_eq!(stmt_list, first_lines.to_be_bytes());
+    // The same program in the same segments: what loads is what ran before.
+    let plain_elf = ElfFile32::<object::BigEndian>::parse(&plain.elf[..]).unwrap();
+    use object::read::elf::ProgramHeader as _;
+    let e = object::BigEndian;
+    let segs = |x: &ElfFile32<object::BigEndian>| -> Vec<(u32, u32, u32)> {
+        x.elf_program_headers()
+            .iter()
+            .map(|p| (p.p_vaddr(e), p.p_filesz(e), p.p_memsz(e)))
+            .collect()
+    };
+    assert_eq!(segs(&elf), segs(&plain_elf));
 }
 
 fn section<'o>(obj: &'o Object, name: &str) -> &'o spu_asm::object::ObjSection {
