@@ -649,12 +649,13 @@ impl Assembler<'_> {
         for (d, rows, end) in &sequences {
             sequence(&mut prog, &mut addr_fields, *d, rows, *end);
         }
-        let mut header = Vec::new();
-        header.push(1); // minimum instruction length
-        header.push(1); // default is_stmt
-        header.push(LINE_BASE as u8);
-        header.push(LINE_RANGE);
-        header.push(OPCODE_BASE);
+        let mut header = vec![
+            1, // minimum instruction length
+            1, // default is_stmt
+            LINE_BASE as u8,
+            LINE_RANGE,
+            OPCODE_BASE,
+        ];
         header.extend_from_slice(&STANDARD_OPCODE_LENGTHS);
         for d in self.dwarf.dirs.iter().skip(1) {
             header.extend_from_slice(d.as_deref().unwrap_or_default());
