@@ -589,6 +589,10 @@ fn bad_operands_are_errors_at_file_line_column() {
             "t.s:2:1: error: unassigned file number 2",
         ),
         (
+            "\t.file 1 \"a.c\"\n\t.loc 1 1\n\tnop\n\t.section .debug_line\n\t.long 0\n",
+            "t.s:1:1: error: duplicate .debug_line sections",
+        ),
+        (
             "\t.file 1 \"a.c\"\n\t.file 70000 \"c.c\"\n",
             "t.s:2:2: error: file number 70000 is too big",
         ),

@@ -594,6 +594,16 @@ impl Assembler<'_> {
         if !self.dwarf.has_rows() {
             return;
         }
+        // The source's own non-empty .debug_line and rows of `.loc`: gas stops
+        // ("duplicate .debug_line sections"); there can be one line table only.
+        let own = self.defs.iter().position(|d| d.name == ".debug_line");
+        if let (Some(d), Some(l)) = (own, self.dwarf.last_file_line.clone()) {
+            let used = (0..self.chunks.len())
+                .any(|c| self.chunks[c].0 == d && self.offsets.get(&c).is_some_and(|&n| n > 0));
+            if used {
+                self.diag(Severity::Error, &l, 1, "duplicate .debug_line sections");
+            }
+        }
         let missing: Vec<usize> = (1..self.dwarf.files.len())
             .filter(|&i| self.dwarf.files[i].is_none())
             .collect();
@@ -612,7 +622,7 @@ impl Assembler<'_> {
     /// The `.debug_line` contents and their relocations (offsets in `.debug_line`, against
     /// section definitions), or `None` without rows.
     pub(super) fn debug_line(&self) -> Option<(Vec<u8>, Vec<Reloc>)> {
-        if !self.dwarf.has_rows() {
+        if !self.dwarf.has_rows() || self.defs.iter().any(|d| d.name == ".debug_line") {
             return None;
         }
         // Sections in the order of their first row; subsections in order within each.
