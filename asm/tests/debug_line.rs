@@ -847,3 +847,61 @@ fn sized_functions_are_subprograms_and_two_sections_use_ranges() {
     let strs = &section(&obj, ".debug_str").data;
     assert!(strs.ends_with(b"GNU AS 2.40\0f\0g\0"));
 }
+
+#[test]
+fn dash_g_numbers_the_assembly_source_lines() {
+    // GNU as -g: a row per source line that has an instruction (two on one line: one
+    // row), file 1 the source as named with its directory, DWARF 2 in .debug_info (gas's
+    // `dwarf_level` under -g), version 3 line table; checked against x86 GNU as 2.40 -g.
+    let opts = Options {
+        debug_lines: true,
+        ..Default::default()
+    };
+    let src = "\t.text\nstart:\tnop\n\tnop ; nop\n\n\t.data\n\t.long 1\n\t.text\n\tnop\n\
+               \t.section .text.b,\"ax\",@progbits\n\tnop\n\t.text\n\tnop\n";
+    let (obj, _) = assemble_object(src, "sub/g.s", &opts).unwrap();
+    let t = decode_all(&obj);
+    assert_eq!(t[0].dirs, vec!["sub".to_string()]);
+    assert_eq!(t[0].files, vec![("g.s".to_string(), 1)]);
+    let r = |a, l| row(a, 1, l, 0);
+    assert_eq!(
+        t[0].rows,
+        vec![
+            r(0, 2),
+            r(4, 3),
+            r(12, 8),
+            r(16, 12),
+            end(20, &r(16, 12)),
+            r(0, 10),
+            end(4, &r(0, 10))
+        ]
+    );
+    let s = section(&obj, ".debug_line");
+    assert_eq!(
+        hex(&s.data[10 + u32::from_be_bytes(s.data[6..10].try_into().unwrap()) as usize..]),
+        "0005020000000013 4b 87 4e 0204000101 0005020000000003090102 04000101".replace(' ', "")
+    );
+    assert_eq!(&section(&obj, ".debug_info").data[4..6], &[0, 2]);
+    // A `.file N` means the source brings its own line numbers: -g's rows go.
+    let (obj, _) = assemble_object(
+        "\tnop\n\t.file 1 \"a.c\"\n\t.loc 1 7\n\tnop\n",
+        "g.s",
+        &opts,
+    )
+    .unwrap();
+    assert_eq!(
+        decode(&obj).rows,
+        vec![row(4, 1, 7, 0), end(8, &row(4, 1, 7, 0))]
+    );
+}
+
+/// Every unit of an object's `.debug_line`, relocated for sections at address 0.
+fn decode_all(obj: &Object) -> Vec<Table> {
+    let s = section(obj, ".debug_line");
+    let mut b = s.data.clone();
+    for r in &s.relocs {
+        let at = r.offset as usize;
+        b[at..at + 4].copy_from_slice(&(r.addend as u32).to_be_bytes());
+    }
+    units(&b)
+}

@@ -82,6 +82,8 @@ struct Row {
     chunk: Sect,
     offset: u32,
     loc: Loc,
+    /// `-g`: the source file, numbered when the table is written (`do_allocate_filenum`).
+    generated: Option<Vec<u8>>,
     /// Its view number: 0 where the address moved on from the chunk's previous row.
     view: u32,
 }
@@ -103,6 +105,13 @@ pub(super) struct LineState {
     pub(super) content_end: HashMap<usize, u32>,
     /// The last `.file N` line, where undeclared slots below a used one are reported.
     last_file_line: Option<Line>,
+    /// A `.file N` was seen: `-g` rows are dropped and no more are made.
+    compiler_lines: bool,
+    /// `-g`: the source line of the last generated row (gas's `dw2_line`, `dw2_filename`).
+    last_generated: Option<(String, usize)>,
+    /// A `.loc` used `prologue_end`, `epilogue_begin` or `isa`, which raise gas's
+    /// `dwarf_level` to 3 where `-g` had set it to 2.
+    level3: bool,
 }
 
 /// A directive's operands read left to right, as gas's `input_line_pointer`.
@@ -224,6 +233,25 @@ impl LineState {
         Ok(())
     }
 
+    /// `-g`'s slot for a source path (`allocate_filenum`): the slot of the same
+    /// directory and name, else the next free one.
+    fn allocate(&mut self, path: &[u8]) -> u32 {
+        let file = basename(path);
+        let dir = self.directory(&path[..file]);
+        let name = &path[file..];
+        if let Some(i) = (1..self.files.len()).find(|&i| {
+            self.files[i]
+                .as_ref()
+                .is_some_and(|(n, d)| *d == dir && n.as_slice() == name)
+        }) {
+            return i as u32;
+        }
+        let i = self.files.len().max(1);
+        self.files.resize(i + 1, None);
+        self.files[i] = Some((name.to_vec(), dir));
+        i as u32
+    }
+
     fn declared(&self, num: i64) -> bool {
         num >= 1 && matches!(self.files.get(num as usize), Some(Some(_)))
     }
@@ -294,6 +322,9 @@ impl Assembler<'_> {
             return;
         }
         self.dwarf.last_file_line = Some(line.clone());
+        // The source brings its own line numbers: `-g`'s go (`purge_generated_debug`).
+        self.dwarf.compiler_lines = true;
+        self.dwarf.rows.retain(|r| r.generated.is_none());
     }
 
     /// `.loc FILE LINE [COLUMN] [basic_block] [prologue_end] [epilogue_begin] [is_stmt V]
@@ -371,8 +402,14 @@ impl Assembler<'_> {
             };
             match word {
                 "basic_block" => loc.basic_block = true,
-                "prologue_end" => loc.prologue_end = true,
-                "epilogue_begin" => loc.epilogue_begin = true,
+                "prologue_end" => {
+                    loc.prologue_end = true;
+                    self.dwarf.level3 = true;
+                }
+                "epilogue_begin" => {
+                    loc.epilogue_begin = true;
+                    self.dwarf.level3 = true;
+                }
                 "is_stmt" => match value(self, &mut cur) {
                     Some(0) => loc.is_stmt = false,
                     Some(1) => loc.is_stmt = true,
@@ -383,7 +420,10 @@ impl Assembler<'_> {
                     None => return,
                 },
                 "isa" => match value(self, &mut cur) {
-                    Some(v) if (0..=u32::MAX as i64).contains(&v) => loc.isa = v as u32,
+                    Some(v) if (0..=u32::MAX as i64).contains(&v) => {
+                        loc.isa = v as u32;
+                        self.dwarf.level3 = true;
+                    }
                     Some(_) => {
                         self.diag(Severity::Error, line, col, "isa number less than zero");
                         return;
@@ -480,6 +520,10 @@ impl Assembler<'_> {
 
     /// An instruction was emitted at `offset` of `chunk`: a waiting `.loc` gives it a row.
     pub(super) fn dwarf_insn(&mut self, chunk: Sect, offset: u32, line: &Line, col: usize) {
+        if self.opts.debug_lines && !self.dwarf.compiler_lines {
+            self.generated_row(chunk, offset, line, col);
+            return;
+        }
         if !self.dwarf.loc_seen {
             return;
         }
@@ -503,6 +547,33 @@ impl Assembler<'_> {
         loc.basic_block = true;
         let offset = self.offsets.get(&self.sect).copied().unwrap_or(0);
         self.dwarf_row(self.sect, offset, loc, line, 1);
+        self.dwarf.consume();
+    }
+
+    /// `-g`: a row for this source line (`dwarf2_where`), one per line and file.
+    fn generated_row(&mut self, chunk: Sect, offset: u32, line: &Line, col: usize) {
+        let here = (line.file.clone(), line.line);
+        if self.dwarf.last_generated.as_ref() == Some(&here) {
+            self.dwarf.consume();
+            return;
+        }
+        let loc = Loc {
+            file: 0,
+            line: line.line as u32,
+            column: 0,
+            isa: self.dwarf.current.isa,
+            discriminator: self.dwarf.current.discriminator,
+            is_stmt: true,
+            basic_block: false,
+            prologue_end: false,
+            epilogue_begin: false,
+        };
+        if self.dwarf_row(chunk, offset, loc, line, col).is_some() {
+            if let Some(r) = self.dwarf.rows.last_mut() {
+                r.generated = Some(line.file.bytes().collect());
+            }
+            self.dwarf.last_generated = Some(here);
+        }
         self.dwarf.consume();
     }
 
@@ -554,9 +625,34 @@ impl Assembler<'_> {
             chunk,
             offset,
             loc,
+            generated: None,
             view,
         });
         Some(view)
+    }
+
+    /// The line-table state with `-g`'s rows numbered: files get slots in the order the
+    /// rows will be written (`do_allocate_filenum` in `dwarf2_finish`).
+    fn numbered(&self) -> LineState {
+        let mut st = self.dwarf.clone();
+        let mut order: Vec<usize> = Vec::new();
+        for r in &st.rows {
+            let d = self.chunks[r.chunk].0;
+            if !order.contains(&d) {
+                order.push(d);
+            }
+        }
+        let mut idx: Vec<usize> = (0..st.rows.len()).collect();
+        idx.sort_by_key(|&i| {
+            let (d, sub) = self.chunks[st.rows[i].chunk];
+            (order.iter().position(|&x| x == d), sub)
+        });
+        for i in idx {
+            if let Some(path) = st.rows[i].generated.clone() {
+                st.rows[i].loc.file = st.allocate(&path);
+            }
+        }
+        st
     }
 
     /// A `.file`/`.loc` operand that must be an absolute number.
@@ -625,9 +721,10 @@ impl Assembler<'_> {
         if !self.dwarf.has_rows() || self.defs.iter().any(|d| d.name == ".debug_line") {
             return None;
         }
+        let state = self.numbered();
         // Sections in the order of their first row; subsections in order within each.
         let mut order: Vec<usize> = Vec::new();
-        for r in &self.dwarf.rows {
+        for r in &state.rows {
             let d = self.chunks[r.chunk].0;
             if !order.contains(&d) {
                 order.push(d);
@@ -635,8 +732,7 @@ impl Assembler<'_> {
         }
         let mut sequences = Vec::new();
         for d in order {
-            let mut rows: Vec<&Row> = self
-                .dwarf
+            let mut rows: Vec<&Row> = state
                 .rows
                 .iter()
                 .filter(|r| self.chunks[r.chunk].0 == d)
@@ -651,7 +747,7 @@ impl Assembler<'_> {
                     )
                 })
                 .collect();
-            let end = self.dwarf.content_end.get(&d).copied().unwrap_or(0);
+            let end = state.content_end.get(&d).copied().unwrap_or(0);
             sequences.push((d, rows, end));
         }
         let mut prog = Vec::new();
@@ -667,12 +763,12 @@ impl Assembler<'_> {
             OPCODE_BASE,
         ];
         header.extend_from_slice(&STANDARD_OPCODE_LENGTHS);
-        for d in self.dwarf.dirs.iter().skip(1) {
+        for d in state.dirs.iter().skip(1) {
             header.extend_from_slice(d.as_deref().unwrap_or_default());
             header.push(0);
         }
         header.push(0);
-        for (name, dir) in self.dwarf.files.iter().skip(1).flatten() {
+        for (name, dir) in state.files.iter().skip(1).flatten() {
             header.extend_from_slice(name);
             header.push(0);
             header.extend(leb128(*dir as i64, false));
@@ -881,12 +977,13 @@ impl Assembler<'_> {
             target,
             addend,
         };
+        let state = self.numbered();
         // Sections with rows, in the order they got their first, and where each ends.
         let mut segs: Vec<(usize, u32)> = Vec::new();
-        for r in &self.dwarf.rows {
+        for r in &state.rows {
             let d = self.chunks[r.chunk].0;
             if !segs.iter().any(|s| s.0 == d) {
-                segs.push((d, self.dwarf.content_end.get(&d).copied().unwrap_or(0)));
+                segs.push((d, state.content_end.get(&d).copied().unwrap_or(0)));
             }
         }
         // Defined functions with a size, in address order; whether any is external.
@@ -913,12 +1010,19 @@ impl Assembler<'_> {
             .collect();
         funcs.sort();
         let have_efunc = funcs.iter().any(|f| f.3);
+        // gas's `dwarf_level`: 2 under `-g` unless a `.loc` option raised it, else 3.
+        let version: u16 = if self.opts.debug_lines && !state.level3 {
+            2
+        } else {
+            3
+        };
+        let typed = version > 2;
 
         // .debug_str: the unit's name, directory and producer, then function names.
         let mut str_data = Vec::new();
         let name_at = str_data.len();
-        if let Some(Some((file, dir))) = self.dwarf.files.get(1) {
-            if let Some(Some(d)) = self.dwarf.dirs.get(*dir as usize) {
+        if let Some(Some((file, dir))) = state.files.get(1) {
+            if let Some(Some(d)) = state.dirs.get(*dir as usize) {
                 str_data.extend_from_slice(d);
                 str_data.push(b'/');
             }
@@ -957,9 +1061,10 @@ impl Assembler<'_> {
             if have_efunc {
                 ab.extend_from_slice(&[DW_AT_EXTERNAL, DW_FORM_FLAG]);
             }
+            if typed {
+                ab.extend_from_slice(&[DW_AT_TYPE, DW_FORM_REF_UDATA]);
+            }
             ab.extend_from_slice(&[
-                DW_AT_TYPE,
-                DW_FORM_REF_UDATA,
                 DW_AT_LOW_PC,
                 DW_FORM_ADDR,
                 DW_AT_HIGH_PC,
@@ -967,14 +1072,16 @@ impl Assembler<'_> {
                 0,
                 0,
             ]);
-            ab.extend_from_slice(&[3, DW_TAG_UNSPECIFIED_TYPE, 0, 0, 0]);
+            if typed {
+                ab.extend_from_slice(&[3, DW_TAG_UNSPECIFIED_TYPE, 0, 0, 0]);
+            }
         }
         ab.push(0);
 
         // .debug_info.
         let mut di = vec![0; 4];
         let mut di_relocs = Vec::new();
-        di.extend_from_slice(&3u16.to_be_bytes());
+        di.extend_from_slice(&version.to_be_bytes());
         di_relocs.push(reloc(di.len(), RelocTarget::Section(abbrev), 0));
         di.extend_from_slice(&[0; 4]);
         di.push(4); // address size
@@ -999,9 +1106,16 @@ impl Assembler<'_> {
             // Where the unspecified type's entry will be: after every subprogram, whose
             // DW_AT_type (a ULEB128) holds that very offset.
             let per_func = 1 + 4 + usize::from(have_efunc) + 4 + 4;
-            let mut tag = di.len() + funcs.len() * (per_func + 1);
-            while tag != di.len() + funcs.len() * (per_func + leb128(tag as i64, false).len()) {
-                tag = di.len() + funcs.len() * (per_func + leb128(tag as i64, false).len());
+            let type_len = |tag: usize| {
+                if typed {
+                    leb128(tag as i64, false).len()
+                } else {
+                    0
+                }
+            };
+            let mut tag = di.len() + funcs.len() * (per_func + type_len(0));
+            while tag != di.len() + funcs.len() * (per_func + type_len(tag)) {
+                tag = di.len() + funcs.len() * (per_func + type_len(tag));
             }
             for (_, _, name, external, size) in &funcs {
                 di.push(2);
@@ -1016,14 +1130,18 @@ impl Assembler<'_> {
                 if have_efunc {
                     di.push(u8::from(*external));
                 }
-                di.extend(leb128(tag as i64, false));
+                if typed {
+                    di.extend(leb128(tag as i64, false));
+                }
                 di_relocs.push(reloc(di.len(), RelocTarget::Symbol(name.clone()), 0));
                 di.extend_from_slice(&[0; 4]);
                 di_relocs.push(reloc(di.len(), RelocTarget::Symbol(name.clone()), *size));
                 di.extend_from_slice(&[0; 4]);
             }
             debug_assert_eq!(di.len(), tag);
-            di.push(3);
+            if typed {
+                di.push(3);
+            }
             di.push(0); // end of the unit's children
         }
         let len = (di.len() - 4) as u32;

@@ -51,6 +51,10 @@ pub struct Options {
     pub defines: Vec<(String, i64)>,
     /// ISA extensions on from the first line (`--ext`; `.spu_ext` adds more).
     pub extensions: spu_isa::Extensions,
+    /// `-g`: line numbers of the assembly source itself, a row per source line with an
+    /// instruction, until a `.file N` says the source brings its own (gas's
+    /// `DEBUG_DWARF2`).
+    pub debug_lines: bool,
 }
 
 /// The assembled program.
