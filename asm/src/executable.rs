@@ -11,6 +11,16 @@ const EM_SPU: u16 = 23;
 /// congruent to their addresses modulo this.
 pub const PAGE: u32 = 0x80;
 
+/// A section that is not loaded (`.debug_*`): its contents follow the image in the file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Unloaded {
+    pub name: String,
+    pub flags: u64,
+    pub entsize: u64,
+    pub align: u32,
+    pub data: Vec<u8>,
+}
+
 /// One output section.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Section {
@@ -76,7 +86,13 @@ fn segments(sections: &[Section]) -> Vec<(u32, usize, usize)> {
 
 /// The ELF file: `image` is local store from 0; `sections` in address order; `symbols`
 /// locals first.
-pub fn write(image: &[u8], sections: &[Section], symbols: &[Symbol], entry: u32) -> Vec<u8> {
+pub fn write(
+    image: &[u8],
+    sections: &[Section],
+    unloaded: &[Unloaded],
+    symbols: &[Symbol],
+    entry: u32,
+) -> Vec<u8> {
     let segs = segments(sections);
     let ehsize = 52u32;
     let phoff = ehsize;
@@ -117,6 +133,12 @@ pub fn write(image: &[u8], sections: &[Section], symbols: &[Symbol], entry: u32)
     }
     let mut body = image.to_vec();
     let align4 = |v: &mut Vec<u8>| v.resize(v.len().next_multiple_of(4), 0);
+    let mut unloaded_off = Vec::new();
+    for u in unloaded {
+        body.resize(body.len().next_multiple_of(u.align.max(1) as usize), 0);
+        unloaded_off.push(image_off + body.len() as u32);
+        body.extend(&u.data);
+    }
     align4(&mut body);
     let symtab_off = image_off + body.len() as u32;
     body.extend(&symtab);
@@ -126,6 +148,10 @@ pub fn write(image: &[u8], sections: &[Section], symbols: &[Symbol], entry: u32)
         .iter()
         .map(|s| add_name(&s.name, &mut shstr))
         .collect();
+    let unloaded_names: Vec<u32> = unloaded
+        .iter()
+        .map(|u| add_name(&u.name, &mut shstr))
+        .collect();
     let symtab_name = add_name(".symtab", &mut shstr);
     let strtab_name = add_name(".strtab", &mut shstr);
     let shstrtab_name = add_name(".shstrtab", &mut shstr);
@@ -133,7 +159,7 @@ pub fn write(image: &[u8], sections: &[Section], symbols: &[Symbol], entry: u32)
     body.extend(&shstr);
     align4(&mut body);
     let shoff = image_off + body.len() as u32;
-    let shnum = sections.len() as u16 + 4;
+    let shnum = (sections.len() + unloaded.len()) as u16 + 4;
     let mut out = Vec::new();
     out.extend([0x7f, b'E', b'L', b'F', 1, 2, 1, 0]);
     out.extend([0u8; 8]);
@@ -188,7 +214,15 @@ pub fn write(image: &[u8], sections: &[Section], symbols: &[Symbol], entry: u32)
             [n, ty, flags, s.addr, off, s.size, 0, 0, s.align, 0],
         );
     }
-    let symtab_index = sections.len() as u32 + 1;
+    for ((u, &n), &off) in unloaded.iter().zip(&unloaded_names).zip(&unloaded_off) {
+        let flags = u.flags as u32;
+        let size = u.data.len() as u32;
+        sh(
+            &mut out,
+            [n, 1, flags, 0, off, size, 0, 0, u.align, u.entsize as u32],
+        );
+    }
+    let symtab_index = (sections.len() + unloaded.len()) as u32 + 1;
     sh(
         &mut out,
         [

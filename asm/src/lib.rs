@@ -17,6 +17,7 @@ mod expr;
 mod gas;
 mod lex;
 pub mod link;
+mod link_debug;
 pub mod object;
 pub mod reloc;
 pub mod sched;

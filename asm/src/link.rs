@@ -515,7 +515,21 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         .iter()
         .map(|x| (x.name.clone(), x.addr, x.size, x.flags & SHF_EXECINSTR != 0))
         .collect();
-    let elf = crate::executable::write(&image, &out_sections, &out_symbols, entry);
+    // Debugging sections are kept, relocated, as GNU ld keeps them.
+    let resolve = |o: usize, target: &RelocTarget| match target {
+        RelocTarget::Section(t) => placed.get(&(o, *t)).map(|a| *a as u64),
+        RelocTarget::Symbol(n) if n.is_empty() => Some(0),
+        RelocTarget::Symbol(n) => match objects[o]
+            .symbols
+            .iter()
+            .find(|s| !s.global && s.name == *n)
+        {
+            Some(s) => address_of(o, s.section, s.value),
+            None => global_address(n),
+        },
+    };
+    let unloaded = crate::link_debug::sections(objects, &resolve)?;
+    let elf = crate::executable::write(&image, &out_sections, &unloaded, &out_symbols, entry);
     Ok(Linked {
         image,
         elf,

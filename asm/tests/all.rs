@@ -2,6 +2,7 @@
 //! module of it, so the build links one test binary instead of one per file
 //! (`tests/tests/test_files.rs` checks that none is left out).
 
+mod debug_line;
 mod gnu_compat;
 mod never_panics;
 mod objects_and_limits;

@@ -6,7 +6,7 @@
 # subsections 0, 1, 2 joined in order (sub 0 is 0x4c bytes, so `late` is at 0x6c);
 # .data.rel at 0x80; .bss at 0xa0 (buf, then flag at 0xac).
 	.file	"gnu_directives.c"
-	.file	1 "gnu_directives.c"	# warning: 9:2: no .debug_line is written
+	.file	1 "gnu_directives.c"
 	.text
 	.global	start
 	.type	start, @function

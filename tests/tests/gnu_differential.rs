@@ -242,8 +242,25 @@ pub fn generated_corpus() -> Vec<(String, String)> {
     for (k, s) in STATEMENTS.iter().enumerate() {
         corpus.push((format!("stmt_{k}.s"), s.to_string()));
     }
+    for (k, s) in LINE_TABLES.iter().enumerate() {
+        corpus.push((format!("line_{k}.s"), s.to_string()));
+    }
     corpus
 }
+
+/// `.file`/`.loc` forms: the `.debug_line` (and the unit gas adds around it) of each is
+/// compared byte for byte.
+const LINE_TABLES: &[&str] = &[
+    "\t.file 1 \"a.c\"\n\t.loc 1 3 0\n\til $3,1\n\til $3,2\n\t.loc 1 5 2\n\til $4,1\n\t.loc 1 4 0 prologue_end\n\tnop\n",
+    "\t.file 1 \"src/a.c\"\n\t.file 2 \"inc/b.h\"\n\t.file 3 \"src/c.c\"\n\t.loc 2 100 7 is_stmt 0\n\til $3,1\n\t.loc 1 1 basic_block\n\til $5,5\n\t.space 400\n\t.loc 1 30 discriminator 3 isa 2\n\til $6,6\n\t.loc 3 2 epilogue_begin\n\t.loc 3 9\n\til $7,7\n",
+    "\t.file 1 \"x.c\"\n\t.loc 1 1\n\tnop\n\t.space 16\n\t.loc 1 2\n\tnop\n\t.space 296\n\t.loc 1 40\n\tnop\n\t.loc 1 20\n\tnop\n\t.align 4\n",
+    "\t.file 1 \"s.c\"\n\t.text 1\n\t.loc 1 20\n\til $3,1\n\t.text 0\n\t.loc 1 10\n\til $3,2\n\til $3,3\n\t.text 1\n\t.align 4\n\t.loc 1 21\n\til $3,4\n",
+    "\t.file 1 \"a.c\"\n\t.global f\n\t.type f,@function\nf:\t.loc 1 1\n\til $3,1\n\tbi $0\n\t.size f,.-f\n\t.section .text.b,\"ax\",@progbits\n\t.type g,@function\ng:\t.loc 1 9\n\tbi $0\n\t.size g,4\n",
+    "\t.file 1 \"a.c\"\n\t.loc_mark_labels 1\n\t.loc 1 5\n\til $3,1\nhere:\til $3,2\n",
+    "\t.file 1 \"a.c\"\n\t.loc 1 0\n\t.loc 1 7 view .LVU1\n\t.loc 1 8 view .LVU2\n\til $3,1\n\t.data\n\t.long .LVU1, .LVU2\n",
+    "\t.file 1 \"/abs/dir/a.c\"\n\t.file 2 \"/b.c\"\n\t.loc 1 1000000\n\til $3,1\n\t.loc 2 1\n\til $3,2\n",
+    "\t.file 1 \"a.c\"\n\t.file 2 \"a.c\"\n\t.file 1 \"a.c\"\n\t.loc 2 2 3\n\tnop\n",
+];
 
 /// Every `.s` of the project (kernels, tests, examples), in a stable order.
 fn project_sources() -> Vec<PathBuf> {

@@ -34,6 +34,10 @@ pub struct Args {
     /// `exit`, `printf` and the other PPE-assisted calls; docs/running-programs.md).
     #[arg(long, conflicts_with = "object")]
     runtime: bool,
+    /// Line numbers of the assembly source in the object's `.debug_line` (GNU as `-g`),
+    /// unless the source has `.file N`/`.loc` of its own.
+    #[arg(short = 'g')]
+    debug_lines: bool,
     #[command(flatten)]
     ext: crate::options::ExtOption,
 }
@@ -57,6 +61,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     let mut opts = Options {
         include_dirs: args.include.clone(),
         extensions: args.ext.ext,
+        debug_lines: args.debug_lines,
         ..Default::default()
     };
     for d in &args.defsym {

@@ -9,6 +9,7 @@
 //! - `obj_elf`: sections and symbol attributes (`obj-elf.c`);
 //! - `target`: SPU operands and encodings (`tc-spu.c`);
 //! - `write`: layout, relocations and output (`write.c`), on `crate::object`;
+//! - `dwarf2`: `.file`/`.loc` rows and the `.debug_line` made of them (`dwarf2dbg.c`);
 //! - `messages`: diagnostics (`messages.c`).
 //!
 //! Pass 1 walks the source to give every label an address (every instruction is 4 bytes,
@@ -17,6 +18,7 @@
 //! `.rept` and `.if`, so they see the same statements.
 
 mod cond;
+mod dwarf2;
 mod macros;
 mod messages;
 mod obj_elf;
@@ -49,6 +51,10 @@ pub struct Options {
     pub defines: Vec<(String, i64)>,
     /// ISA extensions on from the first line (`--ext`; `.spu_ext` adds more).
     pub extensions: spu_isa::Extensions,
+    /// `-g`: line numbers of the assembly source itself, a row per source line with an
+    /// instruction, until a `.file N` says the source brings its own (gas's
+    /// `DEBUG_DWARF2`).
+    pub debug_lines: bool,
 }
 
 /// The assembled program.
@@ -140,8 +146,8 @@ struct Assembler<'o> {
     /// `.symver NAME, NAME2@VERSION[, local|hidden|remove]` (final walk): the versioned
     /// names objects give symbols.
     symvers: Vec<(String, String, String)>,
-    /// The one warning that `.file N`/`.loc` write no line table has been given.
-    no_line_table_warned: bool,
+    /// `.file N`/`.loc` line-table state of this walk (`dwarf2dbg.c`).
+    dwarf: dwarf2::LineState,
     /// The ISA extensions on at this point of the walk (the options', then `.spu_ext`).
     extensions: spu_isa::Extensions,
 }
@@ -214,7 +220,7 @@ impl<'o> Assembler<'o> {
             altmacro: false,
             local_counter: 0,
             symvers: Vec::new(),
-            no_line_table_warned: false,
+            dwarf: Default::default(),
         };
         // gas always has .text, .data and .bss, in that order.
         for name in [".text", ".data", ".bss"] {
@@ -241,6 +247,7 @@ impl<'o> Assembler<'o> {
         self.absolute = None;
         self.altmacro = false;
         self.local_counter = 0;
+        self.dwarf = Default::default();
         if pass == 2 {
             self.bytes.clear();
             self.relocs.clear();
@@ -292,6 +299,7 @@ impl<'o> Assembler<'o> {
             return; // reported by the layout walk; a second walk would only repeat it
         }
         self.run_pass(lines, 2);
+        self.dwarf_finish_checks();
         if self.nonzero_in_nobits {
             self.diags.push(Diagnostic {
                 severity: Severity::Error,

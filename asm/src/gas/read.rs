@@ -142,6 +142,7 @@ impl Assembler<'_> {
                     break;
                 }
                 self.define_label(name, line);
+                self.dwarf_label(line);
                 self.stmt += 1;
                 rest = rest[colon + 1..].trim().to_string();
             }
@@ -184,7 +185,12 @@ impl Assembler<'_> {
                 let v = format!("{value}{}{args}", if args.is_empty() { "" } else { " " });
                 self.set_symbol(name, v.trim(), line);
             } else {
+                let at = (
+                    self.sect,
+                    self.offsets.get(&self.sect).copied().unwrap_or(0),
+                );
                 self.instruction(&lw, &args, line, col);
+                self.dwarf_insn(at.0, at.1, line, col);
             }
             if std::mem::take(&mut self.nonzero_in_absolute) {
                 self.diag(
@@ -639,24 +645,13 @@ impl Assembler<'_> {
                 self.absolute = None;
                 self.elf_directive(d, args, line, col);
             }
-            ".loc" | ".file"
-                if (d == ".loc" || args.trim_start().starts_with(|c: char| c.is_ascii_digit()))
-                    && self.pass == 2
-                    && !self.no_line_table_warned =>
-            {
-                // GNU as writes `.debug_line` from these; this assembler does not yet, and
-                // says so once rather than leave the object short without a word.
-                self.no_line_table_warned = true;
-                self.diag(
-                    Severity::Warning,
-                    line,
-                    col,
-                    format!("{d} is accepted but no .debug_line is written (DWARF line tables are not implemented)"),
-                );
-            }
-            ".extern" | ".file" | ".loc" | ".loc_mark_labels" | ".local" | ".brinfo" | ".end"
-            | ".nolist" | ".list" | ".eject" | ".psize" | ".title" | ".sbttl" | ".version"
-            | ".gnu_attribute" | ".lflags" => {}
+            // `.file "name"` alone is the ELF file symbol; anything else is `.file N`.
+            ".file" if !args.trim_start().starts_with('"') => self.dwarf_file(args, line, col),
+            ".loc" => self.dwarf_loc(args, line, col),
+            ".loc_mark_labels" => self.dwarf_mark_labels(args, line, col),
+            ".extern" | ".file" | ".local" | ".brinfo" | ".end" | ".nolist" | ".list"
+            | ".eject" | ".psize" | ".title" | ".sbttl" | ".version" | ".gnu_attribute"
+            | ".lflags" => {}
             // read.c's s_ignore entries (COFF debugging and MRI listing control), and
             // `.func`/`.endfunc`, which emit nothing without stabs debugging.
             ".debug" | ".dim" | ".endef" | ".scl" | ".tag" | ".val" | ".ln" | ".func"
@@ -1080,7 +1075,7 @@ pub(super) fn operand_column(line: &Line, part: &str, fallback: usize) -> usize 
 }
 
 /// LEB128 bytes of `v` (signed or unsigned), as `.sleb128`/`.uleb128` write them.
-fn leb128(mut v: i64, signed: bool) -> Vec<u8> {
+pub(super) fn leb128(mut v: i64, signed: bool) -> Vec<u8> {
     let mut out = Vec::new();
     loop {
         let byte = (v & 0x7f) as u8;

@@ -63,6 +63,12 @@ impl Assembler<'_> {
                 .max()
                 .unwrap_or(1);
             let last = mine.iter().max_by_key(|&&c| self.chunks[c].1);
+            if let Some(&last) = last {
+                // Where the contents end before the padding: the line table's last address.
+                let end = self.bases.get(&last).copied().unwrap_or(0)
+                    + self.offsets.get(&last).copied().unwrap_or(0);
+                self.dwarf.content_end.insert(d, end);
+            }
             if let (Some(&last), true) = (last, boundary > 1) {
                 self.sect = last;
                 self.align_to(boundary, None);
@@ -416,6 +422,31 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
             data,
             relocs: Vec::new(),
         });
+    }
+    // gas writes `.debug_line` after every section the source made (`dwarf2_finish`).
+    if let Some((data, relocs)) = asm.debug_line() {
+        obj.sections.push(ObjSection {
+            name: ".debug_line".into(),
+            ty: crate::object::SHT_PROGBITS,
+            flags: 0,
+            entsize: 0,
+            align: 1,
+            size: data.len() as u32,
+            data,
+            relocs,
+        });
+        for s in asm.debug_unit(obj.sections.len()) {
+            obj.sections.push(ObjSection {
+                name: s.name.into(),
+                ty: crate::object::SHT_PROGBITS,
+                flags: s.flags,
+                entsize: s.entsize,
+                align: s.align,
+                size: s.data.len() as u32,
+                data: s.data,
+                relocs: s.relocs,
+            });
+        }
     }
     for (d, r, _, _) in &asm.relocs {
         let mut r = r.clone();
