@@ -12,6 +12,7 @@ mod run_input;
 mod runtime_lib;
 mod sched_cli;
 mod shade_cli;
+mod support;
 mod threads_cli;
 mod views;
 

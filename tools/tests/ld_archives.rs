@@ -4,28 +4,12 @@
 //! (R+X and R+W segments, symbol types, sizes and bindings, `_end`, the entry warning).
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn dir(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("spu-ld-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    crate::support::fresh_dir("ld", test)
 }
 
-/// Runs `spu` in `cwd`: stdout, stderr, exit status.
-fn spu(args: &[&str], cwd: &Path) -> (String, String, i32) {
-    let out = Command::new(env!("CARGO_BIN_EXE_spu"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .unwrap();
-    (
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-        out.status.code().unwrap_or(-1),
-    )
-}
+use crate::support::spu_in as spu;
 
 fn ok(args: &[&str], cwd: &Path) -> String {
     let (out, err, code) = spu(args, cwd);

@@ -7,26 +7,11 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// A fresh directory for one test.
 fn dir(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("spu-ppe-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    crate::support::fresh_dir("ppe", test)
 }
 
-fn spu(args: &[&str], cwd: &Path) -> (String, String, i32) {
-    let out = Command::new(env!("CARGO_BIN_EXE_spu"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .unwrap();
-    (
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-        out.status.code().unwrap_or(-1),
-    )
-}
+use crate::support::spu_in as spu;
 
 /// Assembles `source` with the runtime into `dir/prog.elf`.
 fn build(dir: &Path, source: &str) {

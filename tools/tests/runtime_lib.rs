@@ -4,28 +4,13 @@
 //! helpers against Rust's integer arithmetic on edge cases and many pseudo-random values.
 
 use std::fmt::Write;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::PathBuf;
 
 fn dir(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("spu-rt-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    crate::support::fresh_dir("rt", test)
 }
 
-fn spu(args: &[&str], cwd: &Path) -> (String, String, i32) {
-    let out = Command::new(env!("CARGO_BIN_EXE_spu"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .unwrap();
-    (
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-        out.status.code().unwrap_or(-1),
-    )
-}
+use crate::support::spu_in as spu;
 
 /// Builds `source` with the runtime and runs it: stdout and exit status.
 fn run(test: &str, source: &str) -> (String, i32) {
