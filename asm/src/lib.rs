@@ -5,11 +5,10 @@
 //!
 //! The house, bottom up: `lex`, `expr` and `expand` read gas syntax (shared with
 //! `sched`, the list scheduler behind `.sched` and `spu sched`); `object`, `reloc` and
-//! `elf` model ELF; `gas` (split as GNU as is: see its header) and `link` build on both
+//! `executable` model ELF; `gas` (split as GNU as is: see its header) and `link` build on both
 //! and not on each other.
 
 pub mod archive;
-pub mod elf;
 pub mod elf_check;
 pub mod executable;
 mod expand;

@@ -351,24 +351,59 @@ pub(super) fn executable(
         .find(|(n, _)| n == "_start")
         .map(|s| s.1)
         .unwrap_or(0);
-    let sections: Vec<(String, u32, u32, bool)> = placed
+    // The executable as `spu ld` writes one (`crate::executable`): the sections' flags and
+    // alignments, and the symbols' types, sizes and bindings, from the source.
+    let out_sections: Vec<crate::executable::Section> = placed
         .iter()
         .map(|&(d, a, size)| {
             let def = &asm.defs[d];
-            (def.name.clone(), a, size, def.flags & SHF_EXECINSTR != 0)
+            let align = (0..asm.chunks.len())
+                .filter(|&c| asm.chunks[c].0 == d)
+                .map(|c| asm.align.get(&c).copied().unwrap_or(1))
+                .max()
+                .unwrap_or(1);
+            crate::executable::Section {
+                name: def.name.clone(),
+                addr: a,
+                size,
+                flags: def.flags,
+                nobits: def.ty == SHT_NOBITS,
+                align,
+            }
         })
         .collect();
-    let globals: Vec<String> = asm
-        .attrs
+    let place_of = |name: &str| match asm.symbols.get(name) {
+        Some(SymVal::Label(c, _)) => placed.iter().position(|p| p.0 == asm.chunks[*c].0).map_or(
+            crate::executable::Place::Absolute,
+            crate::executable::Place::Section,
+        ),
+        _ => crate::executable::Place::Absolute,
+    };
+    let mut out_symbols: Vec<crate::executable::Symbol> = symbols
         .iter()
-        .filter(|(_, a)| a.global)
-        .map(|(n, _)| n.clone())
+        .map(|(name, value)| {
+            let attrs = asm.attrs.get(name);
+            let bind = match attrs {
+                Some(a) if a.weak => 2,
+                Some(a) if a.global => 1,
+                _ => 0,
+            };
+            crate::executable::Symbol {
+                name: name.clone(),
+                value: *value,
+                size: attrs
+                    .and_then(|a| a.size)
+                    .unwrap_or(0)
+                    .clamp(0, u32::MAX as i64) as u32,
+                kind: attrs.map_or(0, |a| a.kind),
+                bind,
+                place: place_of(name),
+            }
+        })
         .collect();
-    let nobits: Vec<bool> = placed
-        .iter()
-        .map(|p| asm.defs[p.0].ty == SHT_NOBITS)
-        .collect();
-    let elf = crate::elf::write_elf(&image, &sections, &nobits, &symbols, &globals, entry);
+    // Locals first, as ELF requires; the order within each kind is kept (by address).
+    out_symbols.sort_by_key(|s| s.bind != 0);
+    let elf = crate::executable::write(&image, &out_sections, &[], &out_symbols, entry);
     Ok(Output {
         image,
         elf,
@@ -376,7 +411,10 @@ pub(super) fn executable(
         entry,
         listing: asm.listing,
         warnings,
-        sections,
+        sections: out_sections
+            .iter()
+            .map(|x| (x.name.clone(), x.addr, x.size, x.flags & SHF_EXECINSTR != 0))
+            .collect(),
     })
 }
 

@@ -218,21 +218,37 @@ mod tests {
         );
     }
 
-    // Executables as the assembler writes them.
-    use spu_asm::elf::write_elf;
+    // Executables as the assembler and the linker write them.
+    use spu_asm::executable::{write, Place, Section, Symbol};
+
+    /// A `.text` of `size` bytes at 0 and its symbols, `(name, value, binding)`.
+    fn linked_text(image: &[u8], symbols: &[(&str, u32, u8)]) -> Vec<u8> {
+        let text = Section {
+            name: ".text".into(),
+            addr: 0,
+            size: image.len() as u32,
+            flags: 6, // SHF_ALLOC | SHF_EXECINSTR
+            nobits: false,
+            align: 8,
+        };
+        let symbols: Vec<Symbol> = symbols
+            .iter()
+            .map(|&(name, value, bind)| Symbol {
+                name: name.into(),
+                value,
+                size: 0,
+                kind: 0,
+                bind,
+                place: Place::Section(0),
+            })
+            .collect();
+        write(image, &[text], &[], &symbols, 0)
+    }
 
     #[test]
     fn round_trip() {
         let image = vec![0x40, 0x80, 0x15, 0x03, 0, 0, 0x20, 0];
-        let sections = vec![(".text".to_string(), 0, 8, true)];
-        let elf = write_elf(
-            &image,
-            &sections,
-            &[false],
-            &[("_start".into(), 0), ("x".into(), 4)],
-            &["_start".into()],
-            0,
-        );
+        let elf = linked_text(&image, &[("x", 4, 0), ("_start", 0, 1)]);
         let back = read_elf(&elf).unwrap();
         assert_eq!(back.segments, vec![(0, image.clone())]);
         assert_eq!(back.sections[0].2, image);
@@ -242,14 +258,7 @@ mod tests {
 
     #[test]
     fn string_offsets_that_overflow_name_nothing() {
-        let mut elf = write_elf(
-            &[0; 4],
-            &[(".text".into(), 0, 4, true)],
-            &[false],
-            &[("_start".into(), 0)],
-            &["_start".into()],
-            0,
-        );
+        let mut elf = linked_text(&[0; 4], &[("_start", 0, 1)]);
         // Every section's name offset (sh_name, the first word of each header) at the
         // largest u32: added to the string table's offset it used to overflow.
         let shoff = u32::from_be_bytes(elf[32..36].try_into().unwrap()) as usize;
