@@ -272,6 +272,20 @@ impl LineState {
 }
 
 impl Assembler<'_> {
+    /// A `.file`/`.loc` file number must be 1 or more (0 is DWARF 5's); otherwise an error.
+    fn dwarf_file_number_ok(&mut self, number: i64, line: &Line, col: usize) -> bool {
+        if number >= 1 {
+            return true;
+        }
+        let m = if number == 0 {
+            "file number 0 is DWARF 5's (`--gdwarf-5`): spu as writes .debug_line version 3, as GNU as does by default"
+        } else {
+            "file number less than one"
+        };
+        self.diag(Severity::Error, line, col, m);
+        false
+    }
+
     /// `.file N "name"` (dwarf2dbg.c's `dwarf2_directive_filename`; `.file "name"` alone is
     /// the ELF file symbol, handled elsewhere).
     pub(super) fn dwarf_file(&mut self, args: &str, line: &Line, col: usize) {
@@ -280,13 +294,7 @@ impl Assembler<'_> {
         let Some(num) = self.absolute_operand(num_text, line, col) else {
             return;
         };
-        if num < 1 {
-            let m = if num == 0 {
-                "file number 0 is DWARF 5's (`--gdwarf-5`): spu as writes .debug_line version 3, as GNU as does by default"
-            } else {
-                "file number less than one"
-            };
-            self.diag(Severity::Error, line, col, m);
+        if !self.dwarf_file_number_ok(num, line, col) {
             return;
         }
         let Some(name) = cur.string() else {
@@ -343,13 +351,7 @@ impl Assembler<'_> {
         let Some(number) = self.absolute_operand(line_text, line, col) else {
             return;
         };
-        if file < 1 {
-            let m = if file == 0 {
-                "file number 0 is DWARF 5's (`--gdwarf-5`): spu as writes .debug_line version 3, as GNU as does by default"
-            } else {
-                "file number less than one"
-            };
-            self.diag(Severity::Error, line, col, m);
+        if !self.dwarf_file_number_ok(file, line, col) {
             return;
         }
         if !self.dwarf.declared(file) {
