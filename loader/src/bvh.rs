@@ -163,14 +163,6 @@ enum BuildNode {
     },
 }
 
-impl BuildNode {
-    fn bounds(&self) -> (Vec3A, Vec3A) {
-        match self {
-            BuildNode::Leaf { min, max, .. } | BuildNode::Inner { min, max, .. } => (*min, *max),
-        }
-    }
-}
-
 struct Primitives {
     min: Vec<Vec3A>,
     max: Vec<Vec3A>,
@@ -356,31 +348,16 @@ impl Bvh {
 
         let mut nodes = vec![BvhNode::empty(); 2];
         flatten(&root, 0, &mut nodes);
-        let (root_min, root_max) = root.bounds();
-        let root_area = if n == 0 {
+        let sah_cost = if n == 0 {
             0.0
         } else {
-            half_area(root_min, root_max)
+            sah_cost(&nodes, &config)
         };
-        let mut sah_cost = 0.0f64;
-        if root_area > 0.0 {
-            for (index, node) in nodes.iter().enumerate() {
-                if index == 1 {
-                    continue;
-                }
-                let weight = half_area(node.min, node.max) as f64 / root_area as f64;
-                sah_cost += if node.is_leaf() {
-                    weight * node.count as f64 * config.intersection_cost as f64
-                } else {
-                    weight * config.traversal_cost as f64
-                };
-            }
-        }
         Bvh {
             nodes,
             triangle_order: order,
             config,
-            sah_cost: sah_cost as f32,
+            sah_cost,
         }
     }
 
@@ -496,6 +473,31 @@ impl Bvh {
         }
         Ok(())
     }
+}
+
+/// The SAH cost of a flat hierarchy (`nodes[1]` the padding): `sum_inner A/A_root * C_trav +
+/// sum_leaf A/A_root * N * C_isect`, summed in f64 in node order; 0 where the root has no area.
+/// The build reports it, and a refit compares its own against the build's.
+pub fn sah_cost(nodes: &[BvhNode], config: &BvhConfig) -> f32 {
+    let Some(root) = nodes.first() else {
+        return 0.0;
+    };
+    let root_area = half_area(root.min, root.max);
+    let mut cost = 0.0f64;
+    if root_area > 0.0 {
+        for (index, node) in nodes.iter().enumerate() {
+            if index == 1 {
+                continue;
+            }
+            let weight = half_area(node.min, node.max) as f64 / root_area as f64;
+            cost += if node.is_leaf() {
+                weight * node.count as f64 * config.intersection_cost as f64
+            } else {
+                weight * config.traversal_cost as f64
+            };
+        }
+    }
+    cost as f32
 }
 
 fn build_recursive(

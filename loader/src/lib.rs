@@ -5,6 +5,8 @@
 //! - [`procedural`]: deterministic built-in stand-ins for the paper's ERW6, Conference and
 //!   VW Beetle scenes, so everything works where the shared scene files are absent.
 //! - [`camera`]: the pinhole camera and the exact primary-ray convention the kernels share.
+//! - [`animation`], [`refit`]: moving scenes (built-in animations, OBJ keyframes) and the
+//!   per-frame BVH refit with its rebuild policy.
 //! - [`bvh`]: the binned-SAH bounding volume hierarchy (paper section 3.2).
 //! - [`layout`]: the big-endian DMA records (32-byte nodes, 64-byte triangle and vertex
 //!   records, paper section 5.1) and the staged main-memory image.
@@ -21,6 +23,7 @@
 //! The SPUs, their main memory, quanta and host threads are the SPE runtime's
 //! ([`spu_spe::System`]); [`runtime`] runs a frame's SPUs on it.
 
+pub mod animation;
 pub mod bvh;
 pub mod camera;
 pub mod error;
@@ -29,6 +32,7 @@ pub mod obj;
 pub mod ply;
 pub mod procedural;
 pub mod reference;
+pub mod refit;
 pub mod scene;
 pub mod shading;
 
