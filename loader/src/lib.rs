@@ -6,7 +6,7 @@
 //!   VW Beetle scenes, so everything works where the shared scene files are absent.
 //! - [`camera`]: the pinhole camera and the exact primary-ray convention the kernels share.
 //! - [`animation`], [`refit`]: moving scenes (built-in animations, OBJ keyframes) and the
-//!   per-frame BVH refit with its rebuild policy.
+//!   per-frame BVH refit with its rebuild policy; [`spu_refit`], the same refit on the SPEs.
 //! - [`bvh`]: the binned-SAH bounding volume hierarchy (paper section 3.2).
 //! - [`layout`]: the big-endian DMA records (32-byte nodes, 64-byte triangle and vertex
 //!   records, paper section 5.1) and the staged main-memory image.
@@ -48,6 +48,7 @@ pub mod kernels;
 pub mod ppe;
 pub mod render;
 pub mod runtime;
+pub mod spu_refit;
 pub mod stats;
 pub mod timeline;
 pub mod variants;

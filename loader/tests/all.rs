@@ -4,3 +4,4 @@
 
 mod fuzz_regressions;
 mod kernels_assemble;
+mod spu_refit;
