@@ -1,41 +1,50 @@
 # refit.s — BVH refit on the SPEs (paper section 9.3; loader::spu_refit builds its work).
 #
 # Each frame of a moving scene the node bounds are recomputed bottom-up from the new
-# vertices. The host lays the work out once per topology as items of REFIT_ITEM_BYTES in main
-# memory: the nodes of one height (leaves are height 0, a parent is one above its highest
-# child), up to REFIT_MAX_NODES of them, with a DMA list that gathers what they are folded
-# from (a leaf's triangles' corners, 16 bytes from each vertex record; an inner node's child
-# pair, one 64-byte line) and a DMA list that scatters the 32-byte node records back:
+# vertices. The host lays the work out once per topology as items in main memory, each the
+# nodes of one height (leaves are height 0, a parent is one above its higher child), up to
+# REFIT_MAX_NODES of them, with a DMA list that gathers what they are folded from (a leaf's
+# triangles' corners, 16 bytes of each vertex record; an inner node's child pair, one
+# 64-byte line) and a DMA list that scatters the 32-byte node records back. An index of
+# quadwords (block EA, block bytes) finds the blocks; a block is
 #
 #   0   n_nodes, gather list bytes, hi offset (0: points, 16: boxes), EA of this height's
-#       done counter
-#   16  EA of the height below's done counter, its item count (0: none to wait for),
-#       scatter list bytes, height
-#   REFIT_ENTRIES  per node: elements to fold, node index, link, count_axis
-#   REFIT_GATHER   gather list (8 bytes per element: size, EA)
-#   REFIT_SCATTER  scatter list (8 bytes per node)
+#       row of done counters
+#   16  EA of the height below's row, its item count (0: none to wait for), scatter list
+#       bytes, height
+#   32  offset of the gather list, offset of the scatter list in the block
+#   48  per node: elements to fold, node index, link, count_axis
 #
-# Items are taken from a shared counter with an atomic getllar/putllc increment (as frame.s
-# takes tiles). An item of height h starts gathering once every item of height h - 1 is
-# done (their counter, polled with getllar, reached their count), which by induction means
-# every lower height is. Double buffering: while an item is folded, the next item's block is
-# fetched and, where its height's wait is already known to be over, its gather list runs.
+# Work sharing: SPE i starts with items [i*C, (i+1)*C) handed out in the parameters, then
+# takes ranges from a shared counter with an atomic getllar/putllc (as frame.s takes tiles):
+# (tail - v) >> shift items (at least one) while below `tail`, and everything from `tail`
+# on (the top heights, one item each, so that one SPE refits the top of the tree without
+# waiting for other SPEs' counters). A putllc is settled at a quantum boundary, so claims
+# are few and large first, small at the end (guided self-scheduling).
+#
+# Heights in order: an item of height h starts gathering once the items of height h - 1 are
+# done; each SPE counts its finished items per height in its own quadword of the height's
+# row (done row + 16 * SPE index, written with a plain put: no lock), and a waiting SPE
+# sums the row. By induction every lower height is then done too.
+#
+# Double buffering: while an item is folded, the next item's block is fetched and, where
+# its height's wait is already known to be over, its gather list runs.
 #
 # A fold starts from the first point or box and takes the new value per coordinate where
 # fcgt says it is lower (minimum) or higher (maximum): loader::refit does the same, so the
 # bounds are the host's bit for bit.
 #
-# Protocol: $3 = SPU index, $4 = EA of the 128-byte parameter block: items EA, item count,
-# claim counter EA. At the end: refit_stats = items, nodes and polls (word 0 of three
-# quadwords), outbound mailbox 1,
-# stop 0x2000.
+# Protocol: $3 = SPU index, $4 = EA of the 128-byte parameter block: (index EA, item count,
+# claim counter EA, tail), (shift, first range per SPE, -, -). At the end: refit_stats =
+# items, nodes and polls (word 0 of three quadwords), outbound mailbox 1, stop 0x2000.
 
         .data
         .align 7
 params:         .space 128
 claimbuf:       .space 128
 donebuf:        .space 128
-pollbuf:        .space 128
+pollbuf:        .space 256
+idxbuf:         .space 128
 item0:          .space REFIT_ITEM_BYTES
 item1:          .space REFIT_ITEM_BYTES
 data0:          .space REFIT_DATA_BYTES
@@ -44,19 +53,21 @@ out0:           .space REFIT_OUT_BYTES
 out1:           .space REFIT_OUT_BYTES
         .global refit_stats
 refit_stats:    .space 48
-k_inc0:         .long 1, 0, 0, 0
 k_w3:           .long 0, 0, 0, 0xffffffff
 
-# registers: $2 zero; $10 item count, $11 items EA, $12 claim counter EA;
+# registers: $2 zero; $10 item count, $11 index EA, $12 claim counter EA, $13 tail,
+# $14 claim shift, $15 this SPE's offset in a done row (16 * index);
 # current item: $20 block, $21 gathered data, $22 records out, $23 tag (0/1), $30 index;
-# next item: $24, $25, $26, $27, $31; $32 the wait last seen over (EA of a done counter);
-# $33 next item's gather issued early; $34 next item exists;
+# next item: $24, $25, $26, $27, $31; $51 end of the claimed range;
+# $32 the wait last seen over (EA of a done row); $33 next item's gather issued early;
+# $34 next item exists; $49 height counted in $50 (items this SPE finished of it);
 # statistics: $40 items, $41 nodes, $42 polls
 
         .text
         .global _start
 _start:
         il      $2, 0
+        shli    $15, $3, 4
         ila     $5, params
         il      $6, 128
         wrch    $MFC_LSA, $5
@@ -72,9 +83,15 @@ _start:
         wrch    $MFC_WrTagUpdate, $7
         rdch    $7, $MFC_RdTagStat
         lqd     $8, 0($5)
-        ori     $11, $8, 0                    # items EA
+        ori     $11, $8, 0                    # index EA
         rotqbyi $10, $8, 4                    # item count
         rotqbyi $12, $8, 8                    # claim counter EA
+        rotqbyi $13, $8, 12                   # tail
+        lqd     $8, 16($5)
+        ori     $14, $8, 0                    # shift
+        rotqbyi $9, $8, 4                     # first range: [index * C, index * C + C)
+        mpyu    $30, $3, $9
+        a       $51, $30, $9
         ila     $20, item0
         ila     $21, data0
         ila     $22, out0
@@ -87,11 +104,16 @@ _start:
         il      $40, 0
         il      $41, 0
         il      $42, 0
-        # the first item: its block, its height's wait, its gather
-        brsl    $0, claim
+        il      $49, -1
+        il      $50, 0
+        brnz    $9, 1f
+        brsl    $0, claim                     # no first range: claim one
         ori     $30, $3, 0
-        clgt    $6, $10, $30
+        ori     $51, $4, 0
+1:      clgt    $6, $10, $30
         brz     $6, finish
+        # the first item: its block, its height's wait, its gather
+        ori     $3, $30, 0
         ori     $4, $20, 0
         ori     $5, $23, 0
         brsl    $0, fetch_item
@@ -105,12 +127,18 @@ _start:
         brsl    $0, gather
 
 item_loop:
-        # claim the next item and fetch its block while the current one's gather runs
+        # the next item: the next of the range, or the first of a new one; its block is
+        # fetched while the current one's gather runs
+        ai      $31, $30, 1
+        clgt    $6, $51, $31
+        brnz    $6, 1f
         brsl    $0, claim
         ori     $31, $3, 0
-        il      $33, 0
+        ori     $51, $4, 0
+1:      il      $33, 0
         clgt    $34, $10, $31
         brz     $34, 1f
+        ori     $3, $31, 0
         ori     $4, $24, 0
         ori     $5, $27, 0
         brsl    $0, fetch_item
@@ -119,7 +147,7 @@ item_loop:
         brz     $34, 2f
         ori     $5, $27, 0
         brsl    $0, wait_tag                  # the next item's block
-        lqd     $6, 16($24)                   # its wait: counter EA, count
+        lqd     $6, 16($24)                   # its wait: done row EA, count
         rotqbyi $7, $6, 4
         ceq     $8, $6, $32
         ceqi    $9, $7, 0
@@ -132,61 +160,81 @@ item_loop:
         il      $33, 1
 
         # fold the current item's nodes into their records
-2:      lqd     $6, 0($20)                    # n_nodes, gather bytes, hi offset, done EA
-        rotqbyi $15, $6, 8                    # offset of a box's maximum (0 for a point)
-        ai      $16, $15, 16                  # element stride
-        ori     $17, $6, 0                    # nodes left
+2:      lqd     $6, 0($20)                    # n_nodes, gather bytes, hi offset, done row
+        rotqbyi $16, $6, 8                    # offset of a box's maximum (0 for a point)
+        ai      $17, $16, 16                  # element stride
+        ori     $18, $6, 0                    # nodes left
         a       $41, $41, $6
-        ai      $18, $20, REFIT_ENTRIES
-        ori     $19, $21, 0
-        ori     $28, $22, 0
-        lqa     $29, k_w3
+        ai      $19, $20, 48
+        ori     $28, $21, 0
+        ori     $29, $22, 0
+        lqa     $35, k_w3
 node_loop:
-        lqd     $35, 0($18)                   # elements, node, link, count_axis
-        lqd     $36, 0($19)                   # the first point or box
-        lqx     $37, $19, $15
-        a       $19, $19, $16
-        ai      $38, $35, -1
-        brz     $38, 4f
+        lqd     $36, 0($19)                   # elements, node, link, count_axis
+        lqd     $37, 0($28)                   # the first point or box
+        lqx     $38, $28, $16
+        a       $28, $28, $17
+        ai      $39, $36, -1
+        brz     $39, 4f
         hbrr    .Lfold_br, 3f
-3:      lqd     $43, 0($19)
-        lqx     $44, $19, $15
-        a       $19, $19, $16
-        ai      $38, $38, -1
-        fcgt    $45, $36, $43
-        fcgt    $46, $44, $37
-        selb    $36, $36, $43, $45
-        selb    $37, $37, $44, $46
+3:      lqd     $43, 0($28)
+        lqx     $44, $28, $16
+        a       $28, $28, $17
+        ai      $39, $39, -1
+        fcgt    $45, $37, $43
+        fcgt    $46, $44, $38
+        selb    $37, $37, $43, $45
+        selb    $38, $38, $44, $46
 .Lfold_br:
-        brnz    $38, 3b
-4:      rotqbyi $47, $35, 12                  # link into word 3
-        selb    $36, $36, $47, $29            # min, link
-        selb    $37, $37, $35, $29            # max, count_axis
-        stqd    $36, 0($28)
-        stqd    $37, 16($28)
-        ai      $28, $28, 32
-        ai      $18, $18, 16
-        ai      $17, $17, -1
-        brnz    $17, node_loop
+        brnz    $39, 3b
+4:      rotqbyi $47, $36, 12                  # link into word 3
+        selb    $37, $37, $47, $35            # min, link
+        selb    $38, $38, $36, $35            # max, count_axis
+        stqd    $37, 0($29)
+        stqd    $38, 16($29)
+        ai      $29, $29, 32
+        ai      $19, $19, 16
+        ai      $18, $18, -1
+        brnz    $18, node_loop
 
-        # scatter the records, and once they are out count the item done
+        # scatter the records; once they are out, count the item done in this SPE's
+        # quadword of its height's row
         lqd     $7, 16($20)
-        rotqbyi $7, $7, 8                     # scatter list bytes
-        il      $8, REFIT_SCATTER
-        a       $8, $8, $20
-        ai      $9, $23, 2                    # tag 2 + buffer
+        lqd     $8, 32($20)
+        rotqbyi $8, $8, 4
+        a       $8, $8, $20                   # the scatter list
+        rotqbyi $9, $7, 8                     # its bytes
+        ai      $3, $23, 2                    # tag 2 + buffer
         il      $5, 0x24                      # putl
         wrch    $MFC_LSA, $22
         wrch    $MFC_EAH, $2
         wrch    $MFC_EAL, $8
-        wrch    $MFC_Size, $7
-        wrch    $MFC_TagID, $9
+        wrch    $MFC_Size, $9
+        wrch    $MFC_TagID, $3
         wrch    $MFC_Cmd, $5
-        ori     $5, $9, 0
+        ori     $5, $3, 0
         brsl    $0, wait_tag
+        il      $5, 4
+        brsl    $0, wait_tag                  # the last count's put has read its buffer
+        rotqbyi $7, $7, 12                    # height
+        ceq     $8, $7, $49
+        selb    $50, $2, $50, $8              # a new height counts from 0
+        ori     $49, $7, 0
+        ai      $50, $50, 1
+        stqa    $50, donebuf
         lqd     $6, 0($20)
-        rotqbyi $13, $6, 12                   # this height's done counter
-        brsl    $0, count_done
+        rotqbyi $6, $6, 12
+        a       $6, $6, $15
+        ila     $5, donebuf
+        il      $7, 16
+        il      $8, 4
+        il      $9, 0x20                      # put
+        wrch    $MFC_LSA, $5
+        wrch    $MFC_EAH, $2
+        wrch    $MFC_EAL, $6
+        wrch    $MFC_Size, $7
+        wrch    $MFC_TagID, $8
+        wrch    $MFC_Cmd, $9
         ai      $40, $40, 1
         brz     $34, finish
         brnz    $33, 5f
@@ -213,7 +261,7 @@ node_loop:
         br      item_loop
 
 finish:
-        il      $5, 0xf                       # every tag: nothing left in flight
+        il      $5, 0xff                      # every tag: nothing left in flight
         wrch    $MFC_WrTagMask, $5
         il      $5, 2
         wrch    $MFC_WrTagUpdate, $5
@@ -225,10 +273,10 @@ finish:
         wrch    $SPU_WrOutMbox, $5
         stop    0x2000
 
-# ---- claim: $3 = the next item's index (atomic fetch-and-increment of the claim counter)
+# ---- claim: a range [$3, $4) of items from the shared counter (atomic getllar/putllc):
+# (tail - v) >> shift items (at least 1) below the tail, all the rest from it on
 claim:
         ila     $5, claimbuf
-        lqa     $8, k_inc0
 1:      wrch    $MFC_LSA, $5
         wrch    $MFC_EAH, $2
         wrch    $MFC_EAL, $12
@@ -236,8 +284,22 @@ claim:
         wrch    $MFC_Cmd, $6
         rdch    $6, $MFC_RdAtomicStat
         lqd     $7, 0($5)
-        a       $9, $7, $8
-        stqd    $9, 0($5)
+        ori     $3, $7, 0
+        ori     $4, $7, 0
+        clgt    $6, $10, $7
+        brz     $6, 2f                        # none left: nothing to write
+        sf      $8, $7, $13                   # tail - v
+        sfi     $9, $14, 0
+        rotm    $9, $8, $9                    # (tail - v) >> shift
+        ceqi    $6, $9, 0
+        sf      $9, $6, $9                    # at least 1 (ceqi gives -1)
+        cgti    $6, $8, 0
+        sf      $52, $7, $10                  # n - v: from the tail on, everything
+        selb    $9, $52, $9, $6
+        a       $4, $7, $9
+        lqd     $6, 0($5)
+        a       $6, $6, $9
+        stqd    $6, 0($5)
         wrch    $MFC_LSA, $5
         wrch    $MFC_EAH, $2
         wrch    $MFC_EAL, $12
@@ -246,39 +308,30 @@ claim:
         rdch    $6, $MFC_RdAtomicStat
         andi    $6, $6, 1
         brnz    $6, 1b                        # reservation lost: again
-        ori     $3, $7, 0
-        bi      $0
+2:      bi      $0
 
-# ---- count_done: atomic increment of the done counter at EA $13 (a quadword's word 0)
-count_done:
-        ila     $5, donebuf
-        lqa     $8, k_inc0
-        andi    $4, $13, 127                  # its offset in the line
-        andi    $9, $13, -128
-1:      wrch    $MFC_LSA, $5
-        wrch    $MFC_EAH, $2
-        wrch    $MFC_EAL, $9
-        il      $6, 0xd0                      # getllar
-        wrch    $MFC_Cmd, $6
-        rdch    $6, $MFC_RdAtomicStat
-        lqx     $7, $5, $4
-        a       $7, $7, $8
-        stqx    $7, $5, $4
-        wrch    $MFC_LSA, $5
-        wrch    $MFC_EAH, $2
-        wrch    $MFC_EAL, $9
-        il      $6, 0xb4                      # putllc
-        wrch    $MFC_Cmd, $6
-        rdch    $6, $MFC_RdAtomicStat
-        andi    $6, $6, 1
-        brnz    $6, 1b
-        bi      $0
-
-# ---- fetch_item: the block of item $3 into local store at $4, tag $5
+# ---- fetch_item: the block of item $3 into local store at $4, tag $5 (its index entry
+# first)
 fetch_item:
-        shli    $6, $3, REFIT_ITEM_SHIFT
+        shli    $6, $3, 4
         a       $6, $6, $11
-        il      $7, REFIT_ITEM_BYTES
+        ila     $7, idxbuf
+        il      $8, 16
+        il      $9, 6
+        wrch    $MFC_LSA, $7
+        wrch    $MFC_EAH, $2
+        wrch    $MFC_EAL, $6
+        wrch    $MFC_Size, $8
+        wrch    $MFC_TagID, $9
+        il      $8, 0x40                      # get
+        wrch    $MFC_Cmd, $8
+        il      $8, 64
+        wrch    $MFC_WrTagMask, $8
+        il      $8, 2
+        wrch    $MFC_WrTagUpdate, $8
+        rdch    $8, $MFC_RdTagStat
+        lqa     $6, idxbuf                    # block EA, bytes
+        rotqbyi $7, $6, 4
         il      $8, 0x40                      # get
         wrch    $MFC_LSA, $4
         wrch    $MFC_EAH, $2
@@ -298,9 +351,8 @@ wait_tag:
         rdch    $6, $MFC_RdTagStat
         bi      $0
 
-# ---- wait_level: until the height below item block $4's is done (its done counter
-# reached its item count), polling the counter with getllar; $32 remembers the last wait
-# seen over
+# ---- wait_level: until the height below item block $4's is done (the sum of its done row
+# reached its item count), polling the row; $32 remembers the last wait seen over
 wait_level:
         lqd     $6, 16($4)
         rotqbyi $7, $6, 4                     # items to wait for
@@ -308,16 +360,26 @@ wait_level:
         ceq     $8, $6, $32
         brnz    $8, 2f
         ila     $5, pollbuf
-        andi    $4, $6, 127
-        andi    $9, $6, -128
-1:      wrch    $MFC_LSA, $5
+1:      il      $8, 256
+        il      $9, 7
+        wrch    $MFC_LSA, $5
         wrch    $MFC_EAH, $2
-        wrch    $MFC_EAL, $9
-        il      $8, 0xd0                      # getllar
+        wrch    $MFC_EAL, $6
+        wrch    $MFC_Size, $8
+        wrch    $MFC_TagID, $9
+        il      $8, 0x40                      # get
         wrch    $MFC_Cmd, $8
-        rdch    $8, $MFC_RdAtomicStat
-        lqx     $8, $5, $4
+        il      $8, 128
+        wrch    $MFC_WrTagMask, $8
+        il      $8, 2
+        wrch    $MFC_WrTagUpdate, $8
+        rdch    $8, $MFC_RdTagStat
         ai      $42, $42, 1
+        il      $8, 0
+        .irp    Q, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
+        lqd     $9, \Q($5)
+        a       $8, $8, $9
+        .endr
         clgt    $8, $7, $8
         brnz    $8, 1b
         ori     $32, $6, 0
@@ -327,8 +389,8 @@ wait_level:
 gather:
         lqd     $7, 0($4)
         rotqbyi $7, $7, 4                     # list bytes
-        il      $8, REFIT_GATHER
-        a       $8, $8, $4
+        lqd     $8, 32($4)
+        a       $8, $8, $4                    # the list
         il      $9, 0x44                      # getl
         wrch    $MFC_LSA, $5
         wrch    $MFC_EAH, $2

@@ -24,18 +24,15 @@ use spu_isa::jit::{CodeCache, Engine};
 pub const SOURCE: &str = include_str!("../../kernels/refit.s");
 
 /// Nodes per work item.
-pub const MAX_NODES: usize = 24;
-/// Points or boxes an item folds (60 triangles' corners).
-pub const MAX_ELEMENTS: usize = 180;
-/// log2 of a work item's bytes in main memory.
-pub const ITEM_SHIFT: u32 = 11;
-pub const ITEM_BYTES: usize = 1 << ITEM_SHIFT;
-/// Offsets in an item: the header's two quadwords, then the node entries, the gather list
-/// and the scatter list.
-pub const ENTRIES: usize = 32;
-pub const GATHER: usize = ENTRIES + MAX_NODES * 16;
-pub const SCATTER: usize = GATHER + MAX_ELEMENTS * 8;
-const _: () = assert!(SCATTER + MAX_NODES * 8 <= ITEM_BYTES);
+pub const MAX_NODES: usize = 128;
+/// Points or boxes an item folds (341 triangles' corners).
+pub const MAX_ELEMENTS: usize = 1024;
+/// Offset of the node entries in an item's block (after the header's three quadwords).
+pub const ENTRIES: usize = 48;
+/// Local-store bytes for the largest item's block.
+pub const ITEM_BYTES: usize = (ENTRIES + MAX_NODES * 16 + MAX_ELEMENTS * 8 + MAX_NODES * 8)
+    .div_ceil(128)
+    * 128;
 /// Local-store bytes for an item's gathered points (16 bytes each) or child pairs (64).
 pub const DATA_BYTES: usize = if MAX_ELEMENTS * 16 > MAX_NODES * 64 {
     MAX_ELEMENTS * 16
@@ -46,16 +43,14 @@ pub const DATA_BYTES: usize = if MAX_ELEMENTS * 16 > MAX_NODES * 64 {
     * 128;
 /// Local-store bytes for an item's node records.
 pub const OUT_BYTES: usize = (MAX_NODES * NODE_SIZE).div_ceil(128) * 128;
+/// Bytes of a height's row of done counters: a quadword per SPE.
+const DONE_ROW: usize = 16 * 16;
 
 /// The symbols the kernel is assembled with: its buffers' sizes and item offsets, from
 /// the constants above.
 pub fn defines() -> Vec<(&'static str, i64)> {
     vec![
         ("REFIT_ITEM_BYTES", ITEM_BYTES as i64),
-        ("REFIT_ITEM_SHIFT", ITEM_SHIFT as i64),
-        ("REFIT_ENTRIES", ENTRIES as i64),
-        ("REFIT_GATHER", GATHER as i64),
-        ("REFIT_SCATTER", SCATTER as i64),
         ("REFIT_DATA_BYTES", DATA_BYTES as i64),
         ("REFIT_OUT_BYTES", OUT_BYTES as i64),
     ]
@@ -161,22 +156,31 @@ impl RefitPlan {
         self.per_height.len()
     }
 
-    /// The items' blocks for main memory, the done counters of each height at `done_addr`.
-    fn encode(&self, staged: &StagedScene, done_addr: u32) -> Vec<u8> {
+    /// The first item of the top heights that have one item each: from it on, one claim
+    /// takes everything (one SPE refits the top of the tree without waiting on others).
+    pub fn tail(&self) -> usize {
+        let single = self.per_height.iter().rev().take_while(|&&n| n == 1).count();
+        self.items.len() - single
+    }
+
+    /// The items' index (block EA, bytes) and blocks for main memory at `at`, the done rows
+    /// of each height at `done_addr`.
+    fn encode(&self, staged: &StagedScene, at: u32, done_addr: u32) -> Vec<u8> {
         let header = &staged.header;
-        let mut out = vec![0u8; self.items.len() * ITEM_BYTES];
-        let done = |h: usize| done_addr + 16 * h as u32;
-        for (item, block) in self.items.iter().zip(out.chunks_exact_mut(ITEM_BYTES)) {
-            let mut put = |at: usize, words: &[u32]| {
-                for (k, w) in words.iter().enumerate() {
-                    block[at + 4 * k..at + 4 * k + 4].copy_from_slice(&w.to_be_bytes());
-                }
-            };
+        let index_bytes = (16 * self.items.len()).div_ceil(128) * 128;
+        let mut out = vec![0u8; index_bytes];
+        let put = |out: &mut Vec<u8>, at: usize, words: &[u32]| {
+            for (k, w) in words.iter().enumerate() {
+                out[at + 4 * k..at + 4 * k + 4].copy_from_slice(&w.to_be_bytes());
+            }
+        };
+        let row = |h: usize| done_addr + (DONE_ROW * h) as u32;
+        for (i, item) in self.items.iter().enumerate() {
             let leaves = item.height == 0;
             let mut gather = Vec::new();
-            for (k, &index) in item.nodes.iter().enumerate() {
+            for &index in &item.nodes {
                 let node = &staged.nodes[index];
-                let elements = if leaves {
+                if leaves {
                     let first = node.link as usize;
                     for record in &staged.triangles[first..first + node.triangle_count() as usize]
                     {
@@ -184,40 +188,62 @@ impl RefitPlan {
                             gather.push([16, header.vertex_addr + v * VERTEX_SIZE as u32]);
                         }
                     }
-                    3 * node.triangle_count()
                 } else {
                     gather.push([64, header.node_addr + node.link * NODE_SIZE as u32]);
+                }
+            }
+            let n = item.nodes.len();
+            let gather_at = ENTRIES + 16 * n;
+            let scatter_at = gather_at + (8 * gather.len()).div_ceil(16) * 16;
+            let bytes = (scatter_at + 8 * n).div_ceil(128) * 128;
+            let block = out.len();
+            out.resize(block + bytes, 0);
+            put(
+                &mut out,
+                16 * i,
+                &[at + block as u32, bytes as u32, 0, 0],
+            );
+            let (wait_addr, wait_count) = match item.height {
+                0 => (0, 0),
+                h => (row(h - 1), self.per_height[h - 1]),
+            };
+            put(
+                &mut out,
+                block,
+                &[
+                    n as u32,
+                    8 * gather.len() as u32,
+                    if leaves { 0 } else { 16 },
+                    row(item.height),
+                    wait_addr,
+                    wait_count,
+                    8 * n as u32,
+                    item.height as u32,
+                    gather_at as u32,
+                    scatter_at as u32,
+                ],
+            );
+            for (k, &index) in item.nodes.iter().enumerate() {
+                let node = &staged.nodes[index];
+                let elements = if leaves {
+                    3 * node.triangle_count()
+                } else {
                     2
                 };
                 put(
-                    ENTRIES + 16 * k,
+                    &mut out,
+                    block + ENTRIES + 16 * k,
                     &[elements, index as u32, node.link, node.count_axis],
                 );
                 put(
-                    SCATTER + 8 * k,
+                    &mut out,
+                    block + scatter_at + 8 * k,
                     &[32, header.node_addr + (index * NODE_SIZE) as u32],
                 );
             }
             for (k, element) in gather.iter().enumerate() {
-                put(GATHER + 8 * k, element);
+                put(&mut out, block + gather_at + 8 * k, element);
             }
-            let (wait_addr, wait_count) = match item.height {
-                0 => (0, 0),
-                h => (done(h - 1), self.per_height[h - 1]),
-            };
-            put(
-                0,
-                &[
-                    item.nodes.len() as u32,
-                    8 * gather.len() as u32,
-                    if leaves { 0 } else { 16 },
-                    done(item.height),
-                    wait_addr,
-                    wait_count,
-                    8 * item.nodes.len() as u32,
-                    item.height as u32,
-                ],
-            );
         }
         out
     }
@@ -287,8 +313,8 @@ pub fn run(
     let params = align(scene_end);
     let claim = params + 128;
     let done = claim + 128;
-    let items = align(done + 16 * plan.heights());
-    let encoded = plan.encode(staged, done as u32);
+    let items = align(done + DONE_ROW * plan.heights());
+    let encoded = plan.encode(staged, items as u32, done as u32);
     let end = items + encoded.len();
     if end > u32::MAX as usize {
         return Err("the refit's work does not fit a 32-bit address space".into());
@@ -302,12 +328,23 @@ pub fn run(
         record[0..12].fill(0);
         record[16..28].fill(0);
     }
-    for (k, word) in [items as u32, plan.items() as u32, claim as u32]
-        .iter()
-        .enumerate()
-    {
+    // SPE i starts on items [i * first, (i + 1) * first); the counter hands out the rest,
+    // claims shrinking as (tail - claimed) >> shift (a share of what is left per SPE)
+    let spes = config.spes as u32;
+    let shift = (2 * spes).next_power_of_two().trailing_zeros();
+    let first = plan.tail() as u32 / (2 * spes);
+    let words = [
+        items as u32,
+        plan.items() as u32,
+        claim as u32,
+        plan.tail() as u32,
+        shift,
+        first,
+    ];
+    for (k, word) in words.iter().enumerate() {
         memory[params + 4 * k..params + 4 * k + 4].copy_from_slice(&word.to_be_bytes());
     }
+    memory[claim..claim + 4].copy_from_slice(&(first * spes).to_be_bytes());
     memory[items..end].copy_from_slice(&encoded);
     let stats_at = program
         .symbols
