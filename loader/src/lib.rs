@@ -6,7 +6,8 @@
 //!   VW Beetle scenes, so everything works where the shared scene files are absent.
 //! - [`camera`]: the pinhole camera and the exact primary-ray convention the kernels share.
 //! - [`animation`], [`refit`]: moving scenes (built-in animations, OBJ keyframes) and the
-//!   per-frame BVH refit with its rebuild policy; [`spu_refit`], the same refit on the SPEs.
+//!   per-frame BVH refit with its rebuild policy; [`spu_refit`], the same refit on the SPEs;
+//!   [`animate`], an animation's frames: refit, render, validate.
 //! - [`bvh`]: the binned-SAH bounding volume hierarchy (paper section 3.2).
 //! - [`layout`]: the big-endian DMA records (32-byte nodes, 64-byte triangle and vertex
 //!   records, paper section 5.1) and the staged main-memory image.
@@ -23,6 +24,7 @@
 //! The SPUs, their main memory, quanta and host threads are the SPE runtime's
 //! ([`spu_spe::System`]); [`runtime`] runs a frame's SPUs on it.
 
+pub mod animate;
 pub mod animation;
 pub mod bvh;
 pub mod camera;

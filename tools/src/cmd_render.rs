@@ -17,6 +17,9 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 pub fn run(args: Args) -> exit::Result<ExitCode> {
+    if args.frames.is_some() {
+        return crate::cmd_animate::run(&args);
+    }
     let (config, outputs) = args.config()?;
     let started = Instant::now();
     let prepared = render::prepare(&config.scene)?;

@@ -5,6 +5,7 @@
 #[macro_use]
 mod exit;
 
+mod cmd_animate;
 mod cmd_ar;
 mod cmd_as;
 mod cmd_bench;

@@ -103,6 +103,19 @@ pub struct Args {
     /// Timeline of the frame over simulated time (Chrome/Perfetto trace JSON).
     #[arg(long)]
     pub trace: Option<PathBuf>,
+    /// Render N frames of a moving scene (1..18000): a built-in one (room-flag,
+    /// beetle-drive) or OBJ/PLY keyframes named by a pattern (walk_%03d.obj, frames from 0);
+    /// the BVH is refitted on the SPEs each frame. -o out.png writes out_000.png, ...;
+    /// --stats a JSON array of the frames' statistics.
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// With --frames: also every frame as one animated PNG (30 frames per second).
+    #[arg(long)]
+    pub animation: Option<PathBuf>,
+    /// With --frames: rebuild the BVH on the host when its refitted SAH cost exceeds this
+    /// many times its cost when built (above 1).
+    #[arg(long = "rebuild-ratio", default_value_t = spu_loader::refit::REBUILD_RATIO)]
+    pub rebuild_ratio: f32,
 }
 
 /// What `spu render` writes and says besides rendering.
@@ -220,7 +233,14 @@ impl Args {
             Some(text) => Some(Camera::parse(text).map_err(|e| format!("--camera: {e}"))?),
             None => None,
         };
-        check_outputs(self)?;
+        match self.frames {
+            // an animation's files are its own (cmd_animate)
+            Some(_) => crate::cmd_animate::check_options(self)?,
+            None if self.animation.is_some() => {
+                return Err(Error::input("--animation writes the frames of --frames N"))
+            }
+            None => check_outputs(self)?,
+        }
         let config = RenderConfig {
             camera,
             width: self.width,
