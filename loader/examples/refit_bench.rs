@@ -11,7 +11,9 @@ use spu_loader::spu_refit::{self, RefitConfig, RefitPlan};
 use spu_loader::{BvhConfig, StagedScene};
 
 fn main() -> Result<(), String> {
-    let name = std::env::args().nth(1).unwrap_or_else(|| "room-flag".into());
+    let name = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "room-flag".into());
     let animation = Animation::open(&name, 2)?;
     let mut tree = AnimatedBvh::new(
         animation.first(),

@@ -104,7 +104,7 @@ fn flag_point(i: usize, j: usize, frame: u32) -> Vec3 {
     let v = j as f32 / FLAG_ROWS as f32;
     let phase = TAU * (1.5 * u - frame as f32 / 24.0);
     let z = -1.2 + 0.22 * u * phase.sin();
-    let y = 2.25 - 0.75 * v - 0.03 * u * (phase.cos() + 1.0);
+    let y = 1.95 - 0.7 * v - 0.03 * u * (phase.cos() + 1.0);
     Vec3::new(-1.1 + 1.5 * u, y, z)
 }
 

@@ -30,9 +30,8 @@ pub const MAX_ELEMENTS: usize = 1024;
 /// Offset of the node entries in an item's block (after the header's three quadwords).
 pub const ENTRIES: usize = 48;
 /// Local-store bytes for the largest item's block.
-pub const ITEM_BYTES: usize = (ENTRIES + MAX_NODES * 16 + MAX_ELEMENTS * 8 + MAX_NODES * 8)
-    .div_ceil(128)
-    * 128;
+pub const ITEM_BYTES: usize =
+    (ENTRIES + MAX_NODES * 16 + MAX_ELEMENTS * 8 + MAX_NODES * 8).div_ceil(128) * 128;
 /// Local-store bytes for an item's gathered points (16 bytes each) or child pairs (64).
 pub const DATA_BYTES: usize = if MAX_ELEMENTS * 16 > MAX_NODES * 64 {
     MAX_ELEMENTS * 16
@@ -159,7 +158,12 @@ impl RefitPlan {
     /// The first item of the top heights that have one item each: from it on, one claim
     /// takes everything (one SPE refits the top of the tree without waiting on others).
     pub fn tail(&self) -> usize {
-        let single = self.per_height.iter().rev().take_while(|&&n| n == 1).count();
+        let single = self
+            .per_height
+            .iter()
+            .rev()
+            .take_while(|&&n| n == 1)
+            .count();
         self.items.len() - single
     }
 
@@ -182,8 +186,7 @@ impl RefitPlan {
                 let node = &staged.nodes[index];
                 if leaves {
                     let first = node.link as usize;
-                    for record in &staged.triangles[first..first + node.triangle_count() as usize]
-                    {
+                    for record in &staged.triangles[first..first + node.triangle_count() as usize] {
                         for v in record.vertices {
                             gather.push([16, header.vertex_addr + v * VERTEX_SIZE as u32]);
                         }
@@ -198,11 +201,7 @@ impl RefitPlan {
             let bytes = (scatter_at + 8 * n).div_ceil(128) * 128;
             let block = out.len();
             out.resize(block + bytes, 0);
-            put(
-                &mut out,
-                16 * i,
-                &[at + block as u32, bytes as u32, 0, 0],
-            );
+            put(&mut out, 16 * i, &[at + block as u32, bytes as u32, 0, 0]);
             let (wait_addr, wait_count) = match item.height {
                 0 => (0, 0),
                 h => (row(h - 1), self.per_height[h - 1]),
@@ -225,11 +224,7 @@ impl RefitPlan {
             );
             for (k, &index) in item.nodes.iter().enumerate() {
                 let node = &staged.nodes[index];
-                let elements = if leaves {
-                    3 * node.triangle_count()
-                } else {
-                    2
-                };
+                let elements = if leaves { 3 * node.triangle_count() } else { 2 };
                 put(
                     &mut out,
                     block + ENTRIES + 16 * k,
@@ -303,7 +298,10 @@ pub fn run(
     use spu_spe::{ContextConfig, Outcome, Quantum, State, System};
     use std::ops::ControlFlow;
     if !(1..=16).contains(&config.spes) {
-        return Err(format!("the refit runs on 1 to 16 SPEs, not {}", config.spes));
+        return Err(format!(
+            "the refit runs on 1 to 16 SPEs, not {}",
+            config.spes
+        ));
     }
     if staged.base != SCENE_BASE {
         return Err(format!("the scene must be staged at {SCENE_BASE:#x}"));
@@ -457,7 +455,11 @@ mod tests {
         let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
         let plan = RefitPlan::new(&staged).unwrap();
         let covered: usize = plan.items.iter().map(|i| i.nodes.len()).sum();
-        assert_eq!(covered, staged.nodes.len() - 1, "every node but the padding");
+        assert_eq!(
+            covered,
+            staged.nodes.len() - 1,
+            "every node but the padding"
+        );
         assert!(plan.items.windows(2).all(|w| w[0].height <= w[1].height));
         assert_eq!(plan.items.last().unwrap().nodes, vec![0], "the root last");
         assert_eq!(

@@ -72,11 +72,9 @@ pub fn check_options(args: &Args) -> exit::Result<()> {
         path.extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("png"))
     };
-    for (option, path) in std::iter::once(("-o", &args.output)).chain(
-        args.animation
-            .as_ref()
-            .map(|path| ("--animation", path)),
-    ) {
+    for (option, path) in std::iter::once(("-o", &args.output))
+        .chain(args.animation.as_ref().map(|path| ("--animation", path)))
+    {
         if !is_png(path) {
             return Err(Error::input(format!(
                 "{option} {}: written as PNG; name it .png",
@@ -149,8 +147,10 @@ pub fn run(args: &Args) -> exit::Result<ExitCode> {
         indicatif::ProgressDrawTarget::hidden(),
     );
     bar.set_style(
-        indicatif::ProgressStyle::with_template("{spinner} frames {pos}/{len} {wide_bar} {elapsed}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        indicatif::ProgressStyle::with_template(
+            "{spinner} frames {pos}/{len} {wide_bar} {elapsed}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
@@ -175,8 +175,8 @@ pub fn run(args: &Args) -> exit::Result<ExitCode> {
             .map_err(|e| Error::output(&path, e))?;
         exit::write_file(&path, &png)?;
         let validation = if outputs.validate {
-            let v = render::validate(&frame.prepared, &config, &frame.frame)
-                .map_err(Error::failure)?;
+            let v =
+                render::validate(&frame.prepared, &config, &frame.frame).map_err(Error::failure)?;
             if !v.passed() {
                 differing += 1;
                 for message in &v.messages {

@@ -16,7 +16,12 @@ pub fn encode_rgb(rgb: &[u8], width: u32, height: u32) -> Result<Vec<u8>, String
 
 /// The animated PNG (APNG) of `frames`, each a `width` x `height` image of packed 8-bit RGB
 /// pixels, shown `1 / fps` seconds each and looping; viewers without APNG show the first.
-pub fn encode_apng(frames: &[Vec<u8>], width: u32, height: u32, fps: u16) -> Result<Vec<u8>, String> {
+pub fn encode_apng(
+    frames: &[Vec<u8>],
+    width: u32,
+    height: u32,
+    fps: u16,
+) -> Result<Vec<u8>, String> {
     let mut bytes = Vec::new();
     let mut encoder = png::Encoder::new(&mut bytes, width, height);
     encoder.set_color(png::ColorType::Rgb);

@@ -2,6 +2,7 @@
 //! module of it, so the build links one test binary instead of one per file
 //! (`tests/tests/test_files.rs` checks that none is left out).
 
+mod animate_cli;
 mod cli;
 mod exit_status;
 mod ext_cli;
