@@ -54,6 +54,7 @@ out1:           .space REFIT_OUT_BYTES
         .global refit_stats
 refit_stats:    .space 48
 k_w3:           .long 0, 0, 0, 0xffffffff
+k_lo16:         .long 0xffff, 0, 0, 0
 
 # registers: $2 zero; $10 item count, $11 index EA, $12 claim counter EA, $13 tail,
 # $14 claim shift, $15 this SPE's offset in a done row (16 * index);
@@ -159,40 +160,75 @@ item_loop:
         brsl    $0, gather                    # gathers while the current item is folded
         il      $33, 1
 
-        # fold the current item's nodes into their records
-2:      lqd     $6, 0($20)                    # n_nodes, gather bytes, hi offset, done row
-        rotqbyi $16, $6, 8                    # offset of a box's maximum (0 for a point)
-        ai      $17, $16, 16                  # element stride
+        # fold the current item's nodes into their records: a leaf's corners through its
+        # offsets into the gathered vertices, an inner node's child pair from the gathered
+        # pairs (the upper tree) or from the records already folded (a subtree)
+2:      lqd     $6, 0($20)                    # n_nodes, gather bytes, pairs local, done row
         ori     $18, $6, 0                    # nodes left
         a       $41, $41, $6
+        rotqbyi $16, $6, 8
+        ceqi    $16, $16, 0
+        selb    $16, $22, $21, $16            # where child pairs are: gathered or folded
         ai      $19, $20, 48
-        ori     $28, $21, 0
-        ori     $29, $22, 0
         lqa     $35, k_w3
+        lqa     $29, k_lo16
 node_loop:
-        lqd     $36, 0($19)                   # elements, node, link, count_axis
-        lqd     $37, 0($28)                   # the first point or box
-        lqx     $38, $28, $16
-        a       $28, $28, $17
-        ai      $39, $36, -1
-        brz     $39, 4f
-        hbrr    .Lfold_br, 3f
-3:      lqd     $43, 0($28)
-        lqx     $44, $28, $16
-        a       $28, $28, $17
-        ai      $39, $39, -1
+        lqd     $36, 0($19)                   # corners | dest << 16, source, link, count_axis
+        and     $39, $36, $29                 # corners
+        rotmi   $17, $36, -16                 # dest
+        rotqbyi $28, $36, 4                   # source
+        brnz    $39, 5f
+        # a child pair: boxes at source, source + 32
+        a       $28, $28, $16
+        lqd     $37, 0($28)
+        lqd     $38, 16($28)
+        lqd     $43, 32($28)
+        lqd     $44, 48($28)
         fcgt    $45, $37, $43
         fcgt    $46, $44, $38
         selb    $37, $37, $43, $45
         selb    $38, $38, $44, $46
+        br      4f
+        # a leaf: its corners' offsets (words) at source in the block, a triangle a turn
+5:      a       $28, $28, $20
+        lqd     $43, 0($28)
+        rotqby  $43, $43, $28
+        lqx     $37, $21, $43                 # the first corner starts the fold
+        ori     $38, $37, 0
+        hbrr    .Lfold_br, 3f
+3:      ai      $52, $28, 4
+        ai      $53, $28, 8
+        lqd     $43, 0($28)
+        lqd     $44, 0($52)
+        lqd     $45, 0($53)
+        rotqby  $43, $43, $28
+        rotqby  $44, $44, $52
+        rotqby  $45, $45, $53
+        lqx     $43, $21, $43
+        lqx     $44, $21, $44
+        lqx     $45, $21, $45
+        ai      $28, $28, 12
+        ai      $39, $39, -3
+        fcgt    $46, $37, $43
+        fcgt    $47, $43, $38
+        selb    $37, $37, $43, $46
+        selb    $38, $38, $43, $47
+        fcgt    $46, $37, $44
+        fcgt    $47, $44, $38
+        selb    $37, $37, $44, $46
+        selb    $38, $38, $44, $47
+        fcgt    $46, $37, $45
+        fcgt    $47, $45, $38
+        selb    $37, $37, $45, $46
+        selb    $38, $38, $45, $47
 .Lfold_br:
         brnz    $39, 3b
 4:      rotqbyi $47, $36, 12                  # link into word 3
         selb    $37, $37, $47, $35            # min, link
         selb    $38, $38, $36, $35            # max, count_axis
-        stqd    $37, 0($29)
-        stqd    $38, 16($29)
-        ai      $29, $29, 32
+        a       $17, $17, $22
+        stqd    $37, 0($17)
+        stqd    $38, 16($17)
         ai      $19, $19, 16
         ai      $18, $18, -1
         brnz    $18, node_loop

@@ -9,7 +9,7 @@
 //! Nodes are grouped by height (leaves 0; an inner node one above its higher child): the
 //! leaves in triangle order, so that neighbouring leaves gather neighbouring corners, then
 //! each height's inner nodes in index order. An item is up to [`MAX_NODES`] nodes of one
-//! height with at most [`MAX_ELEMENTS`] elements to fold (a leaf: three corners per triangle;
+//! height with at most [`MAX_CORNERS`] elements to fold (a leaf: three corners per triangle;
 //! an inner node: its child pair), so one 2 KB block holds its header, its nodes, the DMA
 //! list gathering its corners (16 bytes of each vertex record) or child pairs (one 64-byte
 //! line each) and the DMA list scattering its node records. Items of a height wait for every
@@ -23,18 +23,23 @@ use spu_isa::jit::{CodeCache, Engine};
 /// The kernel's source.
 pub const SOURCE: &str = include_str!("../../kernels/refit.s");
 
-/// Nodes per work item.
+/// Nodes per work item of the upper tree.
 pub const MAX_NODES: usize = 128;
-/// Points or boxes an item folds (341 triangles' corners).
-pub const MAX_ELEMENTS: usize = 1024;
+/// A subtree item's limits: descendants of its root (their records and the root's fill
+/// [`OUT_BYTES`]), triangle corners, distinct vertices (gathered once each).
+pub const MAX_SUBTREE_NODES: usize = MAX_NODES - 1;
+pub const MAX_CORNERS: usize = 1536;
+pub const MAX_VERTICES: usize = 768;
 /// Offset of the node entries in an item's block (after the header's three quadwords).
 pub const ENTRIES: usize = 48;
-/// Local-store bytes for the largest item's block.
-pub const ITEM_BYTES: usize =
-    (ENTRIES + MAX_NODES * 16 + MAX_ELEMENTS * 8 + MAX_NODES * 8).div_ceil(128) * 128;
-/// Local-store bytes for an item's gathered points (16 bytes each) or child pairs (64).
-pub const DATA_BYTES: usize = if MAX_ELEMENTS * 16 > MAX_NODES * 64 {
-    MAX_ELEMENTS * 16
+/// Local-store bytes for the largest item's block (one DMA: at most 16 KB).
+pub const ITEM_BYTES: usize = 16384;
+const _: () =
+    assert!(ENTRIES + MAX_NODES * 16 + MAX_CORNERS * 4 + MAX_VERTICES * 8 + 16 <= ITEM_BYTES);
+const _: () = assert!(ENTRIES + MAX_NODES * (16 + 8 + 8) <= ITEM_BYTES);
+/// Local-store bytes for an item's gathered vertices (16 bytes each) or child pairs (64).
+pub const DATA_BYTES: usize = if MAX_VERTICES * 16 > MAX_NODES * 64 {
+    MAX_VERTICES * 16
 } else {
     MAX_NODES * 64
 }
@@ -60,11 +65,26 @@ pub fn program() -> Result<Program, String> {
     crate::runtime::assemble_kernel_with(SOURCE, "kernels/refit.s", &defines())
 }
 
-/// One work item: nodes of one height.
+/// One work item.
 #[derive(Clone, Debug, PartialEq)]
-struct Item {
-    height: usize,
-    nodes: Vec<usize>,
+enum Item {
+    /// A whole subtree: `root` and its descendants, the node range `first..end`.
+    Subtree {
+        root: usize,
+        first: usize,
+        end: usize,
+    },
+    /// Nodes of the upper tree at `height`, their child pairs gathered from main memory.
+    Upper { height: usize, nodes: Vec<usize> },
+}
+
+impl Item {
+    fn height(&self) -> usize {
+        match self {
+            Item::Subtree { .. } => 0,
+            Item::Upper { height, .. } => *height,
+        }
+    }
 }
 
 /// A staged scene's refit laid out for the SPEs: the items in claim order (heights upward).
@@ -76,69 +96,104 @@ pub struct RefitPlan {
 }
 
 impl RefitPlan {
-    /// The items refitting `staged`'s nodes. Refuses a leaf of more triangles than an item
-    /// folds.
+    /// The items refitting `staged`'s nodes: the largest subtrees within an item's limits
+    /// (height 0), then the nodes above them by height. Refuses a leaf of more triangles
+    /// than an item folds.
     pub fn new(staged: &StagedScene) -> Result<RefitPlan, String> {
         let nodes = &staged.nodes;
+        let mut items = Vec::new();
         if staged.triangles.is_empty() {
             return Ok(RefitPlan {
-                items: Vec::new(),
+                items,
                 per_height: Vec::new(),
             });
         }
-        let mut height = vec![0usize; nodes.len()];
+        let leaf = |i: usize| nodes[i].triangle_count() > 0;
+        // the end of each inner node's descendants (pairs in pre-order: a subtree's
+        // descendants are the range link..end)
+        let mut end = vec![0usize; nodes.len()];
         for index in (0..nodes.len()).rev() {
-            let node = &nodes[index];
-            if index != 1 && node.triangle_count() == 0 {
-                let c = node.link as usize;
-                height[index] = 1 + height[c].max(height[c + 1]);
+            if index != 1 && !leaf(index) {
+                let c = nodes[index].link as usize;
+                end[index] = (c + 2).max(end[c]).max(end[c + 1]);
             }
+        }
+        let range = |i: usize| {
+            if leaf(i) {
+                (i, i)
+            } else {
+                (nodes[i].link as usize, end[i])
+            }
+        };
+        let fits = |i: usize| -> bool {
+            let (first, last) = range(i);
+            if last - first > MAX_SUBTREE_NODES {
+                return false;
+            }
+            let mut corners = 0;
+            let mut seen = std::collections::HashSet::new();
+            for n in (first..last).chain([i]) {
+                if leaf(n) {
+                    let start = nodes[n].link as usize;
+                    for record in &staged.triangles[start..start + nodes[n].triangle_count() as usize]
+                    {
+                        corners += 3;
+                        seen.extend(record.vertices);
+                    }
+                }
+            }
+            corners <= MAX_CORNERS && seen.len() <= MAX_VERTICES
+        };
+        // the subtree roots, top down; the nodes above them get heights bottom up
+        let mut height = vec![usize::MAX; nodes.len()];
+        let mut upper = Vec::new();
+        let mut stack = vec![0usize];
+        while let Some(i) = stack.pop() {
+            if fits(i) {
+                let (first, last) = range(i);
+                height[i] = 0;
+                items.push(Item::Subtree {
+                    root: i,
+                    first,
+                    end: last,
+                });
+            } else if leaf(i) {
+                return Err(format!(
+                    "a BVH leaf holds {} triangles; the SPU refit folds at most {} at once",
+                    nodes[i].triangle_count(),
+                    MAX_CORNERS / 3
+                ));
+            } else {
+                upper.push(i);
+                let c = nodes[i].link as usize;
+                stack.push(c + 1);
+                stack.push(c);
+            }
+        }
+        // subtrees in node order (neighbouring triangles and vertices), then the upper
+        // tree: children at higher indices, so from the end each height is known
+        items.sort_by_key(|item| match item {
+            Item::Subtree { root, .. } => *root,
+            Item::Upper { .. } => 0,
+        });
+        upper.sort_unstable();
+        for &i in upper.iter().rev() {
+            let c = nodes[i].link as usize;
+            height[i] = 1 + height[c].max(height[c + 1]);
         }
         let heights = height[0] + 1;
-        let mut by_height: Vec<Vec<usize>> = vec![Vec::new(); heights];
-        for (index, &h) in height.iter().enumerate() {
-            if index != 1 {
-                by_height[h].push(index);
-            }
-        }
-        by_height[0].sort_by_key(|&leaf| nodes[leaf].link);
-        let mut items = Vec::new();
         let mut per_height = vec![0u32; heights];
-        for (h, level) in by_height.iter().enumerate() {
-            let mut item = Item {
-                height: h,
-                nodes: Vec::new(),
-            };
-            let mut elements = 0;
-            for &node in level {
-                let wanted = if h == 0 {
-                    3 * nodes[node].triangle_count() as usize
-                } else {
-                    2
-                };
-                if wanted > MAX_ELEMENTS {
-                    return Err(format!(
-                        "a BVH leaf holds {} triangles; the SPU refit folds at most {} per leaf",
-                        wanted / 3,
-                        MAX_ELEMENTS / 3
-                    ));
-                }
-                if item.nodes.len() == MAX_NODES || elements + wanted > MAX_ELEMENTS {
-                    items.push(std::mem::replace(
-                        &mut item,
-                        Item {
-                            height: h,
-                            nodes: Vec::new(),
-                        },
-                    ));
-                    per_height[h] += 1;
-                    elements = 0;
-                }
-                item.nodes.push(node);
-                elements += wanted;
-            }
-            if !item.nodes.is_empty() {
-                items.push(item);
+        per_height[0] = items.len() as u32;
+        let mut by_height: Vec<Vec<usize>> = vec![Vec::new(); heights];
+        for &i in &upper {
+            by_height[height[i]].push(i);
+        }
+        for (h, level) in by_height.iter().enumerate().skip(1) {
+            for chunk in level.chunks(MAX_NODES) {
+                items.push(Item::Upper {
+                    height: h,
+                    nodes: chunk.to_vec(),
+                });
                 per_height[h] += 1;
             }
         }
@@ -171,6 +226,7 @@ impl RefitPlan {
     /// of each height at `done_addr`.
     fn encode(&self, staged: &StagedScene, at: u32, done_addr: u32) -> Vec<u8> {
         let header = &staged.header;
+        let node_ea = |i: usize| header.node_addr + (i * NODE_SIZE) as u32;
         let index_bytes = (16 * self.items.len()).div_ceil(128) * 128;
         let mut out = vec![0u8; index_bytes];
         let put = |out: &mut Vec<u8>, at: usize, words: &[u32]| {
@@ -180,29 +236,73 @@ impl RefitPlan {
         };
         let row = |h: usize| done_addr + (DONE_ROW * h) as u32;
         for (i, item) in self.items.iter().enumerate() {
-            let leaves = item.height == 0;
-            let mut gather = Vec::new();
-            for &index in &item.nodes {
-                let node = &staged.nodes[index];
-                if leaves {
-                    let first = node.link as usize;
-                    for record in &staged.triangles[first..first + node.triangle_count() as usize] {
-                        for v in record.vertices {
-                            gather.push([16, header.vertex_addr + v * VERTEX_SIZE as u32]);
+            // entries (corners | dest << 16, source, node), corner offsets, gather list,
+            // scatter list; a corner's source is a block offset fixed once the entries'
+            // size is known
+            let mut entries: Vec<(u32, u32, usize)> = Vec::new();
+            let mut corners: Vec<u32> = Vec::new();
+            let mut gather: Vec<[u32; 2]> = Vec::new();
+            let mut scatter: Vec<[u32; 2]> = Vec::new();
+            let pairs_local = match item {
+                Item::Subtree { root, first, end } => {
+                    let mut local = std::collections::HashMap::new();
+                    let dest = |n: usize| {
+                        if n == *root {
+                            (end - first) as u32 * NODE_SIZE as u32
+                        } else {
+                            (n - first) as u32 * NODE_SIZE as u32
+                        }
+                    };
+                    for n in (*first..*end).rev().chain([*root]) {
+                        let node = &staged.nodes[n];
+                        if node.triangle_count() > 0 {
+                            let count = 3 * node.triangle_count();
+                            entries.push((count | dest(n) << 16, 4 * corners.len() as u32, n));
+                            let start = node.link as usize;
+                            for record in
+                                &staged.triangles[start..start + node.triangle_count() as usize]
+                            {
+                                for v in record.vertices {
+                                    let next = local.len() as u32;
+                                    let slot = *local.entry(v).or_insert_with(|| {
+                                        gather.push([
+                                            16,
+                                            header.vertex_addr + v * VERTEX_SIZE as u32,
+                                        ]);
+                                        next
+                                    });
+                                    corners.push(16 * slot);
+                                }
+                            }
+                        } else {
+                            let pair = (node.link as usize - first) as u32 * NODE_SIZE as u32;
+                            entries.push((dest(n) << 16, pair, n));
                         }
                     }
-                } else {
-                    gather.push([64, header.node_addr + node.link * NODE_SIZE as u32]);
+                    if end > first {
+                        scatter.push([((end - first) * NODE_SIZE) as u32, node_ea(*first)]);
+                    }
+                    scatter.push([NODE_SIZE as u32, node_ea(*root)]);
+                    1
                 }
-            }
-            let n = item.nodes.len();
-            let gather_at = ENTRIES + 16 * n;
+                Item::Upper { nodes, .. } => {
+                    for (k, &n) in nodes.iter().enumerate() {
+                        let link = staged.nodes[n].link as usize;
+                        entries.push((((k * NODE_SIZE) as u32) << 16, 64 * k as u32, n));
+                        gather.push([64, node_ea(link)]);
+                        scatter.push([NODE_SIZE as u32, node_ea(n)]);
+                    }
+                    0
+                }
+            };
+            let corners_at = ENTRIES + 16 * entries.len();
+            let gather_at = corners_at + (4 * corners.len()).div_ceil(16) * 16;
             let scatter_at = gather_at + (8 * gather.len()).div_ceil(16) * 16;
-            let bytes = (scatter_at + 8 * n).div_ceil(128) * 128;
+            let bytes = (scatter_at + 8 * scatter.len()).div_ceil(128) * 128;
             let block = out.len();
             out.resize(block + bytes, 0);
             put(&mut out, 16 * i, &[at + block as u32, bytes as u32, 0, 0]);
-            let (wait_addr, wait_count) = match item.height {
+            let (wait_addr, wait_count) = match item.height() {
                 0 => (0, 0),
                 h => (row(h - 1), self.per_height[h - 1]),
             };
@@ -210,34 +310,39 @@ impl RefitPlan {
                 &mut out,
                 block,
                 &[
-                    n as u32,
+                    entries.len() as u32,
                     8 * gather.len() as u32,
-                    if leaves { 0 } else { 16 },
-                    row(item.height),
+                    pairs_local,
+                    row(item.height()),
                     wait_addr,
                     wait_count,
-                    8 * n as u32,
-                    item.height as u32,
+                    8 * scatter.len() as u32,
+                    item.height() as u32,
                     gather_at as u32,
                     scatter_at as u32,
                 ],
             );
-            for (k, &index) in item.nodes.iter().enumerate() {
-                let node = &staged.nodes[index];
-                let elements = if leaves { 3 * node.triangle_count() } else { 2 };
+            for (k, &(word, source, n)) in entries.iter().enumerate() {
+                let node = &staged.nodes[n];
+                let source = if word & 0xffff != 0 {
+                    (corners_at as u32) + source
+                } else {
+                    source
+                };
                 put(
                     &mut out,
                     block + ENTRIES + 16 * k,
-                    &[elements, index as u32, node.link, node.count_axis],
+                    &[word, source, node.link, node.count_axis],
                 );
-                put(
-                    &mut out,
-                    block + scatter_at + 8 * k,
-                    &[32, header.node_addr + (index * NODE_SIZE) as u32],
-                );
+            }
+            for (k, &c) in corners.iter().enumerate() {
+                put(&mut out, block + corners_at + 4 * k, &[c]);
             }
             for (k, element) in gather.iter().enumerate() {
                 put(&mut out, block + gather_at + 8 * k, element);
+            }
+            for (k, element) in scatter.iter().enumerate() {
+                put(&mut out, block + scatter_at + 8 * k, element);
             }
         }
         out
@@ -449,22 +554,30 @@ mod tests {
     use super::*;
 
     #[test]
-    fn items_hold_one_height_and_fit_their_block() {
+    fn every_node_is_refitted_once_and_heights_ascend() {
         let scene = crate::procedural::room();
         let bvh = crate::Bvh::build(&scene, &crate::BvhConfig::default());
         let staged = StagedScene::new(&scene, &bvh, SCENE_BASE).unwrap();
         let plan = RefitPlan::new(&staged).unwrap();
-        let covered: usize = plan.items.iter().map(|i| i.nodes.len()).sum();
-        assert_eq!(
-            covered,
-            staged.nodes.len() - 1,
-            "every node but the padding"
-        );
-        assert!(plan.items.windows(2).all(|w| w[0].height <= w[1].height));
-        assert_eq!(plan.items.last().unwrap().nodes, vec![0], "the root last");
+        let mut seen = vec![0; staged.nodes.len()];
+        for item in &plan.items {
+            match item {
+                Item::Subtree { root, first, end } => {
+                    assert!(end - first <= MAX_SUBTREE_NODES);
+                    for n in (*first..*end).chain([*root]) {
+                        seen[n] += 1;
+                    }
+                }
+                Item::Upper { nodes, .. } => nodes.iter().for_each(|&n| seen[n] += 1),
+            }
+        }
+        assert_eq!(seen[1], 0, "the padding node");
+        assert!(seen.iter().enumerate().all(|(i, &k)| i == 1 || k == 1));
+        assert!(plan.items.windows(2).all(|w| w[0].height() <= w[1].height()));
         assert_eq!(
             plan.per_height.iter().sum::<u32>() as usize,
             plan.items.len()
         );
+        assert!(plan.heights() > 1, "the room is more than one subtree");
     }
 }
