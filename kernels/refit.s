@@ -145,52 +145,28 @@ item_loop:
         brsl    $0, fetch_item
 1:      ori     $5, $23, 0
         brsl    $0, wait_tag                  # the current item's corners or child pairs
-        brz     $34, 2f
-        ori     $5, $27, 0
-        brsl    $0, wait_tag                  # the next item's block
-        lqd     $6, 16($24)                   # its wait: done row EA, count
-        rotqbyi $7, $6, 4
-        ceq     $8, $6, $32
-        ceqi    $9, $7, 0
-        or      $8, $8, $9
-        brz     $8, 2f                        # not known to be over: gather it later
-        ori     $4, $24, 0
-        ori     $5, $25, 0
-        ori     $6, $27, 0
-        brsl    $0, gather                    # gathers while the current item is folded
-        il      $33, 1
 
-        # fold the current item's nodes into their records: a leaf's corners through its
-        # offsets into the gathered vertices, an inner node's child pair from the gathered
-        # pairs (the upper tree) or from the records already folded (a subtree)
-2:      lqd     $6, 0($20)                    # n_nodes, gather bytes, pairs local, done row
-        ori     $18, $6, 0                    # nodes left
+        # fold the current item's nodes into their records: first its leaves' corners
+        # through their offsets into the gathered vertices, then the inner nodes' child
+        # pairs, gathered (the upper tree) or folded just before (a subtree)
+        lqd     $6, 0($20)                    # n_nodes, gather bytes, pairs local, done row
         a       $41, $41, $6
         rotqbyi $16, $6, 8
         ceqi    $16, $16, 0
         selb    $16, $22, $21, $16            # where child pairs are: gathered or folded
+        lqd     $7, 32($20)
+        rotqbyi $18, $7, 8                    # leaves
+        sf      $48, $18, $6                  # inner nodes
         ai      $19, $20, 48
         lqa     $35, k_w3
         lqa     $29, k_lo16
-node_loop:
-        lqd     $36, 0($19)                   # corners | dest << 16, source, link, count_axis
+        brz     $18, 6f
+leaf_loop:
+        lqd     $36, 0($19)                   # corners | dest << 16, offsets, link, count_axis
         and     $39, $36, $29                 # corners
         rotmi   $17, $36, -16                 # dest
-        rotqbyi $28, $36, 4                   # source
-        brnz    $39, 5f
-        # a child pair: boxes at source, source + 32
-        a       $28, $28, $16
-        lqd     $37, 0($28)
-        lqd     $38, 16($28)
-        lqd     $43, 32($28)
-        lqd     $44, 48($28)
-        fcgt    $45, $37, $43
-        fcgt    $46, $44, $38
-        selb    $37, $37, $43, $45
-        selb    $38, $38, $44, $46
-        br      4f
-        # a leaf: its corners' offsets (words) at source in the block, a triangle a turn
-5:      a       $28, $28, $20
+        rotqbyi $28, $36, 4
+        a       $28, $28, $20                 # its corners' offsets (words), a triangle a turn
         lqd     $43, 0($28)
         rotqby  $43, $43, $28
         lqx     $37, $21, $43                 # the first corner starts the fold
@@ -223,7 +199,8 @@ node_loop:
         selb    $38, $38, $45, $47
 .Lfold_br:
         brnz    $39, 3b
-4:      rotqbyi $47, $36, 12                  # link into word 3
+        hbrr    .Lleaf_br, leaf_loop
+        rotqbyi $47, $36, 12                  # link into word 3
         selb    $37, $37, $47, $35            # min, link
         selb    $38, $38, $36, $35            # max, count_axis
         a       $17, $17, $22
@@ -231,8 +208,52 @@ node_loop:
         stqd    $38, 16($17)
         ai      $19, $19, 16
         ai      $18, $18, -1
-        brnz    $18, node_loop
+.Lleaf_br:
+        brnz    $18, leaf_loop
 
+        # the next item's block has come while the leaves were folded: where its height's
+        # wait is known to be over, its gather runs during the rest of this item
+6:      brz     $34, 7f
+        ori     $5, $27, 0
+        brsl    $0, wait_tag
+        lqd     $6, 16($24)                   # its wait: done row EA, count
+        rotqbyi $7, $6, 4
+        ceq     $8, $6, $32
+        ceqi    $9, $7, 0
+        or      $8, $8, $9
+        brz     $8, 7f                        # not known to be over: gather it later
+        ori     $4, $24, 0
+        ori     $5, $25, 0
+        ori     $6, $27, 0
+        brsl    $0, gather
+        il      $33, 1
+7:      brz     $48, 8f
+        hbrr    .Lpair_br, pair_loop
+pair_loop:
+        lqd     $36, 0($19)                   # dest << 16, pair, link, count_axis
+        rotmi   $17, $36, -16
+        rotqbyi $28, $36, 4
+        a       $28, $28, $16
+        lqd     $37, 0($28)
+        lqd     $38, 16($28)
+        lqd     $43, 32($28)
+        lqd     $44, 48($28)
+        fcgt    $45, $37, $43
+        fcgt    $46, $44, $38
+        selb    $37, $37, $43, $45
+        selb    $38, $38, $44, $46
+        rotqbyi $47, $36, 12
+        selb    $37, $37, $47, $35
+        selb    $38, $38, $36, $35
+        a       $17, $17, $22
+        stqd    $37, 0($17)
+        stqd    $38, 16($17)
+        ai      $19, $19, 16
+        ai      $48, $48, -1
+.Lpair_br:
+        brnz    $48, pair_loop
+
+8:
         # scatter the records; once they are out, count the item done in this SPE's
         # quadword of its height's row
         lqd     $7, 16($20)

@@ -253,7 +253,12 @@ impl RefitPlan {
                             (n - first) as u32 * NODE_SIZE as u32
                         }
                     };
-                    for n in (*first..*end).rev().chain([*root]) {
+                    // the leaves first (in any order), then the inner nodes, children
+                    // (at higher indices) before parents
+                    let order = (*first..*end).rev().chain([*root]);
+                    let (leaves, inner): (Vec<usize>, Vec<usize>) =
+                        order.partition(|&n| staged.nodes[n].triangle_count() > 0);
+                    for n in leaves.into_iter().chain(inner) {
                         let node = &staged.nodes[n];
                         if node.triangle_count() > 0 {
                             let count = 3 * node.triangle_count();
@@ -320,6 +325,7 @@ impl RefitPlan {
                     item.height() as u32,
                     gather_at as u32,
                     scatter_at as u32,
+                    entries.iter().filter(|e| e.0 & 0xffff != 0).count() as u32,
                 ],
             );
             for (k, &(word, source, n)) in entries.iter().enumerate() {
