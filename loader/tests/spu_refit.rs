@@ -55,15 +55,6 @@ fn the_spus_refit_the_moving_flag_bit_for_bit_on_1_to_16_spes() {
             );
             let again = spu_refit::run(&staged, &plan, &config(spes, 1), &program, &code).unwrap();
             assert_eq!(again, run, "the same on one host thread");
-            eprintln!(
-                "frame {frame} spes {spes}: {:?} items {} heights {}",
-                run.spes
-                    .iter()
-                    .map(|s| (s.cycles, s.items, s.polls))
-                    .collect::<Vec<_>>(),
-                run.items,
-                run.heights
-            );
             cycles.push(run.cycles);
         }
         assert!(cycles[0] > cycles[1], "{cycles:?}");
