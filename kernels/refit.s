@@ -1,19 +1,24 @@
 # refit.s — BVH refit on the SPEs (paper section 9.3; loader::spu_refit builds its work).
 #
 # Each frame of a moving scene the node bounds are recomputed bottom-up from the new
-# vertices. The host lays the work out once per topology as items in main memory, each the
-# nodes of one height (leaves are height 0, a parent is one above its higher child), up to
-# REFIT_MAX_NODES of them, with a DMA list that gathers what they are folded from (a leaf's
-# triangles' corners, 16 bytes of each vertex record; an inner node's child pair, one
-# 64-byte line) and a DMA list that scatters the 32-byte node records back. An index of
-# quadwords (block EA, block bytes) finds the blocks; a block is
+# vertices. The host lays the work out once per topology as items in main memory
+# (loader::spu_refit::RefitPlan): height 0 are whole subtrees (a root and its descendants,
+# which pre-order pair allocation keeps in one node range), each folded in local store from
+# its distinct vertices, gathered once by a DMA list (16 bytes of each vertex record), its
+# inner nodes from the records just folded, and written back by one put of the range; the
+# nodes above them (the upper tree) come in items of one height, up to REFIT_MAX_NODES, each
+# node's child pair gathered from main memory (one 64-byte line) and its record scattered
+# back by a DMA list. An index of quadwords (block EA, block bytes) finds the blocks; a
+# block is
 #
-#   0   n_nodes, gather list bytes, hi offset (0: points, 16: boxes), EA of this height's
-#       row of done counters
+#   0   n_nodes, gather list bytes, child pairs in local store (1: folded here, 0:
+#       gathered), EA of this height's row of done counters
 #   16  EA of the height below's row, its item count (0: none to wait for), scatter list
 #       bytes, height
-#   32  offset of the gather list, offset of the scatter list in the block
-#   48  per node: elements to fold, node index, link, count_axis
+#   32  offset of the gather list, offset of the scatter list, leaves, -
+#   48  per node, the leaves first: corners | (record offset << 16), source (a leaf: the
+#       block offset of its corners' offsets into the gathered vertices, a word each; an
+#       inner node: its child pair's offset), link, count_axis
 #
 # Work sharing: SPE i starts with items [i*C, (i+1)*C) handed out in the parameters, then
 # takes ranges from a shared counter with an atomic getllar/putllc (as frame.s takes tiles):
@@ -33,6 +38,10 @@
 # A fold starts from the first point or box and takes the new value per coordinate where
 # fcgt says it is lower (minimum) or higher (maximum): loader::refit does the same, so the
 # bounds are the host's bit for bit.
+#
+# The loops: a leaf's corners a triangle a turn (three offsets, three loads, three folds),
+# then the inner nodes; branches hinted, so that the only mispredicted branch is the end of
+# a leaf's triangles.
 #
 # Protocol: $3 = SPU index, $4 = EA of the 128-byte parameter block: (index EA, item count,
 # claim counter EA, tail), (shift, first range per SPE, -, -). At the end: refit_stats =
