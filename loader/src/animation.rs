@@ -379,6 +379,34 @@ mod tests {
     }
 
     #[test]
+    fn the_beetle_moves_rigidly_and_its_wheels_turn_about_their_hubs() {
+        let animation = Animation::open("beetle-drive", 60).unwrap();
+        let (a, b) = (animation.frame(0).unwrap(), animation.frame(7).unwrap());
+        assert_eq!(a.triangles, b.triangles);
+        assert_eq!(
+            a.positions,
+            procedural::beetle().positions,
+            "frame 0 is at rest"
+        );
+        let Source::BeetleDrive { wheel, .. } = &animation.source else {
+            panic!("a beetle")
+        };
+        let body: Vec<usize> = (0..wheel.len()).filter(|&v| !wheel[v]).collect();
+        let wheels: Vec<usize> = (0..wheel.len()).filter(|&v| wheel[v]).collect();
+        assert_eq!(wheels.len(), 4 * 128 * 48, "four tori");
+        let distance = |s: &Scene, p: usize, q: usize| s.positions[p].distance(s.positions[q]);
+        // the body keeps its shape (to f32 rounding) while it moves
+        let (p, q) = (body[0], body[body.len() / 2]);
+        assert!((distance(&a, p, q) - distance(&b, p, q)).abs() < 1e-4);
+        assert!(a.positions[p].distance(b.positions[p]) > 0.01);
+        // two vertices of one wheel keep their distance, but turn relative to the body
+        let (w, x) = (wheels[0], wheels[100]);
+        assert!((distance(&a, w, x) - distance(&b, w, x)).abs() < 1e-4);
+        let relative = |s: &Scene| s.positions[w] - s.positions[p];
+        assert!((relative(&a).length() - relative(&b).length()).abs() > 1e-3);
+    }
+
+    #[test]
     fn statement_lines_point_past_the_first_frames_count() {
         let text = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\n";
         assert_eq!(statement_line(text, "v", 3), 4);

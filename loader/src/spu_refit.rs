@@ -441,8 +441,10 @@ pub fn run(
     memory[SCENE_BASE as usize..scene_end].copy_from_slice(&staged.image);
     let nodes_at = staged.header.node_addr as usize;
     let nodes_len = staged.nodes.len() * NODE_SIZE;
-    // zero every bound (links and counts stay): whatever the SPEs do not write shows
-    for record in memory[nodes_at..nodes_at + nodes_len].chunks_exact_mut(NODE_SIZE) {
+    // zero every bound (links and counts stay): whatever the SPEs do not write shows (a
+    // tree without triangles has nothing to refit, and its root's empty box stays)
+    let zeroed = if plan.items() == 0 { 0 } else { nodes_len };
+    for record in memory[nodes_at..nodes_at + zeroed].chunks_exact_mut(NODE_SIZE) {
         record[0..12].fill(0);
         record[16..28].fill(0);
     }

@@ -1,5 +1,5 @@
 //! The SPU refit (`kernels/refit.s`) writes the host refit's node bounds bit for bit, on
-//! 1 to 16 SPEs, the same whatever the host threads.
+//! 1 to 16 SPEs, the same whatever the host threads and the engine.
 
 use spu_isa::jit::{CodeCache, Compiling, Engine};
 use spu_loader::animation::Animation;
@@ -55,6 +55,13 @@ fn the_spus_refit_the_moving_flag_bit_for_bit_on_1_to_16_spes() {
             );
             let again = spu_refit::run(&staged, &plan, &config(spes, 1), &program, &code).unwrap();
             assert_eq!(again, run, "the same on one host thread");
+            let interpreted = RefitConfig {
+                engine: Engine::Interp,
+                ..config(spes, 2)
+            };
+            let interpreted =
+                spu_refit::run(&staged, &plan, &interpreted, &program, &code).unwrap();
+            assert_eq!(interpreted, run, "the same with the interpreter");
             cycles.push(run.cycles);
         }
         assert!(cycles[0] > cycles[1], "{cycles:?}");
