@@ -17,7 +17,7 @@
 #       bytes, height
 #   32  offset of the gather list, offset of the scatter list, leaves, -
 #   48  per node, the leaves first: corners | (record offset << 16), source (a leaf: the
-#       block offset of its corners' offsets into the gathered vertices, a word each; an
+#       block offset of its corners' offsets into the gathered vertices, a halfword each; an
 #       inner node: its child pair's offset), link, count_axis
 #
 # Work sharing: SPE i starts with items [i*C, (i+1)*C) handed out in the parameters, then
@@ -39,7 +39,8 @@
 # fcgt says it is lower (minimum) or higher (maximum): loader::refit does the same, so the
 # bounds are the host's bit for bit.
 #
-# The loops: a leaf's corners a triangle a turn (three offsets, three loads, three folds),
+# The loops: a leaf's corners a triangle a turn (three halfword offsets, three loads,
+# three folds),
 # then the inner nodes; branches hinted, so that the only mispredicted branch is the end of
 # a leaf's triangles.
 #
@@ -175,24 +176,30 @@ leaf_loop:
         and     $39, $36, $29                 # corners
         rotmi   $17, $36, -16                 # dest
         rotqbyi $28, $36, 4
-        a       $28, $28, $20                 # its corners' offsets (words), a triangle a turn
-        lqd     $43, 0($28)
-        rotqby  $43, $43, $28
+        a       $28, $28, $20                 # its corners' offsets (halfwords), a triangle
+        ai      $52, $28, -2                  # a turn; a halfword at A rotated by A - 2
+        lqd     $43, 0($28)                   # lands in word 0's low half
+        rotqby  $43, $43, $52
+        and     $43, $43, $29
         lqx     $37, $21, $43                 # the first corner starts the fold
         ori     $38, $37, 0
         hbrr    .Lfold_br, 3f
-3:      ai      $52, $28, 4
-        ai      $53, $28, 8
+3:      ai      $52, $28, -2
+        ai      $53, $28, 2
+        ai      $54, $28, 4
         lqd     $43, 0($28)
-        lqd     $44, 0($52)
-        lqd     $45, 0($53)
-        rotqby  $43, $43, $28
-        rotqby  $44, $44, $52
+        lqd     $44, 0($53)
+        lqd     $45, 0($54)
+        rotqby  $43, $43, $52
+        rotqby  $44, $44, $28
         rotqby  $45, $45, $53
+        and     $43, $43, $29
+        and     $44, $44, $29
+        and     $45, $45, $29
         lqx     $43, $21, $43
         lqx     $44, $21, $44
         lqx     $45, $21, $45
-        ai      $28, $28, 12
+        ai      $28, $28, 6
         ai      $39, $39, -3
         fcgt    $46, $37, $43
         fcgt    $47, $43, $38

@@ -43,7 +43,7 @@ pub const ENTRIES: usize = 48;
 /// Local-store bytes for the largest item's block (one DMA: at most 16 KB).
 pub const ITEM_BYTES: usize = 16384;
 const _: () =
-    assert!(ENTRIES + MAX_NODES * 16 + MAX_CORNERS * 4 + MAX_VERTICES * 8 + 16 <= ITEM_BYTES);
+    assert!(ENTRIES + MAX_NODES * 16 + MAX_CORNERS * 2 + MAX_VERTICES * 8 + 16 <= ITEM_BYTES);
 const _: () = assert!(ENTRIES + MAX_NODES * (16 + 8 + 8) <= ITEM_BYTES);
 /// Local-store bytes for an item's gathered vertices (16 bytes each) or child pairs (64).
 pub const DATA_BYTES: usize = if MAX_VERTICES * 16 > MAX_NODES * 64 {
@@ -249,7 +249,7 @@ impl RefitPlan {
             // scatter list; a corner's source is a block offset fixed once the entries'
             // size is known
             let mut entries: Vec<(u32, u32, usize)> = Vec::new();
-            let mut corners: Vec<u32> = Vec::new();
+            let mut corners: Vec<u16> = Vec::new();
             let mut gather: Vec<[u32; 2]> = Vec::new();
             let mut scatter: Vec<[u32; 2]> = Vec::new();
             let pairs_local = match item {
@@ -271,7 +271,7 @@ impl RefitPlan {
                         let node = &staged.nodes[n];
                         if node.triangle_count() > 0 {
                             let count = 3 * node.triangle_count();
-                            entries.push((count | dest(n) << 16, 4 * corners.len() as u32, n));
+                            entries.push((count | dest(n) << 16, 2 * corners.len() as u32, n));
                             let start = node.link as usize;
                             for record in
                                 &staged.triangles[start..start + node.triangle_count() as usize]
@@ -285,7 +285,7 @@ impl RefitPlan {
                                         ]);
                                         next
                                     });
-                                    corners.push(16 * slot);
+                                    corners.push(16 * slot as u16);
                                 }
                             }
                         } else {
@@ -310,7 +310,7 @@ impl RefitPlan {
                 }
             };
             let corners_at = ENTRIES + 16 * entries.len();
-            let gather_at = corners_at + (4 * corners.len()).div_ceil(16) * 16;
+            let gather_at = corners_at + (2 * corners.len()).div_ceil(16) * 16;
             let scatter_at = gather_at + (8 * gather.len()).div_ceil(16) * 16;
             let bytes = (scatter_at + 8 * scatter.len()).div_ceil(128) * 128;
             let block = out.len();
@@ -351,7 +351,8 @@ impl RefitPlan {
                 );
             }
             for (k, &c) in corners.iter().enumerate() {
-                put(&mut out, block + corners_at + 4 * k, &[c]);
+                let at = block + corners_at + 2 * k;
+                out[at..at + 2].copy_from_slice(&c.to_be_bytes());
             }
             for (k, element) in gather.iter().enumerate() {
                 put(&mut out, block + gather_at + 8 * k, element);
