@@ -19,8 +19,8 @@
 //! quadword per SPE. `kernels/refit.s` documents the blocks, the claims and the double
 //! buffering.
 //!
-//! For the beetle (693k triangles, 308k nodes) that is 3482 items and 36 MB of DMA a frame;
-//! on 16 SPEs at 2.4 GHz the refit takes 4.19M cycles, 8.6% of a 16-SPE shadows frame
+//! For the beetle (693k triangles, 308k nodes) that is 3482 items and 31 MB of DMA a frame;
+//! on 16 SPEs at 2.4 GHz the refit takes 3.94M cycles, 8.1% of a 16-SPE shadows frame
 //! (`cargo run --release -p spu-loader --example refit_bench -- beetle-drive`).
 
 use crate::frame::SCENE_BASE;
