@@ -415,6 +415,45 @@ fn malformed_programs_are_bad_input() {
 }
 
 #[test]
+fn assembler_diagnostics_are_one_line_each_in_gnu_form_with_the_column() {
+    // GNU as 2.40 writes `t.s:1: Warning: division by zero`; `spu as` writes the same
+    // line with the column and the severity as GCC spells it, one line per report.
+    let d = dir("diagnostics");
+    let src = write(&d, "t.s", ".long 7/0\n.byte 256\nfoo $1\n");
+    let out = spu(&["as", &src, "-o", d.join("t.elf").to_str().unwrap()]);
+    assert_eq!(out.status, 2);
+    assert_eq!(
+        out.stderr,
+        format!(
+            "{src}:1:7: warning: division by zero\n\
+             {src}:2:7: warning: value 0x100 truncated to 0x0\n\
+             {src}:3:1: error: Invalid mnemonic 'foo'\n\
+             1 error(s); nothing written\n"
+        )
+    );
+    let clean = write(&d, "w.s", ".long 7/0\n");
+    let out = spu(&["as", &clean, "-o", d.join("w.elf").to_str().unwrap()]);
+    assert_eq!(
+        (out.status, out.stderr),
+        (0, format!("{clean}:1:7: warning: division by zero\n"))
+    );
+    let absent = d.join("absent.s");
+    let out = spu(&[
+        "as",
+        absent.to_str().unwrap(),
+        "-o",
+        d.join("a.elf").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status, 2);
+    assert!(
+        out.stderr
+            .starts_with(&format!("{}: error: can't read: ", absent.display())),
+        "{}",
+        out.stderr
+    );
+}
+
+#[test]
 fn timing_reports_statements_it_does_not_time() {
     let d = dir("timing");
     let src = write(
