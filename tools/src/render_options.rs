@@ -288,6 +288,9 @@ fn check_outputs(args: &Args) -> exit::Result<()> {
     let mut files = crate::outputs::Files::new();
     if !spu_loader::procedural::is_built_in(&args.scene) {
         files.input("the scene", std::path::Path::new(&args.scene));
+        for library in crate::outputs::material_libraries(std::path::Path::new(&args.scene)) {
+            files.input("the scene's material library", &library);
+        }
     }
     files.output("-o", &args.output);
     if let Some((cycles, wait)) = &heatmaps {

@@ -634,6 +634,90 @@ fn recursive_macro_from_the_fuzzer_is_bad_input() {
 /// spelling, symbolic link or hard link: refused before any work, status 2, naming both,
 /// and the files are left as they were.
 #[test]
+fn no_output_overwrites_a_file_the_input_includes() {
+    // `.include`, `.incbin` (found beside the source or through -I) and a scene's `mtllib`
+    // are inputs as the named ones are: refused before anything is written, naming both.
+    let d = dir("included");
+    let at = |name: &str| d.join(name).to_str().unwrap().to_string();
+    std::fs::create_dir_all(d.join("lib")).unwrap();
+    let inc = write(&d, "inc.s", "        il $3, 1\n");
+    let blob = write(&d, "blob.bin", "abcd");
+    let deep = write(&d.join("lib"), "deep.s", "        il $4, 2\n");
+    let src = program(
+        &d,
+        "x.s",
+        "        .include \"inc.s\"\n        .include \"deep.s\"\n        .incbin \"blob.bin\"\n        stop 0x2000\n",
+    );
+    let other = program(&d, "y.s", "        stop 0x2000\n");
+    let lib = at("lib");
+    let words = |w: &[&str]| -> Vec<String> { w.iter().map(|s| s.to_string()).collect() };
+    let cases: Vec<(Vec<String>, String)> = vec![
+        (
+            words(&["as", &src, "-I", &lib, "-o", &inc]),
+            format!("-o {inc}: would overwrite {src}'s included file {inc}"),
+        ),
+        (
+            words(&["as", &src, "-I", &lib, "-c", "-o", &blob]),
+            format!("-o {blob}: would overwrite {src}'s included file {blob}"),
+        ),
+        (
+            words(&[
+                "as",
+                &src,
+                "-I",
+                &lib,
+                "-o",
+                &at("x.elf"),
+                "--listing",
+                &deep,
+            ]),
+            format!(
+                "--listing {deep}: would overwrite {src}'s included file {}/deep.s",
+                lib
+            ),
+        ),
+        (
+            words(&["as", &other, &src, "-I", &lib, "-o", &inc]),
+            format!("-o {inc}: would overwrite {src}'s included file {inc}"),
+        ),
+    ];
+    for (args, message) in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = spu(&args);
+        assert_eq!(out.status, 2, "spu {args:?}: {}", out.stderr);
+        assert_eq!(out.stderr, format!("spu: {message}\n"), "spu {args:?}");
+    }
+    assert_eq!(std::fs::read_to_string(&inc).unwrap(), "        il $3, 1\n");
+    assert_eq!(std::fs::read_to_string(&blob).unwrap(), "abcd");
+    assert_eq!(
+        std::fs::read_to_string(&deep).unwrap(),
+        "        il $4, 2\n"
+    );
+    assert!(!d.join("x.elf").exists(), "nothing written");
+    // The same source to a fresh output assembles.
+    let out = spu(&["as", &src, "-I", &lib, "-o", &at("x.elf")]);
+    assert_eq!((out.status, out.stderr.as_str()), (0, ""));
+
+    let mtl = write(&d, "m.mtl", "newmtl green\nKd 0 1 0\n");
+    let scene = write(
+        &d,
+        "s.obj",
+        "mtllib m.mtl # the colours\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl green\nf 1 2 3\n",
+    );
+    let out = spu(&["render", "--scene", &scene, "--stats", &mtl]);
+    assert_eq!(out.status, 2, "{}", out.stderr);
+    assert_eq!(
+        out.stderr,
+        format!("spu: --stats {mtl}: would overwrite the scene's material library {mtl}\n")
+    );
+    assert_eq!(out.stdout, "");
+    assert_eq!(
+        std::fs::read_to_string(&mtl).unwrap(),
+        "newmtl green\nKd 0 1 0\n"
+    );
+}
+
+#[test]
 fn no_output_overwrites_an_input_or_another_output() {
     let d = dir("clobber");
     let at = |name: &str| d.join(name).to_str().unwrap().to_string();
