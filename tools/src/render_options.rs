@@ -89,7 +89,8 @@ pub struct Args {
     /// Compare every pixel's triangle and distance with the host reference.
     #[arg(long)]
     pub validate: bool,
-    /// Simulated cycles per SPU before giving up.
+    /// Simulated cycles per SPE before giving up (exit 124): each SPE stops at exactly N,
+    /// and the message names those it stopped.
     #[arg(long, default_value_t = 200_000_000_000)]
     pub max_cycles: u64,
     /// Write the kernel's annotated profile (per instruction: executions, cycles, stalls

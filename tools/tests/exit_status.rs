@@ -173,6 +173,57 @@ fn cycle_limits_exit_124() {
 }
 
 #[test]
+fn render_max_cycles_is_per_spe_and_exact() {
+    // Each SPE stops at exactly N, whatever the engine and the 10,000-cycle quanta (N
+    // falls inside one, and inside the kernel's spin on the tile counter): the message
+    // names the SPEs the limit stopped and the ones that had finished, with their clocks.
+    let d = dir("render-cycles");
+    let image = d.join("r.png");
+    let image = image.to_str().unwrap();
+    let render = |spes: &str, limit: &str, engine: &str| {
+        spu(&[
+            "render",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spes",
+            spes,
+            "--max-cycles",
+            limit,
+            "--engine",
+            engine,
+            "-o",
+            image,
+        ])
+    };
+    for engine in ["interp", "jit"] {
+        for (spes, limit, stopped) in [
+            ("1", "777", "SPE 0 stopped at cycle 777"),
+            ("4", "5000", "SPE 0, 1, 2, 3 stopped at cycle 5000"),
+            ("3", "12345", "SPE 0, 1, 2 stopped at cycle 12345"),
+            (
+                "4",
+                "60000",
+                "SPE 0 stopped at cycle 60000; SPE 1 had finished at cycle 30561; \
+                 SPE 2 had finished at cycle 40561; SPE 3 had finished at cycle 50561",
+            ),
+        ] {
+            let out = render(spes, limit, engine);
+            assert_eq!(out.status, 124, "{engine} {spes} {limit}: {}", out.stderr);
+            assert!(
+                out.stderr.ends_with(&format!(
+                    "spu: the frame did not finish within {limit} cycles per SPE: {stopped}\n"
+                )),
+                "{engine} {spes} {limit}: {}",
+                out.stderr
+            );
+        }
+    }
+    assert!(!Path::new(image).exists(), "no image of a cut frame");
+}
+
+#[test]
 fn numeric_options_are_checked_before_any_work() {
     let d = dir("options");
     let src = program(&d, "p.s", "        stop 0x2000\n");
