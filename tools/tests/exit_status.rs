@@ -515,7 +515,7 @@ fn timing_reports_statements_it_does_not_time() {
     let out = spu(&["timing", &src]);
     out.refused(
         0,
-        "t.s:3: warning: `frob` is not an SPU instruction; not timed",
+        "t.s:3:9: warning: `frob` is not an SPU instruction; not timed",
     );
 }
 
