@@ -113,6 +113,9 @@ pub struct Object {
     pub name: String,
     pub sections: Vec<ObjSection>,
     pub symbols: Vec<ObjSymbol>,
+    /// For an object assembled here, the files its source's `.include` and `.incbin`
+    /// read from disk (inputs of the command that assembles it); empty for one read.
+    pub included: Vec<std::path::PathBuf>,
 }
 
 impl Object {

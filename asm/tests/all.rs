@@ -3,6 +3,7 @@
 //! (`tests/tests/test_files.rs` checks that none is left out).
 
 mod debug_line;
+mod eh_frame;
 mod gnu_compat;
 mod never_panics;
 mod objects_and_limits;

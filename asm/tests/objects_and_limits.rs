@@ -384,3 +384,62 @@ fn symver_aliases_and_versioned_references() {
         vec!["missing version name in `gv' for symbol `g'".to_string()]
     );
 }
+
+/// Which references to symbols of the same file stay relocations, as tc-spu.h decides for
+/// overlay-style code (sections `.ov_*` whose calls the linker routes through stubs):
+/// `TC_FORCE_RELOCATION` keeps every `brsl`/`brasl` (even to a local label) and a
+/// `br`/`bra` to a function; `tc_fix_adjustable` never reduces a function symbol, local
+/// or not, to its section's symbol. Other branches to local symbols of the same section
+/// are resolved, as before.
+#[test]
+fn calls_and_function_references_stay_relocations_as_tc_spu_keeps_them() {
+    let obj = object(
+        "\t.text
+\t.type\thelper,@function
+helper:\tbi\t$lr
+\t.section\t.ov_a,\"ax\",@progbits
+\t.type\tlocal_fn,@function
+local_fn:\tbi\t$lr
+\t.global\tentry
+\t.type\tentry,@function
+entry:\tbrsl\t$lr,helper
+\tbrsl\t$lr,local_fn
+\tbrsl\t$lr,.Lhere
+.Lhere:\tbr\tlocal_fn
+\tbr\t.Lhere
+\tbrnz\t$3,local_fn
+\tilhu\t$3,local_fn@h
+\tiohl\t$3,local_fn@l
+\t.4byte\tlocal_fn
+",
+    );
+    let sym = |name: &str| RelocTarget::Symbol(name.to_string());
+    let ov = obj.sections.iter().position(|s| s.name == ".ov_a").unwrap();
+    let relocs: Vec<(u32, u32, RelocTarget, i64)> = obj.sections[ov]
+        .relocs
+        .iter()
+        .map(|r| (r.offset, r.kind, r.target.clone(), r.addend))
+        .collect();
+    assert_eq!(
+        relocs,
+        vec![
+            (0x04, R_SPU_REL16, sym("helper"), 0),
+            (0x08, R_SPU_REL16, sym("local_fn"), 0),
+            // A call to a local label: kept, against the section (the label is no function).
+            (0x0c, R_SPU_REL16, RelocTarget::Section(ov), 0x10),
+            (0x10, R_SPU_REL16, sym("local_fn"), 0),
+            (0x1c, R_SPU_ADDR16_HI, sym("local_fn"), 0),
+            (0x20, R_SPU_ADDR16_LO, sym("local_fn"), 0),
+            (0x24, R_SPU_ADDR32, sym("local_fn"), 0),
+        ]
+    );
+    let words: Vec<u32> = obj.sections[ov].data[0x14..0x1c]
+        .chunks(4)
+        .map(|c| u32::from_be_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    // `br .Lhere` (back one word) and `brnz $3,local_fn` (back six) are resolved here.
+    assert_eq!(words, vec![0x327fff80, 0x217ffd03]);
+    // The local function is in the symbol table for the relocations to name.
+    let local = obj.symbols.iter().find(|s| s.name == "local_fn").unwrap();
+    assert_eq!((local.global, local.kind, local.value), (false, 2, 0));
+}

@@ -238,8 +238,14 @@ pub const STOP_DONE: u16 = 0x2000;
 pub enum FrameError {
     /// The frame could not be set up (the kernel did not assemble, ...).
     Setup(String),
-    /// The SPUs had not all finished within this many cycles.
-    CycleLimit(u64),
+    /// The SPUs had not all finished within `limit` cycles each (`--max-cycles`, per SPE):
+    /// each SPE's clock when the frame stopped (never past `limit`), and the SPEs the
+    /// limit stopped (the others had finished).
+    CycleLimit {
+        limit: u64,
+        cycles: Vec<u64>,
+        stopped: Vec<usize>,
+    },
     /// An SPU stopped abnormally (illegal instruction, DMA error, deadlock, ...).
     SpuStopped { spu: usize, reason: String },
 }
@@ -248,8 +254,35 @@ impl std::fmt::Display for FrameError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             FrameError::Setup(message) => f.write_str(message),
-            FrameError::CycleLimit(cycles) => {
-                write!(f, "the frame did not finish within {cycles} cycles")
+            FrameError::CycleLimit {
+                limit,
+                cycles,
+                stopped,
+            } => {
+                let list = |spes: &[usize]| {
+                    spes.iter()
+                        .map(usize::to_string)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                };
+                // Those the limit stopped are at it, unless one waited on the host.
+                let (at_limit, before): (Vec<usize>, Vec<usize>) =
+                    stopped.iter().partition(|&&i| cycles[i] == *limit);
+                let mut parts = Vec::new();
+                if !at_limit.is_empty() {
+                    parts.push(format!("SPE {} stopped at cycle {limit}", list(&at_limit)));
+                }
+                for i in before {
+                    parts.push(format!("SPE {i} stopped at cycle {}", cycles[i]));
+                }
+                for i in (0..cycles.len()).filter(|i| !stopped.contains(i)) {
+                    parts.push(format!("SPE {i} had finished at cycle {}", cycles[i]));
+                }
+                write!(
+                    f,
+                    "the frame did not finish within {limit} cycles per SPE: {}",
+                    parts.join("; ")
+                )
             }
             FrameError::SpuStopped { spu, reason } => write!(f, "SPU {spu} stopped: {reason}"),
         }
@@ -389,7 +422,13 @@ pub fn run_frame(
         }
     }
     if outcome == Outcome::CycleLimit {
-        return Err(FrameError::CycleLimit(max_cycles));
+        return Err(FrameError::CycleLimit {
+            limit: max_cycles,
+            cycles: contexts.iter().map(|&id| system.spu(id).cycles()).collect(),
+            stopped: (0..contexts.len())
+                .filter(|&i| !done(system.state(contexts[i])))
+                .collect(),
+        });
     }
     let finished: Vec<Option<u64>> = contexts
         .iter()

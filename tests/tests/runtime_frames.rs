@@ -100,7 +100,9 @@ fn frames_are_identical_for_any_thread_count() {
 }
 
 /// A frame that runs out of cycles on several host threads returns the error (the
-/// threads sharing the SPUs end with it) and the same error on one.
+/// threads sharing the SPUs end with it) and the same error on one. The limit is per SPE
+/// and exact: the last quantum (95,000 is not a multiple of 10,000) ends at the limit, and
+/// every SPE's clock stands at it.
 #[test]
 fn a_frame_out_of_cycles_ends_on_every_thread_count() {
     let room = prepare("room").unwrap();
@@ -116,10 +118,14 @@ fn a_frame_out_of_cycles_ends_on_every_thread_count() {
         .map(|_| ());
         assert_eq!(
             result.err(),
-            Some(spu_loader::runtime::FrameError::CycleLimit(95_000)),
+            Some(spu_loader::runtime::FrameError::CycleLimit {
+                limit: 95_000,
+                cycles: vec![95_000; 4],
+                stopped: vec![0, 1, 2, 3],
+            }),
             "{threads} threads"
         );
-        assert_eq!(quanta, 9, "{threads} threads: quanta run");
+        assert_eq!(quanta, 10, "{threads} threads: quanta run");
     }
 }
 

@@ -49,15 +49,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             args.format
         )));
     }
-    let mut files = crate::outputs::Files::new();
-    for input in &args.input {
-        files.input("the input", input);
-    }
-    files.output("-o", &args.output);
-    if let Some(path) = &args.listing {
-        files.output("--listing", path);
-    }
-    files.check()?;
+    files(&args, &[]).check()?;
     let mut opts = Options {
         include_dirs: args.include.clone(),
         extensions: args.ext.ext,
@@ -87,6 +79,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             for w in &out.warnings {
                 eprintln!("{w}");
             }
+            files(&args, &[(&args.input[0], &out.included)]).check()?;
             let bytes = if args.format == "bin" {
                 &out.image
             } else {
@@ -100,6 +93,26 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         }
         Err(diagnostics) => Ok(report(&diagnostics)),
     }
+}
+
+/// What the command reads and writes: the sources, the files each source's `.include` and
+/// `.incbin` read (known once it is assembled, and checked again then, before anything is
+/// written), and the outputs.
+fn files(args: &Args, included: &[(&PathBuf, &Vec<PathBuf>)]) -> crate::outputs::Files {
+    let mut files = crate::outputs::Files::new();
+    for input in &args.input {
+        files.input("the input", input);
+    }
+    for (source, paths) in included {
+        for path in paths.iter() {
+            files.input(format!("{}'s included file", source.display()), path);
+        }
+    }
+    files.output("-o", &args.output);
+    if let Some(path) = &args.listing {
+        files.output("--listing", path);
+    }
+    files
 }
 
 /// Prints diagnostics; the exit status for a failed assembly.
@@ -137,6 +150,13 @@ fn objects(args: &Args, opts: &Options) -> exit::Result<ExitCode> {
             Err(d) => return Ok(report(&d)),
         }
     }
+    let included: Vec<_> = args
+        .input
+        .iter()
+        .zip(&objects)
+        .map(|(input, obj)| (input, &obj.included))
+        .collect();
+    files(args, &included).check()?;
     if args.runtime {
         // As `spu ld --runtime`: crt0 first, the rest of the runtime searched after.
         let crt0 = spu_loader::ppe::runtime::start_file().map_err(Error::failure)?;

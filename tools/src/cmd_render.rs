@@ -65,7 +65,7 @@ pub fn frame(
     bar.finish_and_clear();
     let result = result.map_err(|e| match e {
         FrameError::Setup(message) => Error::failure(message),
-        FrameError::CycleLimit(_) => Error::new(Status::CycleLimit, e.to_string()),
+        FrameError::CycleLimit { .. } => Error::new(Status::CycleLimit, e.to_string()),
         FrameError::SpuStopped { .. } => Error::new(Status::AbnormalStop, e.to_string()),
     })?;
     let host_seconds = sim_started.elapsed().as_secs_f64();

@@ -39,8 +39,9 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     check_operands(&args.file, &t)?;
     for (line, word) in t.unknown_statements() {
         eprintln!(
-            "{}:{line}: warning: `{word}` is not an SPU instruction; not timed",
-            args.file.display()
+            "{}:{line}:{}: warning: `{word}` is not an SPU instruction; not timed",
+            args.file.display(),
+            word_column(&src, line, word)
         );
     }
     let text = if args.json {
@@ -53,6 +54,22 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         None => out!("{text}"),
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The column (from 1) of statement `word` on line `line` of `src`, for a warning in the
+/// assembler's `file:line:column` form: its first occurrence at the start of a word.
+fn word_column(src: &str, line: usize, word: &str) -> usize {
+    let text = src.lines().nth(line.saturating_sub(1)).unwrap_or("");
+    let starts_word = |i: usize| {
+        text[..i]
+            .chars()
+            .next_back()
+            .is_none_or(|c| c.is_whitespace() || c == ':' || c == ';')
+    };
+    text.match_indices(word)
+        .map(|(i, _)| i)
+        .find(|&i| starts_word(i))
+        .map_or(1, |i| text[..i].chars().count() + 1)
 }
 
 /// Refuses an instruction `spu as` refuses (a register past `$127`, an immediate out of

@@ -119,6 +119,39 @@ fn device_inode(_meta: &std::fs::Metadata) -> (u64, u64) {
     (0, 0)
 }
 
+/// The material libraries an OBJ scene names (`mtllib NAME`, the rest of the line one
+/// name, as `tobj` reads it), where the loader finds them (beside the scene, as named or
+/// with `.gz`): inputs of a render, as the scene is. A scene that cannot be read, or is
+/// not OBJ, names none here; loading it says why.
+pub fn material_libraries(scene: &Path) -> Vec<PathBuf> {
+    let name = scene
+        .file_name()
+        .map(|n| n.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    if !name.trim_end_matches(".gz").ends_with(".obj") {
+        return Vec::new();
+    }
+    let Ok(bytes) = spu_loader::scene::read_maybe_gzipped(scene) else {
+        return Vec::new();
+    };
+    let dir = scene.parent().unwrap_or(Path::new(""));
+    let mut found = Vec::new();
+    for line in String::from_utf8_lossy(&bytes).lines() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        let Some(("mtllib", library)) = line.split_once(' ') else {
+            continue;
+        };
+        let plain = dir.join(library.trim());
+        let mut gz = plain.clone().into_os_string();
+        gz.push(".gz");
+        let path = [plain, PathBuf::from(gz)].into_iter().find(|p| p.is_file());
+        if let Some(path) = path.filter(|p| !found.contains(p)) {
+            found.push(path);
+        }
+    }
+    found
+}
+
 /// `path` with its last component's symbolic links followed (a dangling one too: writing
 /// to it makes the file it names). A loop stops after 40 links, as the kernel does.
 pub fn resolve_links(path: &Path) -> PathBuf {

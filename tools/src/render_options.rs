@@ -89,7 +89,8 @@ pub struct Args {
     /// Compare every pixel's triangle and distance with the host reference.
     #[arg(long)]
     pub validate: bool,
-    /// Simulated cycles per SPU before giving up.
+    /// Simulated cycles per SPE before giving up (exit 124): each SPE stops at exactly N,
+    /// and the message names those it stopped.
     #[arg(long, default_value_t = 200_000_000_000)]
     pub max_cycles: u64,
     /// Write the kernel's annotated profile (per instruction: executions, cycles, stalls
@@ -308,6 +309,9 @@ fn check_outputs(args: &Args) -> exit::Result<()> {
     let mut files = crate::outputs::Files::new();
     if !spu_loader::procedural::is_built_in(&args.scene) {
         files.input("the scene", std::path::Path::new(&args.scene));
+        for library in crate::outputs::material_libraries(std::path::Path::new(&args.scene)) {
+            files.input("the scene's material library", &library);
+        }
     }
     files.output("-o", &args.output);
     if let Some((cycles, wait)) = &heatmaps {

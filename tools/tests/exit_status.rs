@@ -173,6 +173,57 @@ fn cycle_limits_exit_124() {
 }
 
 #[test]
+fn render_max_cycles_is_per_spe_and_exact() {
+    // Each SPE stops at exactly N, whatever the engine and the 10,000-cycle quanta (N
+    // falls inside one, and inside the kernel's spin on the tile counter): the message
+    // names the SPEs the limit stopped and the ones that had finished, with their clocks.
+    let d = dir("render-cycles");
+    let image = d.join("r.png");
+    let image = image.to_str().unwrap();
+    let render = |spes: &str, limit: &str, engine: &str| {
+        spu(&[
+            "render",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spes",
+            spes,
+            "--max-cycles",
+            limit,
+            "--engine",
+            engine,
+            "-o",
+            image,
+        ])
+    };
+    for engine in ["interp", "jit"] {
+        for (spes, limit, stopped) in [
+            ("1", "777", "SPE 0 stopped at cycle 777"),
+            ("4", "5000", "SPE 0, 1, 2, 3 stopped at cycle 5000"),
+            ("3", "12345", "SPE 0, 1, 2 stopped at cycle 12345"),
+            (
+                "4",
+                "60000",
+                "SPE 0 stopped at cycle 60000; SPE 1 had finished at cycle 30561; \
+                 SPE 2 had finished at cycle 40561; SPE 3 had finished at cycle 50561",
+            ),
+        ] {
+            let out = render(spes, limit, engine);
+            assert_eq!(out.status, 124, "{engine} {spes} {limit}: {}", out.stderr);
+            assert!(
+                out.stderr.ends_with(&format!(
+                    "spu: the frame did not finish within {limit} cycles per SPE: {stopped}\n"
+                )),
+                "{engine} {spes} {limit}: {}",
+                out.stderr
+            );
+        }
+    }
+    assert!(!Path::new(image).exists(), "no image of a cut frame");
+}
+
+#[test]
 fn numeric_options_are_checked_before_any_work() {
     let d = dir("options");
     let src = program(&d, "p.s", "        stop 0x2000\n");
@@ -415,6 +466,45 @@ fn malformed_programs_are_bad_input() {
 }
 
 #[test]
+fn assembler_diagnostics_are_one_line_each_in_gnu_form_with_the_column() {
+    // GNU as 2.40 writes `t.s:1: Warning: division by zero`; `spu as` writes the same
+    // line with the column and the severity as GCC spells it, one line per report.
+    let d = dir("diagnostics");
+    let src = write(&d, "t.s", ".long 7/0\n.byte 256\nfoo $1\n");
+    let out = spu(&["as", &src, "-o", d.join("t.elf").to_str().unwrap()]);
+    assert_eq!(out.status, 2);
+    assert_eq!(
+        out.stderr,
+        format!(
+            "{src}:1:7: warning: division by zero\n\
+             {src}:2:7: warning: value 0x100 truncated to 0x0\n\
+             {src}:3:1: error: Invalid mnemonic 'foo'\n\
+             1 error(s); nothing written\n"
+        )
+    );
+    let clean = write(&d, "w.s", ".long 7/0\n");
+    let out = spu(&["as", &clean, "-o", d.join("w.elf").to_str().unwrap()]);
+    assert_eq!(
+        (out.status, out.stderr),
+        (0, format!("{clean}:1:7: warning: division by zero\n"))
+    );
+    let absent = d.join("absent.s");
+    let out = spu(&[
+        "as",
+        absent.to_str().unwrap(),
+        "-o",
+        d.join("a.elf").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status, 2);
+    assert!(
+        out.stderr
+            .starts_with(&format!("{}: error: can't read: ", absent.display())),
+        "{}",
+        out.stderr
+    );
+}
+
+#[test]
 fn timing_reports_statements_it_does_not_time() {
     let d = dir("timing");
     let src = write(
@@ -425,7 +515,7 @@ fn timing_reports_statements_it_does_not_time() {
     let out = spu(&["timing", &src]);
     out.refused(
         0,
-        "t.s:3: warning: `frob` is not an SPU instruction; not timed",
+        "t.s:3:9: warning: `frob` is not an SPU instruction; not timed",
     );
 }
 
@@ -594,6 +684,90 @@ fn recursive_macro_from_the_fuzzer_is_bad_input() {
 /// No output overwrites an input or another output of the same command, whatever the
 /// spelling, symbolic link or hard link: refused before any work, status 2, naming both,
 /// and the files are left as they were.
+#[test]
+fn no_output_overwrites_a_file_the_input_includes() {
+    // `.include`, `.incbin` (found beside the source or through -I) and a scene's `mtllib`
+    // are inputs as the named ones are: refused before anything is written, naming both.
+    let d = dir("included");
+    let at = |name: &str| d.join(name).to_str().unwrap().to_string();
+    std::fs::create_dir_all(d.join("lib")).unwrap();
+    let inc = write(&d, "inc.s", "        il $3, 1\n");
+    let blob = write(&d, "blob.bin", "abcd");
+    let deep = write(&d.join("lib"), "deep.s", "        il $4, 2\n");
+    let src = program(
+        &d,
+        "x.s",
+        "        .include \"inc.s\"\n        .include \"deep.s\"\n        .incbin \"blob.bin\"\n        stop 0x2000\n",
+    );
+    let other = program(&d, "y.s", "        stop 0x2000\n");
+    let lib = at("lib");
+    let words = |w: &[&str]| -> Vec<String> { w.iter().map(|s| s.to_string()).collect() };
+    let cases: Vec<(Vec<String>, String)> = vec![
+        (
+            words(&["as", &src, "-I", &lib, "-o", &inc]),
+            format!("-o {inc}: would overwrite {src}'s included file {inc}"),
+        ),
+        (
+            words(&["as", &src, "-I", &lib, "-c", "-o", &blob]),
+            format!("-o {blob}: would overwrite {src}'s included file {blob}"),
+        ),
+        (
+            words(&[
+                "as",
+                &src,
+                "-I",
+                &lib,
+                "-o",
+                &at("x.elf"),
+                "--listing",
+                &deep,
+            ]),
+            format!(
+                "--listing {deep}: would overwrite {src}'s included file {}/deep.s",
+                lib
+            ),
+        ),
+        (
+            words(&["as", &other, &src, "-I", &lib, "-o", &inc]),
+            format!("-o {inc}: would overwrite {src}'s included file {inc}"),
+        ),
+    ];
+    for (args, message) in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = spu(&args);
+        assert_eq!(out.status, 2, "spu {args:?}: {}", out.stderr);
+        assert_eq!(out.stderr, format!("spu: {message}\n"), "spu {args:?}");
+    }
+    assert_eq!(std::fs::read_to_string(&inc).unwrap(), "        il $3, 1\n");
+    assert_eq!(std::fs::read_to_string(&blob).unwrap(), "abcd");
+    assert_eq!(
+        std::fs::read_to_string(&deep).unwrap(),
+        "        il $4, 2\n"
+    );
+    assert!(!d.join("x.elf").exists(), "nothing written");
+    // The same source to a fresh output assembles.
+    let out = spu(&["as", &src, "-I", &lib, "-o", &at("x.elf")]);
+    assert_eq!((out.status, out.stderr.as_str()), (0, ""));
+
+    let mtl = write(&d, "m.mtl", "newmtl green\nKd 0 1 0\n");
+    let scene = write(
+        &d,
+        "s.obj",
+        "mtllib m.mtl # the colours\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl green\nf 1 2 3\n",
+    );
+    let out = spu(&["render", "--scene", &scene, "--stats", &mtl]);
+    assert_eq!(out.status, 2, "{}", out.stderr);
+    assert_eq!(
+        out.stderr,
+        format!("spu: --stats {mtl}: would overwrite the scene's material library {mtl}\n")
+    );
+    assert_eq!(out.stdout, "");
+    assert_eq!(
+        std::fs::read_to_string(&mtl).unwrap(),
+        "newmtl green\nKd 0 1 0\n"
+    );
+}
+
 #[test]
 fn no_output_overwrites_an_input_or_another_output() {
     let d = dir("clobber");

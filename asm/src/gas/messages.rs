@@ -1,6 +1,7 @@
-//! Diagnostics (gas's `messages.c`): errors and warnings with file, line and column, shown
-//! GNU-style with the source line and a caret; reported once each, at most
-//! `MAX_DIAGNOSTICS` in full, and sorted by place when the assembly fails.
+//! Diagnostics (gas's `messages.c`): errors and warnings with file, line and column, one
+//! line each in GNU's form with the column added (`file:line:column: error: message`);
+//! reported once each, at most `MAX_DIAGNOSTICS` in full, and sorted by place when the
+//! assembly fails.
 
 use super::Assembler;
 use crate::lex::{display_text, Line};
@@ -19,7 +20,7 @@ pub enum Severity {
     Warning,
 }
 
-/// An error or warning with its source line, shown GNU-style with a caret.
+/// An error or warning, with the source line it points into (for callers that show it).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Diagnostic {
     pub severity: Severity,
@@ -29,48 +30,26 @@ pub struct Diagnostic {
 }
 
 impl std::fmt::Display for Diagnostic {
-    /// Rendered by codespan-reporting: the message, `file:line:column`, the line and a caret.
+    /// GNU as 2.40 prints `FILE:LINE: Error: MSG`; this is the same single line with the
+    /// column after the line and the severity in lower case, as GCC and Clang write it, so
+    /// that editors and scripts that parse compiler output read it unchanged. A report about
+    /// a whole file (line 0) names the file alone.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        use codespan_reporting::diagnostic as cd;
-        use codespan_reporting::files::SimpleFile;
-        use codespan_reporting::term;
         let l = &self.location;
-        let plain = |f: &mut std::fmt::Formatter<'_>| {
-            let kind = if self.severity == Severity::Error {
-                "error"
-            } else {
-                "warning"
-            };
-            write!(
+        let kind = match self.severity {
+            Severity::Error => "error",
+            Severity::Warning => "warning",
+        };
+        match (l.file.is_empty(), l.line) {
+            (true, _) => write!(f, "{kind}: {}", self.message),
+            (false, 0) => write!(f, "{}: {kind}: {}", l.file, self.message),
+            (false, line) => write!(
                 f,
-                "{}:{}:{}: {kind}: {}",
-                l.file, l.line, l.column, self.message
-            )
-        };
-        if l.line == 0 {
-            return plain(f);
-        }
-        // A file whose line `l.line` is the source line, so the report shows the real number.
-        let prefix = "\n".repeat(l.line - 1);
-        let text = format!("{prefix}{}\n", self.source_line);
-        let start = prefix.len() + l.column.saturating_sub(1).min(self.source_line.len());
-        let end = (start + 1)
-            .min(prefix.len() + self.source_line.len())
-            .max(start);
-        let file = SimpleFile::new(l.file.clone(), text);
-        let diagnostic = match self.severity {
-            Severity::Error => cd::Diagnostic::error(),
-            Severity::Warning => cd::Diagnostic::warning(),
-        }
-        .with_message(self.message.clone())
-        .with_labels(vec![cd::Label::primary((), start..end)]);
-        let config = term::Config {
-            chars: term::Chars::ascii(),
-            ..Default::default()
-        };
-        match term::emit_into_string(&config, &file, &diagnostic) {
-            Ok(text) => write!(f, "{}", text.trim_end()),
-            Err(_) => plain(f),
+                "{}:{line}:{}: {kind}: {}",
+                l.file,
+                l.column.max(1),
+                self.message
+            ),
         }
     }
 }

@@ -72,6 +72,9 @@ pub struct Output {
     pub warnings: Vec<Diagnostic>,
     /// Section extents: (name, address, size, is code).
     pub sections: Vec<(String, u32, u32, bool)>,
+    /// The files `.include` and `.incbin` read from disk: inputs of the command too, so
+    /// that it writes no output over one.
+    pub included: Vec<std::path::PathBuf>,
 }
 
 /// A chunk: one subsection of one section (an index into `Assembler::chunks`). A section
@@ -100,6 +103,8 @@ struct Assembler<'o> {
     /// Diagnostics already reported (constant-time deduplication) and the count dropped.
     seen_diags: std::collections::HashSet<(String, usize, usize, String)>,
     dropped_diags: usize,
+    /// Files on disk that `.include` and `.incbin` read, each once, in the order first read.
+    included: Vec<std::path::PathBuf>,
     /// The value of the operand whose relocation `instruction` is about to record.
     pending: Option<Val>,
     /// Labels defined so far in this walk.
@@ -193,6 +198,7 @@ impl<'o> Assembler<'o> {
             expanded: 0,
             seen_diags: Default::default(),
             dropped_diags: 0,
+            included: Vec::new(),
             pending: None,
             defined: Default::default(),
             nonzero_in_nobits: false,

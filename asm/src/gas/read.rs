@@ -13,16 +13,28 @@ use std::collections::HashMap;
 impl Assembler<'_> {
     /// The text of an `.include`d file: an in-memory file, else the first found on the
     /// include path, else the name as given.
-    fn read_include(&self, name: &str) -> Option<String> {
+    fn read_include(&mut self, name: &str) -> Option<String> {
         if let Some((_, text)) = self.opts.virtual_files.iter().find(|(n, _)| n == name) {
             return Some(bytes_as_text(text.as_bytes()));
         }
-        for dir in &self.opts.include_dirs {
-            if let Ok(t) = read_source(&dir.join(name)) {
-                return Some(t);
-            }
+        let named = std::path::PathBuf::from(name);
+        let (path, text) = self
+            .opts
+            .include_dirs
+            .iter()
+            .map(|dir| dir.join(name))
+            .chain(std::iter::once(named))
+            .find_map(|path| Some((read_source(&path).ok()?, path)))
+            .map(|(text, path)| (path, text))?;
+        self.note_included(path);
+        Some(text)
+    }
+
+    /// Records a file read from disk, once.
+    fn note_included(&mut self, path: std::path::PathBuf) {
+        if !self.included.contains(&path) {
+            self.included.push(path);
         }
-        read_source(std::path::Path::new(name)).ok()
     }
 
     /// Processes a list of lines (one file, a macro body or a repetition).
@@ -294,6 +306,9 @@ impl Assembler<'_> {
                 format!(".incbin of {count} bytes is more than the local store holds"),
             );
             return;
+        }
+        if let Ok(p) = &path {
+            self.note_included(p.clone());
         }
         let bytes = match &path {
             Ok(p) => {

@@ -17,6 +17,9 @@ pub(super) enum SymVal {
     Common(u32, u32),
 }
 
+/// `.type NAME, @function`: an ELF `STT_FUNC` symbol.
+pub(super) const STT_FUNC: u8 = 2;
+
 /// Symbol attributes set by directives.
 #[derive(Clone, Debug, Default)]
 pub(super) struct SymAttrs {
@@ -97,12 +100,14 @@ impl Assembler<'_> {
             SymVal::Label(s, off) => {
                 let v = (self.bases.get(s).copied().unwrap_or(0) + off) as i64;
                 let a = self.attrs.get(name);
-                let visible = a.is_some_and(|a| a.global || a.weak);
+                // A relocation names a global symbol, and a function even when local
+                // (tc-spu.h's `tc_fix_adjustable`: never reduced to its section's symbol).
+                let named = a.is_some_and(|a| a.global || a.weak || a.kind == STT_FUNC);
                 Val {
                     v,
                     reloc: true,
                     sect: Some(self.chunks[*s].0),
-                    sym: (self.object && visible).then(|| (name.into(), v)),
+                    sym: (self.object && named).then(|| (name.into(), v)),
                     cross: false,
                 }
             }

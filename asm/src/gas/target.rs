@@ -475,7 +475,12 @@ impl Assembler<'_> {
                         }
                     }
                     if self.object && self.pass == 2 && (val.reloc || val.cross) {
-                        match self.object_immediate(form.format, kind, val, high, low, pc) {
+                        let call = mnemonic.eq_ignore_ascii_case("brsl")
+                            || mnemonic.eq_ignore_ascii_case("brasl");
+                        let jump = mnemonic.eq_ignore_ascii_case("br")
+                            || mnemonic.eq_ignore_ascii_case("bra");
+                        let branch = (call, jump);
+                        match self.object_immediate(form.format, kind, val, high, low, pc, branch) {
                             Ok(Some(bits)) => word |= bits,
                             Ok(None) => {
                                 let sect = self.sect;
@@ -513,8 +518,10 @@ impl Assembler<'_> {
     }
 
     /// An operand that depends on an address, in an object: a PC-relative reference to a
-    /// local label of this very section is resolved now (as gas's `fixup_segment` does);
-    /// anything else is left in `pending` for a relocation.
+    /// local symbol of this very section is resolved now (as gas's `fixup_segment` does);
+    /// anything else is left in `pending` for a relocation. `(call, jump)`: the instruction
+    /// is `brsl`/`brasl`, or `br`/`bra`.
+    #[allow(clippy::too_many_arguments)]
     fn object_immediate(
         &mut self,
         format: Format,
@@ -523,19 +530,22 @@ impl Assembler<'_> {
         high: bool,
         low: bool,
         pc: u32,
+        (call, jump): (bool, bool),
     ) -> Result<Option<u32>, String> {
         let pcrel = matches!(kind, OperandKind::Rel18 | OperandKind::BrInst);
         let here = self.chunks[self.sect].0;
-        let weak = val
-            .sym
-            .as_ref()
-            .is_some_and(|(n, _)| self.attrs.get(&**n).is_some_and(|a| a.weak));
+        let attrs = val.sym.as_ref().and_then(|(n, _)| self.attrs.get(&**n));
+        let global = attrs.is_some_and(|a| a.global || a.weak);
+        let function = attrs.is_some_and(|a| a.kind == super::symbols::STT_FUNC);
         if val.cross || (val.sect.is_none() && val.sym.is_none()) {
             return Err("expression too complex for a relocation".into());
         }
-        // Only references to local labels are resolved: gas leaves a relocation for a
-        // global or weak symbol even in the same section (checked with spu-elf-as 2.40).
-        if pcrel && val.sect == Some(here) && val.sym.is_none() && !weak && !high && !low {
+        // Only references to local symbols are resolved: gas leaves a relocation for a
+        // global or weak symbol even in the same section (checked with spu-elf-as 2.40),
+        // and tc-spu.h's `TC_FORCE_RELOCATION` keeps every call's (`brsl`, `brasl`) and a
+        // jump's (`br`, `bra`) to a function: tail and sibling calls, for overlay stubs.
+        let forced = call || (jump && function);
+        if pcrel && val.sect == Some(here) && !global && !forced && !high && !low {
             let local = Val { sym: None, ..val };
             return self
                 .immediate(format, kind, local, false, false, pc)

@@ -410,6 +410,7 @@ pub(super) fn executable(
         symbols,
         entry,
         listing: asm.listing,
+        included: asm.included,
         warnings,
         sections: out_sections
             .iter()
@@ -423,6 +424,7 @@ pub(super) fn executable(
 pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
     let mut obj = Object {
         name: file_name.to_string(),
+        included: asm.included.clone(),
         ..Default::default()
     };
     for (d, def) in asm.defs.iter().enumerate() {

@@ -393,6 +393,19 @@ mod host {
             }
             let first = self.decoded[(pc as usize >> 2) & (LS_SIZE / 4 - 1)];
             let timing = self.timing.as_mut().expect("timing");
+            // The passes stop only at their end: under a cycle limit the last starts where a
+            // whole one still ends before it, as a single replay must (`Spu::replay_fits`),
+            // so that the per-instruction path stops the clock at the limit exactly.
+            let until = match self.limit {
+                u64::MAX => until,
+                limit => until.min(
+                    limit.saturating_sub(
+                        timing
+                            .memo_span(memo)
+                            .saturating_add(super::super::spu::LIMIT_REACH),
+                    ),
+                ),
+            };
             let passes = timing.steady_passes(memo, pc, first, until);
             if passes < 2 {
                 return true;

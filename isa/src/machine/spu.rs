@@ -199,7 +199,7 @@ pub struct Spu {
 /// (`il $0,0`), so no real decoding result equals it.
 /// How close to [`Spu::run`]'s limit the timing model is copied before each issue: past
 /// the longest one instruction waits to issue (a branch miss, a fetch, a dependency).
-const LIMIT_REACH: u64 = 1024;
+pub(super) const LIMIT_REACH: u64 = 1024;
 
 pub(super) const STALE: Inst = Inst {
     op: Op::Unknown,
@@ -466,6 +466,26 @@ impl Spu {
         self.limit = limit;
     }
 
+    /// A channel wait (of the instruction at the pc, issued at `issue`) that reaches the
+    /// limit: the clock stops there, and running again starts the instruction over, the
+    /// model as before it where it was kept (within `LIMIT_REACH`), else stalled to the
+    /// cycle before the limit (the instruction then retries, as after a quantum's boundary).
+    fn stop_waiting_at_limit(&mut self, before: Option<Box<Timing>>, issue: u64, channel: u8) {
+        let last = self.limit.saturating_sub(1);
+        if self.events.is_some() {
+            self.log_channel_wait(issue, last, channel);
+        }
+        match before {
+            Some(model) => self.timing = Some(*model),
+            None => {
+                if let Some(t) = &mut self.timing {
+                    t.channel_stall(self.pc, channel, last);
+                }
+            }
+        }
+        self.cycle = self.limit;
+    }
+
     fn run_to_limit(&mut self, memory: &mut MainMemory, max_cycles: u64) -> StopReason {
         const QUANTUM: u64 = 4096;
         loop {
@@ -592,24 +612,13 @@ impl Spu {
                 Effect::Channel => match self.channel(inst, issue, memory) {
                     ChannelOutcome::Done => self.pc = (pc + 4) & LS_MASK,
                     ChannelOutcome::WaitUntil(when) if when >= self.limit => {
-                        // The wait reaches [`Spu::run`]'s limit: the clock stops there, and
-                        // running again starts the instruction over, the model as before it
-                        // where it was kept (within `LIMIT_REACH`), else stalled to the
-                        // cycle before the limit (the instruction then retries, as after a
-                        // quantum's boundary).
-                        let last = self.limit.saturating_sub(1);
-                        if self.events.is_some() {
-                            self.log_channel_wait(issue, last, inst.ra);
-                        }
-                        match before {
-                            Some(model) => self.timing = Some(*model),
-                            None => {
-                                if let Some(t) = &mut self.timing {
-                                    t.channel_stall(pc, inst.ra, last);
-                                }
-                            }
-                        }
-                        self.cycle = self.limit;
+                        self.stop_waiting_at_limit(before, issue, inst.ra);
+                        return None;
+                    }
+                    // A wait for the quantum's end where the quantum ends at the limit (a
+                    // gang's last quantum): the same.
+                    ChannelOutcome::WaitBoundary if until >= self.limit => {
+                        self.stop_waiting_at_limit(before, issue, inst.ra);
                         return None;
                     }
                     ChannelOutcome::WaitUntil(when) => {

@@ -40,7 +40,9 @@ pub struct ContextConfig {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Quantum {
     /// Quanta end at multiples of this many cycles of a clock shared by all contexts;
-    /// a quantum that would pass the run's cycle limit is not started.
+    /// one that would pass the run's cycle limit ends at the limit instead, so that a run
+    /// cut by it leaves every running context at exactly the limit (and a resumed run's
+    /// quanta end at the multiples again).
     Aligned(u64),
     /// Each quantum ends this many cycles after the slowest running context's clock, or
     /// at the run's cycle limit (a single SPU run as `Spu::run` runs it).
@@ -485,12 +487,16 @@ impl System {
             }
             let until = match quantum {
                 Quantum::Aligned(n) => {
-                    let until = now.saturating_add(n.max(1));
-                    if until > max_cycles {
+                    if *now >= max_cycles {
+                        // Only contexts waiting on another are left, and the clock is out.
                         outcome = Outcome::CycleLimit;
                         return Ok(Next::Done);
                     }
-                    until
+                    let n = n.max(1);
+                    (*now / n)
+                        .saturating_add(1)
+                        .saturating_mul(n)
+                        .min(max_cycles)
                 }
                 Quantum::FromSlowest(n) => slowest.saturating_add(n.max(1)).min(max_cycles),
             };
