@@ -108,7 +108,7 @@ fn frame_error(e: FrameError) -> Error {
     match e {
         // a keyframe that does not load or fit frame 0 is bad input
         FrameError::Setup(message) => Error::input(message),
-        FrameError::CycleLimit(_) => Error::new(Status::CycleLimit, e.to_string()),
+        FrameError::CycleLimit { .. } => Error::new(Status::CycleLimit, e.to_string()),
         FrameError::SpuStopped { .. } => Error::new(Status::AbnormalStop, e.to_string()),
     }
 }
