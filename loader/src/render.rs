@@ -48,6 +48,9 @@ pub struct Shading {
     pub vertex_cache: u32,
     /// Entries of the direct-mapped material cache (a power of two, 16 to 256).
     pub material_cache: u32,
+    /// Reflection bounces per primary ray with [`ShadeMode::Reflect`] (1 to
+    /// [`shading::MAX_REFLECT_DEPTH`]).
+    pub reflect_depth: u32,
 }
 
 impl Default for Shading {
@@ -58,6 +61,7 @@ impl Default for Shading {
             shadow_early: false,
             vertex_cache: 64,
             material_cache: 64,
+            reflect_depth: 1,
         }
     }
 }
@@ -195,6 +199,15 @@ impl RenderConfig {
                 shading::MAX_LIGHTS
             ));
         }
+        within(
+            "reflection depth",
+            s.reflect_depth as u64,
+            1,
+            shading::MAX_REFLECT_DEPTH as u64,
+        )?;
+        if s.mode == ShadeMode::Reflect {
+            return Err(REFLECT_NOT_ON_THE_SPUS.into());
+        }
         if self.kernel.shades() != (s.mode != ShadeMode::None) {
             return Err(format!(
                 "the {} kernel {} shading {}",
@@ -210,6 +223,11 @@ impl RenderConfig {
         Ok(())
     }
 }
+
+/// Why a frame with [`ShadeMode::Reflect`] is refused before any work: the host reference
+/// computes it ([`crate::reflection`]), but no SPU kernel has a reflection pass yet (issue
+/// #34; the plan is in docs/reflections.md).
+pub const REFLECT_NOT_ON_THE_SPUS: &str = "--shade reflect: the SPU kernels have no reflection pass yet (only the host reference computes reflections; see docs/reflections.md)";
 
 /// A scene ready for frames: loaded, its BVH built and staged in main memory's layout.
 /// Frames of any configuration share one (`spu paper` keeps each scene while frames of it
@@ -678,9 +696,25 @@ mod tests {
                 threads: 0,
                 ..ok.clone()
             },
+            RenderConfig {
+                shading: Shading {
+                    reflect_depth: 5,
+                    ..Shading::default()
+                },
+                ..ok.clone()
+            },
         ] {
             assert!(bad.check().is_err(), "{bad:?}");
         }
+        let reflect = RenderConfig {
+            shading: Shading {
+                mode: ShadeMode::Reflect,
+                ..Shading::default()
+            },
+            kernel: RenderConfig::kernel_for(false, ShadeMode::Reflect),
+            ..ok.clone()
+        };
+        assert_eq!(reflect.check(), Err(REFLECT_NOT_ON_THE_SPUS.into()));
         let wrong_scene = prepare("room").map(|mut p| {
             p.name = "beetle".into();
             p

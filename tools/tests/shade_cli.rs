@@ -27,6 +27,10 @@ fn bad_shading_options_exit_2_before_any_work() {
         vec!["--material-cache", "512"],
         vec!["--shade", "shadows", "--fill"],
         vec!["--shade", "simple", "--fill"],
+        vec!["--shade", "reflect", "--reflect-depth", "0"],
+        vec!["--shade", "reflect", "--reflect-depth", "5"],
+        vec!["--shade", "reflect", "--reflect-depth", "two"],
+        vec!["--shade", "shadows", "--reflect-depth", "2"],
         nine.iter().map(String::as_str).collect(),
     ];
     for case in cases {
@@ -52,6 +56,26 @@ fn bad_shading_options_exit_2_before_any_work() {
         "spu: --light lights a shaded frame, and this one is not shaded: add --shade simple or --shade shadows\n"
     );
     assert!(!std::path::Path::new(out).exists());
+    // Reflections are the host reference's only: refused before the scene is loaded, and
+    // a depth without them is refused saying what it is for.
+    for (extra, message) in [
+        (
+            &["--shade", "reflect", "--reflect-depth", "2"][..],
+            spu_loader::render::REFLECT_NOT_ON_THE_SPUS,
+        ),
+        (
+            &["--shade", "simple", "--reflect-depth", "2"][..],
+            "--reflect-depth sets the bounces of --shade reflect, and this frame does not reflect",
+        ),
+    ] {
+        let args = [&["render", "--scene", "no-such.obj", "-o", out][..], extra].concat();
+        let run = spu(&args);
+        assert_eq!(run.status.code(), Some(2), "{run:?}");
+        assert_eq!(
+            String::from_utf8_lossy(&run.stderr),
+            format!("spu: {message}\n")
+        );
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 
