@@ -154,6 +154,7 @@ impl RenderConfig {
         match (fill, mode) {
             (true, _) => KernelVariant::Fill,
             (false, ShadeMode::None) => KernelVariant::Primary,
+            (false, ShadeMode::Reflect) => KernelVariant::Reflect,
             (false, _) => KernelVariant::Shaded,
         }
     }
@@ -205,8 +206,17 @@ impl RenderConfig {
             1,
             shading::MAX_REFLECT_DEPTH as u64,
         )?;
-        if s.mode == ShadeMode::Reflect {
-            return Err(REFLECT_NOT_ON_THE_SPUS.into());
+        if (self.kernel == KernelVariant::Reflect) != (s.mode == ShadeMode::Reflect) {
+            return Err(format!(
+                "the {} kernel {} shading {}",
+                self.kernel.id(),
+                if self.kernel == KernelVariant::Reflect {
+                    "needs"
+                } else {
+                    "does not do"
+                },
+                ShadeMode::Reflect.name()
+            ));
         }
         if self.kernel.shades() != (s.mode != ShadeMode::None) {
             return Err(format!(
@@ -223,11 +233,6 @@ impl RenderConfig {
         Ok(())
     }
 }
-
-/// Why a frame with [`ShadeMode::Reflect`] is refused before any work: the host reference
-/// computes it ([`crate::reflection`]), but no SPU kernel has a reflection pass yet (issue
-/// #34; the plan is in docs/reflections.md).
-pub const REFLECT_NOT_ON_THE_SPUS: &str = "--shade reflect: the SPU kernels have no reflection pass yet (only the host reference computes reflections; see docs/reflections.md)";
 
 /// A scene ready for frames: loaded, its BVH built and staged in main memory's layout.
 /// Frames of any configuration share one (`spu paper` keeps each scene while frames of it
@@ -344,10 +349,15 @@ pub fn frame_layout(
     let mut layout = layout.with_shading(
         staged,
         ShadingBlock {
-            mode: if s.mode == ShadeMode::Shadows {
+            mode: if s.mode.shadows() {
                 SHADE_SHADOWS
             } else {
                 SHADE_SIMPLE
+            },
+            reflect_depth: if s.mode == ShadeMode::Reflect {
+                s.reflect_depth
+            } else {
+                0
             },
             shadow_early: s.shadow_early,
             vertex_cache_log2: s.vertex_cache.trailing_zeros(),
@@ -463,6 +473,11 @@ pub struct Validation {
     /// another triangle sharing an edge with the reference's and take its colour (not
     /// counted as mismatches).
     pub edge_ties: usize,
+    /// Reflect frames: per bounce (the first reflection first), the reflected rays the
+    /// reference casts, and the pixels whose ray differs (cast or not, its hit triangle or
+    /// distance as the primary hits are compared).
+    pub bounce_rays: Vec<usize>,
+    pub bounce_mismatches: Vec<usize>,
     /// The first few differences, described (colours first, then hits).
     pub messages: Vec<String>,
 }
@@ -470,7 +485,10 @@ pub struct Validation {
 impl Validation {
     /// No pixel differs.
     pub fn passed(&self) -> bool {
-        self.mismatches + self.colour_mismatches.unwrap_or(0) == 0
+        self.mismatches
+            + self.colour_mismatches.unwrap_or(0)
+            + self.bounce_mismatches.iter().sum::<usize>()
+            == 0
     }
 }
 
@@ -500,18 +518,36 @@ pub fn validate(
         pixels: pixels.len(),
         ..Validation::default()
     };
-    if frame.run.colour_buffer.is_some() {
-        let shadows = config.shading.mode == ShadeMode::Shadows;
-        let lights = &frame.lights;
-        let expected = reference.shade_image(
+    let reflect = (config.shading.mode == ShadeMode::Reflect).then(|| {
+        crate::reflection::ReflectFrame::render(
+            &reference,
             &hits,
             camera,
             width,
             height,
-            lights,
-            shadows,
+            &frame.lights,
+            config.shading.reflect_depth,
             config.threads,
-        );
+        )
+    });
+    if frame.run.colour_buffer.is_some() {
+        // Reflect frames shade every level with shadows, but their colours are blends: a
+        // grazing shadow ray's or an edge's other outcome is looked for on the primary
+        // level only (where it is not blended).
+        let shadows = config.shading.mode == ShadeMode::Shadows;
+        let lights = &frame.lights;
+        let expected = match &reflect {
+            Some(r) => r.colours.clone(),
+            None => reference.shade_image(
+                &hits,
+                camera,
+                width,
+                height,
+                lights,
+                shadows,
+                config.threads,
+            ),
+        };
         let basis = camera.basis(width, height);
         let ray = |i: usize| {
             (
@@ -549,7 +585,7 @@ pub fn validate(
                 lights,
                 shadows,
             );
-            if tie.is_some_and(|t| within(i, t)) {
+            if reflect.is_none() && tie.is_some_and(|t| within(i, t)) {
                 validation.edge_ties += 1;
                 continue;
             }
@@ -569,7 +605,86 @@ pub fn validate(
     let (mismatches, messages) = compare_hits(&pixels, &hits, &record_to_original, width);
     validation.mismatches = mismatches;
     validation.messages.extend(messages);
+    if let (Some(r), Some(buffer)) = (&reflect, &frame.run.bounce_hits) {
+        let depth = config.shading.reflect_depth;
+        for (k, expected) in r.bounces.iter().enumerate() {
+            let kernel = decode_bounce_hits(buffer, width, height, depth, k as u32);
+            let cast: Vec<bool> = kernel.iter().map(|(_, cast)| *cast).collect();
+            let as_pixels: Vec<PixelResult> = kernel.iter().map(|(p, _)| *p).collect();
+            // a ray the reference does not cast is compared as a miss the kernel must not
+            // cast either
+            let reference_hits: Vec<crate::reference::Hit> = expected
+                .iter()
+                .map(|h| h.unwrap_or(crate::reference::Hit::NONE))
+                .collect();
+            let (mut bad, mut messages) =
+                compare_hits(&as_pixels, &reference_hits, &record_to_original, width);
+            for (i, (e, &c)) in expected.iter().zip(&cast).enumerate() {
+                if e.is_some() != c {
+                    if messages.len() < MESSAGES {
+                        messages.push(format!(
+                            "bounce {} at ({}, {}): the kernel {} a ray, the reference {}",
+                            k + 1,
+                            i as u32 % width,
+                            i as u32 / width,
+                            if c { "casts" } else { "casts no" },
+                            if e.is_some() { "does" } else { "does not" }
+                        ));
+                    }
+                    bad += 1;
+                }
+            }
+            validation.messages.extend(
+                messages
+                    .into_iter()
+                    .map(|m| format!("bounce {}: {m}", k + 1)),
+            );
+            validation
+                .bounce_rays
+                .push(expected.iter().flatten().count());
+            validation.bounce_mismatches.push(bad);
+        }
+    }
     Ok(validation)
+}
+
+/// Bounce `bounce`'s hits (0: the first reflection) of a reflect frame's bounce-hit
+/// buffer ([`crate::kernel_abi::bounce_hits_bytes`]), row-major: the hit (record or
+/// [`MISS`], t) and whether the pixel cast a ray (t = 0 where not: the kernel writes 0, or
+/// nothing for a packet that casts none).
+pub fn decode_bounce_hits(
+    buffer: &[u8],
+    width: u32,
+    height: u32,
+    depth: u32,
+    bounce: u32,
+) -> Vec<(PixelResult, bool)> {
+    let tiles_x = width.div_ceil(kernel_abi::TILE_SIZE);
+    let word = |at: usize| {
+        buffer
+            .get(at..at + 4)
+            .map_or(0, |w| u32::from_be_bytes([w[0], w[1], w[2], w[3]]))
+    };
+    let mut out = Vec::with_capacity((width * height) as usize);
+    for y in 0..height {
+        for x in 0..width {
+            let (block, index) = kernel_abi::pixel_location(x, y, tiles_x);
+            let packet = block / kernel_abi::PACKET_BLOCK_BYTES as usize;
+            let at = (packet * depth as usize + bounce as usize) * 512 + 4 * index;
+            // a packet that casts no ray of the bounce puts nothing: zeros, as t = 0 says
+            let t = f32::from_bits(word(at + 256));
+            let cast = t != 0.0;
+            out.push((
+                PixelResult {
+                    triangle: if cast { word(at) } else { MISS },
+                    t,
+                    rgba: 0,
+                },
+                cast,
+            ));
+        }
+    }
+    out
 }
 
 /// Per-pixel hits against the reference's: the pixels that differ, the first few described.
@@ -714,7 +829,16 @@ mod tests {
             kernel: RenderConfig::kernel_for(false, ShadeMode::Reflect),
             ..ok.clone()
         };
-        assert_eq!(reflect.check(), Err(REFLECT_NOT_ON_THE_SPUS.into()));
+        assert_eq!(reflect.kernel, KernelVariant::Reflect);
+        assert_eq!(reflect.check(), Ok(()));
+        let not_reflecting = RenderConfig {
+            kernel: KernelVariant::Shaded,
+            ..reflect.clone()
+        };
+        assert_eq!(
+            not_reflecting.check(),
+            Err("the shaded kernel does not do shading reflect".into())
+        );
         let wrong_scene = prepare("room").map(|mut p| {
             p.name = "beetle".into();
             p

@@ -61,8 +61,8 @@ pub struct Args {
     pub fill: bool,
     /// What each pixel gets: none (primary rays, the eye-light grey), simple (diffuse
     /// shading with the material colour and the interpolated normal, point lights),
-    /// shadows (simple plus one shadow ray per light) or reflect (shadows plus reflections;
-    /// not on the SPUs yet: refused).
+    /// shadows (simple plus one shadow ray per light) or reflect (shadows plus reflected
+    /// rays off reflective materials, --reflect-depth bounces).
     #[arg(long, default_value = "none", value_parser = ShadeMode::parse)]
     pub shade: ShadeMode,
     /// Reflection bounces per primary ray with --shade reflect (1..4).
@@ -213,9 +213,6 @@ impl Args {
             return Err(Error::input(
                 "--reflect-depth sets the bounces of --shade reflect, and this frame does not reflect",
             ));
-        }
-        if self.shade == ShadeMode::Reflect {
-            return Err(Error::input(spu_loader::render::REFLECT_NOT_ON_THE_SPUS));
         }
         if self.fill && self.shade != ShadeMode::None {
             return Err(Error::input(format!(

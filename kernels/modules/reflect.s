@@ -1,0 +1,629 @@
+# reflect.s — reflection rays (--shade reflect; the paper's section 7: "each 8x8 primary
+# packet generates one reflection packet"): the packet's hits on reflective materials cast
+# reflected rays, which are traced by the primary rays' traversal and triangle test through
+# the same caches, shaded by the shading module with shadows, and blended in by the
+# reflectance, up to the frame's depth. Model: loader/src/reflection.rs.
+#
+# Levels: 0 is the primary packet, level k its k-th reflection. `reflect_packet` takes the
+# place of shade.s's entry in packet_done (output.s) and runs, per level, the shading module
+# (which keeps its colour block here, reflect_block, instead of putting it) and then traces
+# the next level's rays; at the end it blends the levels' colours from the deepest up and
+# puts the packet's colours. Inside the shading module, once the i-set is built,
+# `reflect_iset` turns a reflection's normals to face its rays and generates the next
+# level's rays from the i-set: R = d - 2 (d.N / N.N) N, from P + REFLECT_OFFSET R, cast
+# where the hit's material reflects (its reflectance from a per-material table in local
+# store, fetched once).
+#
+# The reflected rays of a packet have no common origin, and the traversal, the triangle
+# test and the i-set all take one origin per packet. So each reflected ray is traced as a
+# packet of its own (lane 0 of vector 0 active, every other ray t = -1, as shadow.s's rays
+# that are not cast), in the reflection area's packet context with blocking misses, as
+# shadow.s traces its packets; packet_done comes back to `reflect_ray_done` while rf_trace
+# is set. A level's hits go to the shading module as a packet whose rays are the hit points
+# from origin 0 (d = O + t R, t = 1: the i-set's hit point is then the hit point itself, and
+# its barycentrics are the record's projection of it); the i-set turns the normal to face
+# that d, which reflect_iset turns to face R. Each level's hits (record, t) are put to the
+# frame's bounce-hit buffer for the host's validation.
+#
+# The reflection area (REFLECT_AREA above the shading area; loader::kernel_abi::ReflectArea,
+# RF_* in layout.inc): the level, the ray being traced, the rays cast, the saved miss
+# handlers and registers, the statistics before the level, per bounce the counters, the
+# reflectance table, per level the weights and colour blocks, the next level's rays, the
+# traced level's hits, the hits as shading rays, the reflected rays' packet context.
+
+        .text
+        .align  4
+rf_trace:       .long 0, 0, 0, 0        # all ones while a reflected ray is traced
+rf_hold:        .long 0, 0, 0, 0        # all ones: the shading module keeps its block
+rf_origin:      .long 0, 0, 0, 0        # the origin the i-set adds (shade.s)
+rf_ready:       .long 0, 0, 0, 0        # all ones once the counters are cleared
+rf_refl:        .long 0x5245464c, 0x5245464c, 0x5245464c, 0x5245464c   # "REFL"
+rf_corner_x:    .float 1.0, -1.0, 1.0, -1.0
+rf_corner_y:    .float 0.375, -0.375, 0.375, -0.375
+rf_corner_z:    .float 0.6875, -0.6875, 0.6875, -0.6875
+rf_tag:         .long REFLECT_TAG, 1 << REFLECT_TAG, 0, 0
+rf_minus1:      .float -1.0, -1.0, -1.0, -1.0
+rf_offset:      .long REFLECT_OFFSET_BITS, REFLECT_OFFSET_BITS, REFLECT_OFFSET_BITS, REFLECT_OFFSET_BITS
+rf_half:        .float 0.5, 0.5, 0.5, 0.5
+rf_pair:        .long 0x00010203, 0x10111213, 0x00010203, 0x10111213   # (a0, b0, a0, b0)
+rf_halves:      .long 0x00010203, 0x04050607, 0x10111213, 0x14151617   # (a0, a1, b0, b1)
+
+# the registers the reflected rays' traversal changes and packet_done keeps (as shadow.s's,
+# less shade.s's): the link, the context and the packet's own of regs.inc
+        .macro  RF_EACH_REG op, base
+        .irp    R, 0, 1, 6, 11, 25, 27, 28, 29, 33, 34, 35, 39, 40, 42, 43, 44, 45, 46, 47, 48
+        \op     $\R, RF_REGS+16*\R(\base)
+        .endr
+        .irp    R, 49, 50, 51, 52, 53, 54, 55, 56, 57, 58, 59, 60, 61, 62, 63, 64, 65
+        \op     $\R, RF_REGS+16*\R(\base)
+        .endr
+        .endm
+
+# $rt = the shading area (from params), $rb = the reflection area
+        .macro  RF_AREAS rt, rb
+        ila     \rb, params
+        lqd     \rt, PARAM_SHADING_QUAD(\rb)
+        rotqbyi \rt, \rt, PARAM_SHADING_ROT + 4
+        ila     \rb, REFLECT_AREA
+        a       \rb, \rb, \rt
+        .endm
+
+# wait for the puts on tag TAG (tmp: a scratch register)
+        .macro  RF_WAIT tag, tmp
+        il      \tmp, 1 << \tag
+        wrch    $MFC_WrTagMask, \tmp
+        il      \tmp, 2
+        wrch    $MFC_WrTagUpdate, \tmp
+        rdch    \tmp, $MFC_RdTagStat
+        .endm
+
+# ---- a traced primary packet (from packet_done): $68 = its rays, $69 = its number, $0 the
+# return. Keeps $1..$65 as shade_packet does.
+        .align  3
+reflect_packet:
+        RF_AREAS $66, $70
+        RF_EACH_REG stqd, $70
+        stqd    $68, RF_REGS+16*68($70)       # (the slots of registers not kept)
+        stqd    $69, RF_REGS+16*69($70)
+        lqa     $71, rf_ready
+        brz     $71, .Lrf_clear
+.Lrf_start:
+        ila     $71, params
+        lqd     $72, PARAM_ORIGIN($71)
+        stqa    $72, rf_origin                # the primary rays' origin for the i-set
+        stqd    ZERO, RF_STATE($70)           # level 0
+        stqd    ZERO, RF_CASTS($70)
+        il      $72, -1
+        stqa    $72, rf_hold
+        hbrr    .Lrf_shade0, shade_packet
+.Lrf_shade0:
+        brsl    $0, shade_packet              # level 0's colours and level 1's rays
+
+# ---- the next level, if the last one cast any ray and the depth allows
+.Lrf_level:
+        RF_AREAS $66, $70
+        lqd     $71, RF_STATE($70)
+        lqd     $72, SH_BLOCK+SHB_REFLECT($66)
+        ceq     $73, $71, $72
+        brnz    $73, .Lrf_blend
+        lqd     $74, RF_CASTS($70)
+        brz     $74, .Lrf_blend
+        # the one-context miss handlers while the reflected rays run (as shadow.s)
+        .irp    W, 0, 1, 2, 3
+        lqa     $75, vars+V_BMISSH+16*\W      # V_BMISSH, V_BFETCH, V_PFMISS, V_PFFETCH
+        stqd    $75, RF_HANDLERS+16*\W($70)
+        .endr
+        lqa     $75, vars+V_NCTX1
+        stqd    $75, RF_HANDLERS+16*4($70)
+        lqa     $76, vars+V_ASSOC4
+        il      $77, -1
+        stqa    $77, vars+V_NCTX1
+        ila     $77, .Lb_one_fetch
+        stqa    $77, vars+V_BFETCH
+        ila     $77, .Lpf_one_evict
+        stqa    $77, vars+V_PFFETCH
+        ila     $77, bvh_miss_one
+        ila     $78, bvh_miss_ways
+        selb    BMISSH, $77, $78, $76
+        stqa    BMISSH, vars+V_BMISSH
+        ila     $77, .Lpf_one
+        ila     $78, .Lpf_ways
+        selb    $77, $77, $78, $76
+        stqa    $77, vars+V_PFMISS
+        # the reflected rays' context
+        ila     $77, REFLECT_CTX
+        a       RAYS, $66, $77
+        ai      NEGTAB, RAYS, CTX_NEGTAB
+        ila     $77, CTX_STACK
+        a       STKBASE, RAYS, $77
+        lqa     $77, rf_tag
+        stqd    $77, CTX_TAG(RAYS)
+        lqa     $77, rf_corner_x              # no corner-ray culling (as shadow.s)
+        stqd    $77, CTX_CORNERS(RAYS)
+        lqa     $77, rf_corner_y
+        stqd    $77, CTX_CORNERS+16(RAYS)
+        lqa     $77, rf_corner_z
+        stqd    $77, CTX_CORNERS+32(RAYS)
+        # the statistics so far (the level's work is the difference)
+        stqd    S_STEPS, RF_BEFORE($70)
+        lqa     $77, vars+V_BMISS
+        stqd    $77, RF_BEFORE+16($70)
+        lqa     $77, vars+V_LEAVES
+        stqd    $77, RF_BEFORE+32($70)
+        stqd    S_TLOOK, RF_BEFORE+48($70)
+        lqa     $77, vars+V_TMISS
+        stqd    $77, RF_BEFORE+64($70)
+        RF_WAIT 7, $77                        # the last level's hits are out
+        stqd    ZERO, RF_TRACE($70)
+        il      $77, -1
+        stqa    $77, rf_trace
+
+# ---- the next ray the level casts: its packet of one ray, traced
+.Lrf_next:
+        RF_AREAS $66, $70
+        lqd     $71, RF_TRACE($70)
+        ila     $75, RF_CAST
+        a       $75, $75, $70
+1:      ceqi    $72, $71, 64
+        brnz    $72, .Lrf_traced
+        rotmi   $73, $71, -2
+        shli    $73, $73, 4                   # its vector's offset
+        andi    $74, $71, 3
+        shli    $74, $74, 2                   # its lane * 4
+        lqx     $76, $75, $73
+        rotqby  $76, $76, $74
+        brnz    $76, 2f
+        ai      $71, $71, 1
+        br      1b
+2:      stqd    $71, RF_TRACE($70)
+        # its origin and direction, splatted
+        shli    $77, $74, 2
+        ila     $78, k_pat
+        lqx     $79, $78, $77                 # the lane's splat pattern
+        a       $80, $70, $73
+        ila     $81, RF_OX
+        a       $81, $81, $80
+        lqd     $82, 0($81)
+        lqd     $83, 256($81)
+        lqd     $84, 512($81)
+        shufb   OXS, $82, $82, $79
+        shufb   OYS, $83, $83, $79
+        shufb   OZS, $84, $84, $79
+        ila     $81, RF_DX
+        a       $81, $81, $80
+        lqd     $85, 0($81)
+        lqd     $86, 256($81)
+        lqd     $87, 512($81)
+        shufb   $88, $85, $85, $79
+        shufb   $89, $86, $86, $79
+        shufb   $90, $87, $87, $79
+        fsmbi   $91, 0xf000
+        fsmbi   $92, 0x0f00
+        fsmbi   $93, 0x00f0
+        selb    ORIG, ZERO, OXS, $91          # (x, y, z, 0)
+        selb    ORIG, ORIG, OYS, $92
+        selb    ORIG, ORIG, OZS, $93
+        .irp    K, 0, 1, 2                    # 1/d, one Newton step (as raygen.s)
+        frest   (94+\K), (88+\K)
+        fi      (94+\K), (88+\K), (94+\K)
+        fnms    (120+\K), (88+\K), (94+\K), ONE
+        fma     (97+\K), (120+\K), (94+\K), (94+\K)
+        .endr
+        # every vector the ray, only lane 0 of vector 0 active (t = 1e30; the rest -1)
+        lqa     $100, rf_minus1
+        il      $101, -1
+        .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
+        stqd    $88, CTX_RAY_DX+16*\V(RAYS)
+        stqd    $89, CTX_RAY_DX+256+16*\V(RAYS)
+        stqd    $90, CTX_RAY_DX+512+16*\V(RAYS)
+        stqd    $97, CTX_RAY_RX+16*\V(RAYS)
+        stqd    $98, CTX_RAY_RX+256+16*\V(RAYS)
+        stqd    $99, CTX_RAY_RX+512+16*\V(RAYS)
+        stqd    $100, CTX_RAY_T+16*\V(RAYS)
+        stqd    $101, CTX_RAY_ID+16*\V(RAYS)
+        .endr
+        lqa     $102, k_word0
+        selb    $103, $100, BIG, $102
+        stqd    $103, CTX_RAY_T(RAYS)
+        # the frustum: the ray's own 1/d on every axis (raygen.s's packet setup)
+        lqa     $113, k_eps
+        lqa     $114, k_eps20
+        lqa     $115, k_abs
+        .irp    K, 0, 1, 2
+        fm      (\K+PAX), (97+\K), $113
+        ori     (\K+PBX), (\K+PAX), 0
+        fm      $104, (\K+OXS), (\K+PAX)
+        and     $105, $104, $115
+        fma     $104, $105, $114, $104
+        fs      (\K+OAX), ZERO, $104
+        ori     (\K+OBX), (\K+OAX), 0
+        .endr
+        lqa     $106, k_oddmask
+        and     F2, NBIG, $106
+        ori     STK, STKBASE, 0
+        il      FIRST, 0
+        SET_FIRST
+        ori     CUR, ROOTST, 0
+        lqa     BMISSH, vars+V_BMISSH         # (a leaf's ray loop uses the register)
+        lqa     $107, vars+V_EMPTY
+        brnz    $107, packet_done             # the empty scene: a miss
+        br      trav
+
+# ---- the reflected ray is done (packet_done comes here while rf_trace is set): its hit
+# (lane 0's record and t) to its lane of the level's hits, then the next ray
+reflect_ray_done:
+        RF_AREAS $66, $70
+        lqd     $71, RF_TRACE($70)
+        rotmi   $73, $71, -2
+        shli    $73, $73, 4
+        andi    $74, $71, 3
+        shli    $74, $74, 2
+        ila     $76, RF_HIT_ID
+        a       $76, $76, $70
+        a       $76, $76, $73
+        a       $76, $76, $74                 # the ray's word of the hit ids
+        lqd     $77, CTX_RAY_ID(RAYS)
+        lqd     $78, CTX_RAY_T(RAYS)
+        cwd     $80, 0($76)
+        lqd     $79, 0($76)
+        shufb   $79, $77, $79, $80
+        stqd    $79, 0($76)
+        lqd     $81, 256($76)                 # (RF_HIT_T follows RF_HIT_ID)
+        shufb   $81, $78, $81, $80
+        stqd    $81, 256($76)
+        ai      $71, $71, 1
+        stqd    $71, RF_TRACE($70)
+        br      .Lrf_next
+
+# ---- the level is traced: the handlers back, its counters, its hits put and handed to
+# the shading module as rays from origin 0
+.Lrf_traced:
+        stqa    ZERO, rf_trace
+        .irp    W, 0, 1, 2, 3
+        lqd     $75, RF_HANDLERS+16*\W($70)
+        stqa    $75, vars+V_BMISSH+16*\W
+        .endr
+        lqd     $75, RF_HANDLERS+16*4($70)
+        stqa    $75, vars+V_NCTX1
+        lqd     $71, RF_STATE($70)            # the level: bounce level + 1's counters
+        shli    $72, $71, 7
+        ila     $73, RF_COUNTERS
+        a       $73, $73, $72
+        a       $73, $73, $70
+        lqd     $74, RF_CASTS($70)            # rays
+        lqd     $75, 0($73)
+        a       $75, $75, $74
+        stqd    $75, 0($73)
+        lqd     $75, 16($73)                  # packets
+        ai      $75, $75, 1
+        stqd    $75, 16($73)
+        lqd     $76, RF_BEFORE($70)           # pair steps
+        sf      $76, $76, S_STEPS
+        lqd     $75, 48($73)
+        a       $75, $75, $76
+        stqd    $75, 48($73)
+        lqd     $76, RF_BEFORE+16($70)        # BVH misses
+        lqa     $77, vars+V_BMISS
+        sf      $76, $76, $77
+        lqd     $75, 64($73)
+        a       $75, $75, $76
+        stqd    $75, 64($73)
+        lqd     $76, RF_BEFORE+32($70)        # leaves
+        lqa     $77, vars+V_LEAVES
+        sf      $76, $76, $77
+        lqd     $75, 80($73)
+        a       $75, $75, $76
+        stqd    $75, 80($73)
+        lqd     $76, RF_BEFORE+48($70)        # triangle lookups
+        sf      $76, $76, S_TLOOK
+        lqd     $75, 96($73)
+        a       $75, $75, $76
+        stqd    $75, 96($73)
+        lqd     $76, RF_BEFORE+64($70)        # triangle misses
+        lqa     $77, vars+V_TMISS
+        sf      $76, $76, $77
+        lqd     $75, 112($73)
+        a       $75, $75, $76
+        stqd    $75, 112($73)
+        # the hits: kept where cast (a record or -1, t), the rest -1 and 0; as shading rays
+        # the hit point from origin 0, t = 1
+        ila     $80, RF_HIT_ID
+        a       $80, $80, $70                 # ids, t at +256
+        ila     $81, RF_RAYS
+        a       $81, $81, $70                 # the shading rays
+        il      $82, -1
+        il      $83, 0                        # minus the hits
+        .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
+        lqd     $84, RF_CAST+16*\V($70)
+        lqd     $85, 16*\V($80)
+        lqd     $86, 256+16*\V($80)
+        ceqi    $87, $85, -1
+        andc    $88, $84, $87                 # cast and hit
+        selb    $89, $82, $85, $88
+        and     $90, $86, $84
+        stqd    $89, 16*\V($80)
+        stqd    $90, 256+16*\V($80)
+        a       $83, $83, $88
+        lqd     $91, RF_OX+16*\V($70)
+        lqd     $92, RF_OX+256+16*\V($70)
+        lqd     $93, RF_OX+512+16*\V($70)
+        lqd     $94, RF_DX+16*\V($70)
+        lqd     $95, RF_DX+256+16*\V($70)
+        lqd     $96, RF_DX+512+16*\V($70)
+        fma     $91, $90, $94, $91            # O + t R
+        fma     $92, $90, $95, $92
+        fma     $93, $90, $96, $93
+        stqd    $91, CTX_RAY_DX+16*\V($81)
+        stqd    $92, CTX_RAY_DX+256+16*\V($81)
+        stqd    $93, CTX_RAY_DX+512+16*\V($81)
+        stqd    ONE, CTX_RAY_T+16*\V($81)
+        stqd    $89, CTX_RAY_ID+16*\V($81)
+        .endr
+        rotqbyi $84, $83, 8
+        a       $83, $83, $84
+        rotqbyi $84, $83, 4
+        a       $83, $83, $84
+        lqd     $75, 32($73)                  # hits
+        sf      $75, $83, $75
+        stqd    $75, 32($73)
+        # the level's hits to ea_bounce_hits + (packet * depth + level) * 512, tag 7
+        lqd     $84, SH_BLOCK+SHB_REFLECT($66) # (depth, the table's EA, the hits' EA)
+        rotqbyi $85, $84, 8
+        lqd     $86, RF_REGS+16*69($70)       # the packet
+        rotmi   $87, $86, -16
+        mpyu    $87, $87, $84
+        shli    $87, $87, 16
+        mpyu    $88, $86, $84
+        a       $88, $88, $87                 # packet * depth (the packet past 16 bits)
+        a       $88, $88, $71
+        shli    $88, $88, 9
+        a       $85, $85, $88
+        il      $87, 512
+        il      $88, 7
+        il      $89, 0x20
+        wrch    $MFC_LSA, $80
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $85
+        wrch    $MFC_Size, $87
+        wrch    $MFC_TagID, $88
+        wrch    $MFC_Cmd, $89
+        # the next level: its hits shaded, the level after's rays generated
+        ai      $71, $71, 1
+        stqd    $71, RF_STATE($70)
+        stqd    ZERO, RF_CASTS($70)
+        stqa    ZERO, rf_origin
+        ori     $68, $81, 0
+        lqd     $69, RF_REGS+16*69($70)
+        hbrr    .Lrf_shade, shade_packet
+.Lrf_shade:
+        brsl    $0, shade_packet
+        br      .Lrf_level
+
+# ---- every level shaded: blend from the deepest up, a + r (b - a) + 0.5 per 8-bit
+# channel, where r is the weight of the level's ray (0: a as it is)
+.Lrf_blend:
+        lqd     $71, RF_STATE($70)            # the last level shaded
+        il      $75, 255
+        lqa     $76, rf_half
+1:      brz     $71, .Lrf_put
+        ai      $71, $71, -1
+        shli    $72, $71, 8
+        ila     $73, RF_COLOURS
+        a       $73, $73, $72
+        a       $73, $73, $70                 # level k's block; k + 1's at +256
+        ila     $74, RF_WEIGHTS
+        a       $74, $74, $72
+        a       $74, $74, $70                 # its weights
+        .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
+        lqd     $77, 16*\V($73)
+        lqd     $78, 256+16*\V($73)
+        lqd     $79, 16*\V($74)
+        il      $80, 255                      # alpha
+        .irp    S, 24, 16, 8
+        rotmi   $81, $77, -\S
+        and     $81, $81, $75
+        cuflt   $81, $81, 0
+        rotmi   $82, $78, -\S
+        and     $82, $82, $75
+        cuflt   $82, $82, 0
+        fs      $83, $82, $81
+        fma     $83, $79, $83, $81
+        fa      $83, $83, $76
+        cfltu   $83, $83, 0
+        shli    $83, $83, \S
+        or      $80, $80, $83
+        .endr
+        stqd    $80, 16*\V($73)
+        .endr
+        br      1b
+
+# ---- the packet's colours to ea_colour + packet * 256 (tag 6, which the frame's end
+# waits for), the registers back
+.Lrf_put:
+        lqd     $80, SH_BLOCK($66)
+        rotqbyi $80, $80, 8                   # ea_colour
+        lqd     $81, RF_REGS+16*69($70)
+        shli    $81, $81, 8
+        a       $80, $80, $81
+        ila     $82, RF_COLOURS
+        a       $82, $82, $70
+        il      $83, 256
+        il      $84, 6
+        il      $85, 0x20
+        wrch    $MFC_LSA, $82
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $80
+        wrch    $MFC_Size, $83
+        wrch    $MFC_TagID, $84
+        wrch    $MFC_Cmd, $85
+        stqa    ZERO, rf_hold
+        ori     $126, $70, 0
+        RF_EACH_REG lqd, $126
+        bi      $0
+
+# the first call: the counters start at 0 and the table is fetched again
+.Lrf_clear:
+        ila     $72, RF_COUNTERS
+        a       $72, $72, $70
+        il      $73, 4 * 8
+1:      stqd    ZERO, 0($72)
+        ai      $72, $72, 16
+        ai      $73, $73, -1
+        brnz    $73, 1b
+        stqd    ZERO, RF_FLAG($70)
+        il      $72, -1
+        stqa    $72, rf_ready
+        br      .Lrf_start
+
+# ---- the shading module's colour block (from .Lsh_done while rf_hold is set: $66 = the
+# shading area, $115 = the block) to this level's; returns to $0 as .Lsh_done does
+reflect_block:
+        ila     $71, REFLECT_AREA
+        a       $71, $71, $66
+        lqd     $72, RF_STATE($71)
+        brnz    $72, 1f
+        RF_WAIT 6, $73                        # level 0's: the packet before's put is out
+1:      shli    $72, $72, 8
+        ila     $73, RF_COLOURS
+        a       $73, $73, $72
+        a       $73, $73, $71
+        .irp    Q, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
+        lqd     $74, \Q($115)
+        stqd    $74, \Q($73)
+        .endr
+        lqd     $74, SH_STATS+SHS_PACKETS($66)
+        ai      $74, $74, 1
+        stqd    $74, SH_STATS+SHS_PACKETS($66)
+        bi      $0
+
+# ---- once the i-set is built (shade_light.s's .Lsh_iset_done, brsl $127): a
+# reflection's normals turned to face its rays, and unless the level is the last, the next
+# level's rays. Keeps $0..$66, $91..$93, $97, $124; uses $67..$90, $94..$96, $98..$123,
+# $125, $126.
+reflect_iset:
+        lqa     $67, rf_hold
+        brz     $67, .Lri_ret
+        ila     $68, REFLECT_AREA
+        a       $68, $68, $66
+        lqd     $69, RF_FLAG($68)
+        lqa     $70, rf_refl
+        ceq     $71, $69, $70
+        brnz    $71, 1f
+        # the first call: the reflectance table
+        lqd     $72, SH_BLOCK+SHB_REFLECT($66)
+        rotqbyi $72, $72, 4
+        ila     $73, RF_TABLE
+        a       $73, $73, $68
+        il      $74, 4 * RF_MATERIALS
+        SH_GET  $73, $72, $74, $75
+        stqd    $70, RF_FLAG($68)
+1:      lqd     $69, RF_STATE($68)            # the level
+        lqd     $70, SH_BLOCK+SHB_REFLECT($66) # the depth
+        brz     $69, .Lri_gen
+        # a reflection: N faces its ray R where dot(N, R) < 0
+        .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
+        lqd     $71, SH_NX+16*\V($66)
+        lqd     $72, SH_NY+16*\V($66)
+        lqd     $73, SH_NZ+16*\V($66)
+        lqd     $74, RF_DX+16*\V($68)
+        lqd     $75, RF_DX+256+16*\V($68)
+        lqd     $76, RF_DX+512+16*\V($68)
+        fm      $77, $71, $74
+        fma     $77, $72, $75, $77
+        fma     $77, $73, $76, $77
+        fcgt    $78, $77, ZERO
+        and     $78, $78, SIGNS
+        xor     $71, $71, $78
+        xor     $72, $72, $78
+        xor     $73, $73, $78
+        stqd    $71, SH_NX+16*\V($66)
+        stqd    $72, SH_NY+16*\V($66)
+        stqd    $73, SH_NZ+16*\V($66)
+        .endr
+.Lri_gen:
+        stqd    ZERO, RF_CASTS($68)
+        ceq     $71, $69, $70
+        brnz    $71, .Lri_ret                 # the last level casts no ray
+        ila     $74, RF_TABLE
+        a       $74, $74, $68
+        ila     $86, RF_DX                    # the incoming directions: the level's
+        a       $86, $86, $68                 # rays', or the primary rays'
+        brnz    $69, 2f
+        lqd     $86, RF_REGS+16*68($68)
+2:      shli    $87, $69, 8
+        ila     $71, RF_WEIGHTS
+        a       $87, $87, $71
+        a       $87, $87, $68                 # the level's weights
+        lqa     $88, rf_offset
+        il      $89, 0                        # minus the rays cast
+        lqa     $90, rf_pair
+        lqa     $94, rf_halves
+        .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
+        lqd     $71, SH_MAT+16*\V($66)
+        ceqi    $72, $71, -1                  # no hit
+        andc    $73, $71, $72
+        shli    $73, $73, 2                   # the reflectances' byte offsets
+        lqx     $75, $74, $73
+        rotqby  $75, $75, $73
+        rotqbyi $76, $73, 4
+        lqx     $77, $74, $76
+        rotqby  $77, $77, $76
+        rotqbyi $78, $73, 8
+        lqx     $79, $74, $78
+        rotqby  $79, $79, $78
+        rotqbyi $80, $73, 12
+        lqx     $81, $74, $80
+        rotqby  $81, $81, $80
+        shufb   $82, $75, $77, $90
+        shufb   $83, $79, $81, $90
+        shufb   $84, $82, $83, $94            # the rays' reflectances
+        fcgt    $85, $84, ZERO
+        andc    $85, $85, $72                 # cast: a hit that reflects
+        lqd     $95, 16*\V($86)               # d
+        lqd     $96, 256+16*\V($86)
+        lqd     $98, 512+16*\V($86)
+        lqd     $99, SH_NX+16*\V($66)         # N
+        lqd     $100, SH_NY+16*\V($66)
+        lqd     $101, SH_NZ+16*\V($66)
+        lqd     $102, SH_PX+16*\V($66)        # P
+        lqd     $103, SH_PY+16*\V($66)
+        lqd     $104, SH_PZ+16*\V($66)
+        fm      $105, $99, $99                # N.N
+        fma     $105, $100, $100, $105
+        fma     $105, $101, $101, $105
+        fm      $106, $95, $99                # d.N
+        fma     $106, $96, $100, $106
+        fma     $106, $98, $101, $106
+        frest   $107, $105                    # 1 / N.N, one Newton step
+        fi      $107, $105, $107
+        fnms    $108, $105, $107, ONE
+        fma     $107, $108, $107, $107
+        fm      $109, $106, $107
+        fa      $109, $109, $109              # k = 2 d.N / N.N
+        fnms    $110, $99, $109, $95          # R = d - k N
+        fnms    $111, $100, $109, $96
+        fnms    $112, $101, $109, $98
+        fcgt    $113, $105, ZERO
+        and     $85, $85, $113                # (a zero normal reflects nothing)
+        fma     $114, $110, $88, $102         # from P + REFLECT_OFFSET R
+        fma     $115, $111, $88, $103
+        fma     $116, $112, $88, $104
+        stqd    $114, RF_OX+16*\V($68)
+        stqd    $115, RF_OX+256+16*\V($68)
+        stqd    $116, RF_OX+512+16*\V($68)
+        stqd    $110, RF_DX+16*\V($68)
+        stqd    $111, RF_DX+256+16*\V($68)
+        stqd    $112, RF_DX+512+16*\V($68)
+        stqd    $85, RF_CAST+16*\V($68)
+        and     $117, $84, $85
+        stqd    $117, 16*\V($87)
+        a       $89, $89, $85
+        .endr
+        rotqbyi $71, $89, 8
+        a       $89, $89, $71
+        rotqbyi $71, $89, 4
+        a       $89, $89, $71
+        sf      $89, $89, ZERO
+        stqd    $89, RF_CASTS($68)
+.Lri_ret:
+        bi      $127
