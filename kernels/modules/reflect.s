@@ -154,6 +154,17 @@ reflect_packet:
         lqa     $77, vars+V_TMISS
         stqd    $77, RF_BEFORE+64($70)
         RF_WAIT 7, $77                        # the last level's hits are out
+        # every ray of the context inactive (t = -1, no hit, finite d and 1/d): a ray's
+        # packet then writes its vector 0 only
+        lqa     $78, rf_minus1
+        il      $79, -1
+        .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
+        .irp    A, CTX_RAY_DX, CTX_RAY_DX+256, CTX_RAY_DX+512, CTX_RAY_RX, CTX_RAY_RX+256, CTX_RAY_RX+512
+        stqd    ONE, \A+16*\V(RAYS)
+        .endr
+        stqd    $78, CTX_RAY_T+16*\V(RAYS)
+        stqd    $79, CTX_RAY_ID+16*\V(RAYS)
+        .endr
         stqd    ZERO, RF_TRACE($70)
         il      $77, -1
         stqa    $77, rf_trace
@@ -176,70 +187,71 @@ reflect_packet:
         ai      $71, $71, 1
         br      1b
 2:      stqd    $71, RF_TRACE($70)
-        # its origin and direction, splatted
-        shli    $77, $74, 2
-        ila     $78, k_pat
-        lqx     $79, $78, $77                 # the lane's splat pattern
-        a       $80, $70, $73
-        ila     $81, RF_OX
-        a       $81, $81, $80
-        lqd     $82, 0($81)
-        lqd     $83, 256($81)
-        lqd     $84, 512($81)
-        shufb   OXS, $82, $82, $79
-        shufb   OYS, $83, $83, $79
-        shufb   OZS, $84, $84, $79
-        ila     $81, RF_DX
-        a       $81, $81, $80
-        lqd     $85, 0($81)
-        lqd     $86, 256($81)
-        lqd     $87, 512($81)
-        shufb   $88, $85, $85, $79
-        shufb   $89, $86, $86, $79
-        shufb   $90, $87, $87, $79
-        fsmbi   $91, 0xf000
-        fsmbi   $92, 0x0f00
-        fsmbi   $93, 0x00f0
-        selb    ORIG, ZERO, OXS, $91          # (x, y, z, 0)
-        selb    ORIG, ORIG, OYS, $92
-        selb    ORIG, ORIG, OZS, $93
-        .irp    K, 0, 1, 2                    # 1/d, one Newton step (as raygen.s)
-        frest   (94+\K), (88+\K)
-        fi      (94+\K), (88+\K), (94+\K)
-        fnms    (120+\K), (88+\K), (94+\K), ONE
-        fma     (97+\K), (120+\K), (94+\K), (94+\K)
+        # its origin and direction, splatted; 1/d; vector 0 of the packet (lane 0 the ray,
+        # t = 1e30, the other lanes t = -1); the frustum of the ray's own 1/d on every axis
+        # (raygen.s's packet setup)
+        .sched  pool=76-99,113-127 scratch=66-127
+        shli    %l16, $74, 2
+        ila     %kp, k_pat
+        lqx     %pat, %kp, %l16               # the lane's splat pattern
+        a       %base, $70, $73
+        ila     %oo, RF_OX
+        a       %ob, %oo, %base
+        ila     %dd, RF_DX
+        a       %db, %dd, %base
+        lqd     %ox, 0(%ob)
+        lqd     %oy, 256(%ob)
+        lqd     %oz, 512(%ob)
+        lqd     %dx, 0(%db)
+        lqd     %dy, 256(%db)
+        lqd     %dz, 512(%db)
+        shufb   OXS, %ox, %ox, %pat
+        shufb   OYS, %oy, %oy, %pat
+        shufb   OZS, %oz, %oz, %pat
+        shufb   %sx, %dx, %dx, %pat
+        shufb   %sy, %dy, %dy, %pat
+        shufb   %sz, %dz, %dz, %pat
+        fsmbi   %m0, 0xf000
+        fsmbi   %m1, 0x0f00
+        fsmbi   %m2, 0x00f0
+        selb    %o0, ZERO, OXS, %m0           # (x, y, z, 0)
+        selb    %o1, %o0, OYS, %m1
+        selb    ORIG, %o1, OZS, %m2
+        lqa     %m1s, rf_minus1
+        lqa     %w0, k_word0
+        selb    %t0, %m1s, BIG, %w0
+        il      %none, -1
+        lqa     %eps, k_eps
+        lqa     %e20, k_eps20
+        lqa     %abs, k_abs
+        .irp    K, x, y, z
+        frest   %y\K, %s\K
+        fi      %y\K, %s\K, %y\K
+        fnms    %e\K, %s\K, %y\K, ONE
+        fma     %r\K, %e\K, %y\K, %y\K
         .endr
-        # every vector the ray, only lane 0 of vector 0 active (t = 1e30; the rest -1)
-        lqa     $100, rf_minus1
-        il      $101, -1
-        .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
-        stqd    $88, CTX_RAY_DX+16*\V(RAYS)
-        stqd    $89, CTX_RAY_DX+256+16*\V(RAYS)
-        stqd    $90, CTX_RAY_DX+512+16*\V(RAYS)
-        stqd    $97, CTX_RAY_RX+16*\V(RAYS)
-        stqd    $98, CTX_RAY_RX+256+16*\V(RAYS)
-        stqd    $99, CTX_RAY_RX+512+16*\V(RAYS)
-        stqd    $100, CTX_RAY_T+16*\V(RAYS)
-        stqd    $101, CTX_RAY_ID+16*\V(RAYS)
-        .endr
-        lqa     $102, k_word0
-        selb    $103, $100, BIG, $102
-        stqd    $103, CTX_RAY_T(RAYS)
-        # the frustum: the ray's own 1/d on every axis (raygen.s's packet setup)
-        lqa     $113, k_eps
-        lqa     $114, k_eps20
-        lqa     $115, k_abs
+        stqd    %sx, CTX_RAY_DX(RAYS)
+        stqd    %sy, CTX_RAY_DX+256(RAYS)
+        stqd    %sz, CTX_RAY_DX+512(RAYS)
+        stqd    %rx, CTX_RAY_RX(RAYS)
+        stqd    %ry, CTX_RAY_RX+256(RAYS)
+        stqd    %rz, CTX_RAY_RX+512(RAYS)
+        stqd    %t0, CTX_RAY_T(RAYS)
+        stqd    %none, CTX_RAY_ID(RAYS)
+        fm      PAX, %rx, %eps
+        fm      PAY, %ry, %eps
+        fm      PAZ, %rz, %eps
         .irp    K, 0, 1, 2
-        fm      (\K+PAX), (97+\K), $113
         ori     (\K+PBX), (\K+PAX), 0
-        fm      $104, (\K+OXS), (\K+PAX)
-        and     $105, $104, $115
-        fma     $104, $105, $114, $104
-        fs      (\K+OAX), ZERO, $104
+        fm      %p\K, (\K+OXS), (\K+PAX)
+        and     %a\K, %p\K, %abs
+        fma     %q\K, %a\K, %e20, %p\K
+        fs      (\K+OAX), ZERO, %q\K
         ori     (\K+OBX), (\K+OAX), 0
         .endr
-        lqa     $106, k_oddmask
-        and     F2, NBIG, $106
+        lqa     %odd, k_oddmask
+        and     F2, NBIG, %odd
+        .endsched
         ori     STK, STKBASE, 0
         il      FIRST, 0
         SET_FIRST
@@ -521,24 +533,28 @@ reflect_iset:
         lqd     $70, SH_BLOCK+SHB_REFLECT($66) # the depth
         brz     $69, .Lri_gen
         # a reflection: N faces its ray R where dot(N, R) < 0
-        .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
-        lqd     $71, SH_NX+16*\V($66)
-        lqd     $72, SH_NY+16*\V($66)
-        lqd     $73, SH_NZ+16*\V($66)
-        lqd     $74, RF_DX+16*\V($68)
-        lqd     $75, RF_DX+256+16*\V($68)
-        lqd     $76, RF_DX+512+16*\V($68)
-        fm      $77, $71, $74
-        fma     $77, $72, $75, $77
-        fma     $77, $73, $76, $77
-        fcgt    $78, $77, ZERO
-        and     $78, $78, SIGNS
-        xor     $71, $71, $78
-        xor     $72, $72, $78
-        xor     $73, $73, $78
-        stqd    $71, SH_NX+16*\V($66)
-        stqd    $72, SH_NY+16*\V($66)
-        stqd    $73, SH_NZ+16*\V($66)
+        .irp    G, 0, 8
+        .sched  pool=71-90,94-96,98-123,125,126 scratch=66-127
+        .irp    J, 0, 1, 2, 3, 4, 5, 6, 7
+        lqd     %nx\J, SH_NX+16*(\G+\J)($66)
+        lqd     %ny\J, SH_NY+16*(\G+\J)($66)
+        lqd     %nz\J, SH_NZ+16*(\G+\J)($66)
+        lqd     %rx\J, RF_DX+16*(\G+\J)($68)
+        lqd     %ry\J, RF_DX+256+16*(\G+\J)($68)
+        lqd     %rz\J, RF_DX+512+16*(\G+\J)($68)
+        fm      %e1\J, %nx\J, %rx\J
+        fma     %e2\J, %ny\J, %ry\J, %e1\J
+        fma     %e\J, %nz\J, %rz\J, %e2\J
+        fcgt    %f1\J, %e\J, ZERO
+        and     %f\J, %f1\J, SIGNS
+        xor     %ox\J, %nx\J, %f\J
+        xor     %oy\J, %ny\J, %f\J
+        xor     %oz\J, %nz\J, %f\J
+        stqd    %ox\J, SH_NX+16*(\G+\J)($66)
+        stqd    %oy\J, SH_NY+16*(\G+\J)($66)
+        stqd    %oz\J, SH_NZ+16*(\G+\J)($66)
+        .endr
+        .endsched
         .endr
 .Lri_gen:
         stqd    ZERO, RF_CASTS($68)
@@ -558,66 +574,70 @@ reflect_iset:
         il      $89, 0                        # minus the rays cast
         lqa     $90, rf_pair
         lqa     $94, rf_halves
-        .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
-        lqd     $71, SH_MAT+16*\V($66)
-        ceqi    $72, $71, -1                  # no hit
-        andc    $73, $71, $72
-        shli    $73, $73, 2                   # the reflectances' byte offsets
-        lqx     $75, $74, $73
-        rotqby  $75, $75, $73
-        rotqbyi $76, $73, 4
-        lqx     $77, $74, $76
-        rotqby  $77, $77, $76
-        rotqbyi $78, $73, 8
-        lqx     $79, $74, $78
-        rotqby  $79, $79, $78
-        rotqbyi $80, $73, 12
-        lqx     $81, $74, $80
-        rotqby  $81, $81, $80
-        shufb   $82, $75, $77, $90
-        shufb   $83, $79, $81, $90
-        shufb   $84, $82, $83, $94            # the rays' reflectances
-        fcgt    $85, $84, ZERO
-        andc    $85, $85, $72                 # cast: a hit that reflects
-        lqd     $95, 16*\V($86)               # d
-        lqd     $96, 256+16*\V($86)
-        lqd     $98, 512+16*\V($86)
-        lqd     $99, SH_NX+16*\V($66)         # N
-        lqd     $100, SH_NY+16*\V($66)
-        lqd     $101, SH_NZ+16*\V($66)
-        lqd     $102, SH_PX+16*\V($66)        # P
-        lqd     $103, SH_PY+16*\V($66)
-        lqd     $104, SH_PZ+16*\V($66)
-        fm      $105, $99, $99                # N.N
-        fma     $105, $100, $100, $105
-        fma     $105, $101, $101, $105
-        fm      $106, $95, $99                # d.N
-        fma     $106, $96, $100, $106
-        fma     $106, $98, $101, $106
-        frest   $107, $105                    # 1 / N.N, one Newton step
-        fi      $107, $105, $107
-        fnms    $108, $105, $107, ONE
-        fma     $107, $108, $107, $107
-        fm      $109, $106, $107
-        fa      $109, $109, $109              # k = 2 d.N / N.N
-        fnms    $110, $99, $109, $95          # R = d - k N
-        fnms    $111, $100, $109, $96
-        fnms    $112, $101, $109, $98
-        fcgt    $113, $105, ZERO
-        and     $85, $85, $113                # (a zero normal reflects nothing)
-        fma     $114, $110, $88, $102         # from P + REFLECT_OFFSET R
-        fma     $115, $111, $88, $103
-        fma     $116, $112, $88, $104
-        stqd    $114, RF_OX+16*\V($68)
-        stqd    $115, RF_OX+256+16*\V($68)
-        stqd    $116, RF_OX+512+16*\V($68)
-        stqd    $110, RF_DX+16*\V($68)
-        stqd    $111, RF_DX+256+16*\V($68)
-        stqd    $112, RF_DX+512+16*\V($68)
-        stqd    $85, RF_CAST+16*\V($68)
-        and     $117, $84, $85
-        stqd    $117, 16*\V($87)
-        a       $89, $89, $85
+        .irp    G, 0, 8
+        .sched  pool=67,70-73,75-85,95,96,98-123,125,126 scratch=66-127
+        .irp    J, 0, 1, 2, 3, 4, 5, 6, 7
+        lqd     %mat\J, SH_MAT+16*(\G+\J)($66)
+        ceqi    %miss\J, %mat\J, -1           # no hit
+        andc    %m\J, %mat\J, %miss\J
+        shli    %o0\J, %m\J, 2                # the reflectances' byte offsets
+        lqx     %q0\J, $74, %o0\J
+        rotqby  %w0\J, %q0\J, %o0\J
+        rotqbyi %o1\J, %o0\J, 4
+        lqx     %q1\J, $74, %o1\J
+        rotqby  %w1\J, %q1\J, %o1\J
+        rotqbyi %o2\J, %o0\J, 8
+        lqx     %q2\J, $74, %o2\J
+        rotqby  %w2\J, %q2\J, %o2\J
+        rotqbyi %o3\J, %o0\J, 12
+        lqx     %q3\J, $74, %o3\J
+        rotqby  %w3\J, %q3\J, %o3\J
+        shufb   %w01\J, %w0\J, %w1\J, $90
+        shufb   %w23\J, %w2\J, %w3\J, $90
+        shufb   %w\J, %w01\J, %w23\J, $94     # the rays' reflectances
+        fcgt    %rf\J, %w\J, ZERO
+        andc    %c1\J, %rf\J, %miss\J        # a hit that reflects
+        lqd     %dx\J, 16*(\G+\J)($86)         # d
+        lqd     %dy\J, 256+16*(\G+\J)($86)
+        lqd     %dz\J, 512+16*(\G+\J)($86)
+        lqd     %nx\J, SH_NX+16*(\G+\J)($66)   # N
+        lqd     %ny\J, SH_NY+16*(\G+\J)($66)
+        lqd     %nz\J, SH_NZ+16*(\G+\J)($66)
+        lqd     %px\J, SH_PX+16*(\G+\J)($66)   # P
+        lqd     %py\J, SH_PY+16*(\G+\J)($66)
+        lqd     %pz\J, SH_PZ+16*(\G+\J)($66)
+        fm      %a1\J, %nx\J, %nx\J            # N.N
+        fma     %a2\J, %ny\J, %ny\J, %a1\J
+        fma     %nn\J, %nz\J, %nz\J, %a2\J
+        fm      %b1\J, %dx\J, %nx\J            # d.N
+        fma     %b2\J, %dy\J, %ny\J, %b1\J
+        fma     %dn\J, %dz\J, %nz\J, %b2\J
+        frest   %y0\J, %nn\J                  # 1 / N.N, one Newton step
+        fi      %y1\J, %nn\J, %y0\J
+        fnms    %ye\J, %nn\J, %y1\J, ONE
+        fma     %y\J, %ye\J, %y1\J, %y1\J
+        fm      %k1\J, %dn\J, %y\J
+        fa      %k\J, %k1\J, %k1\J             # k = 2 d.N / N.N
+        fnms    %rx\J, %nx\J, %k\J, %dx\J       # R = d - k N
+        fnms    %ry\J, %ny\J, %k\J, %dy\J
+        fnms    %rz\J, %nz\J, %k\J, %dz\J
+        fcgt    %nz0\J, %nn\J, ZERO
+        and     %c\J, %c1\J, %nz0\J            # (a zero normal reflects nothing)
+        fma     %ox\J, %rx\J, $88, %px\J         # from P + REFLECT_OFFSET R
+        fma     %oy\J, %ry\J, $88, %py\J
+        fma     %oz\J, %rz\J, $88, %pz\J
+        stqd    %ox\J, RF_OX+16*(\G+\J)($68)
+        stqd    %oy\J, RF_OX+256+16*(\G+\J)($68)
+        stqd    %oz\J, RF_OX+512+16*(\G+\J)($68)
+        stqd    %rx\J, RF_DX+16*(\G+\J)($68)
+        stqd    %ry\J, RF_DX+256+16*(\G+\J)($68)
+        stqd    %rz\J, RF_DX+512+16*(\G+\J)($68)
+        stqd    %c\J, RF_CAST+16*(\G+\J)($68)
+        and     %ww\J, %w\J, %c\J
+        stqd    %ww\J, 16*(\G+\J)($87)
+        a       $89, $89, %c\J
+        .endr
+        .endsched
         .endr
         rotqbyi $71, $89, 8
         a       $89, $89, $71

@@ -602,7 +602,13 @@ pub fn validate(
         validation.shadow_edge_pixels = shadows.then_some(edges);
     }
     let record_to_original: Vec<u32> = staged.triangles.iter().map(|t| t.original_index).collect();
-    let (mismatches, messages) = compare_hits(&pixels, &hits, &record_to_original, width);
+    let (mismatches, messages) = compare_hits(
+        &pixels,
+        &hits,
+        &record_to_original,
+        width,
+        PRIMARY_T_TOLERANCE,
+    );
     validation.mismatches = mismatches;
     validation.messages.extend(messages);
     if let (Some(r), Some(buffer)) = (&reflect, &frame.run.bounce_hits) {
@@ -617,8 +623,13 @@ pub fn validate(
                 .iter()
                 .map(|h| h.unwrap_or(crate::reference::Hit::NONE))
                 .collect();
-            let (mut bad, mut messages) =
-                compare_hits(&as_pixels, &reference_hits, &record_to_original, width);
+            let (mut bad, mut messages) = compare_hits(
+                &as_pixels,
+                &reference_hits,
+                &record_to_original,
+                width,
+                BOUNCE_T_TOLERANCE,
+            );
             for (i, (e, &c)) in expected.iter().zip(&cast).enumerate() {
                 if e.is_some() != c {
                     if messages.len() < MESSAGES {
@@ -688,15 +699,25 @@ pub fn decode_bounce_hits(
 }
 
 /// Per-pixel hits against the reference's: the pixels that differ, the first few described.
+/// Primary hits agree when their distances differ by at most this fraction: kernel and
+/// reference trace the very same rays.
+const PRIMARY_T_TOLERANCE: f32 = 1e-4;
+/// Reflected hits agree within this fraction: the kernel computes the reflected ray in its
+/// own rounding (a reciprocal estimate and a Newton step for 1 / N.N, fused multiply-adds),
+/// which a grazing ray that hits its own surface again turns into a larger difference of
+/// distance (the beetle's 0.0041071 against 0.0041066).
+const BOUNCE_T_TOLERANCE: f32 = 1e-3;
+
 fn compare_hits(
     pixels: &[PixelResult],
     reference: &[crate::reference::Hit],
     record_to_original: &[u32],
     width: u32,
+    tolerance: f32,
 ) -> (usize, Vec<String>) {
     let mut mismatches = 0;
     let mut messages = Vec::new();
-    let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * a.abs().max(b.abs()).max(1e-30);
+    let close = |a: f32, b: f32| (a - b).abs() <= tolerance * a.abs().max(b.abs()).max(1e-30);
     for (i, (p, r)) in pixels.iter().zip(reference).enumerate() {
         let kernel_tri = if p.triangle == MISS {
             MISS
@@ -750,10 +771,10 @@ mod tests {
         let kernel = [pixel(0, 1.0), pixel(MISS, 0.0), pixel(1, 2.0)];
         let records = [10, 11];
         let same = [hit(10, 1.0), Hit::NONE, hit(12, 2.0)];
-        assert_eq!(compare_hits(&kernel, &same, &records, 3).0, 0);
+        assert_eq!(compare_hits(&kernel, &same, &records, 3, 1e-4).0, 0);
         // A miss where the reference hits, and a hit at another distance.
         let other = [hit(10, 1.0), hit(10, 5.0), hit(11, 2.5)];
-        let (bad, messages) = compare_hits(&kernel, &other, &records, 3);
+        let (bad, messages) = compare_hits(&kernel, &other, &records, 3, 1e-4);
         assert_eq!(bad, 2);
         assert_eq!(
             messages[0],

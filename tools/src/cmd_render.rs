@@ -162,8 +162,17 @@ fn validation_summary(v: &Validation) -> String {
         ),
         None => String::new(),
     };
+    let bounces: String = v
+        .bounce_rays
+        .iter()
+        .zip(&v.bounce_mismatches)
+        .enumerate()
+        .map(|(k, (rays, bad))| {
+            format!("; bounce {}: {bad} of {rays} reflected rays differ", k + 1)
+        })
+        .collect();
     format!(
-        "validation: {bad} of {n} pixels differ from the host reference in the hit triangle, {off} in colour (more than {} of 255 in a channel){ties}{edges}",
+        "validation: {bad} of {n} pixels differ from the host reference in the hit triangle, {off} in colour (more than {} of 255 in a channel){ties}{edges}{bounces}",
         shading::COLOUR_TOLERANCE
     )
 }
