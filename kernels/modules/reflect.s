@@ -16,10 +16,10 @@
 #
 # The reflected rays of a packet have no common origin, and the traversal, the triangle
 # test and the i-set all take one origin per packet. So each reflected ray is traced as a
-# packet of its own (lane 0 of vector 0 active, every other ray t = -1, as shadow.s's rays
+# packet of its own (one lane active, every other ray t = -1, as shadow.s's rays
 # that are not cast), in the reflection area's packet context with blocking misses, as
 # shadow.s traces its packets; packet_done comes back to `reflect_ray_done` while rf_trace
-# is set. A level's hits go to the shading module as a packet whose rays are the hit points
+# is set. The ray is the packet's ray RF_RAY (below). A level's hits go to the shading module as a packet whose rays are the hit points
 # from origin 0 (d = O + t R, t = 1: the i-set's hit point is then the hit point itself, and
 # its barycentrics are the record's projection of it); the i-set turns the normal to face
 # that d, which reflect_iset turns to face R. Each level's hits (record, t) are put to the
@@ -46,6 +46,7 @@ rf_minus1:      .float -1.0, -1.0, -1.0, -1.0
 rf_offset:      .long REFLECT_OFFSET_BITS, REFLECT_OFFSET_BITS, REFLECT_OFFSET_BITS, REFLECT_OFFSET_BITS
 rf_half:        .float 0.5, 0.5, 0.5, 0.5
 rf_pair:        .long 0x00010203, 0x10111213, 0x00010203, 0x10111213   # (a0, b0, a0, b0)
+rf_word2:       .long 0, 0, -1, 0
 rf_halves:      .long 0x00010203, 0x04050607, 0x10111213, 0x14151617   # (a0, a1, b0, b1)
 
 # the registers the reflected rays' traversal changes and packet_done keeps (as shadow.s's,
@@ -76,6 +77,12 @@ rf_halves:      .long 0x00010203, 0x04050607, 0x10111213, 0x14151617   # (a0, a1
         wrch    $MFC_WrTagUpdate, \tmp
         rdch    \tmp, $MFC_RdTagStat
         .endm
+
+# The ray's place in its packet: ray 48 (vector 12, lane 0), the first of the last group
+# of 16, so that a leaf tests that group only (triangle.s tests from the first active
+# ray's group to the end: from ray 0, all 64 rays per triangle)
+        .set    RF_RAY, 48
+        .set    RF_SLOT, 16 * (RF_RAY / 4)
 
 # ---- a traced primary packet (from packet_done): $68 = its rays, $69 = its number, $0 the
 # return. Keeps $1..$65 as shade_packet does.
@@ -155,7 +162,7 @@ reflect_packet:
         stqd    $77, RF_BEFORE+64($70)
         RF_WAIT 7, $77                        # the last level's hits are out
         # every ray of the context inactive (t = -1, no hit, finite d and 1/d): a ray's
-        # packet then writes its vector 0 only
+        # packet then writes its own vector only
         lqa     $78, rf_minus1
         il      $79, -1
         .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
@@ -187,9 +194,9 @@ reflect_packet:
         ai      $71, $71, 1
         br      1b
 2:      stqd    $71, RF_TRACE($70)
-        # its origin and direction, splatted; 1/d; vector 0 of the packet (lane 0 the ray,
-        # t = 1e30, the other lanes t = -1); the frustum of the ray's own 1/d on every axis
-        # (raygen.s's packet setup)
+        # its origin and direction, splatted; 1/d; the packet's vector RF_SLOT (lane 0 the
+        # ray, t = 1e30, the other lanes t = -1); the frustum of the ray's own 1/d on every
+        # axis (raygen.s's packet setup)
         .sched  pool=76-99,113-127 scratch=66-127
         shli    %l16, $74, 2
         ila     %kp, k_pat
@@ -230,14 +237,14 @@ reflect_packet:
         fnms    %e\K, %s\K, %y\K, ONE
         fma     %r\K, %e\K, %y\K, %y\K
         .endr
-        stqd    %sx, CTX_RAY_DX(RAYS)
-        stqd    %sy, CTX_RAY_DX+256(RAYS)
-        stqd    %sz, CTX_RAY_DX+512(RAYS)
-        stqd    %rx, CTX_RAY_RX(RAYS)
-        stqd    %ry, CTX_RAY_RX+256(RAYS)
-        stqd    %rz, CTX_RAY_RX+512(RAYS)
-        stqd    %t0, CTX_RAY_T(RAYS)
-        stqd    %none, CTX_RAY_ID(RAYS)
+        stqd    %sx, CTX_RAY_DX+RF_SLOT(RAYS)
+        stqd    %sy, CTX_RAY_DX+256+RF_SLOT(RAYS)
+        stqd    %sz, CTX_RAY_DX+512+RF_SLOT(RAYS)
+        stqd    %rx, CTX_RAY_RX+RF_SLOT(RAYS)
+        stqd    %ry, CTX_RAY_RX+256+RF_SLOT(RAYS)
+        stqd    %rz, CTX_RAY_RX+512+RF_SLOT(RAYS)
+        stqd    %t0, CTX_RAY_T+RF_SLOT(RAYS)
+        stqd    %none, CTX_RAY_ID+RF_SLOT(RAYS)
         fm      PAX, %rx, %eps
         fm      PAY, %ry, %eps
         fm      PAZ, %rz, %eps
@@ -253,9 +260,10 @@ reflect_packet:
         and     F2, NBIG, %odd
         .endsched
         ori     STK, STKBASE, 0
-        il      FIRST, 0
+        il      FIRST, RF_RAY
         SET_FIRST
-        ori     CUR, ROOTST, 0
+        lqa     $108, rf_word2
+        selb    CUR, ROOTST, FIRST, $108      # the root, with the ray as its first
         lqa     BMISSH, vars+V_BMISSH         # (a leaf's ray loop uses the register)
         lqa     $107, vars+V_EMPTY
         brnz    $107, packet_done             # the empty scene: a miss
@@ -274,8 +282,8 @@ reflect_ray_done:
         a       $76, $76, $70
         a       $76, $76, $73
         a       $76, $76, $74                 # the ray's word of the hit ids
-        lqd     $77, CTX_RAY_ID(RAYS)
-        lqd     $78, CTX_RAY_T(RAYS)
+        lqd     $77, CTX_RAY_ID+RF_SLOT(RAYS)
+        lqd     $78, CTX_RAY_T+RF_SLOT(RAYS)
         cwd     $80, 0($76)
         lqd     $79, 0($76)
         shufb   $79, $77, $79, $80
