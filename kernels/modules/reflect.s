@@ -272,27 +272,33 @@ reflect_packet:
 # ---- the reflected ray is done (packet_done comes here while rf_trace is set): its hit
 # (lane 0's record and t) to its lane of the level's hits, then the next ray
 reflect_ray_done:
-        RF_AREAS $66, $70
-        lqd     $71, RF_TRACE($70)
-        rotmi   $73, $71, -2
-        shli    $73, $73, 4
-        andi    $74, $71, 3
-        shli    $74, $74, 2
-        ila     $76, RF_HIT_ID
-        a       $76, $76, $70
-        a       $76, $76, $73
-        a       $76, $76, $74                 # the ray's word of the hit ids
-        lqd     $77, CTX_RAY_ID+RF_SLOT(RAYS)
-        lqd     $78, CTX_RAY_T+RF_SLOT(RAYS)
-        cwd     $80, 0($76)
-        lqd     $79, 0($76)
-        shufb   $79, $77, $79, $80
-        stqd    $79, 0($76)
-        lqd     $81, 256($76)                 # (RF_HIT_T follows RF_HIT_ID)
-        shufb   $81, $78, $81, $80
-        stqd    $81, 256($76)
-        ai      $71, $71, 1
-        stqd    $71, RF_TRACE($70)
+        .sched  pool=71-127 scratch=66-127
+        ila     %p, params
+        lqd     %q, PARAM_SHADING_QUAD(%p)
+        rotqbyi $66, %q, PARAM_SHADING_ROT + 4
+        ila     %ra, REFLECT_AREA
+        a       $70, %ra, $66
+        lqd     %i, RF_TRACE($70)
+        rotmi   %v, %i, -2
+        shli    %vo, %v, 4
+        andi    %l, %i, 3
+        shli    %lo, %l, 2
+        ila     %hi, RF_HIT_ID
+        a       %h1, %hi, $70
+        a       %h2, %h1, %vo
+        a       %w, %h2, %lo                  # the ray's word of the hit ids
+        lqd     %id, CTX_RAY_ID+RF_SLOT(RAYS)
+        lqd     %t, CTX_RAY_T+RF_SLOT(RAYS)
+        cwd     %ins, 0(%w)
+        lqd     %ids, 0(%w)
+        shufb   %ids2, %id, %ids, %ins
+        stqd    %ids2, 0(%w)
+        lqd     %ts, 256(%w)                  # (RF_HIT_T follows RF_HIT_ID)
+        shufb   %ts2, %t, %ts, %ins
+        stqd    %ts2, 256(%w)
+        ai      %i1, %i, 1
+      ! stqd    %i1, RF_TRACE($70)
+        .endsched
         br      .Lrf_next
 
 # ---- the level is traced: the handlers back, its counters, its hits put and handed to
@@ -570,6 +576,42 @@ reflect_iset:
         brnz    $71, .Lri_ret                 # the last level casts no ray
         ila     $74, RF_TABLE
         a       $74, $74, $68
+        # a packet whose hits are all on one material (or none) that does not reflect casts
+        # no ray: one lookup instead of 64
+        .sched  pool=67,70-73,75-85,95,96,98-123,125,126 scratch=66-127
+        lqd     %m0, SH_MAT($66)
+        shufb   %s, %m0, %m0, PAT0            # ray 0's material, splatted
+        .irp    V, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15
+        lqd     %m\V, SH_MAT+16*\V($66)
+        ceq     %e\V, %m\V, %s
+        .endr
+        and     %a0, %e0, %e1
+        and     %a1, %e2, %e3
+        and     %a2, %e4, %e5
+        and     %a3, %e6, %e7
+        and     %a4, %e8, %e9
+        and     %a5, %e10, %e11
+        and     %a6, %e12, %e13
+        and     %a7, %e14, %e15
+        and     %b0, %a0, %a1
+        and     %b1, %a2, %a3
+        and     %b2, %a4, %a5
+        and     %b3, %a6, %a7
+        and     %c0, %b0, %b1
+        and     %c1, %b2, %b3
+        and     %d, %c0, %c1
+        gb      %g, %d
+        ceqi    %same, %g, 15                 # every ray on ray 0's material
+        ceqi    %none, %m0, -1
+        andc    %mi, %m0, %none
+        shli    %off, %mi, 2
+        lqx     %q, $74, %off
+        rotqby  %w, %q, %off
+        fcgt    %refl, %w, ZERO
+        andc    %refl, %refl, %none           # ray 0's material reflects
+        andc    $71, %same, %refl
+        .endsched
+        brnz    $71, .Lri_ret                 # (RF_CASTS is 0)
         ila     $86, RF_DX                    # the incoming directions: the level's
         a       $86, $86, $68                 # rays', or the primary rays'
         brnz    $69, 2f
