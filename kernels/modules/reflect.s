@@ -37,6 +37,7 @@ rf_trace:       .long 0, 0, 0, 0        # all ones while a reflected ray is trac
 rf_hold:        .long 0, 0, 0, 0        # all ones: the shading module keeps its block
 rf_origin:      .long 0, 0, 0, 0        # the origin the i-set adds (shade.s)
 rf_ready:       .long 0, 0, 0, 0        # all ones once the counters are cleared
+rf_saved:       .long 0, 0, 0, 0        # all ones: the packet's registers are saved
 rf_refl:        .long 0x5245464c, 0x5245464c, 0x5245464c, 0x5245464c   # "REFL"
 rf_corner_x:    .float 1.0, -1.0, 1.0, -1.0
 rf_corner_y:    .float 0.375, -0.375, 0.375, -0.375
@@ -50,9 +51,10 @@ rf_word2:       .long 0, 0, -1, 0
 rf_halves:      .long 0x00010203, 0x04050607, 0x10111213, 0x14151617   # (a0, a1, b0, b1)
 
 # the registers the reflected rays' traversal changes and packet_done keeps (as shadow.s's,
-# less shade.s's): the link, the context and the packet's own of regs.inc
+# less shade.s's and the link, saved on its own): the context and the packet's own of
+# regs.inc. Saved only for a packet that traces reflected rays.
         .macro  RF_EACH_REG op, base
-        .irp    R, 0, 1, 6, 11, 25, 27, 28, 29, 33, 34, 35, 39, 40, 42, 43, 44, 45, 46, 47, 48
+        .irp    R, 1, 6, 11, 25, 27, 28, 29, 33, 34, 35, 39, 40, 42, 43, 44, 45, 46, 47, 48
         \op     $\R, RF_REGS+16*\R(\base)
         .endr
         .irp    R, 49, 50, 51, 52, 53, 54, 55, 56, 57, 58, 59, 60, 61, 62, 63, 64, 65
@@ -89,7 +91,7 @@ rf_halves:      .long 0x00010203, 0x04050607, 0x10111213, 0x14151617   # (a0, a1
         .align  3
 reflect_packet:
         RF_AREAS $66, $70
-        RF_EACH_REG stqd, $70
+        stqd    $0, RF_REGS($70)
         stqd    $68, RF_REGS+16*68($70)       # (the slots of registers not kept)
         stqd    $69, RF_REGS+16*69($70)
         lqa     $71, rf_ready
@@ -105,6 +107,12 @@ reflect_packet:
         hbrr    .Lrf_shade0, shade_packet
 .Lrf_shade0:
         brsl    $0, shade_packet              # level 0's colours and level 1's rays
+        RF_AREAS $66, $70
+        lqd     $74, RF_CASTS($70)
+        brz     $74, .Lrf_put                 # no reflected ray: level 0's colours
+        RF_EACH_REG stqd, $70                 # the registers the rays' traversal changes
+        il      $75, -1
+        stqa    $75, rf_saved
 
 # ---- the next level, if the last one cast any ray and the depth allows
 .Lrf_level:
@@ -466,6 +474,8 @@ reflect_ray_done:
 # ---- the packet's colours to ea_colour + packet * 256 (tag 6, which the frame's end
 # waits for), the registers back
 .Lrf_put:
+        lqd     $0, RF_REGS($70)
+        hbr     .Lrf_ret, $0
         lqd     $80, SH_BLOCK($66)
         rotqbyi $80, $80, 8                   # ea_colour
         lqd     $81, RF_REGS+16*69($70)
@@ -483,9 +493,15 @@ reflect_ray_done:
         wrch    $MFC_TagID, $84
         wrch    $MFC_Cmd, $85
         stqa    ZERO, rf_hold
+        lqa     $86, rf_saved
+        brnz    $86, .Lrf_restore
+.Lrf_ret:
+        bi      $0
+.Lrf_restore:
+        stqa    ZERO, rf_saved
         ori     $126, $70, 0
         RF_EACH_REG lqd, $126
-        bi      $0
+        br      .Lrf_ret
 
 # the first call: the counters start at 0 and the table is fetched again
 .Lrf_clear:
@@ -504,6 +520,7 @@ reflect_ray_done:
 # ---- the shading module's colour block (from .Lsh_done while rf_hold is set: $66 = the
 # shading area, $115 = the block) to this level's; returns to $0 as .Lsh_done does
 reflect_block:
+        hbr     .Lrb_ret, $0
         ila     $71, REFLECT_AREA
         a       $71, $71, $66
         lqd     $72, RF_STATE($71)
@@ -513,13 +530,16 @@ reflect_block:
         ila     $73, RF_COLOURS
         a       $73, $73, $72
         a       $73, $73, $71
+        .sched  pool=74-90,94-114 scratch=66-127
         .irp    Q, 0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240
-        lqd     $74, \Q($115)
-        stqd    $74, \Q($73)
+        lqd     %c\Q, \Q($115)
+      ~ stqd    %c\Q, \Q($73)
         .endr
-        lqd     $74, SH_STATS+SHS_PACKETS($66)
-        ai      $74, $74, 1
-        stqd    $74, SH_STATS+SHS_PACKETS($66)
+        lqd     %n, SH_STATS+SHS_PACKETS($66)
+        ai      %n1, %n, 1
+      ~ stqd    %n1, SH_STATS+SHS_PACKETS($66)
+        .endsched
+.Lrb_ret:
         bi      $0
 
 # ---- once the i-set is built (shade_light.s's .Lsh_iset_done, brsl $127): a
@@ -527,6 +547,7 @@ reflect_block:
 # level's rays. Keeps $0..$66, $91..$93, $97, $124; uses $67..$90, $94..$96, $98..$123,
 # $125, $126.
 reflect_iset:
+        hbr     .Lri_ret, $127
         lqa     $67, rf_hold
         brz     $67, .Lri_ret
         ila     $68, REFLECT_AREA
@@ -534,42 +555,11 @@ reflect_iset:
         lqd     $69, RF_FLAG($68)
         lqa     $70, rf_refl
         ceq     $71, $69, $70
-        brnz    $71, 1f
-        # the first call: the reflectance table
-        lqd     $72, SH_BLOCK+SHB_REFLECT($66)
-        rotqbyi $72, $72, 4
-        ila     $73, RF_TABLE
-        a       $73, $73, $68
-        il      $74, 4 * RF_MATERIALS
-        SH_GET  $73, $72, $74, $75
-        stqd    $70, RF_FLAG($68)
-1:      lqd     $69, RF_STATE($68)            # the level
+        brz     $71, .Lri_fetch               # (the first call: out of line)
+.Lri_fetched:
+        lqd     $69, RF_STATE($68)            # the level
         lqd     $70, SH_BLOCK+SHB_REFLECT($66) # the depth
-        brz     $69, .Lri_gen
-        # a reflection: N faces its ray R where dot(N, R) < 0
-        .irp    G, 0, 8
-        .sched  pool=71-90,94-96,98-123,125,126 scratch=66-127
-        .irp    J, 0, 1, 2, 3, 4, 5, 6, 7
-        lqd     %nx\J, SH_NX+16*(\G+\J)($66)
-        lqd     %ny\J, SH_NY+16*(\G+\J)($66)
-        lqd     %nz\J, SH_NZ+16*(\G+\J)($66)
-        lqd     %rx\J, RF_DX+16*(\G+\J)($68)
-        lqd     %ry\J, RF_DX+256+16*(\G+\J)($68)
-        lqd     %rz\J, RF_DX+512+16*(\G+\J)($68)
-        fm      %e1\J, %nx\J, %rx\J
-        fma     %e2\J, %ny\J, %ry\J, %e1\J
-        fma     %e\J, %nz\J, %rz\J, %e2\J
-        fcgt    %f1\J, %e\J, ZERO
-        and     %f\J, %f1\J, SIGNS
-        xor     %ox\J, %nx\J, %f\J
-        xor     %oy\J, %ny\J, %f\J
-        xor     %oz\J, %nz\J, %f\J
-        stqd    %ox\J, SH_NX+16*(\G+\J)($66)
-        stqd    %oy\J, SH_NY+16*(\G+\J)($66)
-        stqd    %oz\J, SH_NZ+16*(\G+\J)($66)
-        .endr
-        .endsched
-        .endr
+        brnz    $69, .Lri_flip                # (a reflection's: out of line)
 .Lri_gen:
         stqd    ZERO, RF_CASTS($68)
         ceq     $71, $69, $70
@@ -611,7 +601,11 @@ reflect_iset:
         andc    %refl, %refl, %none           # ray 0's material reflects
         andc    $71, %same, %refl
         .endsched
-        brnz    $71, .Lri_ret                 # (RF_CASTS is 0)
+        brz     $71, .Lri_gen_rays            # (RF_CASTS is 0: none to generate)
+.Lri_ret:
+        bi      $127
+
+.Lri_gen_rays:
         ila     $86, RF_DX                    # the incoming directions: the level's
         a       $86, $86, $68                 # rays', or the primary rays'
         brnz    $69, 2f
@@ -695,5 +689,42 @@ reflect_iset:
         a       $89, $89, $71
         sf      $89, $89, ZERO
         stqd    $89, RF_CASTS($68)
-.Lri_ret:
-        bi      $127
+        br      .Lri_ret
+
+# the first call: the reflectance table
+.Lri_fetch:
+        lqd     $72, SH_BLOCK+SHB_REFLECT($66)
+        rotqbyi $72, $72, 4
+        ila     $73, RF_TABLE
+        a       $73, $73, $68
+        il      $74, 4 * RF_MATERIALS
+        SH_GET  $73, $72, $74, $75
+        stqd    $70, RF_FLAG($68)
+        br      .Lri_fetched
+
+.Lri_flip:
+        # a reflection: N faces its ray R where dot(N, R) < 0
+        .irp    G, 0, 8
+        .sched  pool=71-90,94-96,98-123,125,126 scratch=66-127
+        .irp    J, 0, 1, 2, 3, 4, 5, 6, 7
+        lqd     %nx\J, SH_NX+16*(\G+\J)($66)
+        lqd     %ny\J, SH_NY+16*(\G+\J)($66)
+        lqd     %nz\J, SH_NZ+16*(\G+\J)($66)
+        lqd     %rx\J, RF_DX+16*(\G+\J)($68)
+        lqd     %ry\J, RF_DX+256+16*(\G+\J)($68)
+        lqd     %rz\J, RF_DX+512+16*(\G+\J)($68)
+        fm      %e1\J, %nx\J, %rx\J
+        fma     %e2\J, %ny\J, %ry\J, %e1\J
+        fma     %e\J, %nz\J, %rz\J, %e2\J
+        fcgt    %f1\J, %e\J, ZERO
+        and     %f\J, %f1\J, SIGNS
+        xor     %ox\J, %nx\J, %f\J
+        xor     %oy\J, %ny\J, %f\J
+        xor     %oz\J, %nz\J, %f\J
+        stqd    %ox\J, SH_NX+16*(\G+\J)($66)
+        stqd    %oy\J, SH_NY+16*(\G+\J)($66)
+        stqd    %oz\J, SH_NZ+16*(\G+\J)($66)
+        .endr
+        .endsched
+        .endr
+        br      .Lri_gen
