@@ -198,10 +198,8 @@ reflect_packet:
         shli    $74, $74, 2                   # its lane * 4
         lqx     $76, $75, $73
         rotqby  $76, $76, $74
-        brnz    $76, 2f
-        ai      $71, $71, 1
-        br      1b
-2:      stqd    $71, RF_TRACE($70)
+        brz     $76, .Lrf_skip                # (a lane that casts none: out of line)
+        stqd    $71, RF_TRACE($70)
         # its origin and direction, splatted; 1/d; the packet's vector RF_SLOT (lane 0 the
         # ray, t = 1e30, the other lanes t = -1); the frustum of the ray's own 1/d on every
         # axis (raygen.s's packet setup)
@@ -267,6 +265,7 @@ reflect_packet:
         lqa     %odd, k_oddmask
         and     F2, NBIG, %odd
         .endsched
+        hbrr    .Lrf_trav_br, trav
         ori     STK, STKBASE, 0
         il      FIRST, RF_RAY
         SET_FIRST
@@ -275,7 +274,11 @@ reflect_packet:
         lqa     BMISSH, vars+V_BMISSH         # (a leaf's ray loop uses the register)
         lqa     $107, vars+V_EMPTY
         brnz    $107, packet_done             # the empty scene: a miss
+.Lrf_trav_br:
         br      trav
+.Lrf_skip:
+        ai      $71, $71, 1
+        br      1b
 
 # ---- the reflected ray is done (packet_done comes here while rf_trace is set): its hit
 # (lane 0's record and t) to its lane of the level's hits, then the next ray
@@ -305,8 +308,10 @@ reflect_ray_done:
         shufb   %ts2, %t, %ts, %ins
         stqd    %ts2, 256(%w)
         ai      %i1, %i, 1
+        hbrr    .Lrd_br, .Lrf_next
       ! stqd    %i1, RF_TRACE($70)
         .endsched
+.Lrd_br:
         br      .Lrf_next
 
 # ---- the level is traced: the handlers back, its counters, its hits put and handed to
