@@ -251,6 +251,9 @@ reflect_packet:
         stqd    %rz, CTX_RAY_RX+512+RF_SLOT(RAYS)
         stqd    %t0, CTX_RAY_T+RF_SLOT(RAYS)
         stqd    %none, CTX_RAY_ID+RF_SLOT(RAYS)
+        stqd    %sx, CTX_CORNERS(RAYS)        # the corner rays: the ray itself
+        stqd    %sy, CTX_CORNERS+16(RAYS)
+        stqd    %sz, CTX_CORNERS+32(RAYS)
         fm      PAX, %rx, %eps
         fm      PAY, %ry, %eps
         fm      PAZ, %rz, %eps
