@@ -65,9 +65,14 @@ pub struct FrameStats {
 pub struct RaysByKind {
     pub primary: u64,
     pub shadow: u64,
-    /// Reflected rays, all bounces (per bounce: [`FrameStats::reflections`]).
-    #[serde(default)]
+    /// Reflected rays, all bounces (per bounce: [`FrameStats::reflections`]); absent from
+    /// frames that reflect nothing, whose files stay as they were.
+    #[serde(default, skip_serializing_if = "is_zero")]
     pub reflected: u64,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 /// One reflection bounce of a reflect frame (`modules/reflect.s`'s counters): its rays,
