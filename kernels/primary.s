@@ -32,5 +32,8 @@
         .ifdef  SHADE
         .include "modules/shade.s"          # --shade: i-sets, shading caches, diffuse
         .include "modules/shadow.s"         # --shade shadows: shadow packets
+        .ifdef  REFLECT
+        .include "modules/reflect.s"        # --shade reflect: reflected rays
+        .endif
         .endif
         .include "modules/frame_done.s"     # statistics and the end of the frame

@@ -13,15 +13,27 @@
         .align  3
 packet_done:
         .ifdef  SHADE                         # --shade simple: modules/shade.s first
+        .ifdef  REFLECT                       # --shade reflect: modules/reflect.s, which
+        hbrr    .Lpd_shade_br, reflect_packet # calls shade.s per level
+        .else
         hbrr    .Lpd_shade_br, shade_packet
+        .endif
         lqa     $66, sv_trace                 # (a shadow packet: modules/shadow.s)
         brnz    $66, shadow_done
+        .ifdef  REFLECT
+        lqa     $66, rf_trace                 # (a reflected ray: modules/reflect.s)
+        brnz    $66, reflect_ray_done
+        .endif
         lqd     $69, CTX_TILE64(RAYS)
         lqd     $70, CTX_PACKET(RAYS)
         ori     $68, RAYS, 0
         a       $69, $69, $70
 .Lpd_shade_br:
+        .ifdef  REFLECT
+        brsl    $0, reflect_packet
+        .else
         brsl    $0, shade_packet
+        .endif
         nop
         .endif
         .sched  pool=67-79,82-92,94-127 scratch=66-127

@@ -67,7 +67,11 @@ shade_packet:
         ila     $70, params
         ila     $90, sh_const
         lqd     $71, PARAM_SHADING_QUAD($70)
+        .ifdef  REFLECT                       # the camera's, or 0 for a reflection's
+        lqa     $72, rf_origin                # hits (modules/reflect.s)
+        .else
         lqd     $72, PARAM_ORIGIN($70)
+        .endif
         lqd     $91, 64($90)
         lqd     $92, 80($90)
         lqd     $93, 96($90)

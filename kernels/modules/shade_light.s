@@ -19,6 +19,9 @@
 
         # the fast groups' counters (groups, same, triangle lookups) to SH_STATS
 .Lsh_iset_done:
+        .ifdef  REFLECT                       # the reflection's normals, the next level's
+        brsl    $127, reflect_iset            # rays (modules/reflect.s)
+        .endif
         .sched  pool=69,76-81,90,94-96,98-100,104,107-109,111-113,117-120 scratch=66-127
         lqd     $70, SH_BLOCK($66)            # materials, colour, lights
         lqd     $71, SH_BLOCK+SHB_MODE($66)
@@ -288,6 +291,10 @@
 
         # ---- 4. put the block to ea_colour + packet * 256
 .Lsh_done:
+        .ifdef  REFLECT                       # the block kept for the blend
+        lqa     $70, rf_hold                  # (modules/reflect.s)
+        brnz    $70, reflect_block
+        .endif
         lqd     $70, SH_RUN_OUT($66)          # the block's EA, tag
         lqd     $74, SH_STATS+SHS_PACKETS($66)
         hbr     .Lsh_ret, $0

@@ -6,8 +6,9 @@
 
 use crate::camera::CameraBasis;
 use crate::kernel_abi::{
-    check_kernel_options, colour_buffer_bytes, frame_buffer_bytes, ParamBlock, ShadingBlock,
-    SHADED_LS_BYTES, SHADING_BLOCK_BYTES, STATS_BYTES,
+    bounce_hits_bytes, check_kernel_options, colour_buffer_bytes, frame_buffer_bytes, ParamBlock,
+    ShadingBlock, REFLECT_AREA_BYTES, REFLECT_MATERIALS, SHADED_LS_BYTES, SHADING_BLOCK_BYTES,
+    STATS_BYTES,
 };
 
 /// Bytes of an SPU's local store.
@@ -43,6 +44,17 @@ pub struct ShadingRegion {
     pub colour_addr: u32,
     pub colour_len: usize,
     pub block: ShadingBlock,
+    /// A reflect frame's: the reflectance table and the bounces' hits.
+    pub reflect: Option<ReflectRegion>,
+}
+
+/// Where a reflect frame's per-material reflectance table and bounce-hit buffer live
+/// (`modules/reflect.s`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReflectRegion {
+    pub table_addr: u32,
+    pub hits_addr: u32,
+    pub hits_len: usize,
 }
 
 impl FrameLayout {
@@ -121,7 +133,28 @@ impl FrameLayout {
         let block_addr = align128(self.memory_len as u64);
         let colour_addr = align128(block_addr + SHADING_BLOCK_BYTES as u64);
         let colour_len = colour_buffer_bytes(self.params.width, self.params.height);
-        let memory_len = align128(colour_addr + colour_len as u64);
+        let mut memory_len = align128(colour_addr + colour_len as u64);
+        let mut reflect = None;
+        if block.reflect_depth > 0 {
+            if staged.materials.len() > REFLECT_MATERIALS {
+                return Err(format!(
+                    "--shade reflect: the scene has {} materials, at most {REFLECT_MATERIALS}",
+                    staged.materials.len()
+                ));
+            }
+            let table_addr = memory_len;
+            let hits_addr = align128(table_addr + 4 * REFLECT_MATERIALS as u64);
+            let hits_len =
+                bounce_hits_bytes(self.params.width, self.params.height, block.reflect_depth);
+            memory_len = align128(hits_addr + hits_len as u64);
+            block.ea_reflectances = table_addr as u32;
+            block.ea_bounce_hits = hits_addr as u32;
+            reflect = Some(ReflectRegion {
+                table_addr: table_addr as u32,
+                hits_addr: hits_addr as u32,
+                hits_len,
+            });
+        }
         if memory_len > u32::MAX as u64 {
             return Err(format!(
                 "the frame needs {memory_len} bytes of main memory, over 4 GiB"
@@ -137,6 +170,7 @@ impl FrameLayout {
             colour_addr: colour_addr as u32,
             colour_len,
             block,
+            reflect,
         });
         Ok(self)
     }
@@ -146,9 +180,18 @@ impl FrameLayout {
     /// `modules/shadow.s` works above the shading area) below 256 KiB.
     pub fn set_shading_area(&mut self, ls_area: u32) -> Result<(), String> {
         let ls_area = ls_area.div_ceil(128) * 128;
-        if ls_area as usize + SHADED_LS_BYTES > LS_BYTES {
+        let reflects = self.shading.as_ref().is_some_and(|s| s.reflect.is_some());
+        let (bytes, what) = if reflects {
+            (
+                SHADED_LS_BYTES + REFLECT_AREA_BYTES,
+                "shading, shadow and reflection areas",
+            )
+        } else {
+            (SHADED_LS_BYTES, "shading and shadow areas")
+        };
+        if ls_area as usize + bytes > LS_BYTES {
             return Err(format!(
-                "local store: the shading and shadow areas ({SHADED_LS_BYTES} bytes) do not fit above the kernel's caches at {ls_area:#x}: use smaller caches or fewer packets in flight"
+                "local store: the {what} ({bytes} bytes) do not fit above the kernel's caches at {ls_area:#x}: use smaller caches or fewer packets in flight"
             ));
         }
         self.params.ls_shading = ls_area;
@@ -180,6 +223,12 @@ impl FrameLayout {
         if let Some(shading) = &self.shading {
             let b = shading.block_addr as usize;
             memory[b..b + SHADING_BLOCK_BYTES].copy_from_slice(&shading.block.to_be_bytes());
+            if let Some(r) = &shading.reflect {
+                for (i, m) in staged.materials.iter().enumerate() {
+                    let at = r.table_addr as usize + 4 * i;
+                    memory[at..at + 4].copy_from_slice(&m.reflectance.to_bits().to_be_bytes());
+                }
+            }
         }
         memory
     }

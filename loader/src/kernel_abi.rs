@@ -253,6 +253,12 @@ pub struct ShadingBlock {
     pub vertex_cache_log2: u32,
     pub material_cache_log2: u32,
     pub lights: Vec<crate::shading::Light>,
+    /// Reflection bounces per primary ray (0: none; the reflect program only).
+    pub reflect_depth: u32,
+    /// Where the reflectance of every material is ([`REFLECT_MATERIALS`] words, f32) and
+    /// where the bounces' hits go ([`bounce_hits_bytes`]); set by the frame's layout.
+    pub ea_reflectances: u32,
+    pub ea_bounce_hits: u32,
 }
 
 /// The shading block as the kernel reads it ([`ShadingBlock::to_be_bytes`]): its offsets
@@ -270,7 +276,12 @@ pub struct ShadingBlockRecord {
     pub shadow_early: u32,
     pub vertex_cache_log2: u32,
     pub material_cache_log2: u32,
-    pub reserved: [u32; 8],
+    /// Reflect frames' (`modules/reflect.s`; zero in the others): reflection bounces per
+    /// primary ray, the per-material reflectance table, the bounces' hit buffer.
+    pub reflect_depth: u32,
+    pub ea_reflectances: u32,
+    pub ea_bounce_hits: u32,
+    pub reserved: [u32; 5],
     pub lights: [LightRecord; crate::shading::MAX_LIGHTS],
     /// Room for two more lights: the block stays the 384 bytes the kernel fetches.
     pub spare: [LightRecord; 2],
@@ -290,6 +301,7 @@ pub struct LightRecord {
 pub const SHADING_BLOCK_BYTES: usize = size_of::<ShadingBlockRecord>();
 pub const SHB_EA_VERTICES: usize = offset_of!(ShadingBlockRecord, ea_vertices);
 pub const SHB_LIGHT_COUNT: usize = offset_of!(ShadingBlockRecord, light_count);
+pub const SHB_REFLECT: usize = offset_of!(ShadingBlockRecord, reflect_depth);
 pub const SHB_MODE: usize = offset_of!(ShadingBlockRecord, mode);
 pub const SHB_LIGHTS: usize = offset_of!(ShadingBlockRecord, lights);
 /// Bytes per light: position (x, y, z, 0), colour (r, g, b, 0).
@@ -486,6 +498,120 @@ pub const SHADED_LS_BYTES: usize = SHADING_AREA_BYTES + SHADOW_AREA_BYTES;
 /// The DMA tag of the shadow packets' context.
 pub const SHADOW_TAG: u32 = 1;
 
+/// The reflection module's area (`modules/reflect.s`), right above the shadow area, in
+/// reflect frames only: its offsets are the `RF_*` of `layout.inc`. Level 0 is the
+/// primary rays, level `k` the `k`-th reflection.
+#[repr(C)]
+pub struct ReflectArea {
+    /// "REFL" (word 0) once the reflectance table is fetched.
+    pub flag: Quad,
+    /// The level being shaded, the depth, the packet number, the primary rays' address.
+    pub state: Quad,
+    /// The ray being traced (word 0).
+    pub trace: Quad,
+    /// The rays the level casts (word 0).
+    pub cast: Quad,
+    /// The five miss-handler words of `vars`, saved while the reflected rays run.
+    pub handlers: [Quad; 6],
+    /// The registers the reflected rays' traversal changes and the caller keeps.
+    pub registers: [Quad; 128],
+    /// The traversal's statistics when the level's tracing started.
+    pub before: [Quad; 8],
+    /// Per bounce (1 first), its counters.
+    pub counters: [ReflectCounters; crate::shading::MAX_REFLECT_DEPTH as usize],
+    /// Per material, its reflectance (f32), as fetched.
+    pub reflectances: [u32; REFLECT_MATERIALS],
+    /// Per level below the last, the reflectance of each ray's surface where it casts a
+    /// reflected ray, 0 where it casts none.
+    pub weights: [[Quad; 16]; crate::shading::MAX_REFLECT_DEPTH as usize],
+    /// Per level, the colours the shading module gave the packet (its colour block).
+    pub colours:
+        [[u8; COLOUR_BLOCK_BYTES as usize]; crate::shading::MAX_REFLECT_DEPTH as usize + 1],
+    /// The next level's rays: origin and direction (x, y, z), and all ones where cast.
+    pub ray_origin: [[Quad; 16]; 3],
+    pub ray_dir: [[Quad; 16]; 3],
+    pub ray_cast: [Quad; 16],
+    /// The traced level's hits (the triangle record or -1, t), as put to the bounce-hit
+    /// buffer.
+    pub hit_id: [Quad; 16],
+    pub hit_t: [Quad; 16],
+    /// The traced level's hits as the shading module reads a packet's rays (at the packet
+    /// context's ray offsets): the hit point as `d`, `t` = 1, the record.
+    pub rays: [u8; context::RAY_ND as usize],
+    /// The reflected rays' packet context (one ray each).
+    pub context: [u8; context::BYTES as usize],
+}
+
+/// One bounce's counters in the reflection area (word 0 of each quadword), read by the
+/// host as the shading module's.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ReflectCounters {
+    /// Rays cast, packets with any ray, rays that hit.
+    pub rays: Counter,
+    pub packets: Counter,
+    pub hits: Counter,
+    /// The traversal's work for them: pair steps, BVH cache misses, leaves, triangle
+    /// lookups and triangle cache misses.
+    pub steps: Counter,
+    pub bvh_misses: Counter,
+    pub leaves: Counter,
+    pub triangle_lookups: Counter,
+    pub triangle_misses: Counter,
+}
+
+impl ReflectCounters {
+    /// Decodes the counters from local-store bytes at their offset.
+    pub fn from_be_bytes(bytes: &[u8]) -> ReflectCounters {
+        let word = |i: usize| {
+            bytes
+                .get(16 * i..16 * i + 4)
+                .map_or(0, |w| u32::from_be_bytes([w[0], w[1], w[2], w[3]]) as u64)
+        };
+        ReflectCounters {
+            rays: Counter(word(0)),
+            packets: Counter(word(1)),
+            hits: Counter(word(2)),
+            steps: Counter(word(3)),
+            bvh_misses: Counter(word(4)),
+            leaves: Counter(word(5)),
+            triangle_lookups: Counter(word(6)),
+            triangle_misses: Counter(word(7)),
+        }
+    }
+
+    pub fn add(&mut self, o: &ReflectCounters) {
+        for (a, b) in [
+            (&mut self.rays, o.rays),
+            (&mut self.packets, o.packets),
+            (&mut self.hits, o.hits),
+            (&mut self.steps, o.steps),
+            (&mut self.bvh_misses, o.bvh_misses),
+            (&mut self.leaves, o.leaves),
+            (&mut self.triangle_lookups, o.triangle_lookups),
+            (&mut self.triangle_misses, o.triangle_misses),
+        ] {
+            a.0 += b.0;
+        }
+    }
+}
+
+/// Materials a reflect frame's reflectance table holds (a scene with more is refused).
+pub const REFLECT_MATERIALS: usize = 256;
+/// The reflection area's offset from the shading area.
+pub const REFLECT_AREA: usize = SHADOW_AREA + SHADOW_AREA_BYTES;
+/// Bytes of the reflection area.
+pub const REFLECT_AREA_BYTES: usize = size_of::<ReflectArea>();
+/// Offset in the reflection area of the first bounce's counters.
+pub const REFLECT_COUNTERS_OFFSET: usize = offset_of!(ReflectArea, counters);
+/// The DMA tag of the reflected rays' context.
+pub const REFLECT_TAG: u32 = 4;
+/// Bytes of the bounce-hit buffer of a reflect frame: per packet (packet-major like the
+/// result blocks), per bounce, 64 triangle records (or -1) and 64 distances.
+pub fn bounce_hits_bytes(width: u32, height: u32, depth: u32) -> usize {
+    frame_buffer_bytes(width, height) / 2 * depth as usize
+}
+
 impl ShadingBlock {
     /// The block as a record: its lights (at most [`crate::shading::MAX_LIGHTS`]) and
     /// their count.
@@ -507,6 +633,9 @@ impl ShadingBlock {
             shadow_early: self.shadow_early as u32,
             vertex_cache_log2: self.vertex_cache_log2,
             material_cache_log2: self.material_cache_log2,
+            reflect_depth: self.reflect_depth,
+            ea_reflectances: self.ea_reflectances,
+            ea_bounce_hits: self.ea_bounce_hits,
             lights,
             ..Default::default()
         }
@@ -531,6 +660,15 @@ impl ShadingBlock {
             (
                 offset_of!(ShadingBlockRecord, material_cache_log2),
                 r.material_cache_log2,
+            ),
+            (SHB_REFLECT, r.reflect_depth),
+            (
+                offset_of!(ShadingBlockRecord, ea_reflectances),
+                r.ea_reflectances,
+            ),
+            (
+                offset_of!(ShadingBlockRecord, ea_bounce_hits),
+                r.ea_bounce_hits,
             ),
         ] {
             put(at, word);
@@ -778,6 +916,36 @@ pub fn spu_constants() -> Vec<(&'static str, i64)> {
         area("SV_LIGHT", offset_of!(ShadowArea, light)),
         area("SV_HANDLERS", offset_of!(ShadowArea, handlers)),
         area("SV_REGS", offset_of!(ShadowArea, registers)),
+        ("SHB_REFLECT", SHB_REFLECT as i64),
+        ("REFLECT_AREA", REFLECT_AREA as i64),
+        (
+            "REFLECT_CTX",
+            (REFLECT_AREA + offset_of!(ReflectArea, context)) as i64 + context::HEADER as i64,
+        ),
+        ("REFLECT_TAG", REFLECT_TAG as i64),
+        (
+            "REFLECT_OFFSET_BITS",
+            crate::shading::REFLECT_OFFSET.to_bits() as i64,
+        ),
+        area("RF_FLAG", offset_of!(ReflectArea, flag)),
+        area("RF_STATE", offset_of!(ReflectArea, state)),
+        area("RF_TRACE", offset_of!(ReflectArea, trace)),
+        area("RF_CASTS", offset_of!(ReflectArea, cast)),
+        area("RF_HANDLERS", offset_of!(ReflectArea, handlers)),
+        area("RF_REGS", offset_of!(ReflectArea, registers)),
+        area("RF_BEFORE", offset_of!(ReflectArea, before)),
+        area("RF_COUNTERS", offset_of!(ReflectArea, counters)),
+        area("RF_COUNTER_BYTES", size_of::<ReflectCounters>()),
+        area("RF_TABLE", offset_of!(ReflectArea, reflectances)),
+        area("RF_WEIGHTS", offset_of!(ReflectArea, weights)),
+        area("RF_COLOURS", offset_of!(ReflectArea, colours)),
+        area("RF_OX", offset_of!(ReflectArea, ray_origin)),
+        area("RF_DX", offset_of!(ReflectArea, ray_dir)),
+        area("RF_CAST", offset_of!(ReflectArea, ray_cast)),
+        area("RF_HIT_ID", offset_of!(ReflectArea, hit_id)),
+        area("RF_HIT_T", offset_of!(ReflectArea, hit_t)),
+        area("RF_RAYS", offset_of!(ReflectArea, rays)),
+        area("RF_MATERIALS", REFLECT_MATERIALS),
     ]);
     constants
 }

@@ -63,7 +63,9 @@
 //!
 //! # Material record, 32 bytes ([`MaterialRecord`])
 //!
-//! `diffuse` rgb f32 + pad (0..16), `specular` rgb f32 + `shininess` f32 (16..32).
+//! `diffuse` rgb f32 + `reflectance` f32 (0..16), `specular` rgb f32 + `shininess` f32
+//! (16..32). The shading kernels read the first quadword's three colour words only, so the
+//! reflectance (which only the reflection kernel reads) costs the other programs nothing.
 //!
 //! # Scene header, 64 bytes ([`SceneHeader`]) and the staged image ([`StagedScene`])
 //!
@@ -127,7 +129,7 @@ const _: () = assert!(size_of::<VertexRecord>() == 64);
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct MaterialRecord {
     pub diffuse: [f32; 3],
-    pub pad0: u32,
+    pub reflectance: f32,
     pub specular: [f32; 3],
     pub shininess: f32,
 }
@@ -186,6 +188,7 @@ pub const VERTEX_TEXCOORD: usize = offset_of!(VertexRecord, texcoord);
 
 pub const MATERIAL_SIZE: usize = size_of::<MaterialRecord>();
 pub const MATERIAL_DIFFUSE: usize = offset_of!(MaterialRecord, diffuse);
+pub const MATERIAL_REFLECTANCE: usize = offset_of!(MaterialRecord, reflectance);
 pub const MATERIAL_SPECULAR: usize = offset_of!(MaterialRecord, specular);
 pub const MATERIAL_SHININESS: usize = offset_of!(MaterialRecord, shininess);
 
@@ -235,6 +238,7 @@ pub const SPU_LAYOUT_CONSTANTS: &[(&str, usize)] = &[
     ("MATERIAL_SIZE", MATERIAL_SIZE),
     ("MATERIAL_SHIFT", MATERIAL_SIZE.trailing_zeros() as usize),
     ("MATERIAL_DIFFUSE", MATERIAL_DIFFUSE),
+    ("MATERIAL_REFLECTANCE", MATERIAL_REFLECTANCE),
     ("MATERIAL_SPECULAR", MATERIAL_SPECULAR),
     ("MATERIAL_SHININESS", MATERIAL_SHININESS),
     ("HEADER_SIZE", HEADER_SIZE),
@@ -491,7 +495,16 @@ impl MaterialRecord {
         let [s0, s1, s2] = bits(self.specular);
         put_words(
             &mut out[..MATERIAL_SIZE],
-            &[d0, d1, d2, self.pad0, s0, s1, s2, self.shininess.to_bits()],
+            &[
+                d0,
+                d1,
+                d2,
+                self.reflectance.to_bits(),
+                s0,
+                s1,
+                s2,
+                self.shininess.to_bits(),
+            ],
         );
     }
 }
@@ -666,9 +679,9 @@ pub fn material_records(scene: &Scene) -> Vec<MaterialRecord> {
         .iter()
         .map(|m| MaterialRecord {
             diffuse: m.diffuse,
+            reflectance: m.reflectance,
             specular: m.specular,
             shininess: m.shininess,
-            ..Default::default()
         })
         .collect()
 }
@@ -1088,6 +1101,10 @@ mod tests {
             assert_eq!(
                 f32::from_bits(word(at + MATERIAL_DIFFUSE + 4)),
                 material.diffuse[1]
+            );
+            assert_eq!(
+                f32::from_bits(word(at + MATERIAL_REFLECTANCE)),
+                material.reflectance
             );
         }
         assert_eq!(staged.vertices.len(), scene.positions.len());

@@ -15,6 +15,8 @@
 //!   the shading kernels and the reference share, and the `--shade` modes.
 //! - [`reference`](mod@reference): a scalar ray caster over the same records that defines the expected
 //!   kernel output.
+//! - [`reflection`]: reflection rays (`--shade reflect`): the model, the reference's frame
+//!   with its hits per bounce, and the reflection packets' coherence.
 //! - [`stats`]: a frame's statistics as typed JSON (`spu render --stats`).
 //! - [`timeline`]: when each tile and packet was traced, from the SPUs' event logs.
 //! - [`render`]: the one render API (configuration, prepared scene, frame, validation)
@@ -35,6 +37,7 @@ pub mod ply;
 pub mod procedural;
 pub mod reference;
 pub mod refit;
+pub mod reflection;
 pub mod scene;
 pub mod shading;
 

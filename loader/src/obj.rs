@@ -39,6 +39,7 @@ pub fn parse_obj_warned(path: &Path, bytes: &[u8]) -> Result<(Scene, Vec<String>
     let directory = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let material_error: RefCell<Option<LoadError>> = RefCell::new(None);
     let warnings: RefCell<Vec<String>> = RefCell::new(Vec::new());
+    let reflectances: RefCell<HashMap<String, f32>> = RefCell::new(HashMap::new());
     let material_loader = |mtl: &Path| -> tobj::MTLLoadResult {
         let plain = directory.join(mtl);
         let mut gz_name = plain.clone().into_os_string();
@@ -52,6 +53,9 @@ pub fn parse_obj_warned(path: &Path, bytes: &[u8]) -> Result<(Scene, Vec<String>
                 let parsed = read_maybe_gzipped(&mtl_path).and_then(|data| {
                     let data = text_outside_comments(&mtl_path, &data)?;
                     check_mtl(&mtl_path, &data)?;
+                    reflectances
+                        .borrow_mut()
+                        .extend(mtl_reflectances(&mtl_path, &data)?);
                     tobj::load_mtl_buf(&mut data.as_bytes()).map_err(|e| {
                         LoadError::new(&mtl_path, None, format!("material library: {e}"))
                     })
@@ -144,6 +148,7 @@ pub fn parse_obj_warned(path: &Path, bytes: &[u8]) -> Result<(Scene, Vec<String>
             diffuse: m.diffuse.unwrap_or([0.8; 3]),
             specular: m.specular.unwrap_or([0.0; 3]),
             shininess: m.shininess.unwrap_or(0.0),
+            reflectance: reflectances.borrow().get(&m.name).copied().unwrap_or(0.0),
         })
         .collect();
     // Without any `usemtl`, each group/object gets its own default-colored material so that
@@ -343,6 +348,77 @@ fn check_mtl(path: &Path, text: &str) -> Result<(), LoadError> {
         }
     }
     Ok(())
+}
+
+/// The mirror weight of every reflective material of an MTL library, by name: a material
+/// with `illum 3` (reflection on) reflects with its `Km` where it has one, else with its
+/// `Ks`'s largest channel; a weight outside [0, 1] is an error naming its line (a `Km`
+/// anywhere, a `Ks` of a reflective material). Numbers are known finite ([`check_mtl`]).
+fn mtl_reflectances(path: &Path, text: &str) -> Result<HashMap<String, f32>, LoadError> {
+    #[derive(Default)]
+    struct Block {
+        name: Option<String>,
+        illum: Option<u8>,
+        ks: Option<(f32, usize)>,
+        km: Option<f32>,
+    }
+    let out_of_range = |line: usize, what: &str, value: f32| -> Result<(), LoadError> {
+        if (0.0..=1.0).contains(&value) {
+            Ok(())
+        } else {
+            Err(LoadError::new(
+                path,
+                Some(line),
+                format!("material library: {what} {value}: a reflectance must be 0 to 1"),
+            ))
+        }
+    };
+    let mut weights = HashMap::new();
+    let mut finish = |block: Block| -> Result<(), LoadError> {
+        if let (Some(name), Some(3)) = (block.name, block.illum) {
+            let weight = match (block.km, block.ks) {
+                (Some(km), _) => km,
+                (None, Some((ks, line))) => {
+                    out_of_range(line, "Ks (illum 3)", ks)?;
+                    ks
+                }
+                (None, None) => 0.0,
+            };
+            weights.insert(name, weight);
+        }
+        Ok(())
+    };
+    let mut block = Block::default();
+    for (number, line) in text.lines().enumerate() {
+        let mut words = line.split_ascii_whitespace();
+        let keyword = words.next();
+        let mut number_after = || words.next().and_then(|w| w.parse::<f32>().ok());
+        match keyword {
+            Some("newmtl") => {
+                finish(std::mem::take(&mut block))?;
+                block.name = Some(line.trim()["newmtl".len()..].trim().to_string());
+            }
+            Some("illum") => block.illum = words.next().and_then(|w| w.parse().ok()),
+            Some("Ks") => {
+                let largest = (0..3).filter_map(|_| number_after()).fold(0.0f32, f32::max);
+                block.ks = Some((largest, number + 1));
+            }
+            Some("Km") => {
+                let km = number_after().filter(|v| v.is_finite()).ok_or_else(|| {
+                    LoadError::new(
+                        path,
+                        Some(number + 1),
+                        "material library: Km needs one finite number",
+                    )
+                })?;
+                out_of_range(number + 1, "Km", km)?;
+                block.km = Some(km);
+            }
+            _ => {}
+        }
+    }
+    finish(block)?;
+    Ok(weights)
 }
 
 /// Every `usemtl` name, in order of first use, with the line of that use.
@@ -689,6 +765,62 @@ mod tests {
 
         let err = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n").unwrap_err();
         assert_eq!(err.line, Some(4), "{err}");
+    }
+
+    /// `illum 3` makes a material reflective, with `Km` or else `Ks`'s largest channel; a
+    /// weight outside [0, 1] is refused naming the library's line.
+    #[test]
+    fn reflective_materials_come_from_illum_3() {
+        let dir = std::env::temp_dir().join(format!("spu-loader-mirror-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let obj = dir.join("s.obj");
+        std::fs::write(
+            &obj,
+            "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 3 2\n\
+             usemtl c\nf 2 3 1\nusemtl d\nf 2 1 3\n",
+        )
+        .unwrap();
+        std::fs::write(
+            dir.join("m.mtl"),
+            "newmtl a\nKd 1 0 0\nKs 0.2 0.6 0.4\nillum 3\n\
+             newmtl b\nillum 3\nKs 1 1 1\nKm 0.25\n\
+             newmtl c\nKs 0.9 0.9 0.9\nillum 2\n\
+             newmtl d\nKd 0 0 1\n",
+        )
+        .unwrap();
+        let scene = Scene::load(&obj).unwrap();
+        let weight = |name: &str| {
+            scene
+                .materials
+                .iter()
+                .find(|m| m.name == name)
+                .unwrap()
+                .reflectance
+        };
+        assert_eq!(
+            [weight("a"), weight("b"), weight("c"), weight("d")],
+            [0.6, 0.25, 0.0, 0.0]
+        );
+        for (bad, line, message) in [
+            ("newmtl a\nillum 3\nKs 0.5 1.5 0\n", 3, "Ks (illum 3) 1.5"),
+            ("newmtl a\nKs 2 2 2\nillum 3\n", 2, "Ks (illum 3) 2"),
+            ("newmtl a\nillum 1\nKm 1.25\n", 3, "Km 1.25"),
+            ("newmtl a\nKm -0.5\n", 2, "Km -0.5"),
+        ] {
+            std::fs::write(dir.join("m.mtl"), bad).unwrap();
+            let err = Scene::load(&obj).unwrap_err();
+            assert_eq!(
+                err.to_string(),
+                format!(
+                    "{}:{line}: material library: {message}: a reflectance must be 0 to 1",
+                    dir.join("m.mtl").display()
+                )
+            );
+        }
+        // Ks above 1 without illum 3 is a specular colour, not a mirror: accepted.
+        std::fs::write(dir.join("m.mtl"), "newmtl a\nKs 2 2 2\nillum 2\n").unwrap();
+        assert_eq!(Scene::load(&obj).unwrap().materials[0].reflectance, 0.0);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

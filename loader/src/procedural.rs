@@ -40,7 +40,13 @@ impl MeshBuilder {
     }
 
     fn material(&mut self, name: &str, diffuse: [f32; 3]) -> u32 {
-        self.materials.push(Material::new(name, diffuse));
+        self.reflective(name, diffuse, 0.0)
+    }
+
+    /// A material that `--shade reflect` mirrors with weight `reflectance`.
+    fn reflective(&mut self, name: &str, diffuse: [f32; 3], reflectance: f32) -> u32 {
+        self.materials
+            .push(Material::reflective(name, diffuse, reflectance));
         self.materials.len() as u32 - 1
     }
 
@@ -305,6 +311,13 @@ fn simple_chair(builder: &mut MeshBuilder, seat: u32, frame: u32) {
     );
 }
 
+/// The mirror weights of the procedural scenes' reflective surfaces (`--shade reflect`):
+/// the room's polished table, the conference's lacquered tables, the beetle's car paint.
+/// Every other material reflects nothing.
+pub const ROOM_TABLE_REFLECTANCE: f32 = 0.4;
+pub const CONFERENCE_TABLE_REFLECTANCE: f32 = 0.3;
+pub const BEETLE_PAINT_REFLECTANCE: f32 = 0.25;
+
 /// The ERW6-class room: 6 x 3 x 5 m with walls, floor and ceiling (4x4 grids), a table, four
 /// chairs, a floor lamp and a picture (792 triangles, 9 materials).
 pub fn room() -> Scene {
@@ -312,7 +325,7 @@ pub fn room() -> Scene {
     let floor = b.material("floor", [0.55, 0.38, 0.22]);
     let walls = b.material("walls", [0.85, 0.82, 0.72]);
     let ceiling = b.material("ceiling", [0.95, 0.95, 0.95]);
-    let table = b.material("table", [0.45, 0.25, 0.12]);
+    let table = b.reflective("table", [0.45, 0.25, 0.12], ROOM_TABLE_REFLECTANCE);
     let seat = b.material("chair seat", [0.7, 0.12, 0.1]);
     let frame = b.material("chair frame", [0.2, 0.2, 0.22]);
     let metal = b.material("lamp metal", [0.6, 0.6, 0.65]);
@@ -448,7 +461,11 @@ pub fn conference() -> Scene {
     let carpet = b.material("carpet", [0.3, 0.35, 0.5]);
     let walls = b.material("walls", [0.85, 0.83, 0.78]);
     let ceiling = b.material("ceiling", [0.95, 0.95, 0.93]);
-    let wood = b.material("table wood", [0.55, 0.36, 0.2]);
+    let wood = b.reflective(
+        "table wood",
+        [0.55, 0.36, 0.2],
+        CONFERENCE_TABLE_REFLECTANCE,
+    );
     let shell = b.material("chair shell", [0.75, 0.15, 0.12]);
     let metal = b.material("chrome", [0.7, 0.7, 0.75]);
     let arm = b.material("armrest", [0.1, 0.1, 0.1]);
@@ -528,7 +545,7 @@ const WHEEL_MINOR: usize = 48;
 /// a glazed cabin hump) on four torus wheels; 693,120 triangles, 3 materials.
 pub fn beetle() -> Scene {
     let mut b = MeshBuilder::new();
-    let paint = b.material("paint", [0.2, 0.55, 0.25]);
+    let paint = b.reflective("paint", [0.2, 0.55, 0.25], BEETLE_PAINT_REFLECTANCE);
     let tire = b.material("tire", [0.12, 0.12, 0.12]);
     let glass = b.material("window glass", [0.35, 0.45, 0.55]);
     let (length, width, height, ground) = (4.0f32, 1.6f32, 1.05f32, 0.42f32);
@@ -642,6 +659,29 @@ mod tests {
         assert_eq!(used.len(), 9);
         // Pinned: any change to the generator's topology must be deliberate.
         assert_eq!(topology_hash(&a), 0x3671_3ab6_ca4f_a418);
+    }
+
+    /// Each built-in scene mirrors on exactly its named surfaces, and the rest of each scene
+    /// reflects nothing (so `--shade reflect` spawns rays only there).
+    #[test]
+    fn the_reflective_surfaces_are_the_named_ones() {
+        for (scene, name, weight) in [
+            (room(), "table", ROOM_TABLE_REFLECTANCE),
+            (conference(), "table wood", CONFERENCE_TABLE_REFLECTANCE),
+            (beetle(), "paint", BEETLE_PAINT_REFLECTANCE),
+        ] {
+            let reflective: Vec<(&str, f32)> = scene
+                .materials
+                .iter()
+                .filter(|m| m.reflectance != 0.0)
+                .map(|m| (m.name.as_str(), m.reflectance))
+                .collect();
+            assert_eq!(reflective, [(name, weight)]);
+            assert!(scene
+                .triangles
+                .iter()
+                .any(|t| scene.materials[t.material as usize].name == name));
+        }
     }
 
     #[test]

@@ -424,16 +424,14 @@ impl Reference {
         lights: &[Light],
         visible: &dyn Fn(usize, &Light, Vec3) -> bool,
     ) -> u32 {
-        if !hit.is_hit() {
+        let Some(Surface {
+            point,
+            normal,
+            material,
+        }) = self.surface(hit, origin, dir)
+        else {
             return MISS_COLOUR;
-        }
-        let record = &self.triangles[hit.record as usize];
-        let (beta, gamma) = record.barycentrics(origin.to_array(), dir.to_array(), hit.t);
-        let normals = record
-            .vertices
-            .map(|v| Vec3::from(self.vertices[v as usize].normal));
-        let normal = shading::shading_normal(normals, beta, gamma, dir);
-        let point = origin + dir * hit.t;
+        };
         let mut irradiance = Vec3::ZERO;
         for (i, light) in lights.iter().enumerate() {
             let cosine = shading::light_cosine(normal, light.position - point);
@@ -441,7 +439,25 @@ impl Reference {
                 irradiance += light.colour * cosine;
             }
         }
-        shading::pixel_colour(self.materials[record.material as usize].diffuse, irradiance)
+        shading::pixel_colour(self.materials[material as usize].diffuse, irradiance)
+    }
+
+    /// Where the ray `origin + t * dir` hits with `hit` (`None` for a miss): the point, the
+    /// model's eye-facing shading normal there and the material.
+    pub fn surface(&self, hit: &Hit, origin: Vec3, dir: Vec3) -> Option<Surface> {
+        if !hit.is_hit() {
+            return None;
+        }
+        let record = &self.triangles[hit.record as usize];
+        let (beta, gamma) = record.barycentrics(origin.to_array(), dir.to_array(), hit.t);
+        let normals = record
+            .vertices
+            .map(|v| Vec3::from(self.vertices[v as usize].normal));
+        Some(Surface {
+            point: origin + dir * hit.t,
+            normal: shading::shading_normal(normals, beta, gamma, dir),
+            material: record.material,
+        })
     }
 
     /// [`Reference::shade`] for every pixel of `hits` from [`Reference::render`].
@@ -475,6 +491,17 @@ impl Reference {
         });
         colours
     }
+}
+
+/// A hit's shading data ([`Reference::surface`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Surface {
+    /// `origin + t * dir`.
+    pub point: Vec3,
+    /// The interpolated vertex normal, turned to face the ray (not normalised).
+    pub normal: Vec3,
+    /// Index of the material record.
+    pub material: u32,
 }
 
 /// Barycentric margin within which a shadow ray grazes an occluder's edge

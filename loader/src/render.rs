@@ -48,6 +48,9 @@ pub struct Shading {
     pub vertex_cache: u32,
     /// Entries of the direct-mapped material cache (a power of two, 16 to 256).
     pub material_cache: u32,
+    /// Reflection bounces per primary ray with [`ShadeMode::Reflect`] (1 to
+    /// [`shading::MAX_REFLECT_DEPTH`]).
+    pub reflect_depth: u32,
 }
 
 impl Default for Shading {
@@ -58,6 +61,7 @@ impl Default for Shading {
             shadow_early: false,
             vertex_cache: 64,
             material_cache: 64,
+            reflect_depth: 1,
         }
     }
 }
@@ -150,6 +154,7 @@ impl RenderConfig {
         match (fill, mode) {
             (true, _) => KernelVariant::Fill,
             (false, ShadeMode::None) => KernelVariant::Primary,
+            (false, ShadeMode::Reflect) => KernelVariant::Reflect,
             (false, _) => KernelVariant::Shaded,
         }
     }
@@ -193,6 +198,24 @@ impl RenderConfig {
                 "{} lights: at most {}",
                 s.lights.len(),
                 shading::MAX_LIGHTS
+            ));
+        }
+        within(
+            "reflection depth",
+            s.reflect_depth as u64,
+            1,
+            shading::MAX_REFLECT_DEPTH as u64,
+        )?;
+        if (self.kernel == KernelVariant::Reflect) != (s.mode == ShadeMode::Reflect) {
+            return Err(format!(
+                "the {} kernel {} shading {}",
+                self.kernel.id(),
+                if self.kernel == KernelVariant::Reflect {
+                    "needs"
+                } else {
+                    "does not do"
+                },
+                ShadeMode::Reflect.name()
             ));
         }
         if self.kernel.shades() != (s.mode != ShadeMode::None) {
@@ -326,10 +349,15 @@ pub fn frame_layout(
     let mut layout = layout.with_shading(
         staged,
         ShadingBlock {
-            mode: if s.mode == ShadeMode::Shadows {
+            mode: if s.mode.shadows() {
                 SHADE_SHADOWS
             } else {
                 SHADE_SIMPLE
+            },
+            reflect_depth: if s.mode == ShadeMode::Reflect {
+                s.reflect_depth
+            } else {
+                0
             },
             shadow_early: s.shadow_early,
             vertex_cache_log2: s.vertex_cache.trailing_zeros(),
@@ -445,6 +473,11 @@ pub struct Validation {
     /// another triangle sharing an edge with the reference's and take its colour (not
     /// counted as mismatches).
     pub edge_ties: usize,
+    /// Reflect frames: per bounce (the first reflection first), the reflected rays the
+    /// reference casts, and the pixels whose ray differs (cast or not, its hit triangle or
+    /// distance as the primary hits are compared).
+    pub bounce_rays: Vec<usize>,
+    pub bounce_mismatches: Vec<usize>,
     /// The first few differences, described (colours first, then hits).
     pub messages: Vec<String>,
 }
@@ -452,7 +485,10 @@ pub struct Validation {
 impl Validation {
     /// No pixel differs.
     pub fn passed(&self) -> bool {
-        self.mismatches + self.colour_mismatches.unwrap_or(0) == 0
+        self.mismatches
+            + self.colour_mismatches.unwrap_or(0)
+            + self.bounce_mismatches.iter().sum::<usize>()
+            == 0
     }
 }
 
@@ -482,18 +518,41 @@ pub fn validate(
         pixels: pixels.len(),
         ..Validation::default()
     };
-    if frame.run.colour_buffer.is_some() {
-        let shadows = config.shading.mode == ShadeMode::Shadows;
-        let lights = &frame.lights;
-        let expected = reference.shade_image(
+    let reflect = (config.shading.mode == ShadeMode::Reflect).then(|| {
+        crate::reflection::ReflectFrame::render(
+            &reference,
             &hits,
             camera,
             width,
             height,
-            lights,
-            shadows,
+            &frame.lights,
+            config.shading.reflect_depth,
             config.threads,
-        );
+        )
+    });
+    if frame.run.colour_buffer.is_some() {
+        // Reflect frames shade every level with shadows; a grazing shadow ray's or an
+        // edge's other outcome is looked for where the pixel is its primary hit's colour
+        // alone (it casts no reflected ray), not in a blend.
+        let shadows = config.shading.mode.shadows();
+        let unblended = |i: usize| {
+            reflect
+                .as_ref()
+                .is_none_or(|r| r.bounces.first().is_none_or(|b| b[i].is_none()))
+        };
+        let lights = &frame.lights;
+        let expected = match &reflect {
+            Some(r) => r.colours.clone(),
+            None => reference.shade_image(
+                &hits,
+                camera,
+                width,
+                height,
+                lights,
+                shadows,
+                config.threads,
+            ),
+        };
         let basis = camera.basis(width, height);
         let ray = |i: usize| {
             (
@@ -513,6 +572,7 @@ pub fn validate(
             // A shadow ray grazing an occluder's edge may give either outcome's colour
             // (Reference::shade_alternatives).
             if shadows
+                && unblended(i)
                 && reference
                     .shade_alternatives(&hits[i], origin, dir, lights)
                     .iter()
@@ -531,7 +591,7 @@ pub fn validate(
                 lights,
                 shadows,
             );
-            if tie.is_some_and(|t| within(i, t)) {
+            if unblended(i) && tie.is_some_and(|t| within(i, t)) {
                 validation.edge_ties += 1;
                 continue;
             }
@@ -548,22 +608,127 @@ pub fn validate(
         validation.shadow_edge_pixels = shadows.then_some(edges);
     }
     let record_to_original: Vec<u32> = staged.triangles.iter().map(|t| t.original_index).collect();
-    let (mismatches, messages) = compare_hits(&pixels, &hits, &record_to_original, width);
+    let (mismatches, messages) = compare_hits(
+        &pixels,
+        &hits,
+        &record_to_original,
+        width,
+        PRIMARY_T_TOLERANCE,
+    );
     validation.mismatches = mismatches;
     validation.messages.extend(messages);
+    if let (Some(r), Some(buffer)) = (&reflect, &frame.run.bounce_hits) {
+        let depth = config.shading.reflect_depth;
+        for (k, expected) in r.bounces.iter().enumerate() {
+            let kernel = decode_bounce_hits(buffer, width, height, depth, k as u32);
+            let cast: Vec<bool> = kernel.iter().map(|(_, cast)| *cast).collect();
+            let as_pixels: Vec<PixelResult> = kernel.iter().map(|(p, _)| *p).collect();
+            // a ray the reference does not cast is compared as a miss the kernel must not
+            // cast either
+            let reference_hits: Vec<crate::reference::Hit> = expected
+                .iter()
+                .map(|h| h.unwrap_or(crate::reference::Hit::NONE))
+                .collect();
+            let (mut bad, mut messages) = compare_hits(
+                &as_pixels,
+                &reference_hits,
+                &record_to_original,
+                width,
+                BOUNCE_T_TOLERANCE,
+            );
+            for (i, (e, &c)) in expected.iter().zip(&cast).enumerate() {
+                if e.is_some() != c {
+                    if messages.len() < MESSAGES {
+                        messages.push(format!(
+                            "bounce {} at ({}, {}): the kernel {} a ray, the reference {}",
+                            k + 1,
+                            i as u32 % width,
+                            i as u32 / width,
+                            if c { "casts" } else { "casts no" },
+                            if e.is_some() { "does" } else { "does not" }
+                        ));
+                    }
+                    bad += 1;
+                }
+            }
+            validation.messages.extend(
+                messages
+                    .into_iter()
+                    .map(|m| format!("bounce {}: {m}", k + 1)),
+            );
+            validation
+                .bounce_rays
+                .push(expected.iter().flatten().count());
+            validation.bounce_mismatches.push(bad);
+        }
+    }
     Ok(validation)
 }
 
+/// Bounce `bounce`'s hits (0: the first reflection) of a reflect frame's bounce-hit
+/// buffer ([`crate::kernel_abi::bounce_hits_bytes`]), row-major: the hit (record or
+/// [`MISS`], t) and whether the pixel cast a ray (t = 0 where not: the kernel writes 0, or
+/// nothing for a packet that casts none).
+pub fn decode_bounce_hits(
+    buffer: &[u8],
+    width: u32,
+    height: u32,
+    depth: u32,
+    bounce: u32,
+) -> Vec<(PixelResult, bool)> {
+    let tiles_x = width.div_ceil(kernel_abi::TILE_SIZE);
+    let word = |at: usize| {
+        buffer
+            .get(at..at + 4)
+            .map_or(0, |w| u32::from_be_bytes([w[0], w[1], w[2], w[3]]))
+    };
+    let mut out = Vec::with_capacity((width * height) as usize);
+    for y in 0..height {
+        for x in 0..width {
+            let (block, index) = kernel_abi::pixel_location(x, y, tiles_x);
+            let packet = block / kernel_abi::PACKET_BLOCK_BYTES as usize;
+            let at = (packet * depth as usize + bounce as usize) * 512 + 4 * index;
+            // a packet that casts no ray of the bounce puts nothing: zeros, as t = 0 says
+            let t = f32::from_bits(word(at + 256));
+            let cast = t != 0.0;
+            out.push((
+                PixelResult {
+                    triangle: if cast { word(at) } else { MISS },
+                    t,
+                    rgba: 0,
+                },
+                cast,
+            ));
+        }
+    }
+    out
+}
+
 /// Per-pixel hits against the reference's: the pixels that differ, the first few described.
+/// Primary hits agree when their distances differ by at most this fraction: kernel and
+/// reference trace the very same rays.
+const PRIMARY_T_TOLERANCE: (f32, f32) = (1e-4, 0.0);
+/// Reflected hits agree within this fraction, or within 1/256 of the offset a reflected
+/// ray starts off its surface: the kernel computes the reflected ray in its own rounding
+/// (a reciprocal estimate and a Newton step for 1 / N.N, fused multiply-adds, its own hit
+/// point), which a grazing ray that hits its own surface again turns into a larger
+/// difference of distance (the beetle's 0.0041071 against 0.0041066), and a ray that hits
+/// right beside its start (the room's table legs, t = 0.0003) into a larger fraction.
+const BOUNCE_T_TOLERANCE: (f32, f32) = (1e-3, shading::REFLECT_OFFSET / 256.0);
+
 fn compare_hits(
     pixels: &[PixelResult],
     reference: &[crate::reference::Hit],
     record_to_original: &[u32],
     width: u32,
+    (tolerance, absolute): (f32, f32),
 ) -> (usize, Vec<String>) {
     let mut mismatches = 0;
     let mut messages = Vec::new();
-    let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * a.abs().max(b.abs()).max(1e-30);
+    let close = |a: f32, b: f32| {
+        let d = (a - b).abs();
+        d <= tolerance * a.abs().max(b.abs()).max(1e-30) || d <= absolute
+    };
     for (i, (p, r)) in pixels.iter().zip(reference).enumerate() {
         let kernel_tri = if p.triangle == MISS {
             MISS
@@ -617,10 +782,13 @@ mod tests {
         let kernel = [pixel(0, 1.0), pixel(MISS, 0.0), pixel(1, 2.0)];
         let records = [10, 11];
         let same = [hit(10, 1.0), Hit::NONE, hit(12, 2.0)];
-        assert_eq!(compare_hits(&kernel, &same, &records, 3).0, 0);
+        assert_eq!(
+            compare_hits(&kernel, &same, &records, 3, PRIMARY_T_TOLERANCE).0,
+            0
+        );
         // A miss where the reference hits, and a hit at another distance.
         let other = [hit(10, 1.0), hit(10, 5.0), hit(11, 2.5)];
-        let (bad, messages) = compare_hits(&kernel, &other, &records, 3);
+        let (bad, messages) = compare_hits(&kernel, &other, &records, 3, PRIMARY_T_TOLERANCE);
         assert_eq!(bad, 2);
         assert_eq!(
             messages[0],
@@ -678,9 +846,34 @@ mod tests {
                 threads: 0,
                 ..ok.clone()
             },
+            RenderConfig {
+                shading: Shading {
+                    reflect_depth: 5,
+                    ..Shading::default()
+                },
+                ..ok.clone()
+            },
         ] {
             assert!(bad.check().is_err(), "{bad:?}");
         }
+        let reflect = RenderConfig {
+            shading: Shading {
+                mode: ShadeMode::Reflect,
+                ..Shading::default()
+            },
+            kernel: RenderConfig::kernel_for(false, ShadeMode::Reflect),
+            ..ok.clone()
+        };
+        assert_eq!(reflect.kernel, KernelVariant::Reflect);
+        assert_eq!(reflect.check(), Ok(()));
+        let not_reflecting = RenderConfig {
+            kernel: KernelVariant::Shaded,
+            ..reflect.clone()
+        };
+        assert_eq!(
+            not_reflecting.check(),
+            Err("the shaded kernel does not do shading reflect".into())
+        );
         let wrong_scene = prepare("room").map(|mut p| {
             p.name = "beetle".into();
             p

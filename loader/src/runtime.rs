@@ -30,6 +30,11 @@ pub struct FrameRun {
     pub shade_counters: Vec<ShadeCounters>,
     /// Shadow rays the shadow module cast (`--shade shadows`), summed over the SPUs.
     pub shadow_rays: u64,
+    /// A reflect frame's: per bounce (the first reflection first), the reflection
+    /// module's counters summed over the SPUs, and the bounce-hit buffer (per packet, per
+    /// bounce: 64 triangle records or -1, 64 distances).
+    pub reflect_counters: Vec<crate::kernel_abi::ReflectCounters>,
+    pub bounce_hits: Option<Vec<u8>>,
     pub frame_cycles: u64,
     pub spus: Vec<SpuReport>,
     /// The timing model's counters, merged over all SPUs.
@@ -504,6 +509,29 @@ pub fn run_frame(
         }
         _ => (None, Vec::new()),
     };
+    let (reflect_counters, bounce_hits) = match layout.shading.as_ref().map(|s| (s, &s.reflect)) {
+        Some((shading, Some(r))) => {
+            let mut counters = vec![
+                crate::kernel_abi::ReflectCounters::default();
+                shading.block.reflect_depth as usize
+            ];
+            let area = layout.params.ls_shading as usize
+                + crate::kernel_abi::REFLECT_AREA
+                + crate::kernel_abi::REFLECT_COUNTERS_OFFSET;
+            let size = std::mem::size_of::<crate::kernel_abi::ReflectCounters>();
+            for spu in &spus {
+                for (k, total) in counters.iter_mut().enumerate() {
+                    let at = area + k * size;
+                    total.add(&crate::kernel_abi::ReflectCounters::from_be_bytes(
+                        spu.ls().get(at..at + size).unwrap_or_default(),
+                    ));
+                }
+            }
+            let at = r.hits_addr as usize;
+            (counters, Some(memory.bytes()[at..at + r.hits_len].to_vec()))
+        }
+        _ => (Vec::new(), None),
+    };
     let traffic = regions
         .iter()
         .enumerate()
@@ -523,6 +551,8 @@ pub fn run_frame(
         colour_buffer,
         shade_counters,
         shadow_rays,
+        reflect_counters,
+        bounce_hits,
         events,
         frame_buffer,
         frame_cycles: spus_report.iter().map(|s| s.cycles).max().unwrap_or(0),

@@ -32,6 +32,10 @@ pub struct Material {
     pub specular: [f32; 3],
     /// Phong exponent (`Ns` in MTL files).
     pub shininess: f32,
+    /// Mirror weight in [0, 1] (MTL `illum 3` with `Km`, else `Ks`'s largest channel; 0:
+    /// not reflective): `--shade reflect` blends the reflected colour in by it
+    /// ([`crate::shading`]).
+    pub reflectance: f32,
 }
 
 impl Material {
@@ -41,6 +45,15 @@ impl Material {
             diffuse,
             specular: [0.0; 3],
             shininess: 0.0,
+            reflectance: 0.0,
+        }
+    }
+
+    /// [`Material::new`] with a mirror weight (`reflectance` in [0, 1]).
+    pub fn reflective(name: impl Into<String>, diffuse: [f32; 3], reflectance: f32) -> Self {
+        Material {
+            reflectance,
+            ..Material::new(name, diffuse)
         }
     }
 

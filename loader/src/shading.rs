@@ -129,6 +129,9 @@ pub enum ShadeMode {
     Simple,
     /// Simple shading plus one shadow ray per light.
     Shadows,
+    /// Shadows plus reflections: a hit on a reflective material blends in the colour its
+    /// reflected ray finds (up to `--reflect-depth` bounces, [`crate::reflection`]).
+    Reflect,
 }
 
 impl ShadeMode {
@@ -137,7 +140,10 @@ impl ShadeMode {
             "none" => Ok(ShadeMode::None),
             "simple" => Ok(ShadeMode::Simple),
             "shadows" => Ok(ShadeMode::Shadows),
-            _ => Err(format!("--shade {text}: expected none, simple or shadows")),
+            "reflect" => Ok(ShadeMode::Reflect),
+            _ => Err(format!(
+                "--shade {text}: expected none, simple, shadows or reflect"
+            )),
         }
     }
 
@@ -146,8 +152,56 @@ impl ShadeMode {
             ShadeMode::None => "none",
             ShadeMode::Simple => "simple",
             ShadeMode::Shadows => "shadows",
+            ShadeMode::Reflect => "reflect",
         }
     }
+
+    /// Whether the mode casts shadow rays (reflections are shaded with shadows too).
+    pub fn shadows(self) -> bool {
+        matches!(self, ShadeMode::Shadows | ShadeMode::Reflect)
+    }
+}
+
+/// `--reflect-depth`: reflection bounces per primary ray, at most this many.
+pub const MAX_REFLECT_DEPTH: u32 = 4;
+/// A reflected ray starts this fraction of its direction off the surface it leaves, so
+/// that the surface does not reflect itself.
+pub const REFLECT_OFFSET: f32 = 1.0 / 1024.0;
+
+/// Parses `--reflect-depth`: 1 to [`MAX_REFLECT_DEPTH`].
+pub fn parse_reflect_depth(text: &str) -> Result<u32, String> {
+    match text.parse::<u32>() {
+        Ok(n) if (1..=MAX_REFLECT_DEPTH).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "--reflect-depth {text}: expected a number of bounces from 1 to {MAX_REFLECT_DEPTH}"
+        )),
+    }
+}
+
+/// The mirror image of `dir` about the (eye-facing, unnormalised) shading normal:
+/// `d - 2 (dot(d, N) / dot(N, N)) N`, as long as `d`; `d` itself for a zero normal.
+pub fn reflect_direction(dir: Vec3, normal: Vec3) -> Vec3 {
+    let nn = normal.dot(normal);
+    if nn > 0.0 {
+        let k = 2.0 * dir.dot(normal) / nn;
+        dir - normal * k
+    } else {
+        dir
+    }
+}
+
+/// The colour of a reflective hit: per 8-bit channel `a + r (b - a)` of its own colour `a`
+/// and the reflected colour `b` (both `0xRRGGBBff`), plus 0.5, truncated. The blend works
+/// on the 8-bit colours each bounce has already stored, as a kernel that shades a bounce
+/// and then the next one blends them.
+pub fn blend(local: u32, reflected: u32, reflectance: f32) -> u32 {
+    let a = local.to_be_bytes();
+    let b = reflected.to_be_bytes();
+    let c = |i: usize| {
+        let (a, b) = (a[i] as f32, b[i] as f32);
+        (a + reflectance * (b - a) + 0.5).clamp(0.0, 255.0) as u8
+    };
+    u32::from_be_bytes([c(0), c(1), c(2), 0xff])
 }
 
 /// `on`/`off` for flags such as `--shadow-early`.
@@ -235,7 +289,9 @@ mod tests {
         assert_eq!(ShadeMode::parse("shadows").unwrap(), ShadeMode::Shadows);
         assert!(ShadeMode::parse("phong")
             .unwrap_err()
-            .contains("none, simple or shadows"));
+            .contains("none, simple, shadows or reflect"));
+        assert_eq!(ShadeMode::parse("reflect").unwrap(), ShadeMode::Reflect);
+        assert!(ShadeMode::Reflect.shadows() && !ShadeMode::Simple.shadows());
         assert!(parse_on_off("--shadow-early", "on").unwrap());
         assert!(parse_on_off("--shadow-early", "yes").is_err());
     }
@@ -258,5 +314,32 @@ mod tests {
         assert_eq!(n, Vec3::new(0.5, 0.5, 0.0));
         assert!((light_cosine(n, Vec3::X) - 0.70710677).abs() < 1e-6);
         assert_eq!(channel_difference(0x0102_03ff, 0x0300_03ff), 2);
+    }
+
+    #[test]
+    fn reflections_by_hand() {
+        // A ray down at 45 degrees onto a floor whose normal is +Y (unnormalised) leaves up
+        // at 45 degrees, as long as it came.
+        let d = Vec3::new(1.0, -1.0, 0.0);
+        assert_eq!(
+            reflect_direction(d, Vec3::new(0.0, 3.0, 0.0)),
+            Vec3::new(1.0, 1.0, 0.0)
+        );
+        assert_eq!(reflect_direction(d, Vec3::ZERO), d);
+        // Blends: none, half, all, and the rounding of a + r (b - a) + 0.5.
+        let (red, blue) = (0xff00_00ff, 0x0000_ffff);
+        assert_eq!(blend(red, blue, 0.0), red);
+        assert_eq!(blend(red, blue, 1.0), blue);
+        assert_eq!(blend(red, blue, 0.5), 0x8000_80ff);
+        assert_eq!(blend(0x6400_00ff, 0xc800_00ff, 0.25), 0x7d00_00ff); // 100 + 25 + 0.5
+        for (text, depth) in [("1", 1), ("4", 4)] {
+            assert_eq!(parse_reflect_depth(text).unwrap(), depth);
+        }
+        for bad in ["0", "5", "-1", "x", ""] {
+            assert!(
+                parse_reflect_depth(bad).unwrap_err().contains("1 to 4"),
+                "{bad}"
+            );
+        }
     }
 }

@@ -55,6 +55,9 @@ pub struct FrameStats {
     /// The shading code (`shade_packet` .. `shade_end`, shaded frames with the timing model).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shading: Option<SectionStats>,
+    /// `--shade reflect`: per bounce, the reflected rays and what tracing them took.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub reflections: Vec<BounceStats>,
 }
 
 /// Rays cast in a frame, by kind.
@@ -62,6 +65,70 @@ pub struct FrameStats {
 pub struct RaysByKind {
     pub primary: u64,
     pub shadow: u64,
+    /// Reflected rays, all bounces (per bounce: [`FrameStats::reflections`]); absent from
+    /// frames that reflect nothing, whose files stay as they were.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub reflected: u64,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
+}
+
+/// One reflection bounce of a reflect frame (`modules/reflect.s`'s counters): its rays,
+/// how full its packets are, and its traversal's work, cache hit rates and DMA bytes.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct BounceStats {
+    /// 1 for the first reflection.
+    pub bounce: u32,
+    pub rays: u64,
+    /// Of them, the rays that hit a triangle.
+    pub hits: u64,
+    /// Primary packets with any ray of the bounce (its reflection packets).
+    pub packets: u64,
+    /// Rays per reflection packet over its 64 (the packets' coherence), percent.
+    pub active_ray_percent: f64,
+    pub traversal_steps: u64,
+    pub leaves: u64,
+    /// Hit rates per lookup of the BVH cache (a step's pair) and the triangle cache,
+    /// percent.
+    pub bvh_hit_percent: f64,
+    pub triangle_hit_percent: f64,
+    /// Bytes the bounce's cache misses fetched (a 64-byte line each).
+    pub dma_bytes: u64,
+}
+
+impl BounceStats {
+    /// From the frame's per-bounce counters.
+    pub fn from_counters(counters: &[crate::kernel_abi::ReflectCounters]) -> Vec<BounceStats> {
+        let percent = |part: u64, whole: u64| {
+            if whole == 0 {
+                0.0
+            } else {
+                rounded(100.0 * part as f64 / whole as f64, 2)
+            }
+        };
+        counters
+            .iter()
+            .enumerate()
+            .map(|(k, c)| BounceStats {
+                bounce: k as u32 + 1,
+                rays: c.rays.0,
+                hits: c.hits.0,
+                packets: c.packets.0,
+                active_ray_percent: percent(c.rays.0, 64 * c.packets.0),
+                traversal_steps: c.steps.0,
+                leaves: c.leaves.0,
+                bvh_hit_percent: percent(c.steps.0.saturating_sub(c.bvh_misses.0), c.steps.0),
+                triangle_hit_percent: percent(
+                    c.triangle_lookups.0.saturating_sub(c.triangle_misses.0),
+                    c.triangle_lookups.0,
+                ),
+                dma_bytes: 64 * (c.bvh_misses.0 + c.triangle_misses.0),
+            })
+            .collect()
+    }
 }
 
 /// The shading module's i-set and cache figures (the paper's Table 4). Keys missing from a
@@ -442,7 +509,9 @@ impl FrameStats {
             rays_by_kind: RaysByKind {
                 primary: rays,
                 shadow: run.shadow_rays,
+                reflected: run.reflect_counters.iter().map(|c| c.rays.0).sum(),
             },
+            reflections: BounceStats::from_counters(&run.reflect_counters),
             table4: Table4::new(&run.shade_counters),
             table6: Table6::new(&run.traffic),
             shading: if run.shade_counters.is_empty() {

@@ -20,15 +20,20 @@ pub enum KernelVariant {
     /// extension, `docs/extensions.md`): branches hinted before the loops whose own hints
     /// would replace theirs on the real SPU (`kernels/primary.s` with `EXT_MULTIHINT`).
     PrimaryMultihint,
+    /// [`KernelVariant::Shaded`] with the reflection pass (`modules/reflect.s`): each
+    /// primary packet's reflective hits spawn reflected rays, traced, shaded with shadows
+    /// and blended in (`kernels/primary.s` with `SHADE` and `REFLECT`).
+    Reflect,
 }
 
 impl KernelVariant {
     /// Every variant, in the order the build assembles them.
-    pub const ALL: [KernelVariant; 4] = [
+    pub const ALL: [KernelVariant; 5] = [
         KernelVariant::Primary,
         KernelVariant::Shaded,
         KernelVariant::Fill,
         KernelVariant::PrimaryMultihint,
+        KernelVariant::Reflect,
     ];
 
     /// A short name: prebuilt file names, messages.
@@ -38,15 +43,17 @@ impl KernelVariant {
             KernelVariant::Shaded => "shaded",
             KernelVariant::Fill => "fill",
             KernelVariant::PrimaryMultihint => "primary-multihint",
+            KernelVariant::Reflect => "reflect",
         }
     }
 
     /// The source file, relative to `kernels/`.
     pub const fn file(self) -> &'static str {
         match self {
-            KernelVariant::Primary | KernelVariant::Shaded | KernelVariant::PrimaryMultihint => {
-                "primary.s"
-            }
+            KernelVariant::Primary
+            | KernelVariant::Shaded
+            | KernelVariant::PrimaryMultihint
+            | KernelVariant::Reflect => "primary.s",
             KernelVariant::Fill => "fill.s",
         }
     }
@@ -54,9 +61,10 @@ impl KernelVariant {
     /// The name diagnostics and the sources' hash use.
     pub const fn name(self) -> &'static str {
         match self {
-            KernelVariant::Primary | KernelVariant::Shaded | KernelVariant::PrimaryMultihint => {
-                "kernels/primary.s"
-            }
+            KernelVariant::Primary
+            | KernelVariant::Shaded
+            | KernelVariant::PrimaryMultihint
+            | KernelVariant::Reflect => "kernels/primary.s",
             KernelVariant::Fill => "kernels/fill.s",
         }
     }
@@ -66,6 +74,7 @@ impl KernelVariant {
         match self {
             KernelVariant::Shaded => &[("SHADE", 1)],
             KernelVariant::PrimaryMultihint => &[("EXT_MULTIHINT", 1)],
+            KernelVariant::Reflect => &[("SHADE", 1), ("REFLECT", 1)],
             KernelVariant::Primary | KernelVariant::Fill => &[],
         }
     }
@@ -78,6 +87,6 @@ impl KernelVariant {
 
     /// Whether the program runs the shading module (and needs the frame's shading block).
     pub const fn shades(self) -> bool {
-        matches!(self, KernelVariant::Shaded)
+        matches!(self, KernelVariant::Shaded | KernelVariant::Reflect)
     }
 }

@@ -279,6 +279,9 @@ const MODULE_ENTRIES: &[(&str, &[&str])] = &[
     ("lru.s", &["lru_find", "lru_rotate"]),
     ("output.s", &["packet_done"]),
     ("raygen.s", &["packet_loop"]),
+    // Reflected rays run in reflect frames only, which none of the pinned frames is (their
+    // own frames: runtime_frames' every variant, tools' shade_cli, reflect_module).
+    ("reflect.s", &[]),
     ("shade.s", &["shade_packet"]),
     // The shading module's jobs behind shade_packet carry local labels only: they run
     // within it, and the shading counters of the snapshots count what they did.

@@ -332,6 +332,7 @@ fn every_kernel_variant_renders_and_validates() {
                 spu_loader::shading::ShadeMode::None
             }
             KernelVariant::Shaded => spu_loader::shading::ShadeMode::Shadows,
+            KernelVariant::Reflect => spu_loader::shading::ShadeMode::Reflect,
         };
         let frame = render(&room, &config, &CodeCache::default()).unwrap();
         assert_eq!(frame.run.kernel_image, variant.program().unwrap().image);
@@ -340,12 +341,22 @@ fn every_kernel_variant_renders_and_validates() {
             .unwrap()
             .contains(if variant.traces() { "trav" } else { "_start" }));
         match variant {
-            KernelVariant::Primary | KernelVariant::Shaded | KernelVariant::PrimaryMultihint => {
+            KernelVariant::Primary
+            | KernelVariant::Shaded
+            | KernelVariant::PrimaryMultihint
+            | KernelVariant::Reflect => {
                 let v = spu_loader::render::validate(&room, &config, &frame).unwrap();
                 assert!(v.passed(), "{variant:?}: {:?}", v.messages);
                 assert_eq!(v.pixels, 64 * 64);
                 assert_eq!(v.colour_mismatches.is_some(), variant.shades());
                 assert_eq!(frame.run.shadow_rays > 0, variant.shades());
+                // the room's table reflects: the reflect frame traces its rays
+                let reflects = variant == KernelVariant::Reflect;
+                assert_eq!(v.bounce_rays.first().is_some_and(|&n| n > 0), reflects);
+                assert_eq!(
+                    frame.run.reflect_counters.first().map(|c| c.rays.0),
+                    reflects.then_some(v.bounce_rays.first().copied().unwrap_or(0) as u64)
+                );
             }
             KernelVariant::Fill => {
                 assert!(spu_loader::render::validate(&room, &config, &frame).is_err());

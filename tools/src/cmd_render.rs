@@ -97,6 +97,9 @@ pub fn frame(
             instructions as f64 / host_seconds / 1e6,
             outputs.image.display()
         );
+        if !run.reflect_counters.is_empty() {
+            outln!("{}", reflections_summary(run, seconds));
+        }
         if run.jit.blocks > 0 {
             outln!(
                 "block compiler: {:.1}% ran compiled; {} blocks ({} instructions) compiled in {:.2} s{}",
@@ -165,10 +168,45 @@ fn validation_summary(v: &Validation) -> String {
         ),
         None => String::new(),
     };
+    let bounces: String = v
+        .bounce_rays
+        .iter()
+        .zip(&v.bounce_mismatches)
+        .enumerate()
+        .map(|(k, (rays, bad))| {
+            format!("; bounce {}: {bad} of {rays} reflected rays differ", k + 1)
+        })
+        .collect();
     format!(
-        "validation: {bad} of {n} pixels differ from the host reference in the hit triangle, {off} in colour (more than {} of 255 in a channel){ties}{edges}",
+        "validation: {bad} of {n} pixels differ from the host reference in the hit triangle, {off} in colour (more than {} of 255 in a channel){ties}{edges}{bounces}",
         shading::COLOUR_TOLERANCE
     )
+}
+
+/// The lines a reflect frame adds: its frame rate, the rays by kind, and per bounce its
+/// rays, packets, their active-ray fraction, cache hit rates and DMA bytes.
+fn reflections_summary(run: &spu_loader::runtime::FrameRun, seconds: f64) -> String {
+    let bounces = spu_loader::stats::BounceStats::from_counters(&run.reflect_counters);
+    let reflected: u64 = bounces.iter().map(|b| b.rays).sum();
+    let mut text = format!(
+        "reflections: {:.2} fps; {} shadow and {reflected} reflected rays",
+        if seconds > 0.0 { 1.0 / seconds } else { 0.0 },
+        run.shadow_rays
+    );
+    for b in &bounces {
+        text.push_str(&format!(
+            "\n  bounce {}: {} rays ({} hit) in {} packets, {:.1}% of their rays active; BVH cache {:.1}% hits, triangle cache {:.1}%; {:.1} KB by DMA",
+            b.bounce,
+            b.rays,
+            b.hits,
+            b.packets,
+            b.active_ray_percent,
+            b.bvh_hit_percent,
+            b.triangle_hit_percent,
+            b.dma_bytes as f64 / 1024.0
+        ));
+    }
+    text
 }
 
 /// `--validate` that found differing pixels (hit triangles, or colours beyond the

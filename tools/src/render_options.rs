@@ -60,10 +60,14 @@ pub struct Args {
     #[arg(long)]
     pub fill: bool,
     /// What each pixel gets: none (primary rays, the eye-light grey), simple (diffuse
-    /// shading with the material colour and the interpolated normal, point lights) or
-    /// shadows (simple plus one shadow ray per light).
+    /// shading with the material colour and the interpolated normal, point lights),
+    /// shadows (simple plus one shadow ray per light) or reflect (shadows plus reflected
+    /// rays off reflective materials, --reflect-depth bounces).
     #[arg(long, default_value = "none", value_parser = ShadeMode::parse)]
     pub shade: ShadeMode,
+    /// Reflection bounces per primary ray with --shade reflect (1..4).
+    #[arg(long = "reflect-depth", value_parser = shading::parse_reflect_depth)]
+    pub reflect_depth: Option<u32>,
     /// A point light `x,y,z[,r,g,b]` (repeatable, up to 8; default: the scene's own).
     #[arg(long = "light", value_parser = Light::parse, allow_hyphen_values = true)]
     pub lights: Vec<Light>,
@@ -219,6 +223,11 @@ impl Args {
                 "--light lights a shaded frame, and this one is not shaded: add --shade simple or --shade shadows",
             ));
         }
+        if self.reflect_depth.is_some() && self.shade != ShadeMode::Reflect {
+            return Err(Error::input(
+                "--reflect-depth sets the bounces of --shade reflect, and this frame does not reflect",
+            ));
+        }
         if self.fill && self.shade != ShadeMode::None {
             return Err(Error::input(format!(
                 "--fill runs the fill program, which does not shade: drop --shade {}",
@@ -260,6 +269,7 @@ impl Args {
                 shadow_early: self.shadow_early,
                 vertex_cache: self.vertex_cache,
                 material_cache: self.material_cache,
+                reflect_depth: self.reflect_depth.unwrap_or(1),
             },
             kernel: RenderConfig::kernel_with(self.fill, self.shade, self.ext.ext),
             engine: self.engine,
@@ -377,6 +387,9 @@ pub fn words(config: &RenderConfig, outputs: &Outputs) -> Vec<String> {
     if s.material_cache != defaults.shading.material_cache {
         option("--material-cache", s.material_cache.to_string());
     }
+    if s.mode == ShadeMode::Reflect {
+        option("--reflect-depth", s.reflect_depth.to_string());
+    }
     if !config.timing {
         option("--timing", "off".into());
     }
@@ -448,6 +461,7 @@ mod tests {
                 shadow_early: true,
                 vertex_cache: 16,
                 material_cache: 256,
+                reflect_depth: 1,
             },
             kernel: KernelVariant::Shaded,
             event_log: true,

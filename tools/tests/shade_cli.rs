@@ -27,6 +27,10 @@ fn bad_shading_options_exit_2_before_any_work() {
         vec!["--material-cache", "512"],
         vec!["--shade", "shadows", "--fill"],
         vec!["--shade", "simple", "--fill"],
+        vec!["--shade", "reflect", "--reflect-depth", "0"],
+        vec!["--shade", "reflect", "--reflect-depth", "5"],
+        vec!["--shade", "reflect", "--reflect-depth", "two"],
+        vec!["--shade", "shadows", "--reflect-depth", "2"],
         nine.iter().map(String::as_str).collect(),
     ];
     for case in cases {
@@ -52,6 +56,23 @@ fn bad_shading_options_exit_2_before_any_work() {
         "spu: --light lights a shaded frame, and this one is not shaded: add --shade simple or --shade shadows\n"
     );
     assert!(!std::path::Path::new(out).exists());
+    // A depth without reflections is refused saying what it is for.
+    let run = spu(&[
+        "render",
+        "--scene",
+        "no-such.obj",
+        "-o",
+        out,
+        "--shade",
+        "simple",
+        "--reflect-depth",
+        "2",
+    ]);
+    assert_eq!(run.status.code(), Some(2), "{run:?}");
+    assert_eq!(
+        String::from_utf8_lossy(&run.stderr),
+        "spu: --reflect-depth sets the bounces of --shade reflect, and this frame does not reflect\n"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -133,5 +154,72 @@ fn a_frame_with_shadows_validates() {
         "{json}"
     );
     assert!(json["fps"].as_f64().unwrap() > 0.0);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A reflective frame (the room's polished table) validates every bounce and every colour,
+/// and its statistics count the reflected rays and packets the host model casts.
+#[test]
+fn a_frame_with_reflections_validates_and_counts_its_rays() {
+    let dir = std::env::temp_dir().join(format!("spu-reflect-ok-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("room.png");
+    let stats = dir.join("room.json");
+    let (size, depth) = (96, 2);
+    let run = spu(&[
+        "render",
+        "--width",
+        &size.to_string(),
+        "--height",
+        &size.to_string(),
+        "--shade",
+        "reflect",
+        "--reflect-depth",
+        &depth.to_string(),
+        "--spes",
+        "2",
+        "--validate",
+        "--stats",
+        stats.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert!(run.status.success(), "{run:?}");
+    // the host model's reflection packets of the same frame
+    let prepared = spu_loader::render::prepare("room").unwrap();
+    let reference = spu_loader::reference::Reference::from_staged(&prepared.staged);
+    let camera = &prepared.scene.camera;
+    let hits = reference.render(camera, size, size, 2);
+    let lights = spu_loader::shading::default_lights(&prepared.scene);
+    let frame = spu_loader::reflection::ReflectFrame::render(
+        &reference, &hits, camera, size, size, &lights, depth, 2,
+    );
+    let packets = frame.packets(size, size);
+    assert!(packets[0].rays > 100, "{packets:?}");
+    assert!(
+        text.contains(
+            "validation: 0 of 9216 pixels differ from the host reference in the hit triangle, 0 in colour (more than 2 of 255 in a channel)"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!(
+            "; bounce 1: 0 of {} reflected rays differ; bounce 2: 0 of {} reflected rays differ\n",
+            packets[0].rays, packets[1].rays
+        )),
+        "{text}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let bounces = json["reflections"].as_array().unwrap();
+    assert_eq!(bounces.len(), depth as usize);
+    for (b, model) in bounces.iter().zip(&packets) {
+        assert_eq!(b["rays"], model.rays, "{b}");
+        assert_eq!(b["hits"], model.hits, "{b}");
+        assert_eq!(b["packets"], model.packets, "{b}");
+    }
+    let reflected: u64 = packets.iter().map(|p| p.rays).sum();
+    assert_eq!(json["rays_by_kind"]["reflected"], reflected);
     std::fs::remove_dir_all(&dir).ok();
 }
