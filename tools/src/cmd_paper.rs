@@ -58,9 +58,10 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     if !(8..=8192).contains(&size) {
         return Err(Error::input(format!("--size {size}: must be 8 to 8192")));
     }
-    if !(1..=16).contains(&args.max_spes) {
+    let most = spu_loader::render::MAX_SPES;
+    if !(1..=most).contains(&args.max_spes) {
         return Err(Error::input(format!(
-            "--max-spes {}: must be 1 to 16",
+            "--max-spes {}: must be 1 to {most}",
             args.max_spes
         )));
     }
