@@ -20,6 +20,7 @@ mod frame_views;
 mod heatmap;
 mod options;
 mod outputs;
+mod paper_beyond;
 mod paper_data;
 mod paper_figure;
 mod paper_jobs;
