@@ -672,7 +672,7 @@ mod tests {
         assert_eq!(shaded.check(), Ok(()));
         for bad in [
             RenderConfig {
-                spes: 17,
+                spes: 65,
                 ..ok.clone()
             },
             RenderConfig {
