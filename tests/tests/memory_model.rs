@@ -132,4 +132,3 @@ fn the_benchmark_refuses_bad_setups() {
         );
     }
 }
-
