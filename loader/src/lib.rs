@@ -50,6 +50,7 @@ pub mod frame;
 pub mod kernel_abi;
 pub mod kernel_image;
 pub mod kernels;
+pub mod membench;
 pub mod ppe;
 pub mod render;
 pub mod runtime;

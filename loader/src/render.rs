@@ -66,6 +66,14 @@ impl Default for Shading {
     }
 }
 
+/// The most SPEs a frame runs on: a Cell has 8, the paper's dual-Cell blade 16; up to 64
+/// are hypothetical Cells, sharing one memory interface (`docs/memory-model.md`).
+pub const MAX_SPES: usize = 64;
+/// The range of `--memory-bandwidth-gbs`: from a starved chip to far beyond any XDR.
+pub const MIN_BANDWIDTH_GBS: f64 = 0.1;
+/// The largest main-memory bandwidth a frame accepts, in GB/s.
+pub const MAX_BANDWIDTH_GBS: f64 = 10_000.0;
+
 /// Everything one frame is made from. The image, the cycles and every statistic depend
 /// on these fields only (`threads` and `engine` change how fast the host gets there, not
 /// what it gets).
@@ -78,7 +86,7 @@ pub struct RenderConfig {
     pub camera: Option<Camera>,
     pub width: u32,
     pub height: u32,
-    /// Simulated SPEs, 1 to 16.
+    /// Simulated SPEs, 1 to [`MAX_SPES`].
     pub spes: usize,
     /// Host threads running the SPEs and the reference (at least 1).
     pub threads: usize,
@@ -86,6 +94,9 @@ pub struct RenderConfig {
     pub clock_ghz: f64,
     /// Main-memory latency of a DMA in nanoseconds before its bytes move.
     pub dma_latency_ns: f64,
+    /// Main-memory bandwidth of the Cell in GB/s, shared by all its SPEs
+    /// (`docs/memory-model.md`).
+    pub memory_bandwidth_gbs: f64,
     /// Lines of the BVH-node cache (a power of two, 128 to 1024).
     pub bvh_cache: u32,
     /// Lines of the triangle cache (a power of two, 128 to 1024).
@@ -123,6 +134,7 @@ impl RenderConfig {
             threads: 1,
             clock_ghz: 2.4,
             dma_latency_ns: 100.0,
+            memory_bandwidth_gbs: 25.6,
             bvh_cache: 256,
             tri_cache: 256,
             assoc: 1,
@@ -169,7 +181,7 @@ impl RenderConfig {
                 Err(format!("{what} {value}: must be {low} to {high}"))
             }
         };
-        within("SPEs", self.spes as u64, 1, 16)?;
+        within("SPEs", self.spes as u64, 1, MAX_SPES as u64)?;
         within("width", self.width as u64, 1, 8192)?;
         within("height", self.height as u64, 1, 8192)?;
         within("threads", self.threads as u64, 1, 1024)?;
@@ -182,6 +194,14 @@ impl RenderConfig {
             return Err(format!(
                 "DMA latency {} ns: must be 0 to 1000000",
                 self.dma_latency_ns
+            ));
+        }
+        if !(self.memory_bandwidth_gbs.is_finite()
+            && (MIN_BANDWIDTH_GBS..=MAX_BANDWIDTH_GBS).contains(&self.memory_bandwidth_gbs))
+        {
+            return Err(format!(
+                "memory bandwidth {} GB/s: must be {MIN_BANDWIDTH_GBS} to {MAX_BANDWIDTH_GBS}",
+                self.memory_bandwidth_gbs
             ));
         }
         kernel_abi::check_kernel_options(self.bvh_cache, self.tri_cache, self.assoc, self.sht)?;
@@ -432,6 +452,7 @@ pub fn render_with(
             timing: spu_isa::timing::TimingConfig {
                 clock_ghz: config.clock_ghz,
                 dma_latency_ns: config.dma_latency_ns,
+                memory_bandwidth_gbs: config.memory_bandwidth_gbs,
                 ..Default::default()
             },
             timed: config.timing,
@@ -819,7 +840,7 @@ mod tests {
         assert_eq!(shaded.check(), Ok(()));
         for bad in [
             RenderConfig {
-                spes: 17,
+                spes: 65,
                 ..ok.clone()
             },
             RenderConfig {

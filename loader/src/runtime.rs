@@ -234,6 +234,15 @@ fn check_leaves_fit(staged: &StagedScene) -> Result<(), String> {
 /// frame's result does not depend on how the SPUs are spread over host threads.
 pub const QUANTUM_CYCLES: u64 = 10_000;
 
+/// The quantum of a frame on `spes` SPEs: [`QUANTUM_CYCLES`] up to a dual Cell's 16. A
+/// contended atomic (the tile counter every SPE claims its tiles from) lets one SPE through
+/// per quantum, so beyond 16 the quantum shrinks with the SPE count: the first round of
+/// claims then costs at most the 160,000 cycles it costs 16 SPEs (`docs/memory-model.md`).
+pub fn quantum_cycles(spes: usize) -> u64 {
+    const DUAL_CELL: u64 = 16;
+    QUANTUM_CYCLES * DUAL_CELL / (spes as u64).max(DUAL_CELL)
+}
+
 /// Stop code of a kernel that finished its frame (`stop 0x2000`, exit status 0).
 pub const STOP_DONE: u16 = 0x2000;
 
@@ -369,7 +378,7 @@ pub fn run_frame(
     }
     let regions = traffic_regions(staged, layout);
     let mut system = System::with_memory(MainMemory::new(layout.memory_image(staged)));
-    system.set_quantum(Quantum::Aligned(QUANTUM_CYCLES));
+    system.set_quantum(Quantum::Aligned(quantum_cycles(spes)));
     system.set_threads(threads);
     // The SPEs run the same kernel: each block is compiled once for all of them.
     let compiled_before = code.stats();

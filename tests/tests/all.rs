@@ -17,6 +17,7 @@ mod golden_forms;
 mod isa_extensions;
 mod kernel_caches;
 mod kernel_modules;
+mod memory_model;
 mod reflect_module;
 mod runtime_frames;
 mod sched_timing;

@@ -800,11 +800,12 @@ fn bad_sndsig_stops_with_a_dma_error() {
     }
 }
 
-/// The chip's 25.6 GB/s (10.67 bytes per cycle at 2.4 GHz) is shared: one SPU fetching
-/// 32 blocks of 16 KiB, each waited for, takes 32 x (240 latency + 2048 at its own
-/// 8 bytes per cycle) cycles; four SPUs doing the same at once need the memory interface
-/// for 4 x 32 x 16384 / 10.67 = 196,608 cycles, so they finish close to that (sharing
-/// takes effect one 10,000-cycle quantum late, so up to a quantum early).
+/// The chip's memory interface is shared: one SPU fetching 32 blocks of 16 KiB, each
+/// waited for, takes 32 x (240 latency + 2048 at its own 8 bytes per cycle) cycles; four
+/// SPUs reading at once are held to the memory interface's EIB port, 8 bytes per cycle
+/// each way at 2.4 GHz (below XDR's 10.67), so they need 4 x 32 x 16384 / 8 = 262,144
+/// cycles and finish close to that (sharing takes effect one 10,000-cycle quantum late, so
+/// up to a quantum early).
 #[test]
 fn four_spus_share_the_chip_memory_bandwidth() {
     let fetcher = || {
@@ -825,7 +826,7 @@ fn four_spus_share_the_chip_memory_bandwidth() {
     let alone = run(1)[0];
     let own = 32 * (240 + 16384 / 8);
     assert!(alone >= own && alone < own + 2_000, "{alone} vs {own}");
-    let chip = (4.0 * 32.0 * 16384.0 / (25.6 / 2.4)) as u64;
+    let chip = 4 * 32 * 16384 / 8;
     let together = run(4);
     let last = *together.iter().max().unwrap();
     assert!(

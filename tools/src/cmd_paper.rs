@@ -48,8 +48,8 @@ pub struct Args {
     /// Frame size (overrides --quick; small sizes keep tests short).
     #[arg(long, hide = true)]
     size: Option<u32>,
-    /// Largest SPE count run (16; smaller keeps tests short).
-    #[arg(long, hide = true, default_value_t = 16)]
+    /// Largest SPE count run (64; smaller keeps tests short).
+    #[arg(long, hide = true, default_value_t = 64)]
     max_spes: usize,
 }
 
@@ -58,9 +58,10 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     if !(8..=8192).contains(&size) {
         return Err(Error::input(format!("--size {size}: must be 8 to 8192")));
     }
-    if !(1..=16).contains(&args.max_spes) {
+    let most = spu_loader::render::MAX_SPES;
+    if !(1..=most).contains(&args.max_spes) {
         return Err(Error::input(format!(
-            "--max-spes {}: must be 1 to 16",
+            "--max-spes {}: must be 1 to {most}",
             args.max_spes
         )));
     }
@@ -157,7 +158,10 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         missing: missing.clone(),
         heatmaps: heatmaps(&jobs, &stats_dir, &args.out),
         notes,
+        verdicts: Vec::new(),
     };
+    let scene_ids: Vec<String> = setup.scenes.iter().map(|s| s.id.clone()).collect();
+    report.verdicts = crate::paper_beyond::verdicts(&report.tables, &scene_ids);
     if let Some(t) = report.tables.iter().find(|t| t.id == "figure2") {
         let series = crate::paper_figure::series(t);
         let files = crate::paper_figure::write_figure2(&args.out, "figure2", &series)
@@ -168,6 +172,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             files,
         });
     }
+    beyond_figures(&mut report, &args.out)?;
     write(&args.out.join("report.json"), &{
         let mut s =
             serde_json::to_string_pretty(&report).map_err(|e| Error::failure(e.to_string()))?;
@@ -203,6 +208,91 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
             ),
         ))
     }
+}
+
+/// The figures of "Beyond the paper", from its tables: rays per second against hint
+/// entries, against clock, and frame rate against SPE count.
+fn beyond_figures(report: &mut Report, out: &Path) -> exit::Result<()> {
+    use crate::paper_beyond::{self as beyond, Axes, Curve};
+    let find = |id: &str| report.tables.iter().find(|t| t.id == id);
+    let mut figures = Vec::new();
+    if let Some(t) = find(beyond::TABLES[0]) {
+        // primary rays: "none" is the real SPU's one hint entry
+        let curves: Vec<Curve> = report
+            .scenes
+            .iter()
+            .filter_map(|sc| {
+                let points: Vec<(f64, f64)> = beyond::extension_settings()
+                    .iter()
+                    .filter_map(|ext| {
+                        let n = match *ext {
+                            "none" => 1.0,
+                            other => other.strip_prefix("multihint=")?.parse().ok()?,
+                        };
+                        let label = format!("none, ext {ext}: MRays/s");
+                        let row = t
+                            .rows
+                            .iter()
+                            .find(|r| r.scene == sc.id && r.label == label)?;
+                        Some((n, row.ours?))
+                    })
+                    .collect();
+                (!points.is_empty()).then(|| Curve {
+                    label: sc.id.clone(),
+                    points,
+                })
+            })
+            .collect();
+        figures.push((
+            beyond::TABLES[0],
+            "beyond-hints",
+            Axes {
+                caption: "Primary rays against branch hint entries",
+                x: "hint entries (1: the real SPU)",
+                y: "MRays/s on one 2.4 GHz SPE",
+            },
+            curves,
+        ));
+    }
+    if let Some(t) = find(beyond::TABLES[1]) {
+        let curves = beyond::curves(t, &["SHT 1, ", "SHT 4, "], " GHz", &beyond::CLOCKS);
+        figures.push((
+            beyond::TABLES[1],
+            "beyond-clock",
+            Axes {
+                caption: "MRays/s per SPE against clock, 100 ns memory",
+                x: "clock (GHz)",
+                y: "MRays/s per SPE",
+            },
+            curves,
+        ));
+    }
+    if let Some(t) = find(beyond::TABLES[2]) {
+        let xs: Vec<f64> = beyond::SPE_COUNTS.iter().map(|&n| n as f64).collect();
+        let curves = beyond::curves(t, &[""], " SPEs: fps", &xs);
+        figures.push((
+            beyond::TABLES[2],
+            "beyond-spes",
+            Axes {
+                caption: "Frame rate against SPEs, one 25.6 GB/s memory",
+                x: "SPEs",
+                y: "fps at 1024x1024, simple shading",
+            },
+            curves,
+        ));
+    }
+    for (id, stem, axes, curves) in figures {
+        if curves.is_empty() {
+            continue;
+        }
+        let files = beyond::write_figure(out, stem, &axes, &curves).map_err(Error::failure)?;
+        report.figures.push(Figure {
+            id: id.into(),
+            title: axes.caption.into(),
+            files,
+        });
+    }
+    Ok(())
 }
 
 /// The heat maps the jobs drew, where they exist, as paths relative to the report.
@@ -244,13 +334,19 @@ fn prepare_out(out: &Path) -> exit::Result<()> {
 }
 
 /// The files the report is written to (the figures besides).
-const REPORT_FILES: [&str; 6] = [
+const REPORT_FILES: [&str; 12] = [
     "report.json",
     "report.md",
     "report.html",
     "results.md",
     "figure2.png",
     "figure2.svg",
+    "beyond-hints.png",
+    "beyond-hints.svg",
+    "beyond-clock.png",
+    "beyond-clock.svg",
+    "beyond-spes.png",
+    "beyond-spes.svg",
 ];
 
 /// No report file overwrites a stats file or heat map `--collect` reads.
@@ -339,6 +435,10 @@ fn run_jobs(jobs: &[Job], dir: &Path, threads: usize, ext: spu_isa::Extensions) 
 fn with_ext(job: &Job, ext: spu_isa::Extensions) -> spu_loader::render::RenderConfig {
     use spu_loader::render::RenderConfig;
     let config = job.config();
+    if job.ext != "none" {
+        // the run of a "Beyond the paper" row: its own extensions
+        return config;
+    }
     RenderConfig {
         kernel: RenderConfig::kernel_with(!config.kernel.traces(), config.shading.mode, ext),
         extensions: ext,

@@ -1,4 +1,4 @@
-//! `spu render`: ray-trace a scene with the SPU kernels on 1 to 16 simulated SPEs, as the
+//! `spu render`: ray-trace a scene with the SPU kernels on 1 to 64 simulated SPEs, as the
 //! paper's PPE would drive them, and report the image, the statistics and the validation
 //! against the host reference. The frame itself is the library's
 //! ([`spu_loader::render`]); this command parses the options

@@ -21,6 +21,7 @@ mod frame_views;
 mod heatmap;
 mod options;
 mod outputs;
+mod paper_beyond;
 mod paper_data;
 mod paper_figure;
 mod paper_jobs;
@@ -61,7 +62,7 @@ enum Command {
     Prof(cmd_prof::Args),
     /// Static timing of straight-line code per basic block, like IBM's spu_timing.
     Timing(cmd_timing::Args),
-    /// Ray-trace a scene on 1 to 16 simulated SPEs.
+    /// Ray-trace a scene on 1 to 64 simulated SPEs.
     Render(cmd_render::Args),
     /// List-schedule straight-line code into dual-issue pairs (`.sched` blocks).
     Sched(cmd_sched::Args),

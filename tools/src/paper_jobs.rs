@@ -125,6 +125,9 @@ pub struct Job {
     pub assoc: u32,
     pub sht: u32,
     pub shade: &'static str,
+    /// The ISA extensions the job's SPUs run with, as `--ext` writes them ("none": the
+    /// real SPU, or whatever `spu paper --ext` gives every run).
+    pub ext: &'static str,
 }
 
 /// The settings of a job.
@@ -136,6 +139,7 @@ pub struct Want {
     pub assoc: u32,
     pub sht: u32,
     pub shade: &'static str,
+    pub ext: &'static str,
 }
 
 impl Default for Want {
@@ -147,6 +151,7 @@ impl Default for Want {
             assoc: 1,
             sht: 1,
             shade: "none",
+            ext: "none",
         }
     }
 }
@@ -164,6 +169,7 @@ impl Job {
             assoc: want.assoc,
             sht: want.sht,
             shade: want.shade,
+            ext: want.ext,
         }
     }
 
@@ -171,6 +177,7 @@ impl Job {
     /// side by side).
     pub fn config(&self) -> RenderConfig {
         let mode = ShadeMode::parse(self.shade).unwrap_or(ShadeMode::None);
+        let ext = self.extensions();
         RenderConfig {
             width: self.size,
             height: self.size,
@@ -185,10 +192,17 @@ impl Job {
                 mode,
                 ..Shading::default()
             },
-            kernel: RenderConfig::kernel_for(false, mode),
+            kernel: RenderConfig::kernel_with(false, mode, ext),
+            extensions: ext,
             event_log: self.draws_heatmap(),
             ..RenderConfig::new(&self.scene_arg)
         }
+    }
+
+    /// The job's own ISA extensions (none where `ext` does not parse: the lists are
+    /// this program's own).
+    pub fn extensions(&self) -> spu_isa::Extensions {
+        spu_isa::Extensions::parse(self.ext).unwrap_or(spu_isa::Extensions::NONE)
     }
 
     /// What the job writes into `dir`: its statistics and image, and the heat maps of the
@@ -206,8 +220,12 @@ impl Job {
     /// The file stem of the job's outputs: its settings, readable.
     pub fn name(&self) -> String {
         let assoc = if self.assoc == 4 { "4way" } else { "dm" };
+        let ext = match self.ext {
+            "none" => String::new(),
+            list => format!("-{}", list.replace(['=', ','], "")),
+        };
         format!(
-            "{}-{}-{}{}-sht{}-{}spe-{}ghz-{}",
+            "{}-{}-{}{}-sht{}-{}spe-{}ghz-{}{ext}",
             self.scene_id,
             self.shade,
             assoc,
@@ -243,7 +261,10 @@ impl Job {
                 self.sht.to_string()
             },
             self.shade
-        )
+        ) + &match self.ext {
+            "none" => String::new(),
+            list => format!(", ext {list}"),
+        }
     }
 
     /// Whether this run also draws the scene's heat maps: the paper's base configuration
@@ -255,6 +276,7 @@ impl Job {
             && self.assoc == 1
             && self.sht == 1
             && self.shade == "none"
+            && self.ext == "none"
     }
 
     /// The cycles heat map (`--heatmap` writes the DMA-wait map beside it).

@@ -26,6 +26,10 @@ pub struct Report {
     #[serde(default)]
     pub heatmaps: Vec<HeatMaps>,
     pub notes: Vec<String>,
+    /// "Beyond the paper": a verdict on each of the paper's predictions, written from the
+    /// measured numbers (`paper_beyond::verdicts`).
+    #[serde(default)]
+    pub verdicts: Vec<String>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -234,6 +238,21 @@ impl Report {
                 );
             }
         }
+        s + &self.verdicts_markdown()
+    }
+
+    /// The verdicts on the paper's predictions, as a Markdown section (empty without any).
+    fn verdicts_markdown(&self) -> String {
+        let mut s = String::new();
+        if !self.verdicts.is_empty() {
+            let _ = writeln!(
+                s,
+                "\n## Beyond the paper: its proposals measured, a verdict on each\n"
+            );
+            for v in &self.verdicts {
+                let _ = writeln!(s, "- {v}");
+            }
+        }
         s
     }
 
@@ -322,7 +341,7 @@ impl Report {
                 }
             }
         }
-        s
+        s + &self.verdicts_markdown()
     }
 
     pub fn to_html(&self) -> String {
@@ -412,6 +431,13 @@ impl Report {
                 );
             }
         }
+        if !self.verdicts.is_empty() {
+            s.push_str("<h2 id=\"verdicts\">Beyond the paper: its proposals measured, a verdict on each</h2>\n<ul>\n");
+            for v in &self.verdicts {
+                let _ = writeln!(s, "<li>{}</li>", e(v));
+            }
+            s.push_str("</ul>\n");
+        }
         s.push_str("</body></html>\n");
         s
     }
@@ -484,6 +510,7 @@ mod tests {
                 wait: "jobs/room-heat-wait.png".into(),
             }],
             notes: vec!["a note".into()],
+            verdicts: Vec::new(),
         };
         let md = report.to_results_markdown();
         let body = md

@@ -34,6 +34,16 @@ pub enum Metric {
     /// Kilobytes read per frame from a main-memory region under `table6`, scaled to
     /// 1024x1024 (row index of [`paper::TABLE6_KB`]).
     Table6(usize),
+    /// Branch-miss stall cycles of every SPU, scaled to a 1024x1024 frame.
+    BranchStalls1024,
+    /// Cycles per instruction over every SPU.
+    Cpi,
+    /// Frame cycles (the slowest SPU's), in millions, scaled to a 1024x1024 frame.
+    Mcycles1024,
+    /// Rays of every kind per second over the frame, in millions.
+    Mrays,
+    /// Main-memory traffic of the frame in GB/s: bytes read and written over its time.
+    MemoryGbs,
 }
 
 /// One row of a table.
@@ -61,12 +71,12 @@ pub struct TableSpec {
 pub struct Setup {
     pub scenes: Vec<SceneSpec>,
     pub size: u32,
-    /// Largest SPE count to run (16; smaller only to keep tests short).
+    /// Largest SPE count to run (64; smaller only to keep tests short).
     pub max_spes: usize,
 }
 
 impl Setup {
-    fn job(&self, scene: &SceneSpec, want: Want) -> Result<Job, String> {
+    pub(crate) fn job(&self, scene: &SceneSpec, want: Want) -> Result<Job, String> {
         if want.spes > self.max_spes {
             return Err(format!("{} SPEs: above --max-spes", want.spes));
         }
@@ -81,7 +91,7 @@ impl Setup {
         }
     }
 
-    fn row(
+    pub(crate) fn row(
         &self,
         label: impl Into<String>,
         scene: &SceneSpec,
@@ -109,6 +119,9 @@ pub fn tables(setup: &Setup) -> Vec<TableSpec> {
         table5(setup),
         table6(setup),
         figure2(setup),
+        crate::paper_beyond::extensions(setup),
+        crate::paper_beyond::clocks(setup),
+        crate::paper_beyond::spe_counts(setup),
     ]
 }
 
@@ -385,6 +398,34 @@ pub fn value(metric: Metric, measured: &[&Measured]) -> Result<f64, String> {
             .and_then(|v| v.as_f64())
             .ok_or_else(|| format!("the stats have no table4.{key}"))?,
         Metric::Table6(row) => table6_kb(first, row)?,
+        Metric::BranchStalls1024 => {
+            let totals = first.stats.totals.as_ref().ok_or("no profile totals")?;
+            totals.stall.branch as f64 * to_1024(first)
+        }
+        Metric::Cpi => first
+            .stats
+            .totals
+            .as_ref()
+            .and_then(|t| t.cpi)
+            .ok_or("no profile totals")?,
+        Metric::Mcycles1024 => first.stats.frame_cycles as f64 * to_1024(first) / 1e6,
+        Metric::Mrays => first.stats.mrays_per_sec,
+        Metric::MemoryGbs => {
+            let kb = |key: &str| {
+                first
+                    .raw
+                    .get("table6")
+                    .and_then(|t| t.get(key))
+                    .and_then(|v| v.as_f64())
+            };
+            let read = kb("total_read_kb").ok_or("the stats have no table6")?;
+            let written = kb("frame_buffer_written_kb").unwrap_or(0.0);
+            let seconds = first.stats.frame_cycles as f64 / (first.stats.clock_ghz * 1e9);
+            if seconds <= 0.0 {
+                return Err("no cycles".into());
+            }
+            (read + written) * 1024.0 / seconds / 1e9
+        }
     };
     Ok(v)
 }
@@ -398,6 +439,12 @@ const TABLE6_KEYS: [&str; 5] = [
     "shader_data_kb",
     "total_read_kb",
 ];
+
+/// The factor from a frame of `m`'s rays to the paper's 1024x1024 primary rays.
+fn to_1024(m: &Measured) -> f64 {
+    let primary = m.stats.width as f64 * m.stats.height as f64;
+    (PAPER_SIZE as f64 * PAPER_SIZE as f64) / primary.max(1.0)
+}
 
 fn table6_kb(m: &Measured, row: usize) -> Result<f64, String> {
     let key = TABLE6_KEYS[row];

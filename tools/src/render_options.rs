@@ -29,7 +29,7 @@ pub struct Args {
     pub width: u32,
     #[arg(long, default_value_t = 1024)]
     pub height: u32,
-    /// Simulated SPEs (1..16).
+    /// Simulated SPEs (1..64: a Cell has 8, a dual Cell 16, more are hypothetical).
     #[arg(long, default_value_t = 1)]
     pub spes: usize,
     /// Host threads running the SPEs (results do not depend on it).
@@ -56,6 +56,9 @@ pub struct Args {
     /// Main-memory latency of a DMA in nanoseconds before its bytes move.
     #[arg(long = "dma-latency-ns", default_value_t = 100.0, value_parser = latency_ns, allow_hyphen_values = true)]
     pub dma_latency_ns: f64,
+    /// Main-memory bandwidth of the Cell in GB/s, shared by all its SPEs (25.6: XDR).
+    #[arg(long = "memory-bandwidth-gbs", default_value_t = 25.6, value_parser = bandwidth_gbs, allow_hyphen_values = true)]
+    pub memory_bandwidth_gbs: f64,
     /// Run the fill pattern program instead of the ray tracer (tests the runtime).
     #[arg(long)]
     pub fill: bool,
@@ -190,12 +193,26 @@ fn latency_ns(text: &str) -> Result<f64, String> {
     Ok(ns)
 }
 
+/// `--memory-bandwidth-gbs`: finite, within the range a frame accepts.
+fn bandwidth_gbs(text: &str) -> Result<f64, String> {
+    use spu_loader::render::{MAX_BANDWIDTH_GBS, MIN_BANDWIDTH_GBS};
+    let gbs: f64 = text
+        .parse()
+        .map_err(|_| format!("{text:?} is not a bandwidth in GB/s"))?;
+    if !gbs.is_finite() || !(MIN_BANDWIDTH_GBS..=MAX_BANDWIDTH_GBS).contains(&gbs) {
+        return Err(format!(
+            "{gbs} GB/s: must be from {MIN_BANDWIDTH_GBS} to {MAX_BANDWIDTH_GBS} GB/s"
+        ));
+    }
+    Ok(gbs)
+}
+
 impl Args {
     /// The frame and the files the options ask for, every option checked before the scene
     /// is loaded: numbers in range, output paths writable and in a format the command
     /// writes.
     pub fn config(&self) -> exit::Result<(RenderConfig, Outputs)> {
-        options::count("--spes", self.spes, 1..=16)?;
+        options::count("--spes", self.spes, 1..=spu_loader::render::MAX_SPES)?;
         options::count("--width", self.width, 1..=8192)?;
         options::count("--height", self.height, 1..=8192)?;
         let (threads, thread_notes) = options::threads(
@@ -259,6 +276,7 @@ impl Args {
             threads,
             clock_ghz: self.clock,
             dma_latency_ns: self.dma_latency_ns,
+            memory_bandwidth_gbs: self.memory_bandwidth_gbs,
             bvh_cache: self.bvh_cache,
             tri_cache: self.tri_cache,
             assoc: self.assoc,
@@ -372,6 +390,12 @@ pub fn words(config: &RenderConfig, outputs: &Outputs) -> Vec<String> {
     }
     if config.dma_latency_ns != defaults.dma_latency_ns {
         option("--dma-latency-ns", config.dma_latency_ns.to_string());
+    }
+    if config.memory_bandwidth_gbs != defaults.memory_bandwidth_gbs {
+        option(
+            "--memory-bandwidth-gbs",
+            config.memory_bandwidth_gbs.to_string(),
+        );
     }
     for light in &s.lights {
         let v = [light.position.to_array(), light.colour.to_array()].concat();

@@ -238,8 +238,8 @@ fn numeric_options_are_checked_before_any_work() {
             &["render", "--clock", "1e20"],
             "--clock 100000000000000000000: must be",
         ),
-        (&["render", "--spes", "0"], "--spes 0: must be 1 to 16"),
-        (&["render", "--spes", "17"], "--spes 17: must be 1 to 16"),
+        (&["render", "--spes", "0"], "--spes 0: must be 1 to 64"),
+        (&["render", "--spes", "65"], "--spes 65: must be 1 to 64"),
         (&["render", "--width", "0"], "--width 0: must be 1 to 8192"),
         (
             &["render", "--height", "100000"],

@@ -86,7 +86,18 @@ fn quick_report_has_every_table_and_the_figure() {
         .collect();
     assert_eq!(
         ids,
-        ["table1", "table2", "table3", "table4", "table5", "table6", "figure2"]
+        [
+            "table1",
+            "table2",
+            "table3",
+            "table4",
+            "table5",
+            "table6",
+            "figure2",
+            "beyond_extensions",
+            "beyond_clock",
+            "beyond_spes"
+        ]
     );
     for t in r["tables"].as_array().unwrap() {
         let rows = t["rows"].as_array().unwrap();
@@ -140,6 +151,44 @@ fn quick_report_has_every_table_and_the_figure() {
     assert_eq!(&png[1..4], b"PNG");
     let svg = std::fs::read_to_string(dir.join("figure2.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.contains("ideal"), "{svg}");
+    // "Beyond the paper": its figures, a verdict per prediction from the numbers, and
+    // the measured rows (runs above --max-spes say why they are missing)
+    let stems: Vec<&str> = r["figures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["files"][0].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        stems,
+        [
+            "figure2.png",
+            "beyond-hints.png",
+            "beyond-clock.png",
+            "beyond-spes.png"
+        ]
+    );
+    let verdicts = r["verdicts"].as_array().unwrap();
+    assert_eq!(verdicts.len(), 4, "{verdicts:?}");
+    assert!(verdicts[0].as_str().unwrap().contains("room"));
+    let clock = table(&r, "beyond_clock");
+    let room_clock: Vec<f64> = clock["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|row| {
+            row["scene"] == "room" && row["label"].as_str().unwrap().starts_with("SHT 1,")
+        })
+        .map(|row| row["ours"].as_f64().unwrap())
+        .collect();
+    assert_eq!(room_clock.len(), 5);
+    assert!(room_clock.windows(2).all(|w| w[1] > w[0]), "{room_clock:?}");
+    let spes = table(&r, "beyond_spes");
+    let rows = spes["rows"].as_array().unwrap();
+    assert!(rows
+        .iter()
+        .filter(|row| row["label"].as_str().unwrap().starts_with("64 SPEs"))
+        .all(|row| row["missing"].as_str().unwrap().contains("--max-spes")));
     // each scene's heat maps, beside the report
     let maps = r["heatmaps"].as_array().unwrap();
     assert_eq!(maps.len(), 3);

@@ -14,6 +14,19 @@ pub struct MainMemory {
     /// The cycle (fractional) at which the memory interface has moved every byte the SPUs'
     /// DMA commands asked for up to the last quantum boundary (see [`apply_quantum`]).
     bus_busy_until: f64,
+    /// The same for the memory interface's EIB port, reads and writes.
+    port_busy_until: [f64; 2],
+}
+
+/// A DMA transfer's claim on the memory interface, logged by the SPU that issued it for
+/// the quantum's boundary to queue.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct BusRequest {
+    /// The first cycle its bytes may move (issue plus latency).
+    pub(super) earliest: u64,
+    pub(super) bytes: u32,
+    /// Towards main memory (a put or a signal), else from it.
+    pub(super) write: bool,
 }
 
 impl MainMemory {
@@ -22,6 +35,7 @@ impl MainMemory {
         MainMemory {
             bytes,
             bus_busy_until: 0.0,
+            port_busy_until: [0.0; 2],
         }
     }
     /// Main memory of `len` zero bytes.
@@ -105,32 +119,39 @@ impl MainMemory {
 }
 
 /// The chip's memory interface (25.6 GB/s at 2.4 GHz, 10.67 bytes per cycle) serves the
-/// DMA commands of all SPUs first come, first served: at a boundary the commands of the
+/// DMA commands of all SPUs first come, first served, and so does its EIB port (16 bytes
+/// per bus cycle in each direction, 8 per core cycle): at a boundary the commands of the
 /// quantum just run, ordered by (first cycle they may move data, SPU index, order), are
 /// queued behind the earlier traffic, and every SPU's later commands complete no earlier
-/// than the interface can serve them behind it. Commands of one quantum do not delay each
-/// other across SPUs (each SPU's own engine, 8 bytes per cycle, still does): sharing takes
-/// effect one quantum late, and the outcome depends only on simulated time. One SPU alone
-/// never waits for it (8 < 10.67).
+/// than the interface and the port can serve them behind it. Commands of one quantum do
+/// not delay each other across SPUs (each SPU's own engine, 8 bytes per cycle, still
+/// does): sharing takes effect one quantum late, and the outcome depends only on simulated
+/// time (`docs/memory-model.md`). One SPU alone never waits for it (8 <= 8 < 10.67).
 fn settle_memory_bus(spus: &mut [Spu], memory: &mut MainMemory) {
-    let mut traffic: Vec<(u64, usize, usize, u32)> = Vec::new();
+    let mut traffic: Vec<(u64, usize, usize, BusRequest)> = Vec::new();
     for (i, spu) in spus.iter_mut().enumerate() {
-        for (k, (earliest, bytes)) in spu.bus_log.drain(..).enumerate() {
-            traffic.push((earliest, i, k, bytes));
+        for (k, request) in spu.bus_log.drain(..).enumerate() {
+            traffic.push((request.earliest, i, k, request));
         }
     }
     let Some(first) = spus.first() else {
         return;
     };
     let chip = first.timing_config.chip_bytes_per_cycle();
-    traffic.sort_unstable();
+    let port = first.timing_config.eib_port_bytes_per_cycle;
+    traffic.sort_unstable_by_key(|(earliest, i, k, _)| (*earliest, *i, *k));
     let mut busy = memory.bus_busy_until;
-    for (earliest, _, _, bytes) in traffic {
-        busy = busy.max(earliest as f64) + bytes as f64 / chip;
+    let mut port_busy = memory.port_busy_until;
+    for (earliest, _, _, request) in traffic {
+        busy = busy.max(earliest as f64) + request.bytes as f64 / chip;
+        let way = &mut port_busy[request.write as usize];
+        *way = way.max(earliest as f64) + request.bytes as f64 / port;
     }
     memory.bus_busy_until = busy;
+    memory.port_busy_until = port_busy;
     for spu in spus.iter_mut() {
         spu.bus_free_at = busy.ceil() as u64;
+        spu.port_free_at = port_busy.map(|b| b.ceil() as u64);
     }
 }
 

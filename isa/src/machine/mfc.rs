@@ -131,21 +131,35 @@ impl Spu {
         }
     }
 
-    pub(super) fn schedule(&mut self, now: u64, bytes: u32) -> u64 {
+    /// The completion cycle of a transfer of `bytes` issued at `now` (`write`: to main
+    /// memory), behind this SPU's earlier commands on its own engine and behind the traffic
+    /// the memory interface and its EIB port still have from earlier quanta
+    /// (`docs/memory-model.md`).
+    pub(super) fn schedule(&mut self, now: u64, bytes: u32, write: bool) -> u64 {
         let earliest = now.saturating_add(self.dma_latency());
         let per_cycle = (self.timing_config.spu_bytes_per_cycle.max(1.0)) as u64;
         let own = earliest
             .max(self.dma_free_at)
             .saturating_add((bytes as u64).div_ceil(per_cycle));
         // Behind the traffic the memory interface still has from earlier quanta.
-        let chip = self.timing_config.chip_bytes_per_cycle();
-        let shared = (earliest.max(self.bus_free_at) as f64 + bytes as f64 / chip).ceil() as u64;
+        let behind = |free_at: u64, rate: f64| {
+            (earliest.max(free_at) as f64 + bytes as f64 / rate).ceil() as u64
+        };
+        let shared =
+            behind(self.bus_free_at, self.timing_config.chip_bytes_per_cycle()).max(behind(
+                self.port_free_at[write as usize],
+                self.timing_config.eib_port_bytes_per_cycle,
+            ));
         // A clock or bandwidth the tools refuse can make `shared` infinite: a transfer still
         // ends within the longest latency of a later start, never near the end of u64.
         let done = own
             .max(shared)
             .min(earliest.saturating_add(MAX_DMA_LATENCY));
-        self.bus_log.push((earliest, bytes));
+        self.bus_log.push(super::memory::BusRequest {
+            earliest,
+            bytes,
+            write,
+        });
         self.dma_free_at = done;
         if let Some(t) = &mut self.timing {
             t.dma_local_store(done, bytes);
@@ -219,7 +233,7 @@ impl Spu {
                 if let Err(e) = self.check_transfer(lsa, ea, size, memory) {
                     return ChannelOutcome::Error(e);
                 }
-                let complete = self.schedule(now, size);
+                let complete = self.schedule(now, size, cmd & 0x40 == 0);
                 let range = memory.range(ea, size).unwrap();
                 if cmd & 0x40 != 0 {
                     let data = self.read_main(memory, range);
@@ -336,7 +350,7 @@ impl Spu {
                         "LS {lsa:#x} and EA {ea:#x} differ in their low 4 bits"
                     ));
                 }
-                let complete = self.schedule(now, 4);
+                let complete = self.schedule(now, 4, true);
                 let data: Vec<u8> = (0..4)
                     .map(|k| self.core.ls[((lsa + k) & LS_MASK) as usize])
                     .collect();
@@ -384,7 +398,7 @@ impl Spu {
             if let Err(e) = self.check_transfer(lsa, ea, size, memory) {
                 return ChannelOutcome::Error(format!("list element at {list:#x}: {e}"));
             }
-            last = self.schedule(now, size);
+            last = self.schedule(now, size, cmd & 0x40 == 0);
             let range = memory.range(ea, size).unwrap();
             if cmd & 0x40 != 0 {
                 incoming.push((lsa, self.read_main(memory, range)));

@@ -173,10 +173,11 @@ pub struct Spu {
     pub(super) queue: Vec<DmaCommand>,
     pub(super) dma_free_at: u64,
     /// The memory interface is busy with earlier quanta's traffic until then (set at each
-    /// boundary); this quantum's commands, `(first cycle they may move data, bytes)`, for
-    /// the boundary to add.
+    /// boundary), and its EIB port in each direction (reads, writes); this quantum's
+    /// commands, for the boundary to add.
     pub(super) bus_free_at: u64,
-    pub(super) bus_log: Vec<(u64, u32)>,
+    pub(super) port_free_at: [u64; 2],
+    pub(super) bus_log: Vec<super::memory::BusRequest>,
     /// Bytes moved per host-named main-memory region.
     pub(super) traffic: super::mfc::Traffic,
     pub(super) list_stall: u32,
@@ -286,6 +287,7 @@ impl Spu {
             queue: Vec::new(),
             dma_free_at: 0,
             bus_free_at: 0,
+            port_free_at: [0; 2],
             bus_log: Vec::new(),
             traffic: Default::default(),
             list_stall: 0,

@@ -35,6 +35,10 @@ pub struct TimingConfig {
     pub memory_bandwidth_gbs: f64,
     /// Bytes one SPU's MFC moves per cycle in each direction (8, Cell BE Handbook).
     pub spu_bytes_per_cycle: f64,
+    /// Bytes per core cycle the memory interface's EIB port moves in each direction: 16
+    /// bytes per bus cycle at half the core clock (Kistler et al. 2006), so 8, whatever
+    /// the clock (`docs/memory-model.md`).
+    pub eib_port_bytes_per_cycle: f64,
     /// Cycles a mispredicted (or unhinted taken) branch costs before the next instruction
     /// issues (18, SDK Programmer's Guide: "18-19 cycles").
     pub branch_miss_penalty: u32,
@@ -67,6 +71,7 @@ impl Default for TimingConfig {
             dma_latency_ns: 100.0,
             memory_bandwidth_gbs: 25.6,
             spu_bytes_per_cycle: 8.0,
+            eib_port_bytes_per_cycle: 8.0,
             branch_miss_penalty: 18,
             hint_window: 11,
             hint_min_distance: 8,
