@@ -20,15 +20,21 @@ pub enum KernelVariant {
     /// extension, `docs/extensions.md`): branches hinted before the loops whose own hints
     /// would replace theirs on the real SPU (`kernels/primary.s` with `EXT_MULTIHINT`).
     PrimaryMultihint,
+    /// [`KernelVariant::Shaded`] for SPUs with the gather load (the `gather` extension,
+    /// `docs/extensions.md`): the i-set's groups on different triangles looked up for
+    /// their four lanes at once with `lgw`/`lgwx` (`kernels/primary.s` with `SHADE` and
+    /// `EXT_GATHER`).
+    ShadedGather,
 }
 
 impl KernelVariant {
     /// Every variant, in the order the build assembles them.
-    pub const ALL: [KernelVariant; 4] = [
+    pub const ALL: [KernelVariant; 5] = [
         KernelVariant::Primary,
         KernelVariant::Shaded,
         KernelVariant::Fill,
         KernelVariant::PrimaryMultihint,
+        KernelVariant::ShadedGather,
     ];
 
     /// A short name: prebuilt file names, messages.
@@ -38,13 +44,17 @@ impl KernelVariant {
             KernelVariant::Shaded => "shaded",
             KernelVariant::Fill => "fill",
             KernelVariant::PrimaryMultihint => "primary-multihint",
+            KernelVariant::ShadedGather => "shaded-gather",
         }
     }
 
     /// The source file, relative to `kernels/`.
     pub const fn file(self) -> &'static str {
         match self {
-            KernelVariant::Primary | KernelVariant::Shaded | KernelVariant::PrimaryMultihint => {
+            KernelVariant::Primary
+            | KernelVariant::Shaded
+            | KernelVariant::PrimaryMultihint
+            | KernelVariant::ShadedGather => {
                 "primary.s"
             }
             KernelVariant::Fill => "fill.s",
@@ -54,7 +64,10 @@ impl KernelVariant {
     /// The name diagnostics and the sources' hash use.
     pub const fn name(self) -> &'static str {
         match self {
-            KernelVariant::Primary | KernelVariant::Shaded | KernelVariant::PrimaryMultihint => {
+            KernelVariant::Primary
+            | KernelVariant::Shaded
+            | KernelVariant::PrimaryMultihint
+            | KernelVariant::ShadedGather => {
                 "kernels/primary.s"
             }
             KernelVariant::Fill => "kernels/fill.s",
@@ -66,6 +79,7 @@ impl KernelVariant {
         match self {
             KernelVariant::Shaded => &[("SHADE", 1)],
             KernelVariant::PrimaryMultihint => &[("EXT_MULTIHINT", 1)],
+            KernelVariant::ShadedGather => &[("SHADE", 1), ("EXT_GATHER", 1)],
             KernelVariant::Primary | KernelVariant::Fill => &[],
         }
     }
@@ -78,6 +92,6 @@ impl KernelVariant {
 
     /// Whether the program runs the shading module (and needs the frame's shading block).
     pub const fn shades(self) -> bool {
-        matches!(self, KernelVariant::Shaded)
+        matches!(self, KernelVariant::Shaded | KernelVariant::ShadedGather)
     }
 }

@@ -325,8 +325,13 @@ fn every_kernel_variant_renders_and_validates() {
             KernelVariant::Primary | KernelVariant::Fill | KernelVariant::PrimaryMultihint => {
                 spu_loader::shading::ShadeMode::None
             }
-            KernelVariant::Shaded => spu_loader::shading::ShadeMode::Shadows,
+            KernelVariant::Shaded | KernelVariant::ShadedGather => {
+                spu_loader::shading::ShadeMode::Shadows
+            }
         };
+        if variant == KernelVariant::ShadedGather {
+            config.extensions = spu_isa::Extensions::parse("gather").unwrap();
+        }
         let frame = render(&room, &config, &CodeCache::default()).unwrap();
         assert_eq!(frame.run.kernel_image, variant.program().unwrap().image);
         assert!(frame
@@ -334,7 +339,10 @@ fn every_kernel_variant_renders_and_validates() {
             .unwrap()
             .contains(if variant.traces() { "trav" } else { "_start" }));
         match variant {
-            KernelVariant::Primary | KernelVariant::Shaded | KernelVariant::PrimaryMultihint => {
+            KernelVariant::Primary
+            | KernelVariant::Shaded
+            | KernelVariant::PrimaryMultihint
+            | KernelVariant::ShadedGather => {
                 let v = spu_loader::render::validate(&room, &config, &frame).unwrap();
                 assert!(v.passed(), "{variant:?}: {:?}", v.messages);
                 assert_eq!(v.pixels, 64 * 64);
