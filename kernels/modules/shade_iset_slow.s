@@ -34,22 +34,6 @@
         # Only the missing lanes and vertices call the miss handlers, in lookup order;
         # a hit's normal is gathered before any lands (a miss may land in its line).
         .spu_ext gather
-# (the gather variant) vertex I of lane LANE (its vertex in VI's lane, "it missed" in
-# VM's) to sh_vertex_miss where it missed, as SH_VERTEX calls it
-        .macro  SH_GMISS lane, i, vi, vm
-        rotqbyi $86, \vm, 4*\lane
-        rotqbyi $81, \vi, 4*\lane
-        and     $85, $81, $121
-        shli    $83, $85, 4
-        a       $83, $83, $115
-        shli    $84, $85, 6
-        a       $84, $84, $123
-        ai      $84, $84, -16
-        ila     $89, SH_NRM+\lane*64+\i*16
-        ila     $88, 1f
-        binz    $86, $114
-1:
-        .endm
         .sched  pool=68,71-77,80-90,92-96,98,100-105,110-114,116-118,120,125-127 scratch=66-127
         a       %rp, $99, $67
         lqd     %ids, CTX_RAY_ID(%rp)
@@ -139,15 +123,64 @@
 .Lsh_gather_br:
         brnz    %allhit, .Lsh_gather_cols
         .endsched
-        # a vertex missed: the misses in lookup order (lane by lane), landed, and their
-        # normals gathered from the lanes' SH_NRM slots where they landed
+        # a vertex missed: the misses one by one in lookup order (lane by lane, vertex by
+        # vertex, as SH_NORMALS makes them), each call's return the next miss or the
+        # landing (no branch back: the call's target and its return are both hinted),
+        # landed, and their normals gathered from the lanes' SH_NRM slots where they
+        # landed
         ila     $114, sh_vertex_miss
         lqd     $100, SH_BLOCK($66)           # the vertex records' EA
-        .irp    L, 0, 1, 2, 3
-        SH_GMISS \L, 0, $93, $101
-        SH_GMISS \L, 1, $95, $102
-        SH_GMISS \L, 2, $98, $103
-        .endr
+        .sched  pool=71-77,85-87,90,92,125-127 scratch=66-127
+        andi    %b0, $101, 4                  # per lane, its vertices' misses: 0 in
+        andi    %b1, $102, 2                  # bit 2, 1 in bit 1, 2 in bit 0
+        andi    %b2, $103, 1
+        or      %b01, %b0, %b1
+        or      %b, %b01, %b2
+        lqa     %sh, sh_gather_lanes+16
+        shl     %bs, %b, %sh                  # lane 0's in bits 11..9, lane 3's in 2..0
+        rotqbyi %r4, %bs, 4
+        or      %o4, %bs, %r4
+        rotqbyi %r8, %o4, 8
+        or      $120, %o4, %r8
+        .endsched
+        .sched  pool=71-77,85-87,90 scratch=66-127
+.Lsh_gmiss:
+        hbr     .Lsh_gmiss_call, $114
+        clz     %z, $120
+        ai      %q, %z, -20                   # 3 lane + vertex, the highest bit's
+        mpyi    %q11, %q, 11
+        rotmi   %l, %q11, -5                  # the lane (q / 3 for q < 12)
+        mpyi    %l3, %l, 3
+        sf      %i, %l3, %q                   # the vertex
+        ceqi    %i0, %i, 0
+        ceqi    %i1, %i, 1
+        selb    %v12, $98, $95, %i1
+        selb    %vs, %v12, $93, %i0           # the vertex's lanes
+        shli    %lb, %l, 2
+        rotqby  $81, %vs, %lb                 # the vertex
+        and     %x, $81, $121
+        shli    %xo, %x, 4
+        a       $83, %xo, $115                # its tag
+        shli    %xl, %x, 6
+        a       %ln, %xl, $123
+        ai      $84, %ln, -16                 # its line
+        shli    %lo, %l, 6
+        shli    %io, %i, 4
+        a       %o1, %lo, %io
+        ila     %nb, SH_NRM
+        a       $89, %o1, %nb                 # the lane's normal
+        il      %top, 0x800
+        sfi     %nq, %q, 0
+        rotm    %bit, %top, %nq
+        andc    $120, $120, %bit
+        ila     %next, .Lsh_gmiss
+        ila     %done, .Lsh_gmiss_done
+        ceqi    %last, $120, 0
+        selb    $88, %next, %done, %last      # back: the next miss, or the landing
+.Lsh_gmiss_call:
+        bi      $114
+        .endsched
+.Lsh_gmiss_done:
         SH_LAND
         .sched  pool=68,71-77,80-90,92,94,96,100,106,114,120,125-127 scratch=66-127
         shufb   %area, $66, $66, $91
@@ -207,6 +240,7 @@
         .align  4
 sh_gather_lanes:                              # the lanes' 64-byte strides
         .long   0, 64, 128, 192
+        .long   9, 6, 3, 0                    # +16: the lanes' misses to bits
         .endif
 
 

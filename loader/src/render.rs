@@ -214,7 +214,9 @@ impl RenderConfig {
         if self.kernel == KernelVariant::ShadedGather
             && !self.extensions.enables(spu_isa::Extension::Gather)
         {
-            return Err("the shaded-gather kernel needs the gather extension (--ext gather)".into());
+            return Err(
+                "the shaded-gather kernel needs the gather extension (--ext gather)".into(),
+            );
         }
         Ok(())
     }

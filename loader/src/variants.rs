@@ -54,9 +54,7 @@ impl KernelVariant {
             KernelVariant::Primary
             | KernelVariant::Shaded
             | KernelVariant::PrimaryMultihint
-            | KernelVariant::ShadedGather => {
-                "primary.s"
-            }
+            | KernelVariant::ShadedGather => "primary.s",
             KernelVariant::Fill => "fill.s",
         }
     }
@@ -67,9 +65,7 @@ impl KernelVariant {
             KernelVariant::Primary
             | KernelVariant::Shaded
             | KernelVariant::PrimaryMultihint
-            | KernelVariant::ShadedGather => {
-                "kernels/primary.s"
-            }
+            | KernelVariant::ShadedGather => "kernels/primary.s",
             KernelVariant::Fill => "kernels/fill.s",
         }
     }

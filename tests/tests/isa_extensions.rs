@@ -395,3 +395,65 @@ fn the_multihint_kernel_renders_the_same_frame_with_fewer_traversal_misses() {
     assert_eq!((multi.1, multi.2), (79_866, 2_192_425));
     assert_eq!(base.1 - multi.1, 177 * 18);
 }
+
+/// The shading kernel for SPUs with the gather load (`KernelVariant::ShadedGather`, chosen
+/// by `kernel_with` when gather is on and a shading mode is) renders the baseline's image,
+/// which the host reference validates, in fewer shading cycles; without the extension the
+/// frame is refused before it runs.
+#[test]
+fn the_gather_kernel_shades_the_same_frame_in_fewer_cycles() {
+    use spu_isa::jit::CodeCache;
+    use spu_loader::kernels::KernelVariant;
+    use spu_loader::render::{prepare, render, validate, RenderConfig};
+    use spu_loader::shading::ShadeMode;
+    assert_eq!(
+        RenderConfig::kernel_with(false, ShadeMode::Simple, gather_on()),
+        KernelVariant::ShadedGather
+    );
+    assert_eq!(
+        RenderConfig::kernel_with(false, ShadeMode::None, gather_on()),
+        KernelVariant::Primary
+    );
+    let mut shaded = Vec::new();
+    for scene in ["room", "conference"] {
+        let prepared = prepare(scene).unwrap();
+        let frame = |kernel: KernelVariant, extensions: Extensions| {
+            let mut config = RenderConfig {
+                width: 128,
+                height: 128,
+                threads: 1,
+                kernel,
+                extensions,
+                ..RenderConfig::new(scene)
+            };
+            config.shading.mode = ShadeMode::Shadows;
+            let frame = render(&prepared, &config, &CodeCache::default()).unwrap();
+            let v = validate(&prepared, &config, &frame).unwrap();
+            assert!(v.passed(), "{scene} {kernel:?}: {:?}", v.messages);
+            let stats = frame.stats(&config, None);
+            let cycles = stats.shading.as_ref().unwrap().cycles;
+            assert!(frame.run.colour_buffer.is_some());
+            ((frame.run.frame_buffer, frame.run.colour_buffer), cycles)
+        };
+        let base = frame(KernelVariant::Shaded, Extensions::NONE);
+        let gather = frame(KernelVariant::ShadedGather, gather_on());
+        assert_eq!(gather.0, base.0, "{scene}");
+        shaded.push((scene, base.1, gather.1));
+    }
+    // (scene, the shading module's cycles: baseline, gather)
+    assert_eq!(
+        shaded,
+        [
+            ("room", 1_243_345, 1_235_553),
+            ("conference", 3_614_585, 3_347_172)
+        ]
+    );
+    let refused = RenderConfig {
+        kernel: KernelVariant::ShadedGather,
+        ..RenderConfig::new("room")
+    };
+    let mut refused = refused;
+    refused.shading.mode = ShadeMode::Simple;
+    let e = refused.check().unwrap_err();
+    assert!(e.contains("--ext gather"), "{e}");
+}
