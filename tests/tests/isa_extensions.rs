@@ -230,12 +230,9 @@ fn several_hint_entries_keep_every_branch_hinted() {
             gather: false,
         };
         let many = timed(TWO_HINTS, ext, true);
-        // The block memo is off with several entries: the same with it asked for or not.
-        assert_eq!(
-            many.totals,
-            timed(TWO_HINTS, ext, false).totals,
-            "{n} entries"
-        );
+        // The block memo keeps its records where the other entries play no part: the
+        // same with it or without it, totals and per address, on either engine.
+        assert_memo_exact(TWO_HINTS, ext);
         assert_eq!(many.totals.branch_misses, 1, "{n} entries");
         assert_eq!(many.totals.hint_hits, 99, "{n} entries");
         // Each of the 50 misses of b1 was 18 cycles of branch-miss stall.
@@ -249,6 +246,20 @@ fn several_hint_entries_keep_every_branch_hinted() {
             50 * 18,
             "{n} entries"
         );
+    }
+}
+
+/// Runs `src` with `ext` memoized (on both engines) and timing every instruction: the
+/// same totals and per-address counters.
+fn assert_memo_exact(src: &str, ext: Extensions) {
+    let per = |p: &Profile| p.addresses().map(|(a, s)| (a, *s)).collect::<Vec<_>>();
+    let plain = timed(src, ext, false);
+    for engine in [Engine::Interp, Engine::host_default()] {
+        let (spu, stop) = run(src, ext, engine, Some(TimingConfig::default()));
+        assert_eq!(stop, StopReason::Stop(0x2000));
+        let memo = spu.timing().unwrap().finish_profile();
+        assert_eq!(memo.totals, plain.totals, "{ext:?} {engine:?}");
+        assert_eq!(per(&memo), per(&plain), "{ext:?} {engine:?}");
     }
 }
 
@@ -281,6 +292,24 @@ fn a_full_buffer_replaces_its_oldest_entry() {
         false,
     );
     assert_eq!(p.totals.branch_misses, 1);
+    // The memo's records with 2 to 8 entries, where the oldest entry is replaced (and a
+    // hint set in the loop pushes another down), time it as the model does.
+    let pushed = three.replace(
+        "top:    ai      $10, $10, -1\n",
+        "top:    ai      $10, $10, -1\n        hbrr    b9, t9\n",
+    );
+    let pushed = pushed.replace(
+        "        stop    0x2000\n",
+        "b9:     br      t9\nt9:     stop    0x2000\n",
+    );
+    for n in 2..=8 {
+        let ext = Extensions {
+            hint_entries: n,
+            gather: false,
+        };
+        assert_memo_exact(&three, ext);
+        assert_memo_exact(&pushed, ext);
+    }
 }
 
 /// Gathers in a loop: the block memo replays their issue blocks and latencies exactly
