@@ -1359,9 +1359,17 @@ impl Timing {
                 ))
         {
             // Timed by more than the newest hint entry: not kept (the block is timed
-            // per instruction where it runs again in such a state).
+            // per instruction where it runs again in such a state). A start that has
+            // no record and keeps failing so is not recorded again.
             rec.steps.clear();
             self.memo.spare_steps = std::mem::take(&mut rec.steps);
+            let idx = Self::slot_index(rec.start);
+            if self.memo.slots.get(idx) == Some(&0) {
+                self.memo.fails[idx] = self.memo.fails[idx].saturating_add(1);
+                if self.memo.fails[idx] >= 8 {
+                    self.memo.slots[idx] = NEVER;
+                }
+            }
             return;
         }
         let branch_at = (branch_pc != NO_PC).then(|| (branch_pc, rec.words.len() as u64 - 1));
