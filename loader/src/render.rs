@@ -150,11 +150,15 @@ impl RenderConfig {
     }
 
     /// [`RenderConfig::kernel_for`] on SPUs with the extensions `ext`: primary rays with
-    /// several hint entries run the kernel that hints for them.
+    /// several hint entries run the kernel that hints for them, shading with the gather
+    /// load the kernel that gathers.
     pub fn kernel_with(fill: bool, mode: ShadeMode, ext: spu_isa::Extensions) -> KernelVariant {
         match Self::kernel_for(fill, mode) {
             KernelVariant::Primary if ext.enables(spu_isa::Extension::MultiHint) => {
                 KernelVariant::PrimaryMultihint
+            }
+            KernelVariant::Shaded if ext.enables(spu_isa::Extension::Gather) => {
+                KernelVariant::ShadedGather
             }
             kernel => kernel,
         }
@@ -249,6 +253,13 @@ impl RenderConfig {
                 },
                 s.mode.name()
             ));
+        }
+        if self.kernel == KernelVariant::ShadedGather
+            && !self.extensions.enables(spu_isa::Extension::Gather)
+        {
+            return Err(
+                "the shaded-gather kernel needs the gather extension (--ext gather)".into(),
+            );
         }
         Ok(())
     }

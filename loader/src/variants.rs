@@ -24,16 +24,22 @@ pub enum KernelVariant {
     /// primary packet's reflective hits spawn reflected rays, traced, shaded with shadows
     /// and blended in (`kernels/primary.s` with `SHADE` and `REFLECT`).
     Reflect,
+    /// [`KernelVariant::Shaded`] for SPUs with the gather load (the `gather` extension,
+    /// `docs/extensions.md`): the i-set's groups on different triangles looked up for
+    /// their four lanes at once with `lgw`/`lgwx` (`kernels/primary.s` with `SHADE` and
+    /// `EXT_GATHER`).
+    ShadedGather,
 }
 
 impl KernelVariant {
     /// Every variant, in the order the build assembles them.
-    pub const ALL: [KernelVariant; 5] = [
+    pub const ALL: [KernelVariant; 6] = [
         KernelVariant::Primary,
         KernelVariant::Shaded,
         KernelVariant::Fill,
         KernelVariant::PrimaryMultihint,
         KernelVariant::Reflect,
+        KernelVariant::ShadedGather,
     ];
 
     /// A short name: prebuilt file names, messages.
@@ -44,6 +50,7 @@ impl KernelVariant {
             KernelVariant::Fill => "fill",
             KernelVariant::PrimaryMultihint => "primary-multihint",
             KernelVariant::Reflect => "reflect",
+            KernelVariant::ShadedGather => "shaded-gather",
         }
     }
 
@@ -53,7 +60,8 @@ impl KernelVariant {
             KernelVariant::Primary
             | KernelVariant::Shaded
             | KernelVariant::PrimaryMultihint
-            | KernelVariant::Reflect => "primary.s",
+            | KernelVariant::Reflect
+            | KernelVariant::ShadedGather => "primary.s",
             KernelVariant::Fill => "fill.s",
         }
     }
@@ -64,7 +72,8 @@ impl KernelVariant {
             KernelVariant::Primary
             | KernelVariant::Shaded
             | KernelVariant::PrimaryMultihint
-            | KernelVariant::Reflect => "kernels/primary.s",
+            | KernelVariant::Reflect
+            | KernelVariant::ShadedGather => "kernels/primary.s",
             KernelVariant::Fill => "kernels/fill.s",
         }
     }
@@ -75,6 +84,7 @@ impl KernelVariant {
             KernelVariant::Shaded => &[("SHADE", 1)],
             KernelVariant::PrimaryMultihint => &[("EXT_MULTIHINT", 1)],
             KernelVariant::Reflect => &[("SHADE", 1), ("REFLECT", 1)],
+            KernelVariant::ShadedGather => &[("SHADE", 1), ("EXT_GATHER", 1)],
             KernelVariant::Primary | KernelVariant::Fill => &[],
         }
     }
@@ -87,6 +97,9 @@ impl KernelVariant {
 
     /// Whether the program runs the shading module (and needs the frame's shading block).
     pub const fn shades(self) -> bool {
-        matches!(self, KernelVariant::Shaded | KernelVariant::Reflect)
+        matches!(
+            self,
+            KernelVariant::Shaded | KernelVariant::Reflect | KernelVariant::ShadedGather
+        )
     }
 }

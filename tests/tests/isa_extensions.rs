@@ -230,12 +230,9 @@ fn several_hint_entries_keep_every_branch_hinted() {
             gather: false,
         };
         let many = timed(TWO_HINTS, ext, true);
-        // The block memo is off with several entries: the same with it asked for or not.
-        assert_eq!(
-            many.totals,
-            timed(TWO_HINTS, ext, false).totals,
-            "{n} entries"
-        );
+        // The block memo keeps its records where the other entries play no part: the
+        // same with it or without it, totals and per address, on either engine.
+        assert_memo_exact(TWO_HINTS, ext);
         assert_eq!(many.totals.branch_misses, 1, "{n} entries");
         assert_eq!(many.totals.hint_hits, 99, "{n} entries");
         // Each of the 50 misses of b1 was 18 cycles of branch-miss stall.
@@ -249,6 +246,20 @@ fn several_hint_entries_keep_every_branch_hinted() {
             50 * 18,
             "{n} entries"
         );
+    }
+}
+
+/// Runs `src` with `ext` memoized (on both engines) and timing every instruction: the
+/// same totals and per-address counters.
+fn assert_memo_exact(src: &str, ext: Extensions) {
+    let per = |p: &Profile| p.addresses().map(|(a, s)| (a, *s)).collect::<Vec<_>>();
+    let plain = timed(src, ext, false);
+    for engine in [Engine::Interp, Engine::host_default()] {
+        let (spu, stop) = run(src, ext, engine, Some(TimingConfig::default()));
+        assert_eq!(stop, StopReason::Stop(0x2000));
+        let memo = spu.timing().unwrap().finish_profile();
+        assert_eq!(memo.totals, plain.totals, "{ext:?} {engine:?}");
+        assert_eq!(per(&memo), per(&plain), "{ext:?} {engine:?}");
     }
 }
 
@@ -281,6 +292,24 @@ fn a_full_buffer_replaces_its_oldest_entry() {
         false,
     );
     assert_eq!(p.totals.branch_misses, 1);
+    // The memo's records with 2 to 8 entries, where the oldest entry is replaced (and a
+    // hint set in the loop pushes another down), time it as the model does.
+    let pushed = three.replace(
+        "top:    ai      $10, $10, -1\n",
+        "top:    ai      $10, $10, -1\n        hbrr    b9, t9\n",
+    );
+    let pushed = pushed.replace(
+        "        stop    0x2000\n",
+        "b9:     br      t9\nt9:     stop    0x2000\n",
+    );
+    for n in 2..=8 {
+        let ext = Extensions {
+            hint_entries: n,
+            gather: false,
+        };
+        assert_memo_exact(&three, ext);
+        assert_memo_exact(&pushed, ext);
+    }
 }
 
 /// Gathers in a loop: the block memo replays their issue blocks and latencies exactly
@@ -394,4 +423,66 @@ fn the_multihint_kernel_renders_the_same_frame_with_fewer_traversal_misses() {
     assert_eq!((base.1, base.2), (83_052, 2_197_047));
     assert_eq!((multi.1, multi.2), (79_866, 2_192_425));
     assert_eq!(base.1 - multi.1, 177 * 18);
+}
+
+/// The shading kernel for SPUs with the gather load (`KernelVariant::ShadedGather`, chosen
+/// by `kernel_with` when gather is on and a shading mode is) renders the baseline's image,
+/// which the host reference validates, in fewer shading cycles; without the extension the
+/// frame is refused before it runs.
+#[test]
+fn the_gather_kernel_shades_the_same_frame_in_fewer_cycles() {
+    use spu_isa::jit::CodeCache;
+    use spu_loader::kernels::KernelVariant;
+    use spu_loader::render::{prepare, render, validate, RenderConfig};
+    use spu_loader::shading::ShadeMode;
+    assert_eq!(
+        RenderConfig::kernel_with(false, ShadeMode::Simple, gather_on()),
+        KernelVariant::ShadedGather
+    );
+    assert_eq!(
+        RenderConfig::kernel_with(false, ShadeMode::None, gather_on()),
+        KernelVariant::Primary
+    );
+    let mut shaded = Vec::new();
+    for scene in ["room", "conference"] {
+        let prepared = prepare(scene).unwrap();
+        let frame = |kernel: KernelVariant, extensions: Extensions| {
+            let mut config = RenderConfig {
+                width: 128,
+                height: 128,
+                threads: 1,
+                kernel,
+                extensions,
+                ..RenderConfig::new(scene)
+            };
+            config.shading.mode = ShadeMode::Shadows;
+            let frame = render(&prepared, &config, &CodeCache::default()).unwrap();
+            let v = validate(&prepared, &config, &frame).unwrap();
+            assert!(v.passed(), "{scene} {kernel:?}: {:?}", v.messages);
+            let stats = frame.stats(&config, None);
+            let cycles = stats.shading.as_ref().unwrap().cycles;
+            assert!(frame.run.colour_buffer.is_some());
+            ((frame.run.frame_buffer, frame.run.colour_buffer), cycles)
+        };
+        let base = frame(KernelVariant::Shaded, Extensions::NONE);
+        let gather = frame(KernelVariant::ShadedGather, gather_on());
+        assert_eq!(gather.0, base.0, "{scene}");
+        shaded.push((scene, base.1, gather.1));
+    }
+    // (scene, the shading module's cycles: baseline, gather)
+    assert_eq!(
+        shaded,
+        [
+            ("room", 1_243_345, 1_235_553),
+            ("conference", 3_614_585, 3_347_172)
+        ]
+    );
+    let refused = RenderConfig {
+        kernel: KernelVariant::ShadedGather,
+        ..RenderConfig::new("room")
+    };
+    let mut refused = refused;
+    refused.shading.mode = ShadeMode::Simple;
+    let e = refused.check().unwrap_err();
+    assert!(e.contains("--ext gather"), "{e}");
 }

@@ -331,9 +331,14 @@ fn every_kernel_variant_renders_and_validates() {
             KernelVariant::Primary | KernelVariant::Fill | KernelVariant::PrimaryMultihint => {
                 spu_loader::shading::ShadeMode::None
             }
-            KernelVariant::Shaded => spu_loader::shading::ShadeMode::Shadows,
+            KernelVariant::Shaded | KernelVariant::ShadedGather => {
+                spu_loader::shading::ShadeMode::Shadows
+            }
             KernelVariant::Reflect => spu_loader::shading::ShadeMode::Reflect,
         };
+        if variant == KernelVariant::ShadedGather {
+            config.extensions = spu_isa::Extensions::parse("gather").unwrap();
+        }
         let frame = render(&room, &config, &CodeCache::default()).unwrap();
         assert_eq!(frame.run.kernel_image, variant.program().unwrap().image);
         assert!(frame
@@ -344,7 +349,8 @@ fn every_kernel_variant_renders_and_validates() {
             KernelVariant::Primary
             | KernelVariant::Shaded
             | KernelVariant::PrimaryMultihint
-            | KernelVariant::Reflect => {
+            | KernelVariant::Reflect
+            | KernelVariant::ShadedGather => {
                 let v = spu_loader::render::validate(&room, &config, &frame).unwrap();
                 assert!(v.passed(), "{variant:?}: {:?}", v.messages);
                 assert_eq!(v.pixels, 64 * 64);

@@ -88,3 +88,44 @@ fn the_command_switches_the_gather_extension() {
     }
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// `spu render --ext gather` with a shading mode runs the gather kernel: the same image as
+/// without the extension, in fewer shading cycles.
+#[test]
+fn render_with_the_gather_extension_shades_the_same_image() {
+    // (a directory of its own: the other test removes `dir()` when it ends)
+    let d = std::env::temp_dir().join(format!("spu-ext-render-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let render = |ext: &str| {
+        let png = d.join(format!("{ext}.png"));
+        let stats = d.join(format!("{ext}.json"));
+        let (status, _, stderr) = spu(&[
+            "render",
+            "--scene",
+            "conference",
+            "--width",
+            "64",
+            "--height",
+            "64",
+            "--shade",
+            "simple",
+            "--ext",
+            ext,
+            "-o",
+            png.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ]);
+        assert_eq!(status, 0, "--ext {ext}: {stderr}");
+        let stats = std::fs::read_to_string(&stats).unwrap();
+        let json: serde_json::Value = serde_json::from_str(&stats).unwrap();
+        let cycles = json["shading"]["cycles"].as_u64().unwrap();
+        (std::fs::read(&png).unwrap(), cycles)
+    };
+    let (plain, plain_cycles) = render("none");
+    let (gather, gather_cycles) = render("gather");
+    assert!(plain == gather, "the images differ");
+    // The shading module's cycles: the baseline kernel's, the gather kernel's.
+    assert_eq!((plain_cycles, gather_cycles), (1_267_288, 1_178_306));
+    std::fs::remove_dir_all(&d).ok();
+}

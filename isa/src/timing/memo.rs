@@ -175,6 +175,10 @@ pub(super) struct Recording {
     pub hint_changed: bool,
     /// The last hint recorded was an `hbr`.
     pub hint_dynamic: bool,
+    /// Hints the block set (a record with several hint entries keeps at most one).
+    pub hints_set: u8,
+    /// With several hint entries, the entries but the newest at the entry (else empty).
+    pub entry_more_hints: Vec<HintEntry>,
     pub steps: Vec<Step>,
     /// The cycles the fetch model probed for a free local-store cycle (absolute).
     pub probes: Vec<u64>,
@@ -411,6 +415,28 @@ fn names_inner(h: &HintEntry, inner: &[u32]) -> bool {
     h.valid && inner.contains(&h.branch)
 }
 
+/// With several hint entries (`multihint`), whether a block whose final branch is at
+/// `branch_pc`, with inner branches `inner`, that sets a hint for branch `sets` (at most
+/// one), times the same as with the newest entry `newest` alone, so that its record (or
+/// its replay) holds: no other entry `more` names one of its branches, and the newest
+/// names none but the one the block hints itself (which then replaces it). Otherwise the
+/// newest entry, pushed down by the block's hint, would still hint a branch after it.
+#[inline]
+fn others_quiet(
+    newest: &HintEntry,
+    more: &[HintEntry],
+    branch_pc: u32,
+    inner: &[u32],
+    sets: Option<u32>,
+) -> bool {
+    let names = |h: &HintEntry| h.valid && (h.branch == branch_pc || inner.contains(&h.branch));
+    !more.iter().any(names)
+        && match sets {
+            Some(b) => newest.branch == b || !names(newest),
+            None => true,
+        }
+}
+
 /// What the memo table says of a block start.
 enum Lookup {
     /// Never memoized here (its state kept changing).
@@ -635,6 +661,8 @@ impl Timing {
             dp_changed: false,
             hint_changed: false,
             hint_dynamic: false,
+            hints_set: 0,
+            entry_more_hints: self.more_hints.clone(),
             steps: {
                 // Empty: a recording hands its buffer back cleared.
                 let mut steps = std::mem::take(&mut self.memo.spare_steps);
@@ -730,7 +758,7 @@ impl Timing {
     #[inline]
     fn entry_matches(&self, id: usize, pc: u32, inst: Inst) -> bool {
         let m = &self.memo.memos[id];
-        if m.start != pc || m.words[0] != inst.word {
+        if m.start != pc || m.words[0] != inst.word || !self.others_quiet_now(id) {
             return false;
         }
         let branch_at = (m.branch_pc != NO_PC).then(|| (m.branch_pc, m.words.len() as u64 - 1));
@@ -823,8 +851,25 @@ impl Timing {
         let ok = c.pc == pc
             && self.memo.memos[id].generation == c.generation
             && self.open_registers_ready(f.max_ready_at_entry, &c.open)
-            && (a.sets_hint || self.hint_view_now(id) == c.hint);
+            && (a.sets_hint || self.hint_view_now(id) == c.hint)
+            && self.others_quiet_now(id);
         ok.then_some(id)
+    }
+
+    /// [`others_quiet`] for memo `id` in the current state (at once with one entry).
+    #[inline(always)]
+    fn others_quiet_now(&self, id: usize) -> bool {
+        if self.config.hint_entries == 1 {
+            return true;
+        }
+        let m = &self.memo.memos[id];
+        others_quiet(
+            &self.hint,
+            &self.more_hints,
+            m.branch_pc,
+            &m.inner,
+            m.exit.hint.map(|h| h.0.branch),
+        )
     }
 
     /// Whether the registers a chain leaves open (`open`: a list ended by 128, or
@@ -1180,6 +1225,7 @@ impl Timing {
         if class.flags & F_HINT != 0 && !is_hbrp(inst) {
             rec.hint_changed = true;
             rec.hint_dynamic = inst.op == Op::Hbr;
+            rec.hints_set = rec.hints_set.saturating_add(1);
         }
         let w = self.last.writes;
         let (ready_rel, producer, unit) = if w < 128 {
@@ -1301,6 +1347,31 @@ impl Timing {
                 }
             }
         }
+        let exit = rec.steps.last().expect("a step").exit;
+        if self.config.hint_entries > 1
+            && (rec.hints_set > 1
+                || !others_quiet(
+                    &rec.entry.hint,
+                    &rec.entry_more_hints,
+                    branch_pc,
+                    &inner,
+                    exit.hint.map(|h| h.0.branch),
+                ))
+        {
+            // Timed by more than the newest hint entry: not kept (the block is timed
+            // per instruction where it runs again in such a state). A start that has
+            // no record and keeps failing so is not recorded again.
+            rec.steps.clear();
+            self.memo.spare_steps = std::mem::take(&mut rec.steps);
+            let idx = Self::slot_index(rec.start);
+            if self.memo.slots.get(idx) == Some(&0) {
+                self.memo.fails[idx] = self.memo.fails[idx].saturating_add(1);
+                if self.memo.fails[idx] >= 8 {
+                    self.memo.slots[idx] = NEVER;
+                }
+            }
+            return;
+        }
         let branch_at = (branch_pc != NO_PC).then(|| (branch_pc, rec.words.len() as u64 - 1));
         let (live_past, live_exact): (Vec<u8>, Vec<u8>) = live
             .iter()
@@ -1326,7 +1397,7 @@ impl Timing {
             branch_pc,
             inner,
             sig,
-            exit: rec.steps.last().expect("a step").exit,
+            exit,
             step_writes: rec.steps.iter().map(|st| st.write).collect(),
             steps: rec.steps,
             log,
@@ -1505,10 +1576,11 @@ impl Timing {
             }
         }
         let st = if k == m.steps.len() {
-            &m.exit
+            m.exit
         } else {
-            &m.steps[k - 1].exit
+            m.steps[k - 1].exit
         };
+        let sets_hint = m.sets_hint;
         self.last = st.last;
         self.last.issue = at(st.last_issue_rel);
         self.now = self.last.issue + 1;
@@ -1516,18 +1588,21 @@ impl Timing {
             self.dp_until = at(d);
         }
         let mut dynamic = false;
-        if let Some((h, issued, index, from_hbr)) = st.hint {
-            self.hint = h;
-            self.hint.issued = at(issued);
-            self.hint.index = rp.entry_index + index;
+        if let Some((mut h, issued, index, from_hbr)) = st.hint {
+            h.issued = at(issued);
+            h.index = rp.entry_index + index;
             if from_hbr {
-                self.hint.target = self.hint_target;
+                h.target = self.hint_target;
                 dynamic = true;
             }
+            // As the block's one hint filled it (with several entries, the newest moves
+            // down unless it names the same branch; again after a partial replay's
+            // materialize, nothing changes).
+            self.set_hint(h);
         }
         // The final branch was predicted to the hint entry's target as it is now, when
         // that is not the record's own.
-        if (!m.sets_hint || dynamic) && st.last.hinted().is_some() {
+        if (!sets_hint || dynamic) && st.last.hinted().is_some() {
             self.last.branch_hint = Some(self.hint.target);
         }
         self.fetch.line = st.fetch.0;

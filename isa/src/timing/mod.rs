@@ -56,8 +56,8 @@ pub struct TimingConfig {
     /// instructions may issue (6: the local-store access pipeline a load also takes).
     pub fetch_latency: u32,
     /// Replay the timing of basic blocks whose entry state repeats (exact; only a speed-up).
-    /// The block memo knows one hint entry: with `hint_entries > 1` the model runs without
-    /// it ([`Timing::new`]).
+    /// With `hint_entries > 1` a block is memoized where only the newest hint entry plays
+    /// a part in its timing (`memo::others_quiet`); elsewhere it is timed per instruction.
     pub memoize: bool,
     /// Entries of the branch target buffer: 1 is the real SPU's one hint; more is the
     /// `multihint` extension (`docs/extensions.md`).
@@ -366,12 +366,9 @@ impl Fetch {
 }
 
 impl Timing {
-    /// A model at cycle 0 with every register ready, using `config` (without the block
-    /// memo when the branch target buffer has more than one entry: the memo's record
-    /// holds one hint entry, so the model times every instruction itself, exactly).
+    /// A model at cycle 0 with every register ready, using `config`.
     pub fn new(mut config: TimingConfig) -> Self {
         config.hint_entries = config.hint_entries.clamp(1, crate::ext::MAX_HINT_ENTRIES);
-        config.memoize &= config.hint_entries == 1;
         Timing {
             config,
             classes: classes(),
