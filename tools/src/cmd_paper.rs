@@ -552,5 +552,8 @@ fn read_stats(text: &str, job: &Job) -> Result<Measured, String> {
             c.sht, c.assoc, c.bvh_cache_lines, c.tri_cache_lines
         ));
     }
-    Ok(Measured::Frame(crate::paper_tables::Frame { stats, raw }))
+    Ok(Measured::Frame(Box::new(crate::paper_tables::Frame {
+        stats,
+        raw,
+    })))
 }

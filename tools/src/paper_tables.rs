@@ -9,7 +9,7 @@ use spu_loader::stats::FrameStats;
 /// A finished job's statistics.
 #[derive(Clone, Debug)]
 pub enum Measured {
-    Frame(Frame),
+    Frame(Box<Frame>),
     /// A moving scene's frames, in order (`spu render --frames --stats`).
     Frames(Vec<spu_loader::animate::FrameStats>),
 }
@@ -554,10 +554,10 @@ mod tests {
             "traversal": null, "intersection": null, "totals": null{extra}}}"#,
             size * size
         );
-        Measured::Frame(Frame {
+        Measured::Frame(Box::new(Frame {
             stats: FrameStats::from_json(&text).unwrap(),
             raw: serde_json::from_str(&text).unwrap(),
-        })
+        }))
     }
 
     #[test]
