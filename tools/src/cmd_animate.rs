@@ -113,7 +113,7 @@ fn frame_error(e: FrameError) -> Error {
     }
 }
 
-fn rgb(colours: &[u32]) -> Vec<u8> {
+pub(crate) fn rgb(colours: &[u32]) -> Vec<u8> {
     colours
         .iter()
         .flat_map(|c| {

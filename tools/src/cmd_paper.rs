@@ -96,6 +96,10 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
                     &with_ext(job, args.ext.ext),
                     &job.outputs(&jobs_dir),
                 ))
+                .chain(match job.frames {
+                    0 => Vec::new(),
+                    n => vec!["--frames".to_string(), n.to_string()],
+                })
                 .map(|w| shell_word(&w))
                 .collect();
             outln!("{}", words.join(" "));
@@ -162,6 +166,9 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     };
     let scene_ids: Vec<String> = setup.scenes.iter().map(|s| s.id.clone()).collect();
     report.verdicts = crate::paper_beyond::verdicts(&report.tables, &scene_ids);
+    report
+        .verdicts
+        .extend(crate::paper_next::verdicts(&report.tables, &scene_ids));
     if let Some(t) = report.tables.iter().find(|t| t.id == "figure2") {
         let series = crate::paper_figure::series(t);
         let files = crate::paper_figure::write_figure2(&args.out, "figure2", &series)
@@ -460,6 +467,15 @@ fn weight(job: &Job) -> u64 {
 fn run_job(job: &Job, dir: &Path, kept: &Kept, ext: spu_isa::Extensions) -> Result<(), String> {
     let stats = job.stats_path(dir);
     let _ = std::fs::remove_file(&stats);
+    if job.frames > 0 {
+        // a moving scene prepares each frame itself
+        return crate::paper_next::run_frames(
+            &with_ext(job, ext),
+            job.frames,
+            &job.outputs(dir),
+            &kept.code,
+        );
+    }
     let prepared = kept.prepare(&job.scene_arg)?;
     crate::cmd_render::frame(
         &prepared,
@@ -486,6 +502,30 @@ pub fn collect(jobs: &[Job], dir: &Path) -> BTreeMap<String, Result<Measured, St
 }
 
 fn read_stats(text: &str, job: &Job) -> Result<Measured, String> {
+    if job.frames > 0 {
+        let frames: Vec<spu_loader::animate::FrameStats> =
+            serde_json::from_str(text).map_err(|e| e.to_string())?;
+        if frames.len() != job.frames as usize {
+            return Err(format!(
+                "holds {} frames, not the job's {}",
+                frames.len(),
+                job.frames
+            ));
+        }
+        // a frame the host rebuilt has no refit to count SPEs by
+        if let Some(f) = frames
+            .iter()
+            .find(|f| !f.rebuilt && f.refit_spes.len() != job.spes)
+        {
+            return Err(format!(
+                "frame {} was refitted on {} SPEs, not the job's {}",
+                f.frame,
+                f.refit_spes.len(),
+                job.spes
+            ));
+        }
+        return Ok(Measured::Frames(frames));
+    }
     let stats = FrameStats::from_json(text)?;
     let raw: serde_json::Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
     if stats.width != job.size || stats.height != job.size || stats.spus.len() != job.spes {
@@ -512,5 +552,8 @@ fn read_stats(text: &str, job: &Job) -> Result<Measured, String> {
             c.sht, c.assoc, c.bvh_cache_lines, c.tri_cache_lines
         ));
     }
-    Ok(Measured { stats, raw })
+    Ok(Measured::Frame(Box::new(crate::paper_tables::Frame {
+        stats,
+        raw,
+    })))
 }

@@ -25,6 +25,7 @@ mod paper_beyond;
 mod paper_data;
 mod paper_figure;
 mod paper_jobs;
+mod paper_next;
 mod paper_report;
 mod paper_tables;
 mod png;

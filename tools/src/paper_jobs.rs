@@ -128,6 +128,8 @@ pub struct Job {
     /// The ISA extensions the job's SPUs run with, as `--ext` writes them ("none": the
     /// real SPU, or whatever `spu paper --ext` gives every run).
     pub ext: &'static str,
+    /// Frames of a moving scene (`spu render --frames`); 0: one still frame.
+    pub frames: u32,
 }
 
 /// The settings of a job.
@@ -140,6 +142,8 @@ pub struct Want {
     pub sht: u32,
     pub shade: &'static str,
     pub ext: &'static str,
+    /// Frames of a moving scene; 0: one still frame.
+    pub frames: u32,
 }
 
 impl Default for Want {
@@ -152,6 +156,7 @@ impl Default for Want {
             sht: 1,
             shade: "none",
             ext: "none",
+            frames: 0,
         }
     }
 }
@@ -170,6 +175,7 @@ impl Job {
             sht: want.sht,
             shade: want.shade,
             ext: want.ext,
+            frames: want.frames,
         }
     }
 
@@ -224,8 +230,12 @@ impl Job {
             "none" => String::new(),
             list => format!("-{}", list.replace(['=', ','], "")),
         };
+        let frames = match self.frames {
+            0 => String::new(),
+            n => format!("-{n}frames"),
+        };
         format!(
-            "{}-{}-{}{}-sht{}-{}spe-{}ghz-{}{ext}",
+            "{}-{}-{}{}-sht{}-{}spe-{}ghz-{}{ext}{frames}",
             self.scene_id,
             self.shade,
             assoc,
@@ -264,6 +274,12 @@ impl Job {
         ) + &match self.ext {
             "none" => String::new(),
             list => format!(", ext {list}"),
+        } + &match self.frames {
+            0 => String::new(),
+            n => format!(
+                ", {n} frames of {}, the BVH refitted on the SPEs",
+                self.scene_arg
+            ),
         }
     }
 
@@ -277,6 +293,7 @@ impl Job {
             && self.sht == 1
             && self.shade == "none"
             && self.ext == "none"
+            && self.frames == 0
     }
 
     /// The cycles heat map (`--heatmap` writes the DMA-wait map beside it).

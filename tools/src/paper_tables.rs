@@ -6,11 +6,36 @@ use crate::paper_data::{self as paper, Cache, PAPER_SIZE};
 use crate::paper_jobs::{Job, SceneSpec, Want, SHT_ON};
 use spu_loader::stats::FrameStats;
 
-/// A finished job's statistics: typed, and as raw JSON for keys other kernels add.
+/// A finished job's statistics.
 #[derive(Clone, Debug)]
-pub struct Measured {
+pub enum Measured {
+    Frame(Box<Frame>),
+    /// A moving scene's frames, in order (`spu render --frames --stats`).
+    Frames(Vec<spu_loader::animate::FrameStats>),
+}
+
+/// A still frame's statistics: typed, and as raw JSON for keys other kernels add.
+#[derive(Clone, Debug)]
+pub struct Frame {
     pub stats: FrameStats,
     pub raw: serde_json::Value,
+}
+
+impl Measured {
+    fn frame(&self) -> Result<&Frame, String> {
+        match self {
+            Measured::Frame(f) => Ok(f),
+            Measured::Frames(_) => Err("a moving scene's frames, not one frame".into()),
+        }
+    }
+
+    fn frames(&self) -> Result<&[spu_loader::animate::FrameStats], String> {
+        match self {
+            Measured::Frames(f) if !f.is_empty() => Ok(f),
+            Measured::Frames(_) => Err("no frames".into()),
+            Measured::Frame(_) => Err("one frame, not a moving scene's frames".into()),
+        }
+    }
 }
 
 /// How a row's number comes out of its jobs' statistics.
@@ -44,6 +69,25 @@ pub enum Metric {
     Mrays,
     /// Main-memory traffic of the frame in GB/s: bytes read and written over its time.
     MemoryGbs,
+    /// A moving scene's figure over its frames.
+    Moving(Moving),
+}
+
+/// What a row of a moving scene's frames shows.
+#[derive(Clone, Copy, Debug)]
+pub enum Moving {
+    /// Refit cycles per frame (the slowest SPE's), in millions.
+    RefitMcycles,
+    /// Ray-tracing cycles per frame (the slowest SPE's), in millions.
+    TraceMcycles,
+    /// The refit's share of all cycles, in %.
+    RefitPct,
+    /// Frames per second over the frames, refit included.
+    Fps,
+    /// Frames per second over the frames, refit left out.
+    FpsWithoutRefit,
+    /// Frames whose BVH the host rebuilt instead.
+    Rebuilt,
 }
 
 /// One row of a table.
@@ -122,6 +166,8 @@ pub fn tables(setup: &Setup) -> Vec<TableSpec> {
         crate::paper_beyond::extensions(setup),
         crate::paper_beyond::clocks(setup),
         crate::paper_beyond::spe_counts(setup),
+        crate::paper_next::reflections(setup),
+        crate::paper_next::moving(setup),
     ]
 }
 
@@ -351,6 +397,13 @@ fn figure2(s: &Setup) -> TableSpec {
 
 /// Our number for a row from its jobs' statistics (in the row's job order).
 pub fn value(metric: Metric, measured: &[&Measured]) -> Result<f64, String> {
+    if let Metric::Moving(what) = metric {
+        return moving(what, measured.first().ok_or("no job")?.frames()?);
+    }
+    let measured: Vec<&Frame> = measured
+        .iter()
+        .map(|m| m.frame())
+        .collect::<Result<_, _>>()?;
     let first = measured.first().ok_or("no job")?;
     let t2 = &first.stats.table2;
     let v = match metric {
@@ -426,8 +479,33 @@ pub fn value(metric: Metric, measured: &[&Measured]) -> Result<f64, String> {
             }
             (read + written) * 1024.0 / seconds / 1e9
         }
+        Metric::Moving(_) => unreachable!("answered above"),
     };
     Ok(v)
+}
+
+/// A moving scene's figure over all its frames.
+fn moving(what: Moving, frames: &[spu_loader::animate::FrameStats]) -> Result<f64, String> {
+    let n = frames.len() as f64;
+    let refit: u64 = frames.iter().map(|f| f.refit_cycles).sum();
+    let trace: u64 = frames.iter().map(|f| f.trace_cycles).sum();
+    // frames over their seconds: each frame's fps is its clock over its cycles
+    let rate = |fps: &dyn Fn(&spu_loader::animate::FrameStats) -> f64| {
+        let seconds: f64 = frames.iter().map(|f| 1.0 / fps(f)).sum();
+        if seconds.is_finite() && seconds > 0.0 {
+            Ok(n / seconds)
+        } else {
+            Err("no frame rate".to_string())
+        }
+    };
+    Ok(match what {
+        Moving::RefitMcycles => refit as f64 / n / 1e6,
+        Moving::TraceMcycles => trace as f64 / n / 1e6,
+        Moving::RefitPct => 100.0 * refit as f64 / (refit + trace).max(1) as f64,
+        Moving::Fps => rate(&|f| f.fps)?,
+        Moving::FpsWithoutRefit => rate(&|f| f.fps_without_refit)?,
+        Moving::Rebuilt => frames.iter().filter(|f| f.rebuilt).count() as f64,
+    })
 }
 
 /// The keys of the stats' `table6` object (kilobytes read per frame by main-memory
@@ -441,12 +519,12 @@ const TABLE6_KEYS: [&str; 5] = [
 ];
 
 /// The factor from a frame of `m`'s rays to the paper's 1024x1024 primary rays.
-fn to_1024(m: &Measured) -> f64 {
+fn to_1024(m: &Frame) -> f64 {
     let primary = m.stats.width as f64 * m.stats.height as f64;
     (PAPER_SIZE as f64 * PAPER_SIZE as f64) / primary.max(1.0)
 }
 
-fn table6_kb(m: &Measured, row: usize) -> Result<f64, String> {
+fn table6_kb(m: &Frame, row: usize) -> Result<f64, String> {
     let key = TABLE6_KEYS[row];
     let kb = m
         .raw
@@ -476,10 +554,10 @@ mod tests {
             "traversal": null, "intersection": null, "totals": null{extra}}}"#,
             size * size
         );
-        Measured {
+        Measured::Frame(Box::new(Frame {
             stats: FrameStats::from_json(&text).unwrap(),
             raw: serde_json::from_str(&text).unwrap(),
-        }
+        }))
     }
 
     #[test]
@@ -513,5 +591,32 @@ mod tests {
         assert_eq!(value(Metric::Table6(0), &[&shaded]), Ok(24.0));
         assert_eq!(value(Metric::Table6(4), &[&shaded]), Ok(186.0));
         assert!(value(Metric::Speedup, &[&a]).is_err());
+        // a still frame is no moving scene's frames, nor the other way round
+        assert!(value(Metric::Moving(Moving::Fps), &[&a]).is_err());
+        let frame = |refit_cycles: u64, trace_cycles: u64| spu_loader::animate::FrameStats {
+            frame: 0,
+            refit_cycles,
+            trace_cycles,
+            fps: 2.4e9 / (refit_cycles + trace_cycles) as f64,
+            fps_without_refit: 2.4e9 / trace_cycles as f64,
+            rebuilt: refit_cycles == 0,
+            sah_refit: 1.0,
+            sah_built: 1.0,
+            refit_items: 1,
+            refit_dma_read: 0,
+            refit_dma_written: 0,
+            refit_spes: Vec::new(),
+            mismatches: None,
+        };
+        let frames = Measured::Frames(vec![frame(2_000_000, 22_000_000), frame(0, 24_000_000)]);
+        assert!(value(Metric::Cpi, &[&frames]).is_err());
+        let moving = |what| value(Metric::Moving(what), &[&frames]).unwrap();
+        assert_eq!(moving(Moving::RefitMcycles), 1.0);
+        assert_eq!(moving(Moving::TraceMcycles), 23.0);
+        assert!((moving(Moving::RefitPct) - 100.0 * 2.0 / 48.0).abs() < 1e-9);
+        // 2 frames in 48 M cycles at 2.4 GHz; 46 M without the refit
+        assert!((moving(Moving::Fps) - 100.0).abs() < 1e-9);
+        assert!((moving(Moving::FpsWithoutRefit) - 2.0 * 2400.0 / 46.0).abs() < 1e-9);
+        assert_eq!(moving(Moving::Rebuilt), 1.0);
     }
 }

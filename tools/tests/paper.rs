@@ -96,7 +96,9 @@ fn quick_report_has_every_table_and_the_figure() {
             "figure2",
             "beyond_extensions",
             "beyond_clock",
-            "beyond_spes"
+            "beyond_spes",
+            "beyond_reflections",
+            "beyond_moving"
         ]
     );
     for t in r["tables"].as_array().unwrap() {
@@ -169,8 +171,12 @@ fn quick_report_has_every_table_and_the_figure() {
         ]
     );
     let verdicts = r["verdicts"].as_array().unwrap();
-    assert_eq!(verdicts.len(), 4, "{verdicts:?}");
+    assert_eq!(verdicts.len(), 6, "{verdicts:?}");
     assert!(verdicts[0].as_str().unwrap().contains("room"));
+    assert!(verdicts[4].as_str().unwrap().starts_with("Reflections (7)"));
+    let moving = verdicts[5].as_str().unwrap();
+    assert!(moving.contains("room-flag on 1 SPE ") && moving.contains("beetle-drive on 1 SPE "));
+    reflections_and_moving_rows(&r);
     let clock = table(&r, "beyond_clock");
     let room_clock: Vec<f64> = clock["rows"]
         .as_array()
@@ -290,12 +296,129 @@ fn quick_report_has_every_table_and_the_figure() {
         };
         assert_eq!(read(&stats.0), read(&stats.1), "{scene}: the statistics");
     }
+    // a moving scene's job is listed with its frames, and rendered alone it writes the
+    // statistics and frames the run wrote
+    let line = lines
+        .iter()
+        .find(|l| l.contains("--scene room-flag ") && l.contains("--spes 1 "))
+        .expect("the moving room's job is listed");
+    assert!(line.ends_with(" --frames 2"), "{line}");
+    let mut words: Vec<String> = line.split_whitespace().skip(1).map(String::from).collect();
+    let (mut stats, mut image) = (PathBuf::new(), PathBuf::new());
+    for i in 1..words.len() {
+        let own = alone.join(Path::new(&words[i]).file_name().unwrap_or_default());
+        match words[i - 1].as_str() {
+            "--stats" => stats = std::mem::replace(&mut words[i], own.display().to_string()).into(),
+            "-o" => image = std::mem::replace(&mut words[i], own.display().to_string()).into(),
+            _ => {}
+        }
+    }
+    let args: Vec<&str> = words.iter().map(String::as_str).collect();
+    let run = spu(&args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let mine = alone.join(stats.file_name().unwrap());
+    assert_eq!(
+        std::fs::read_to_string(&stats).unwrap(),
+        std::fs::read_to_string(&mine).unwrap(),
+        "room-flag: the frames' statistics"
+    );
+    for frame in ["_000.png", "_001.png"] {
+        let name = |p: &Path| {
+            let stem = p.file_stem().unwrap().to_str().unwrap().to_string();
+            p.with_file_name(stem + frame)
+        };
+        let alone_image = alone.join(image.file_name().unwrap());
+        assert_eq!(
+            std::fs::read(name(&image)).unwrap(),
+            std::fs::read(name(&alone_image)).unwrap(),
+            "room-flag frame {frame}"
+        );
+    }
     // ... and makes the jobs folder, so the listed commands run in a fresh --out
     let fresh = dir.join("fresh");
     let listed = spu(&["paper", "--out", fresh.to_str().unwrap(), "--list-jobs"]);
     assert!(listed.status.success());
     assert!(fresh.join("jobs").is_dir());
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// "Beyond the paper": Table 5 with reflections, and the moving scenes' refit and frame
+/// rates, on one SPE (more are above the quick run's --max-spes).
+fn reflections_and_moving_rows(r: &serde_json::Value) {
+    let number = |t: &serde_json::Value, scene: &str, label: &str| -> Option<f64> {
+        let rows = t["rows"].as_array().unwrap();
+        let row = rows
+            .iter()
+            .find(|row| row["scene"] == scene && row["label"] == label)
+            .unwrap_or_else(|| panic!("{scene}: row {label}"));
+        row["ours"].as_f64()
+    };
+    let t = table(r, "beyond_reflections");
+    // Table 5's rows, numbers and paper's numbers, then the reflections
+    let table5 = table(r, "table5");
+    for row in table5["rows"].as_array().unwrap() {
+        let scene = row["scene"].as_str().unwrap();
+        let label = row["label"].as_str().unwrap();
+        assert_eq!(number(t, scene, label), row["ours"].as_f64(), "{label}");
+    }
+    assert_eq!(
+        t["rows"].as_array().unwrap().len(),
+        table5["rows"].as_array().unwrap().len() / 3 * 5
+    );
+    let one = "2.4 GHz SPE";
+    for scene in ["room", "conference", "beetle"] {
+        let reflect = number(t, scene, &format!("reflections (ours, depth 1): {one}")).unwrap();
+        let shadows = number(t, scene, &format!("shadows: {one}")).unwrap();
+        let ratio = number(t, scene, &format!("reflections over shadows (x): {one}")).unwrap();
+        // a reflected ray is traced on top of the shadows frame's work
+        assert!(reflect < shadows, "{scene}: {reflect} against {shadows}");
+        assert!((ratio - reflect / shadows).abs() < 1e-9, "{scene}");
+        let dual = format!(
+            "reflections (ours, depth 1): {}",
+            "Dual-Cell (16 SPEs, 2.4 GHz)"
+        );
+        assert_eq!(number(t, scene, &dual), None);
+    }
+    let t = table(r, "beyond_moving");
+    for scene in ["room", "beetle"] {
+        let m = |label: &str| number(t, scene, label).unwrap();
+        let (refit, trace) = (
+            m("1 SPEs: refit Mcycles per frame"),
+            m("1 SPEs: trace Mcycles per frame"),
+        );
+        assert!(refit > 0.0 && trace > 0.0, "{scene}");
+        let pct = m("1 SPEs: refit % of the cycles");
+        assert!(
+            (pct - 100.0 * refit / (refit + trace)).abs() < 1e-6,
+            "{scene}"
+        );
+        let (with, without) = (
+            m("1 SPEs: fps with the refit"),
+            m("1 SPEs: fps without the refit"),
+        );
+        // fps over both frames: 2.4 GHz over the mean cycles per frame
+        assert!(
+            (with - 2400.0 / (refit + trace)).abs() < 1e-6 * with,
+            "{scene}"
+        );
+        assert!((without - 2400.0 / trace).abs() < 1e-6 * without, "{scene}");
+        assert_eq!(m("frames rebuilt on the host"), 0.0, "{scene}");
+        assert_eq!(number(t, scene, "16 SPEs: fps with the refit"), None);
+    }
+    // the refit has no data-dependent branch: the same cycles each frame, at any frame size
+    // (155,475 on one SPE in docs/animation.md's 1024x1024 run)
+    assert_eq!(
+        number(t, "room", "1 SPEs: refit Mcycles per frame"),
+        Some(0.155475)
+    );
+    // two SPE counts of five rows and the rebuilds, for the scenes that move
+    let rows = t["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2 * 11);
+    assert!(!rows.iter().any(|row| row["scene"] == "conference"));
 }
 
 #[test]
