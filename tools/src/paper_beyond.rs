@@ -132,8 +132,8 @@ pub fn spe_counts(s: &Setup) -> TableSpec {
     }
 }
 
-/// A row's number by the start of its label and its scene.
-fn number(table: &Table, scene: &str, label: &str) -> Option<f64> {
+/// A row's number by its label and its scene.
+pub(crate) fn number(table: &Table, scene: &str, label: &str) -> Option<f64> {
     table
         .rows
         .iter()

@@ -3,6 +3,7 @@
 //! refitted on the SPEs (section 9.3); their verdicts; and how a moving scene's job runs in
 //! process, writing what `spu render --frames` writes.
 
+use crate::paper_beyond::number;
 use crate::paper_data::{self as paper, PAPER_SIZE};
 use crate::paper_jobs::{SceneSpec, Want, SHT_ON};
 use crate::paper_report::Table;
@@ -146,15 +147,6 @@ pub fn moving(s: &Setup) -> TableSpec {
         note: format!("`spu render --frames {FRAMES} --shade shadows` at the report's frame size (not scaled), 2.4 GHz SPEs, SHT {SHT_ON}: room is room-flag (the room with a waving flag), beetle is beetle-drive (the beetle swerving, its wheels turning), the other scenes have no moving version; frame 0 at rest, then moving. Each frame the SPEs refit the BVH (kernels/refit.s, docs/animation.md), then trace it; cycles are per frame (the slowest SPE's), fps over all frames. The host rebuilds the tree instead where the refit's SAH cost passes {ratio} times the built tree's."),
         rows,
     }
-}
-
-/// A row's number by its label and scene.
-fn number(table: &Table, scene: &str, label: &str) -> Option<f64> {
-    table
-        .rows
-        .iter()
-        .find(|r| r.scene == scene && r.label == label)
-        .and_then(|r| r.ours)
 }
 
 /// One verdict per table, from its numbers; a table without numbers says so.
