@@ -195,6 +195,19 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         report.jobs_measured,
         report.jobs
     );
+    if let Some(bytes) = crate::peak_memory::peak_resident_bytes() {
+        let runs = match args.collect {
+            Some(_) => "collected, none run".to_string(),
+            None => match threads.min(jobs.len()).max(1) {
+                1 => "one run at a time".to_string(),
+                n => format!("up to {n} runs at once"),
+            },
+        };
+        eprintln!(
+            "peak memory: {} MiB resident on this host ({runs})",
+            bytes.div_ceil(1 << 20)
+        );
+    }
     if missing.is_empty() {
         Ok(ExitCode::SUCCESS)
     } else {

@@ -28,6 +28,7 @@ mod paper_jobs;
 mod paper_next;
 mod paper_report;
 mod paper_tables;
+mod peak_memory;
 mod png;
 mod prepared;
 mod render_options;

@@ -71,12 +71,23 @@ fn quick_report_has_every_table_and_the_figure() {
         out,
     ];
     let run = spu(&[&common[..], &["--threads", "2"]].concat());
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    // the host's peak memory goes to stderr (Linux), never into the report
+    if cfg!(target_os = "linux") {
+        let line = err
+            .lines()
+            .find(|l| l.starts_with("peak memory: "))
+            .unwrap_or_else(|| panic!("no peak memory line in {err}"));
+        assert!(
+            line.ends_with(" MiB resident on this host (up to 2 runs at once)"),
+            "{line}"
+        );
+    }
     let r = report(&dir);
+    assert!(!std::fs::read_to_string(dir.join("results.md"))
+        .unwrap()
+        .contains("peak memory"));
     assert_eq!(r["size"], 128);
     let ids: Vec<&str> = r["tables"]
         .as_array()
