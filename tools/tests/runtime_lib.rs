@@ -228,7 +228,7 @@ fn values(n: usize, seed: u64) -> Vec<u64> {
         .collect()
 }
 
-/// main: for each pair in `.Lpairs`, calls the four helpers named and prints their results.
+/// main: for each pair in the table, calls the four helpers named and prints their results.
 fn division_program(pairs: &[(u64, u64)], wide: bool) -> String {
     let mut table = String::new();
     for (a, b) in pairs {
@@ -274,52 +274,7 @@ fn division_program(pairs: &[(u64, u64)], wide: bool) -> String {
         )
         .unwrap();
     }
-    format!(
-        r#"
-        .section .rodata
-.Lfmt:  .string "{fmt}"
-        .align  4
-.Lpairs:
-{table}
-        .text
-        .global main
-        .type   main, @function
-main:   stqd    $lr, 16($sp)
-        stqd    $80, -16($sp)
-        stqd    $81, -32($sp)
-        stqd    $82, -48($sp)
-        stqd    $83, -64($sp)
-        stqd    $84, -80($sp)
-        stqd    $85, -96($sp)
-        stqd    $sp, -128($sp)
-        ai      $sp, $sp, -128
-        ila     $80, .Lpairs
-        il      $81, {n}
-1:      brz     $81, 2f
-{calls}
-        ila     $3, .Lfmt
-        ori     $4, $82, 0
-        ori     $5, $83, 0
-        ori     $6, $84, 0
-        ori     $7, $85, 0
-        brsl    $lr, printf
-        ai      $80, $80, 16
-        ai      $81, $81, -1
-        br      1b
-2:      il      $3, 0
-        ai      $sp, $sp, 128
-        lqd     $85, -96($sp)
-        lqd     $84, -80($sp)
-        lqd     $83, -64($sp)
-        lqd     $82, -48($sp)
-        lqd     $81, -32($sp)
-        lqd     $80, -16($sp)
-        lqd     $lr, 16($sp)
-        bi      $lr
-        .size   main, .-main
-"#,
-        n = pairs.len()
-    )
+    table_loop_program(fmt, &table, pairs.len(), &calls)
 }
 
 /// The pairs: every combination of the edge cases, then pseudo-random ones.
@@ -504,7 +459,7 @@ main:   stqd    $lr, 16($sp)
     assert!(out.contains("<main>") || out.contains("main:"), "{out}");
 }
 
-/// main: for each entry {double, int} of `.Lcases`, the four conversions, printed as bits.
+/// main: for each entry {double, int} of the table, the four conversions, printed as bits.
 fn conversion_program(cases: &[(u64, u32)]) -> String {
     let mut table = String::new();
     for (d, i) in cases {
@@ -532,13 +487,29 @@ fn conversion_program(cases: &[(u64, u32)]) -> String {
 /// main: for each quadword of `table` ({double, integer}), calls the four helpers named
 /// (two taking the double, two the integer) and prints their results with `format`.
 fn conversion_program_calling(table: &str, n: usize, calls: [&str; 4], format: &str) -> String {
-    let [f0, f1, f2, f3] = calls;
+    let mut text = String::new();
+    for (k, f) in calls.iter().enumerate() {
+        // the integer is the quadword's second doubleword
+        let integer = if k >= 2 { "\trotqbyi\t$3, $3, 8\n" } else { "" };
+        writeln!(
+            text,
+            "\tlqd\t$3, 0($80)\n{integer}\tbrsl\t$lr, {f}\n\tori\t${}, $3, 0",
+            82 + k
+        )
+        .unwrap();
+    }
+    table_loop_program(&format!("{format}\\n"), table, n, &text)
+}
+
+/// main: for each of the `n` quadwords of `table` (at `.Ltable`, walked in `$80`), runs
+/// `calls` (which leave four results in `$82`..`$85`) and prints them with `printf(fmt)`.
+fn table_loop_program(fmt: &str, table: &str, n: usize, calls: &str) -> String {
     format!(
         r#"
         .section .rodata
-.Lfmt:  .string "{format}\n"
+.Lfmt:  .string "{fmt}"
         .align  4
-.Lcases:
+.Ltable:
 {table}
         .text
         .global main
@@ -552,23 +523,10 @@ main:   stqd    $lr, 16($sp)
         stqd    $85, -96($sp)
         stqd    $sp, -128($sp)
         ai      $sp, $sp, -128
-        ila     $80, .Lcases
+        ila     $80, .Ltable
         il      $81, {n}
 1:      brz     $81, 2f
-        lqd     $3, 0($80)
-        brsl    $lr, {f0}
-        ori     $82, $3, 0
-        lqd     $3, 0($80)
-        brsl    $lr, {f1}
-        ori     $83, $3, 0
-        lqd     $3, 0($80)
-        rotqbyi $3, $3, 8
-        brsl    $lr, {f2}
-        ori     $84, $3, 0
-        lqd     $3, 0($80)
-        rotqbyi $3, $3, 8
-        brsl    $lr, {f3}
-        ori     $85, $3, 0
+{calls}
         ila     $3, .Lfmt
         ori     $4, $82, 0
         ori     $5, $83, 0
@@ -589,7 +547,7 @@ main:   stqd    $lr, 16($sp)
         lqd     $lr, 16($sp)
         bi      $lr
         .size   main, .-main
-"#,
+"#
     )
 }
 
@@ -703,7 +661,7 @@ fn the_conversion_helpers_match_rust() {
     assert_eq!(code, 0);
 }
 
-/// main: for each entry {double, long long} of `.Lcases`, the four 64-bit conversions,
+/// main: for each entry {double, long long} of the table, the four 64-bit conversions,
 /// printed as bits.
 fn wide_conversion_program(cases: &[(u64, u64)]) -> String {
     let mut table = String::new();
