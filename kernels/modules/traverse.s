@@ -29,6 +29,114 @@
 # $68/$70/$71: the pair's x/y/z planes, $73: (link', meta) of both children, $76: near
 # child's table offset, $77: the entry a pop takes, $112: first-ray miss mask
 # (lanes child 0, 0, 1, 1), $118: the children's first active rays.
+        .ifdef  EXT_MULTIHINT
+# With several hint entries (docs/extensions.md, Multihint) the step's three early exits
+# (first_changed, leaf, the BVH cache's miss) are one `bi` to a target chosen with selb
+# from conditions known 12 cycles into the step, hinted at once and taken after the first
+# ray's and the frustum's tests (the common case: its own next instruction). Its hint
+# keeps an entry of its own beside the loop's, so no exit is mispredicted either way.
+        .sched  scratch=66-127
+trav:
+      ! hbrr    .Lloop_br, trav
+        and     $66, CUR, BMASK64             # the pair's cache line
+        shufb   $67, CUR, CUR, PAT1           # meta << 4, every lane
+        rotmi   $72, $66, -2                  # its tag's offset
+        lqx     $68, BDATA, $66               # x planes (min0, max0, min1, max1)
+        lqx     $70, BDATA16, $66             # y
+        lqx     $71, BDATA32, $66             # z
+        lqx     $73, BDATA48, $66             # (link', meta) of both children
+        lqx     $75, BTAGS, $72
+        andi    $69, $67, 0x30                # split axis * 16
+        lqx     $76, NEGTAB, $69              # all ones: child 1 is the near one
+        lqd     $74, CTX_RAY_T(FT_ADDR)               # the first ray's t
+        lqd     $77, -16(STK)                 # the entry a pop takes
+        lqa     $78, k_pc0
+        lqa     $79, k_pc1
+        shufb   $80, $68, $68, PERMX          # planes in (near, far) order for the first ray
+        shufb   $81, $70, $70, PERMY
+        shufb   $82, $71, $71, PERMZ
+        shufb   $83, $74, $74, FT_PAT         # (0, t, 0, t)
+        xor     $83, $83, NEGODD              # (0, -t, 0, -t)
+        fms     $84, $80, RX1, OR1X           # first ray: (entry, -exit) per child and axis
+        fms     $85, $81, RY1, OR1Y
+        fms     $86, $82, RZ1, OR1Z
+        fma     $87, $80, PAX, OAX            # packet: both bounds, the smaller taken
+        fma     $88, $80, PBX, OBX
+        fma     $89, $81, PAY, OAY
+        fma     $90, $81, PBY, OBY
+        fma     $91, $82, PAZ, OAZ
+        fma     $92, $82, PBZ, OBZ
+        shufb   $116, CUR, CUR, PAT2          # this node's first active ray: unchanged?
+        ceq     $116, $116, FIRST
+        rotmi   $117, $67, -6                 # triangle count: 0 for an inner node
+        ceqi    $117, $117, 0
+        and     $118, $116, $117              # a step (the lookup decides the rest)
+        lqa     $119, k_trav_to                 # (first_changed, leaf, .Ltrav_on, -)
+        rotqbyi $120, $119, 4
+        rotqbyi $121, $119, 8
+        selb    $122, $119, $120, $116        # first ray changed, else a leaf
+        ceq     $115, $75, CUR                # the line holds this pair
+        selb    $123, BMISSH, $121, $115      # a step: on, or the miss handler
+        selb    $124, $122, $123, $118        # where the step goes
+        sf      S_STEPS, $118, S_STEPS        # +1 for a step
+        hbr     .Ltop_br, $124                # (the first ray's tests take the 11 cycles:
+        fcgt    $93, $84, $85 @after $124     # they wait for the target, which goes first)
+        selb    $94, $85, $84, $93            # max(x, y)
+        fcgt    $95, $86, $83
+        selb    $96, $83, $86, $95            # max(z, t)
+        fcgt    $97, $94, $96
+        selb    $98, $96, $94, $97            # first ray: (entry, -exit) over the axes
+        fcgt    $99, $87, $88 @after $124
+        selb    $100, $87, $88, $99
+        fcgt    $101, $89, $90 @after $124
+        selb    $102, $89, $90, $101
+        fcgt    $103, $91, $92 @after $124
+        selb    $104, $91, $92, $103
+        fcgt    $105, $100, $102
+        selb    $106, $102, $100, $105
+        fcgt    $107, $104, F2
+        selb    $108, F2, $104, $107
+        fcgt    $109, $106, $108
+        selb    $110, $108, $106, $109        # packet: (entry, -exit) over the axes
+        shufb   $111, $98, $98, SWAP
+        xor     $111, $111, SIGNS             # (exit, -entry)
+        fcgt    $112, $98, $111               # the first ray misses (lanes child 0, 0, 1, 1)
+        shufb   $113, $110, $110, SWAP
+        xor     $113, $113, SIGNS
+        fcgt    $114, $110, $113              # the frustum misses
+.Ltop_br:
+      ! bi      $124
+        .endsched
+        .sched  scratch=66-127
+.Ltrav_on:
+        shufb   $116, $112, $112, PAT0        # child 0 missed, every lane
+        shufb   $117, $112, $112, PAT2        # child 1 missed
+        or      $118, $116, $76
+        andc    $118, $118, $117              # go to child 1
+        selb    $119, $78, $79, $118          # next state's pattern
+        selb    $120, $79, $78, $118          # pushed state's pattern
+        and     $121, $116, $117              # neither: pop
+        shufb   $122, $73, FIRST, $119
+        shufb   $123, $73, FIRST, $120
+        a       $124, $116, $117
+        shli    $124, $124, 4                 # -32, -16, 0: stack delta - 16
+        ai      $124, $124, 16                # (the delta, one add on the stack's path)
+        andc    $125, $112, $114              # undecided: the first ray misses, the frustum not
+        gb      $126, $125
+        a       M1V, M1V, $112
+        and     $127, $112, $114              # early exits
+        a       EEV, EEV, $127
+      ! brnz    $126, slow                    # the third case
+        ceq     $93, STK, STKBASE
+        and     $93, $93, $121                # popping an empty stack: the packet is done
+        selb    CUR, $122, $77, $121
+      ! stqd    $123, 0(STK)                  # stored either way; kept when both children go
+      ! brnz    $93, packet_done
+        a       STK, STK, $124
+.Lloop_br:
+      ! br      trav
+        .endsched
+        .else
         .sched  scratch=66-127
 trav:
       ! hbrr    .Lloop_br, trav
@@ -119,6 +227,7 @@ trav:
 .Lloop_br:
       ! br      trav
         .endsched
+        .endif
 
 # FIND_FIRST: the first ray from FIRST on whose slab intervals with the box ($80/$81 min/max
 # x, $82/$83 y, $84/$85 z planes, splats) overlap within [0, t], widened by 1 -/+ 2^-16;
