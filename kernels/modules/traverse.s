@@ -355,6 +355,57 @@ first_changed:
 
 # ---- the third case: the first ray misses a child the frustum does not rule out. Find the
 # first ray from FIRST on that enters it; none means the child is skipped.
+        .ifdef  EXT_MULTIHINT
+# (multihint) one search code for either child: the first search takes child 0 if it is
+# undecided, else child 1; whether a second one (child 1) follows is known on entry, so
+# its branch is a hinted `bi` and the way back to the search a hinted `br`, in entries of
+# their own beside the search loop's; a search that finds no ray changes nothing (masks,
+# no branch). $66/$67 the child's (min, max) patterns, $72 its lanes of $112, $74 its
+# word of $126, $75 where the search goes when it is done.
+slow:
+        ori     $126, FIRST, 0                # the children's first active rays
+        shufb   $90, $125, $125, PAT0         # child 0 undecided, every lane
+        shufb   $91, $125, $125, PAT2         # child 1 undecided
+        and     $92, $90, $91                 # both: a second search
+        ila     $93, .Lslow_again
+        ila     $94, .Lslow_done
+        selb    $75, $94, $93, $92
+        hbr     .Lslow_more_br, $75
+        hbrr    .Lslow_back_br, .Lslow_search
+        selb    $66, PAT2, PAT0, $90          # the first search's child
+        selb    $67, PAT3, PAT1, $90
+        lqa     $93, k_child0
+        lqa     $94, k_child1
+        selb    $72, $94, $93, $90
+        lqa     $93, k_word0
+        lqa     $94, k_word1
+        selb    $74, $94, $93, $90
+.Lslow_search:
+        shufb   $80, $68, $68, $66
+        shufb   $81, $68, $68, $67
+        shufb   $82, $70, $70, $66
+        shufb   $83, $70, $70, $67
+        shufb   $84, $71, $71, $66
+        shufb   $85, $71, $71, $67
+        FIND_FIRST
+        ceqi    $98, $97, -1                  # none: the child is skipped
+        andc    $99, $72, $98
+        andc    $112, $112, $99               # else no longer missed
+        shufb   $100, $97, $97, PAT0
+        andc    $98, $74, $98
+        selb    $126, $126, $100, $98         # and its first ray goes to its word
+.Lslow_more_br:
+        bi      $75
+.Lslow_again:                                 # the second search: child 1
+        hbrr    .Lslow_more_br, .Lslow_done
+        ori     $66, PAT2, 0
+        ori     $67, PAT3, 0
+        lqa     $72, k_child1
+        lqa     $74, k_word1
+        ila     $75, .Lslow_done
+.Lslow_back_br:
+        br      .Lslow_search
+        .else
 slow:
         ori     $126, FIRST, 0                # the children's first active rays
         brz     $125, .Lslow1
@@ -363,6 +414,7 @@ slow:
         rotqbyi $90, $125, 8
         brz     $90, .Lslow_done
         SLOW_CHILD PAT2, PAT3, .Lslow_done, k_child1, k_word1
+        .endif
 .Lslow_done:
         # the step's decision again, with the children's own first rays
         hbrr    .Lslow_br, .Lnewcur
