@@ -323,6 +323,104 @@ trav:
 3:
         .endm
 
+# FIND_FIRST for a packet whose rays point one way on every axis (the multihint variant
+# only, though it needs no extension): the planes put in (smaller, larger) distance order
+# once per search by the first ray's signs (NEGTAB) instead of per ray and axis (9 even-pipe
+# instructions fewer per vector of 4 rays); exact, since (min - o) * r <= (max - o) * r for
+# every ray r of the sign the packet's corner rays share.
+        .ifdef  EXT_MULTIHINT
+        .macro  FIND_FIRST_SIGNED
+        lqd     $91, 0(NEGTAB)                # the packet's rays all point the first ray's
+        lqd     $92, 16(NEGTAB)               # way on every axis: the smaller of a slab's
+        lqd     $93, 32(NEGTAB)               # two distances is its min plane's when positive
+        selb    $94, $80, $81, $91
+        selb    $81, $81, $80, $91
+        ori     $80, $94, 0
+        selb    $94, $82, $83, $92
+        selb    $83, $83, $82, $92
+        ori     $82, $94, 0
+        selb    $94, $84, $85, $93
+        selb    $85, $85, $84, $93
+        ori     $84, $94, 0
+        fs      $80, $80, OXS
+        fs      $81, $81, OXS
+        fs      $82, $82, OYS
+        fs      $83, $83, OYS
+        fs      $84, $84, OZS
+        fs      $85, $85, OZS
+        rotmi   $86, FIRST, -3
+        shli    $86, $86, 5                   # byte offset of the even vector at or below FIRST's
+        rotmi   $117, $86, -2                 # its first ray
+        lqa     $90, k_idx
+        a       $117, $117, $90               # the ray indices of its lanes
+        ai      $89, FIRST, -1
+        lqa     $113, k_epslo
+        lqa     $114, k_epshi
+        ila     $88, CTX_RAY_RX
+        a       $88, $88, RAYS
+        hbrr    .Lff_none\@, 3f               # the search's exit when no ray enters, hinted
+        # two vectors per pass (scheduled into even/odd pairs)
+        .sched  pool=91-96,98-102,105-111,116,118-124,127,87 scratch=66-127
+1:
+        a       $90, $88, $86
+        lqd     %rx0, 0($90)
+        lqd     %ry0, 256($90)
+        lqd     %rz0, 512($90)
+        lqd     %t0, 768($90)
+        lqd     %rx1, 16($90)
+        lqd     %ry1, 272($90)
+        lqd     %rz1, 528($90)
+        lqd     %t1, 784($90)
+        .irp    V, 0, 1
+        fm      %lx\V, $80, %rx\V
+        fm      %hx\V, $81, %rx\V
+        fm      %ly\V, $82, %ry\V
+        fm      %hy\V, $83, %ry\V
+        fm      %lz\V, $84, %rz\V
+        fm      %hz\V, $85, %rz\V
+        fcgt    %m1\V, %lx\V, %ly\V
+        selb    %e1\V, %ly\V, %lx\V, %m1\V
+        fcgt    %m2\V, %lz\V, ZERO
+        selb    %e2\V, ZERO, %lz\V, %m2\V
+        fcgt    %m3\V, %e1\V, %e2\V
+        selb    %en\V, %e2\V, %e1\V, %m3\V
+        fcgt    %m4\V, %hx\V, %hy\V
+        selb    %x1\V, %hx\V, %hy\V, %m4\V
+        fcgt    %m5\V, %hz\V, %t\V
+        selb    %x2\V, %hz\V, %t\V, %m5\V
+        fcgt    %m6\V, %x1\V, %x2\V
+        selb    %ex\V, %x1\V, %x2\V, %m6\V
+        fm      %enw\V, %en\V, $113
+        fm      %exw\V, %ex\V, $114
+        fcgt    %miss\V, %enw\V, %exw\V
+        .endr
+        ai      %idx1, $117, 4
+        cgt     %act0, $117, $89
+        cgt     %act1, %idx1, $89
+        andc    %hit0, %act0, %miss0
+        andc    %hit1, %act1, %miss1
+        gb      %g0, %hit0
+        gb      %g1, %hit1
+        shli    %g0s, %g0, 4
+        or      $103, %g0s, %g1
+        ai      $86, $86, 32
+        ai      $117, $117, 8
+        ceqi    $104, $86, 256
+        hbrr    .Lff_br\@, 1b                 # (most searches take a few passes)
+      ! brnz    $103, 2f
+.Lff_br\@:
+      ! brz     $104, 1b
+        .endsched
+        il      $97, -1
+.Lff_none\@:
+        br      3f
+2:      clz     $103, $103                    # 8 lanes: the first = clz - 24
+        ai      $103, $103, -32               # (less the 8 rays $117 has moved on)
+        a       $97, $117, $103
+3:
+        .endm
+        .endif
+
 # a new state from a pop or a changed first ray: the step's own checks sort it out
         .set    .Lnewcur, trav
 
@@ -362,6 +460,21 @@ first_changed:
 # their own beside the search loop's; a search that finds no ray changes nothing (masks,
 # no branch). $66/$67 the child's (min, max) patterns, $72 its lanes of $112, $74 its
 # word of $126, $75 where the search goes when it is done.
+        .macro  SLOW_SEARCH find
+        shufb   $80, $68, $68, $66
+        shufb   $81, $68, $68, $67
+        shufb   $82, $70, $70, $66
+        shufb   $83, $70, $70, $67
+        shufb   $84, $71, $71, $66
+        shufb   $85, $71, $71, $67
+        \find
+        ceqi    $98, $97, -1                  # none: the child is skipped
+        andc    $99, $72, $98
+        andc    $112, $112, $99               # else no longer missed
+        shufb   $100, $97, $97, PAT0
+        andc    $98, $74, $98
+        selb    $126, $126, $100, $98         # and its first ray goes to its word
+        .endm
 slow:
         ori     $126, FIRST, 0                # the children's first active rays
         shufb   $90, $125, $125, PAT0         # child 0 undecided, every lane
@@ -371,7 +484,6 @@ slow:
         ila     $94, .Lslow_done
         selb    $75, $94, $93, $92
         hbr     .Lslow_more_br, $75
-        hbrr    .Lslow_back_br, .Lslow_search
         selb    $66, PAT2, PAT0, $90          # the first search's child
         selb    $67, PAT3, PAT1, $90
         lqa     $93, k_child0
@@ -380,20 +492,18 @@ slow:
         lqa     $93, k_word0
         lqa     $94, k_word1
         selb    $74, $94, $93, $90
+        ceq     $98, PAX, ZERO                # an axis the packet's rays cross both ways
+        ceq     $99, PAY, ZERO                # (raygen.s: PA is 0 there): the search for
+        ceq     $100, PAZ, ZERO               # any signs, else the signed one
+        or      $98, $98, $99
+        or      $98, $98, $100
+        ila     $93, .Lslow_search
+        ila     $94, .Lslow_search_any
+        selb    $78, $93, $94, $98
+        hbr     .Lslow_back_br, $78
+        brnz    $98, .Lslow_search_any
 .Lslow_search:
-        shufb   $80, $68, $68, $66
-        shufb   $81, $68, $68, $67
-        shufb   $82, $70, $70, $66
-        shufb   $83, $70, $70, $67
-        shufb   $84, $71, $71, $66
-        shufb   $85, $71, $71, $67
-        FIND_FIRST
-        ceqi    $98, $97, -1                  # none: the child is skipped
-        andc    $99, $72, $98
-        andc    $112, $112, $99               # else no longer missed
-        shufb   $100, $97, $97, PAT0
-        andc    $98, $74, $98
-        selb    $126, $126, $100, $98         # and its first ray goes to its word
+        SLOW_SEARCH FIND_FIRST_SIGNED
 .Lslow_more_br:
         bi      $75
 .Lslow_again:                                 # the second search: child 1
@@ -404,7 +514,10 @@ slow:
         lqa     $74, k_word1
         ila     $75, .Lslow_done
 .Lslow_back_br:
-        br      .Lslow_search
+        bi      $78
+.Lslow_search_any:                            # (rare: its way on is not hinted)
+        SLOW_SEARCH FIND_FIRST
+        bi      $75
         .else
 slow:
         ori     $126, FIRST, 0                # the children's first active rays
