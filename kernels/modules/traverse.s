@@ -424,12 +424,23 @@ trav:
 # a new state from a pop or a changed first ray: the step's own checks sort it out
         .set    .Lnewcur, trav
 
+        .ifdef  EXT_MULTIHINT
+        .sched  scratch=66-127                # (multihint: scheduled, which needs no extension)
+first_changed:
+        hbrr    .Lfc_br, trav
+        shufb   FIRST, CUR, CUR, PAT2
+        SET_FIRST
+.Lfc_br:
+      ! br      trav
+        .endsched
+        .else
 first_changed:
         hbrr    .Lfc_br, trav                 # (set_first inline: no call and return
         shufb   FIRST, CUR, CUR, PAT2         # to mispredict, and the way back hinted)
         SET_FIRST
 .Lfc_br:
         br      trav
+        .endif
 
 # one child of the third case: its min and max planes (patterns LO, HI), its first ray
 # (FIND_FIRST); none: on to SKIP; else the child is no longer missed (MISS: its lanes of
