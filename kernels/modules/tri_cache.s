@@ -69,6 +69,51 @@
         bi      $84
 # several contexts: a triangle staged while the packet was suspended is installed now;
 # others are fetched into the packet's staging slots
+        .ifdef  EXT_MULTIHINT
+# (multihint) the same as two scheduled blocks, the fetch's operands and the counter's
+# load before the staging check (which needs no extension)
+        .sched  scratch=66-127
+.Lpf_stage:
+        ai      $95, $77, -1
+        ila     $96, .Lpf
+        ila     $97, suspend
+        ceqi    $95, $95, 0
+        selb    $96, $96, $97, $95
+      ! hbr     .Lpf_stage_br, $96
+        sf      $88, $66, $76                 # the slot
+        shli    $89, $88, 4
+        a       $89, $89, RAYS
+        lqd     $90, CTX_STAGE_TAGS($89)
+        shli    $84, $88, 6
+        ila     $91, CTX_STAGE_TRIS
+        a       $84, $84, $91
+        a       $84, $84, RAYS
+        lqd     $86, CTX_TAG(RAYS)
+        il      $87, 0x40
+        shli    $85, $76, 6
+        a       $85, $85, EATRIS
+        lqa     $98, vars+V_TMISS
+        ai      $98, $98, 1
+        ceq     $90, $90, $76
+      ! brnz    $90, .Lpf_install
+        .endsched
+        .sched  scratch=66-127
+        stqd    $76, CTX_STAGE_TAGS($89)
+        wrch    $MFC_LSA, $84
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $85
+        wrch    $MFC_Size, $79
+        wrch    $MFC_TagID, $86
+        wrch    $MFC_Cmd, $87
+        il      $78, 1
+        stqa    $98, vars+V_TMISS
+        ai      $76, $76, 1
+        ai      $77, $77, -1
+        ila     $80, leaf_resume
+.Lpf_stage_br:
+      ! bi      $96
+        .endsched
+        .else
 .Lpf_stage:
         ai      $95, $77, -1                  # the pass's step taken here, and its
         ila     $96, .Lpf                     # branch hinted to where it goes: the
@@ -107,6 +152,7 @@
         ila     $80, leaf_resume
 .Lpf_stage_br:
         bi      $96
+        .endif
 .Lpf_install:                                 # (4-way, when the pass runs again)
         il      $90, -1
         stqd    $90, CTX_STAGE_TAGS($89)
