@@ -70,6 +70,7 @@ k_c255:         .long 255, 255, 255, 255
 k_abs:          .long 0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff
         .ifdef  EXT_MULTIHINT
 k_trav_to:      .long first_changed, leaf, .Ltrav_on, 0   # a step's ways (traverse.s)
+numbuf:         .space 128      # the leaf's triangles' n_d - o.n, by triangle & 7 (triangle.s)
         .endif
 
         .align 7

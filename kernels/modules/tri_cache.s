@@ -289,7 +289,7 @@ tri_miss:
         brsl    $0, lru_find
         brz     $100, 1f
         brsl    $0, lru_rotate
-        br      .Ltri_hit
+        br      .Ltri_back
 1:      brz     $85, 2f
         il      $100, 3
         brsl    $0, lru_rotate                # evict the least recent way
@@ -312,7 +312,7 @@ tri_miss:
         stqd    $92, 16($84)
         stqd    $93, 32($84)
         stqd    $94, 48($84)
-        br      .Ltri_hit
+        br      .Ltri_back
 .Ltm_fetch:
         lqa     $86, vars+V_TMISS
         ai      $86, $86, 1
@@ -333,5 +333,5 @@ tri_miss:
         wrch    $MFC_WrTagMask, $86
         wrch    $MFC_WrTagUpdate, $88
         rdch    $86, $MFC_RdTagStat
-        br      .Ltri_hit
+        br      .Ltri_back
 
