@@ -25,6 +25,16 @@
 #   clobbers: $84..$88 $101 $102
 
         .text
+# back to the test loop's triangle (with EXT_MULTIHINT through .Ltri_hit_m, triangle.s,
+# which computes the numerator the cull may not have)
+        .macro  TRI_BACK
+        .ifdef  EXT_MULTIHINT
+        br      .Ltri_hit_m
+        .else
+        br      .Ltri_hit
+        .endif
+        .endm
+
 # prefetch misses: one context fetches straight into way 0
 .Lpf_one:
         a       $101, TTAGS, $81              # way 0's tag and line
@@ -289,7 +299,7 @@ tri_miss:
         brsl    $0, lru_find
         brz     $100, 1f
         brsl    $0, lru_rotate
-        br      .Ltri_back
+        TRI_BACK
 1:      brz     $85, 2f
         il      $100, 3
         brsl    $0, lru_rotate                # evict the least recent way
@@ -312,7 +322,7 @@ tri_miss:
         stqd    $92, 16($84)
         stqd    $93, 32($84)
         stqd    $94, 48($84)
-        br      .Ltri_back
+        TRI_BACK
 .Ltm_fetch:
         lqa     $86, vars+V_TMISS
         ai      $86, $86, 1
@@ -333,5 +343,5 @@ tri_miss:
         wrch    $MFC_WrTagMask, $86
         wrch    $MFC_WrTagUpdate, $88
         rdch    $86, $MFC_RdTagStat
-        br      .Ltri_back
+        TRI_BACK
 

@@ -439,9 +439,6 @@ ray_loop:
         ila     $114, numbuf
         stqx    $70, $114, $100
         br      .Ltri_hit
-        .set    .Ltri_back, .Ltri_hit_m
-        .else
-        .set    .Ltri_back, .Ltri_hit
         .endif
 
 tri_next:                                     # (a culled triangle)
