@@ -68,6 +68,10 @@ k_shade:        .long 0x03030380, 0x07070780, 0x0b0b0b80, 0x0f0f0f80   # byte 3 
 k_ff:           .long 0x000000ff, 0x000000ff, 0x000000ff, 0x000000ff
 k_c255:         .long 255, 255, 255, 255
 k_abs:          .long 0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff
+        .ifdef  EXT_MULTIHINT
+k_trav_to:      .long first_changed, leaf, .Ltrav_on, 0   # a step's ways (traverse.s)
+numbuf:         .space 128      # the leaf's triangles' n_d - o.n, by triangle & 7 (triangle.s)
+        .endif
 
         .align 7
 outbuf:         .space 2048     # two packet result blocks, alternating

@@ -25,6 +25,16 @@
 #   clobbers: $84..$88 $101 $102
 
         .text
+# back to the test loop's triangle (with EXT_MULTIHINT through .Ltri_hit_m, triangle.s,
+# which computes the numerator the cull may not have)
+        .macro  TRI_BACK
+        .ifdef  EXT_MULTIHINT
+        br      .Ltri_hit_m
+        .else
+        br      .Ltri_hit
+        .endif
+        .endm
+
 # prefetch misses: one context fetches straight into way 0
 .Lpf_one:
         a       $101, TTAGS, $81              # way 0's tag and line
@@ -69,6 +79,51 @@
         bi      $84
 # several contexts: a triangle staged while the packet was suspended is installed now;
 # others are fetched into the packet's staging slots
+        .ifdef  EXT_MULTIHINT
+# (multihint) the same as two scheduled blocks, the fetch's operands and the counter's
+# load before the staging check (which needs no extension)
+        .sched  scratch=66-127
+.Lpf_stage:
+        ai      $95, $77, -1
+        ila     $96, .Lpf
+        ila     $97, suspend
+        ceqi    $95, $95, 0
+        selb    $96, $96, $97, $95
+      ! hbr     .Lpf_stage_br, $96
+        sf      $88, $66, $76                 # the slot
+        shli    $89, $88, 4
+        a       $89, $89, RAYS
+        lqd     $90, CTX_STAGE_TAGS($89)
+        shli    $84, $88, 6
+        ila     $91, CTX_STAGE_TRIS
+        a       $84, $84, $91
+        a       $84, $84, RAYS
+        lqd     $86, CTX_TAG(RAYS)
+        il      $87, 0x40
+        shli    $85, $76, 6
+        a       $85, $85, EATRIS
+        lqa     $98, vars+V_TMISS
+        ai      $98, $98, 1
+        ceq     $90, $90, $76
+      ! brnz    $90, .Lpf_install
+        .endsched
+        .sched  scratch=66-127
+        stqd    $76, CTX_STAGE_TAGS($89)
+        wrch    $MFC_LSA, $84
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $85
+        wrch    $MFC_Size, $79
+        wrch    $MFC_TagID, $86
+        wrch    $MFC_Cmd, $87
+        il      $78, 1
+        stqa    $98, vars+V_TMISS
+        ai      $76, $76, 1
+        ai      $77, $77, -1
+        ila     $80, leaf_resume
+.Lpf_stage_br:
+      ! bi      $96
+        .endsched
+        .else
 .Lpf_stage:
         ai      $95, $77, -1                  # the pass's step taken here, and its
         ila     $96, .Lpf                     # branch hinted to where it goes: the
@@ -107,6 +162,7 @@
         ila     $80, leaf_resume
 .Lpf_stage_br:
         bi      $96
+        .endif
 .Lpf_install:                                 # (4-way, when the pass runs again)
         il      $90, -1
         stqd    $90, CTX_STAGE_TAGS($89)
@@ -146,6 +202,52 @@ leaf_resume:
         ila     $89, CTX_STAGE_TRIS           # and its record at CTX_STAGE_TRIS + 64 j
         a       $89, $89, RAYS
         il      $100, -1
+        .ifdef  EXT_MULTIHINT
+        # (multihint) one scheduled block per slot, whose way on (the next slot or, after
+        # the last, the leaf's cull) is chosen as it starts and hinted in an entry of its own
+        ila     $101, .Lres
+        ila     $102, leaf_cull
+        .sched  scratch=66-127
+.Lres:
+        ai      $77, $77, -1
+        ceqi    $103, $77, 0
+        selb    $104, $101, $102, $103
+        hbr     .Lres_br, $104
+        and     $80, $76, TMASK
+        lqd     $85, CTX_STAGE_TAGS($88)
+        shli    $81, $80, 4
+        shli    $82, $80, 6
+        a       $83, TTAGS, $81
+        a       $84, TDATA, $82
+        lqd     $86, 0($83)                   # the line as it is
+        lqd     $91, 0($84)
+        lqd     $92, 16($84)
+        lqd     $93, 32($84)
+        lqd     $94, 48($84)
+        lqd     $95, 0($89)                   # the staged record
+        lqd     $96, 16($89)
+        lqd     $97, 32($89)
+        lqd     $98, 48($89)
+        ceq     $99, $85, $76                 # staged: install it
+        shufb   $99, $99, $99, PAT0
+        selb    $86, $86, $76, $99
+        selb    $91, $91, $95, $99
+        selb    $92, $92, $96, $99
+        selb    $93, $93, $97, $99
+        selb    $94, $94, $98, $99
+        stqd    $86, 0($83)
+        stqd    $91, 0($84)
+        stqd    $92, 16($84)
+        stqd    $93, 32($84)
+        stqd    $94, 48($84)
+        stqd    $100, CTX_STAGE_TAGS($88)
+        ai      $76, $76, 1
+        ai      $88, $88, 16
+        ai      $89, $89, 64
+.Lres_br:
+      ! bi      $104
+        .endsched
+        .else
         hbrr    .Lres_br, .Lres
 .Lres:  and     $80, $76, TMASK
         lqd     $85, CTX_STAGE_TAGS($88)
@@ -182,6 +284,7 @@ leaf_resume:
 .Lres_br:
         brnz    $77, .Lres
         br      leaf_cull
+        .endif
 
 # ---- triangle cache miss in the test loop: another way of a 4-way set, the packet's
 # staging slot (fetched while it was suspended), or a fetch it waits for
@@ -196,7 +299,7 @@ tri_miss:
         brsl    $0, lru_find
         brz     $100, 1f
         brsl    $0, lru_rotate
-        br      .Ltri_hit
+        TRI_BACK
 1:      brz     $85, 2f
         il      $100, 3
         brsl    $0, lru_rotate                # evict the least recent way
@@ -219,7 +322,7 @@ tri_miss:
         stqd    $92, 16($84)
         stqd    $93, 32($84)
         stqd    $94, 48($84)
-        br      .Ltri_hit
+        TRI_BACK
 .Ltm_fetch:
         lqa     $86, vars+V_TMISS
         ai      $86, $86, 1
@@ -240,5 +343,5 @@ tri_miss:
         wrch    $MFC_WrTagMask, $86
         wrch    $MFC_WrTagUpdate, $88
         rdch    $86, $MFC_RdTagStat
-        br      .Ltri_hit
+        TRI_BACK
 

@@ -66,6 +66,9 @@ leaf_cull:
         ai      $79, RAYS, CTX_CORNERS        # the corner rays' x, y, z
         ila     $80, k_axoff
         ila     $81, k_kuv
+        .ifdef  EXT_MULTIHINT
+        ila     $75, numbuf                   # (the test's numerator, kept for tri_loop)
+        .endif
         .sched  pool=82-127 scratch=66-127
 .Lcull:
         .irp    T, 0, 1
@@ -143,6 +146,9 @@ leaf_cull:
         andi    %sl\T, %tri\T, 7
         shli    %so\T, %sl\T, 4
       ~ stqx    %cv\T, $78, %so\T
+        .ifdef  EXT_MULTIHINT
+      ~ stqx    %num\T, $75, %so\T
+        .endif
         .endr
         ai      $76, $76, 2
         ai      $77, $77, -2
@@ -196,9 +202,14 @@ tri_loop:
         shufb   $94, $92, $92, PAT0           # o_k
         shufb   $121, $92, $92, PAT1          # o_u
         shufb   $122, $92, $92, PAT2          # o_v
+        .ifdef  EXT_MULTIHINT                 # (multihint; needs no extension) the cull
+        ila     $114, numbuf                  # computed it, off this block's critical
+        lqx     $70, $114, $100               # path (a test-loop miss: .Ltri_hit_m)
+        .else
         fs      $70, $93, $94
         fnms    $70, $68, $121, $70
         fnms    $70, $69, $122, $70              # num = n_d - o_k - n_u o_u - n_v o_v
+        .endif
         .ifndef SHADE                         # (the eye-light grey's n.d/|n|: unshaded)
         fm      $95, $68, $68
         fma     $95, $69, $69, $95
@@ -403,6 +414,32 @@ ray_loop:
       ! bi      %to
         .endsched
 
+
+        .ifdef  EXT_MULTIHINT
+# a triangle fetched by the test loop's miss (tri_miss): the cull's numerator in its slot
+# may be another triangle's (the line held that one), so it is computed here
+.Ltri_hit_m:
+        andi    $100, $66, 7
+        shli    $100, $100, 4
+        lqd     $86, TRI_N_U($84)
+        rotqbyi $89, $86, 12
+        shli    $89, $89, 4
+        ila     $90, k_kuv
+        lqx     $92, $90, $89
+        shufb   $92, ORIG, ORIG, $92
+        shufb   $68, $86, $86, PAT0
+        shufb   $69, $86, $86, PAT1
+        shufb   $93, $86, $86, PAT2
+        shufb   $94, $92, $92, PAT0
+        shufb   $121, $92, $92, PAT1
+        shufb   $122, $92, $92, PAT2
+        fs      $70, $93, $94
+        fnms    $70, $68, $121, $70
+        fnms    $70, $69, $122, $70
+        ila     $114, numbuf
+        stqx    $70, $114, $100
+        br      .Ltri_hit
+        .endif
 
 tri_next:                                     # (a culled triangle)
         ai      $66, $66, 1

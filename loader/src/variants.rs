@@ -17,8 +17,9 @@ pub enum KernelVariant {
     /// The fill pattern that exercises the runtime without tracing (`kernels/fill.s`).
     Fill,
     /// [`KernelVariant::Primary`] for SPUs with several hint entries (the `multihint`
-    /// extension, `docs/extensions.md`): branches hinted before the loops whose own hints
-    /// would replace theirs on the real SPU (`kernels/primary.s` with `EXT_MULTIHINT`).
+    /// extension, `docs/extensions.md`): data-dependent branches turned into `bi`s to
+    /// `selb`-chosen targets hinted beside the loops' own hints, and the slow path and
+    /// leaf paths reworked (`kernels/primary.s` with `EXT_MULTIHINT`).
     PrimaryMultihint,
     /// [`KernelVariant::Shaded`] with the reflection pass (`modules/reflect.s`): each
     /// primary packet's reflective hits spawn reflected rays, traced, shaded with shadows
