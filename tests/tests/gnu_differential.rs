@@ -263,10 +263,14 @@ const LINE_TABLES: &[&str] = &[
 ];
 
 /// Every `.s` of the project (kernels, tests, examples), in a stable order.
-fn project_sources() -> Vec<PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+pub(crate) fn project_sources() -> Vec<PathBuf> {
+    sources_under(&Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+}
+
+/// Every `.s` under `root` (not in hidden directories, `target` or `shared`), sorted.
+fn sources_under(root: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();
-    let mut dirs = vec![root.clone()];
+    let mut dirs = vec![root.to_path_buf()];
     while let Some(dir) = dirs.pop() {
         let Ok(entries) = std::fs::read_dir(&dir) else {
             continue;
@@ -287,97 +291,335 @@ fn project_sources() -> Vec<PathBuf> {
     out
 }
 
-/// A relocation as comparable text: offset, type, what it names, addend.
-fn relocs(obj: &Object, section: usize) -> Vec<String> {
-    let mut v: Vec<String> = obj.sections[section]
-        .relocs
-        .iter()
-        .map(|r| {
-            let target = match &r.target {
-                RelocTarget::Section(s) => obj.sections[*s].name.clone(),
-                RelocTarget::Symbol(n) => n.clone(),
-            };
-            format!("{:#x} {} {target}{:+}", r.offset, r.kind, r.addend)
-        })
-        .collect();
-    v.sort();
-    v
-}
-
-/// The symbols as comparable text: name, section name, value, size, type, binding.
-fn symbols(obj: &Object) -> Vec<String> {
-    let mut v: Vec<String> = obj
-        .symbols
-        .iter()
-        .map(|s| {
-            let section = match s.section {
-                SymSection::Undefined => "UND".to_string(),
-                SymSection::Absolute => "ABS".to_string(),
-                SymSection::Common => "COM".to_string(),
-                SymSection::Section(k) => obj.sections[k].name.clone(),
-            };
-            let bind = if s.weak {
-                "weak"
-            } else if s.global {
-                "global"
-            } else {
-                "local"
-            };
-            format!(
-                "{} {section} {:#x} size {} type {} {bind}{}",
-                s.name,
-                s.value,
-                s.size,
-                s.kind,
-                if s.hidden { " hidden" } else { "" }
-            )
-        })
-        .collect();
-    v.sort();
-    v
-}
-
-/// Every difference between our object and GNU's, in words.
-fn differences(name: &str, ours: &Object, theirs: &Object) -> Vec<String> {
-    let mut failures = Vec::new();
-    for (k, s) in ours.sections.iter().enumerate() {
-        let Some(t) = theirs.sections.iter().position(|x| x.name == s.name) else {
-            if s.size > 0 || !s.relocs.is_empty() {
-                failures.push(format!("{name}: GNU as has no section {}", s.name));
-            }
-            continue;
-        };
-        let g = &theirs.sections[t];
-        if (s.size, &s.data, s.ty, s.flags) != (g.size, &g.data, g.ty, g.flags) {
-            failures.push(format!(
-                "{name}: {} differs (ours {} bytes type {} flags {:#x}, GNU {} bytes type {} flags {:#x})",
-                s.name, s.size, s.ty, s.flags, g.size, g.ty, g.flags
-            ));
-        }
-        if relocs(ours, k) != relocs(theirs, t) {
-            failures.push(format!(
-                "{name}: {} relocations: ours {:?}, GNU {:?}",
-                s.name,
-                relocs(ours, k),
-                relocs(theirs, t)
-            ));
-        }
+/// An ELF32 big-endian object as lines of text, one fact per line, in file order: the
+/// header, each section header, each symbol in table order, each relocation in section
+/// order and each section's contents 16 bytes to a line. Two objects are the same object
+/// when these lines are the same; where they differ, the first differing lines say how
+/// (the byte comparison after it catches anything the lines leave out: padding).
+pub(crate) fn elf_lines(elf: &[u8]) -> Result<Vec<String>, String> {
+    let u16_at = |o: usize| -> Result<usize, String> {
+        elf.get(o..o + 2)
+            .map(|b| u16::from_be_bytes([b[0], b[1]]) as usize)
+            .ok_or_else(|| format!("ELF cut short at {o:#x}"))
+    };
+    let u32_at = |o: usize| -> Result<usize, String> {
+        elf.get(o..o + 4)
+            .map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]) as usize)
+            .ok_or_else(|| format!("ELF cut short at {o:#x}"))
+    };
+    let cstr = |o: usize| -> String {
+        let tail = elf.get(o..).unwrap_or(&[]);
+        let end = tail.iter().position(|&b| b == 0).unwrap_or(tail.len());
+        String::from_utf8_lossy(&tail[..end]).into_owned()
+    };
+    if elf.get(..6) != Some(b"\x7fELF\x01\x02".as_slice()) {
+        return Err("not ELF32 big-endian".into());
     }
-    for g in &theirs.sections {
-        let ours_has = ours.sections.iter().any(|s| s.name == g.name);
-        // `.debug_line` byte for byte: a missing one is a difference too.
-        if !ours_has && (g.size > 0 || g.name == ".debug_line") {
-            failures.push(format!("{name}: we have no section {}", g.name));
-        }
+    let mut out = vec![format!(
+        "header: ident {:02x?} type {} machine {} version {} entry {:#x} flags {:#x} ehsize {} shentsize {}",
+        &elf[..16],
+        u16_at(16)?,
+        u16_at(18)?,
+        u32_at(20)?,
+        u32_at(24)?,
+        u32_at(36)?,
+        u16_at(40)?,
+        u16_at(46)?
+    )];
+    let (shoff, shnum, shstrndx) = (u32_at(32)?, u16_at(48)?, u16_at(50)?);
+    out.push(format!("section headers at {shoff:#x}, {shnum} of them"));
+    // name, type, offset, size, link, entsize
+    let mut headers = Vec::new();
+    for k in 0..shnum {
+        let h = shoff + 40 * k;
+        let f: Vec<usize> = (0..10)
+            .map(|i| u32_at(h + 4 * i))
+            .collect::<Result<_, _>>()?;
+        headers.push(f);
     }
-    if symbols(ours) != symbols(theirs) {
-        failures.push(format!(
-            "{name}: symbols: ours {:?}, GNU {:?}",
-            symbols(ours),
-            symbols(theirs)
+    let shstr = headers.get(shstrndx).map_or(0, |h| h[4]);
+    let name = |k: usize| {
+        headers
+            .get(k)
+            .map_or(format!("#{k}"), |h| cstr(shstr + h[0]))
+    };
+    for (k, h) in headers.iter().enumerate() {
+        out.push(format!(
+            "[{k}] {} (name at {}) type {} flags {:#x} addr {:#x} off {:#x} size {:#x} link {} info {} align {} entsize {}",
+            name(k), h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], h[8], h[9]
         ));
     }
-    failures
+    // The symbol table's names, for the relocations.
+    let mut sym_names = Vec::new();
+    for h in &headers {
+        if h[1] != 2 {
+            continue;
+        }
+        let strtab = headers.get(h[6]).map_or(0, |s| s[4]);
+        for i in 0..h[5] / 16 {
+            let o = h[4] + 16 * i;
+            let (nm, value, size) = (u32_at(o)?, u32_at(o + 4)?, u32_at(o + 8)?);
+            let (info, other, shndx) = (
+                *elf.get(o + 12).ok_or("cut short")?,
+                *elf.get(o + 13).ok_or("cut short")?,
+                u16_at(o + 14)?,
+            );
+            let place = match shndx {
+                0 => "UND".to_string(),
+                0xfff1 => "ABS".to_string(),
+                0xfff2 => "COM".to_string(),
+                k => name(k),
+            };
+            let n = if info & 15 == 3 {
+                name(shndx)
+            } else {
+                cstr(strtab + nm)
+            };
+            out.push(format!(
+                "sym {i}: `{}' {place} value {value:#x} size {size} type {} bind {} other {other} (name at {nm})",
+                cstr(strtab + nm),
+                info & 15,
+                info >> 4
+            ));
+            sym_names.push(n);
+        }
+    }
+    for h in &headers {
+        if h[1] == 4 {
+            for i in 0..h[5] / 12 {
+                let o = h[4] + 12 * i;
+                let (off, info, addend) = (u32_at(o)?, u32_at(o + 4)?, u32_at(o + 8)? as i32);
+                out.push(format!(
+                    "reloc {}[{i}] {off:#x} type {} sym {} `{}' {addend:+}",
+                    name(h[7]),
+                    info & 0xff,
+                    info >> 8,
+                    sym_names.get(info >> 8).map_or("?", |s| s.as_str())
+                ));
+            }
+        } else if h[1] != 8 {
+            let bytes = elf.get(h[4]..h[4] + h[5]).ok_or("section past the end")?;
+            for (i, c) in bytes.chunks(16).enumerate() {
+                out.push(format!(
+                    "{}+{:#x}: {:02x?}",
+                    name(headers.iter().position(|x| x == h).unwrap_or(0)),
+                    16 * i,
+                    c
+                ));
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// How GNU as and `spu as -c` differ on one object ("" when they do not): the first
+/// differing facts of `elf_lines`, or the first differing byte.
+pub(crate) fn object_difference(ours: &[u8], theirs: &[u8]) -> String {
+    if ours == theirs {
+        return String::new();
+    }
+    match (elf_lines(ours), elf_lines(theirs)) {
+        (Ok(a), Ok(b)) => {
+            // The first few facts that differ (where the header table starts follows from
+            // the rest, so it is named only when nothing else differs).
+            let differing: Vec<usize> = (0..a.len().max(b.len()))
+                .filter(|&k| a.get(k) != b.get(k))
+                .collect();
+            // Symbols and relocations first: section offsets and sizes follow from them.
+            let rank = |k: &usize| {
+                let line = a.get(*k).or(b.get(*k)).map_or("", |s| s.as_str());
+                (
+                    !(line.starts_with("sym") || line.starts_with("reloc")),
+                    *k == 1,
+                    *k,
+                )
+            };
+            let mut shown = differing.clone();
+            shown.sort_by_key(rank);
+            shown.truncate(3);
+            if !shown.is_empty() {
+                let show = |v: &[String]| {
+                    shown
+                        .iter()
+                        .map(|&k| v.get(k).map_or("(none)", |s| s.as_str()))
+                        .collect::<Vec<_>>()
+                        .join(" | ")
+                };
+                return format!("ours: {}\n    GNU:  {}", show(&a), show(&b));
+            }
+        }
+        (Err(e), _) => return format!("ours unreadable: {e}"),
+        (_, Err(e)) => return format!("GNU's unreadable: {e}"),
+    }
+    let k = ours
+        .iter()
+        .zip(theirs)
+        .position(|(a, b)| a != b)
+        .unwrap_or(ours.len().min(theirs.len()));
+    format!(
+        "bytes differ at {k:#x} (ours {} bytes, GNU {})",
+        ours.len(),
+        theirs.len()
+    )
+}
+
+/// The lines of a file GNU's messages name with a warning (`FILE:LINE: Warning: ...`),
+/// each as `basename:line`, sorted, each once (GNU as warns twice of some divisions by
+/// zero in data, once for each time it reads the expression: a count we do not copy).
+fn gnu_warning_lines(stderr: &str) -> Vec<String> {
+    let mut v: Vec<String> = stderr
+        .lines()
+        .filter_map(|l| {
+            let (place, msg) = l.split_once(": Warning: ")?;
+            let _ = msg;
+            let (file, line) = place.rsplit_once(':')?;
+            Some(format!(
+                "{}:{line}",
+                Path::new(file).file_name()?.to_string_lossy()
+            ))
+        })
+        .collect();
+    v.sort();
+    v.dedup();
+    v
+}
+
+/// What the differential run found.
+#[derive(Default)]
+pub(crate) struct Differential {
+    /// Files both assemblers turned into objects (compared byte for byte).
+    pub(crate) compared: usize,
+    /// Files both refused.
+    pub(crate) refused_by_both: usize,
+    /// Project files left out: they use this project's own directives (`.sched`), which
+    /// GNU as has not.
+    pub(crate) extensions: usize,
+    pub(crate) failures: Vec<String>,
+}
+
+/// Statements of this project's own, beyond GNU as: files using them are not compared.
+const OWN_DIRECTIVES: &[&str] = &[".sched", ".spu_ext"];
+
+/// Both assemblers over `files`, in parallel: whether each accepts it, the lines each
+/// warns on, and the objects byte for byte.
+pub(crate) fn differential(gas: &Path, files: &[PathBuf], tmp: &Path) -> Differential {
+    std::fs::create_dir_all(tmp).unwrap();
+    let threads = std::thread::available_parallelism()
+        .map_or(2, |n| n.get())
+        .min(8);
+    let results = std::sync::Mutex::new(Differential::default());
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    std::thread::scope(|scope| {
+        for t in 0..threads {
+            let (results, next) = (&results, &next);
+            scope.spawn(move || {
+                let out = tmp.join(format!("gnu{t}.o"));
+                loop {
+                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(file) = files.get(k) else { break };
+                    let r = compare_one(gas, file, &out);
+                    let mut d = results.lock().unwrap();
+                    match r {
+                        Compared::Same => d.compared += 1,
+                        Compared::RefusedByBoth => d.refused_by_both += 1,
+                        Compared::Extension => d.extensions += 1,
+                        Compared::Differ(m) => {
+                            d.compared += 1;
+                            d.failures.push(format!("{}: {m}", file.display()));
+                        }
+                        Compared::Disagree(m) => {
+                            d.failures.push(format!("{}: {m}", file.display()))
+                        }
+                    }
+                }
+            });
+        }
+    });
+    let mut d = results.into_inner().unwrap();
+    d.failures.sort();
+    d
+}
+
+enum Compared {
+    Same,
+    RefusedByBoth,
+    Extension,
+    Differ(String),
+    Disagree(String),
+}
+
+fn compare_one(gas: &Path, file: &Path, out: &Path) -> Compared {
+    let source = std::fs::read(file).unwrap_or_default();
+    let text = String::from_utf8_lossy(&source);
+    if text.lines().any(|l| {
+        let t = l.trim_start();
+        OWN_DIRECTIVES.iter().any(|d| t.starts_with(d))
+    }) {
+        return Compared::Extension;
+    }
+    let ours = assemble_object_file(file, &Options::default());
+    let mut cmd = std::process::Command::new(gas);
+    if let Some(dir) = file.parent() {
+        cmd.arg("-I").arg(dir);
+    }
+    let _ = std::fs::remove_file(out);
+    let gnu = cmd
+        .arg(file)
+        .arg("-o")
+        .arg(out)
+        .output()
+        .expect("runs GNU as");
+    let stderr = String::from_utf8_lossy(&gnu.stderr).into_owned();
+    let first = |s: &str| {
+        s.lines()
+            .find(|l| l.contains("rror"))
+            .unwrap_or("")
+            .to_string()
+    };
+    match (ours, gnu.status.success()) {
+        (Err(_), false) => Compared::RefusedByBoth,
+        (Err(e), true) => Compared::Disagree(format!(
+            "GNU as accepts what we refuse: {}",
+            e.first().map(|d| d.to_string()).unwrap_or_default()
+        )),
+        (Ok(_), false) => {
+            Compared::Disagree(format!("GNU as refuses what we accept: {}", first(&stderr)))
+        }
+        (Ok((obj, warnings)), true) => {
+            let mut ours_warned: Vec<String> = warnings
+                .iter()
+                .map(|w| {
+                    let f = Path::new(&w.location.file).file_name().unwrap_or_default();
+                    format!("{}:{}", f.to_string_lossy(), w.location.line)
+                })
+                .collect();
+            ours_warned.sort();
+            ours_warned.dedup();
+            let mut m = Vec::new();
+            let theirs_warned = gnu_warning_lines(&stderr);
+            if ours_warned != theirs_warned {
+                m.push(format!(
+                    "warnings on lines: ours {ours_warned:?}, GNU {theirs_warned:?} ({})",
+                    stderr.trim().replace('\n', " / ")
+                ));
+            }
+            match obj.to_elf() {
+                Ok(elf) => {
+                    let theirs = std::fs::read(out).unwrap_or_default();
+                    let d = object_difference(&elf, &theirs);
+                    if !d.is_empty() {
+                        m.push(d);
+                    }
+                }
+                Err(e) => m.push(format!("ours not written: {e}")),
+            }
+            if m.is_empty() {
+                Compared::Same
+            } else {
+                Compared::Differ(m.join("\n    "))
+            }
+        }
+    }
 }
 
 /// GNU as's object for `file` (None when GNU as refuses it too).
@@ -395,7 +637,7 @@ fn gnu_object(gas: &Path, file: &Path, tmp: &Path) -> Option<Object> {
 }
 
 /// Writes the generated corpus under `dir` and gives the paths.
-fn write_corpus(dir: &Path) -> Vec<PathBuf> {
+pub(crate) fn write_corpus(dir: &Path) -> Vec<PathBuf> {
     std::fs::create_dir_all(dir).unwrap();
     generated_corpus()
         .into_iter()
@@ -404,6 +646,17 @@ fn write_corpus(dir: &Path) -> Vec<PathBuf> {
             std::fs::write(&p, src).unwrap();
             p
         })
+        .collect()
+}
+
+/// The `.s` files under the directories `SPU_GAS_TESTSUITE` names (`:`-separated; gas's
+/// own `gas/testsuite/gas/spu` for one): extra inputs on a machine that has them.
+pub(crate) fn testsuite_sources() -> Vec<PathBuf> {
+    let Some(dirs) = std::env::var_os("SPU_GAS_TESTSUITE") else {
+        return Vec::new();
+    };
+    std::env::split_paths(&dirs)
+        .flat_map(|d| sources_under(&d))
         .collect()
 }
 
@@ -421,24 +674,23 @@ fn objects_match_gnu_as() {
     let tmp = std::env::temp_dir().join(format!("spu-gnu-diff-{}", std::process::id()));
     let mut files = project_sources();
     files.extend(write_corpus(&tmp.join("corpus")));
-    let mut failures = Vec::new();
-    let mut compared = 0;
-    for file in &files {
-        let Ok((ours, _)) = assemble_object_file(file, &Options::default()) else {
-            continue; // the error tests
-        };
-        let Some(theirs) = gnu_object(gas, file, &tmp) else {
-            failures.push(format!("{}: GNU as refuses what we accept", file.display()));
-            continue;
-        };
-        compared += 1;
-        let name = file.display().to_string();
-        failures.extend(differences(&name, &ours, &theirs));
-    }
-    eprintln!("compared {compared} objects with GNU as");
+    files.extend(testsuite_sources());
+    let d = differential(gas, &files, &tmp);
+    eprintln!(
+        "{} files: {} objects identical or compared, {} refused by both, {} use this project's own directives; {} differences",
+        files.len(),
+        d.compared,
+        d.refused_by_both,
+        d.extensions,
+        d.failures.len()
+    );
     let _ = std::fs::remove_dir_all(&tmp);
-    assert!(compared > 300, "GNU as assembled only {compared} files");
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert!(
+        d.compared > 300,
+        "GNU as assembled only {} files",
+        d.compared
+    );
+    assert!(d.failures.is_empty(), "{}", d.failures.join("\n"));
 }
 
 /// `spu dis` (its listing of each code section) against `objdump -d` on GNU's objects,

@@ -39,7 +39,7 @@ use macros::Macro;
 use obj_elf::SectionDef;
 use std::collections::HashMap;
 use std::path::PathBuf;
-use symbols::{SymAttrs, SymVal};
+use symbols::{Chain, SymAttrs, SymVal};
 
 /// Assembler settings.
 #[derive(Clone, Debug, Default)]
@@ -155,6 +155,8 @@ struct Assembler<'o> {
     dwarf: dwarf2::LineState,
     /// The ISA extensions on at this point of the walk (the options', then `.spu_ext`).
     extensions: spu_isa::Extensions,
+    /// The order the final walk made symbols in (an object's symbol table order).
+    chain: std::cell::RefCell<Chain>,
 }
 
 /// What a `.sched` block's schedule is made from: its lines, options and start address.
@@ -227,6 +229,7 @@ impl<'o> Assembler<'o> {
             local_counter: 0,
             symvers: Vec::new(),
             dwarf: Default::default(),
+            chain: Default::default(),
         };
         // gas always has .text, .data and .bss, in that order.
         for name in [".text", ".data", ".bss"] {
@@ -255,6 +258,15 @@ impl<'o> Assembler<'o> {
         self.local_counter = 0;
         self.dwarf = Default::default();
         if pass == 2 {
+            // gas makes .text, .data and .bss (and their symbols) before reading.
+            let mut chain = Chain::default();
+            for d in 0..3 {
+                chain.section(d);
+            }
+            for (n, _) in &self.opts.defines {
+                chain.symbol(n);
+            }
+            *self.chain.borrow_mut() = chain;
             self.bytes.clear();
             self.relocs.clear();
             self.listing.clear();

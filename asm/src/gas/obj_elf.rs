@@ -198,6 +198,7 @@ impl Assembler<'_> {
             );
             return;
         }
+        self.note_symbol(&name);
         if d == ".comm" {
             self.attrs.entry(name.clone()).or_default().global = true;
             if self.object {
@@ -215,6 +216,10 @@ impl Assembler<'_> {
                 return;
             }
         }
+        // read.c bss_alloc: an object of its size.
+        let a = self.attrs.entry(name.clone()).or_default();
+        a.kind = 1;
+        a.size = Some(size);
         let here = self.sect;
         let bss = self.chunk(SectionDef::named(".bss"), 0);
         self.sect = bss;
@@ -255,6 +260,7 @@ impl Assembler<'_> {
             ".text" | ".data" | ".bss" | ".rodata" => {
                 let sub = self.subsection(args, line, col);
                 let c = self.chunk(SectionDef::named(d), sub);
+                self.note_section(self.chunks[c].0);
                 self.switch_to(c);
             }
             ".subsection" => {
@@ -271,6 +277,7 @@ impl Assembler<'_> {
                     self.sect_stack.push((self.sect, self.prev_sect));
                 }
                 let c = self.chunk(def, sub);
+                self.note_section(self.chunks[c].0);
                 self.switch_to(c);
             }
             ".popsection" => match self.sect_stack.pop() {
@@ -328,11 +335,14 @@ impl Assembler<'_> {
                     if n.is_empty() {
                         continue;
                     }
+                    self.note_symbol(n);
                     let a = self.attrs.entry(n.to_string()).or_default();
                     match d {
                         ".weak" => a.weak = true,
                         ".global" | ".globl" => a.global = true,
-                        _ => a.hidden = true,
+                        ".internal" => a.visibility = 1,
+                        ".hidden" => a.visibility = 2,
+                        _ => a.visibility = 3,
                     }
                 }
             }
@@ -363,6 +373,7 @@ impl Assembler<'_> {
                         return true;
                     }
                 };
+                self.note_symbol(&name);
                 self.attrs.entry(name).or_default().kind = kind;
             }
             ".size" => {
@@ -377,6 +388,7 @@ impl Assembler<'_> {
                     return true;
                 }
                 let name = parts[0].trim().to_string();
+                self.note_symbol(&name);
                 match self.eval_val(parts[1..].join(",").trim()) {
                     Ok((v, _, _)) if !v.reloc || self.pass == 1 => {
                         self.attrs.entry(name).or_default().size = Some(v.v)

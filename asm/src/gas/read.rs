@@ -664,9 +664,22 @@ impl Assembler<'_> {
             ".file" if !args.trim_start().starts_with('"') => self.dwarf_file(args, line, col),
             ".loc" => self.dwarf_loc(args, line, col),
             ".loc_mark_labels" => self.dwarf_mark_labels(args, line, col),
-            ".extern" | ".file" | ".local" | ".brinfo" | ".end" | ".nolist" | ".list"
-            | ".eject" | ".psize" | ".title" | ".sbttl" | ".version" | ".gnu_attribute"
-            | ".lflags" => {}
+            ".file" => {
+                if let Some(name) = crate::lex::unquote(args.trim()) {
+                    if self.pass == 2 {
+                        let name: String = name.iter().map(|&b| b as char).collect();
+                        self.chain.borrow_mut().file(&name);
+                    }
+                }
+            }
+            ".local" => {
+                // obj-elf.c obj_elf_local makes each symbol (an undefined one stays global).
+                for n in split_top(args, ',') {
+                    self.note_symbol(n.trim());
+                }
+            }
+            ".extern" | ".brinfo" | ".end" | ".nolist" | ".list" | ".eject" | ".psize"
+            | ".title" | ".sbttl" | ".version" | ".gnu_attribute" | ".lflags" => {}
             // read.c's s_ignore entries (COFF debugging and MRI listing control), and
             // `.func`/`.endfunc`, which emit nothing without stabs debugging.
             ".debug" | ".dim" | ".endef" | ".scl" | ".tag" | ".val" | ".ln" | ".func"
@@ -855,8 +868,9 @@ impl Assembler<'_> {
                     let b = value.to_be_bytes();
                     let s = size as usize;
                     let mut word = vec![0u8; s];
+                    // md_number_to_chars of at most 4 bytes at the start; zeros after.
                     let k = s.min(4);
-                    word[s - k..].copy_from_slice(&b[8 - k..]);
+                    word[..k].copy_from_slice(&b[8 - k..]);
                     self.emit(&word);
                 }
             }
