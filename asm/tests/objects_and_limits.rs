@@ -138,7 +138,7 @@ fn linked_objects_equal_one_assembly() {
 /// when a program has no data at all.
 #[test]
 fn the_data_segment_starts_at_align_0x80() {
-    let src = "\t.text\n\t.global _start\n_start:\tila\t$3, tab\n\tila\t$4, _edata\n\tila\t$5, _end\n\tstop\t0x2000\n\t.section .rodata\nro:\t.long\t1\n\t.data\ntab:\t.long\t2\n\t.bss\nb:\t.space\t4\n";
+    let src = "\t.text\n\t.global _start\n_start:\tila\t$3, tab\n\tila\t$4, _edata\n\tila\t$5, _end\n\tstop\t0x2000\n\t.section .rodata\nro:\t.long\t1\n\t.data\ntab:\t.long\t2\n\t.section .bss\nb:\t.space\t4\n";
     let linked = link(&[object(src)], &LinkOptions::default()).unwrap();
     let at = |n: &str| linked.symbols.iter().find(|s| s.0 == n).unwrap().1;
     let sect = |n: &str| linked.sections.iter().find(|s| s.0 == n).unwrap().1;

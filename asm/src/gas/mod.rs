@@ -258,13 +258,14 @@ impl<'o> Assembler<'o> {
         self.local_counter = 0;
         self.dwarf = Default::default();
         if pass == 2 {
-            // gas makes .text, .data and .bss (and their symbols) before reading.
+            // gas makes the `--defsym` symbols (the last given first), then .text, .data
+            // and .bss (and their symbols), before reading.
             let mut chain = Chain::default();
+            for (n, _) in self.opts.defines.iter().rev() {
+                chain.symbol(n);
+            }
             for d in 0..3 {
                 chain.section(d);
-            }
-            for (n, _) in &self.opts.defines {
-                chain.symbol(n);
             }
             *self.chain.borrow_mut() = chain;
             self.bytes.clear();

@@ -145,6 +145,15 @@ impl Assembler<'_> {
     pub(super) fn common(&mut self, d: &str, args: &str, line: &Line, col: usize) {
         let parts = split_top(args, ',');
         let name = parts[0].trim().to_string();
+        if d == ".bss" && (name.is_empty() || parts.len() < 3) {
+            let m = if name.is_empty() {
+                "expected symbol name"
+            } else {
+                "expected alignment after size"
+            };
+            self.diag(Severity::Error, line, col, m);
+            return;
+        }
         if name.is_empty() || parts.len() < 2 {
             self.diag(
                 Severity::Error,
@@ -216,9 +225,9 @@ impl Assembler<'_> {
                 return;
             }
         }
-        // read.c bss_alloc: an object of its size.
+        // read.c bss_alloc: a symbol of its size, an object unless `.bss` made it.
         let a = self.attrs.entry(name.clone()).or_default();
-        a.kind = 1;
+        a.kind = if d == ".bss" { 0 } else { 1 };
         a.size = Some(size);
         let here = self.sect;
         let bss = self.chunk(SectionDef::named(".bss"), 0);
@@ -257,7 +266,10 @@ impl Assembler<'_> {
     /// The section and symbol-attribute directives; whether `d` was one.
     pub(super) fn elf_directive(&mut self, d: &str, args: &str, line: &Line, col: usize) -> bool {
         match d {
-            ".text" | ".data" | ".bss" | ".rodata" => {
+            // tc-spu.c: `.bss NAME, SIZE, ALIGN` reserves space in .bss (s_lcomm_bytes);
+            // it does not switch to it, and there is no `.rodata` directive.
+            ".bss" => self.common(d, args, line, col),
+            ".text" | ".data" => {
                 let sub = self.subsection(args, line, col);
                 let c = self.chunk(SectionDef::named(d), sub);
                 self.note_section(self.chunks[c].0);

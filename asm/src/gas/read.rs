@@ -478,8 +478,8 @@ impl Assembler<'_> {
             return;
         }
         let ty = parts[1].trim();
-        let kind = crate::reloc::by_name(ty).or_else(|| self.eval(ty).ok().map(|v| v.0 as u32));
-        let Some(kind) = kind.filter(|k| crate::reloc::name(*k).is_some()) else {
+        // Names only, as spu-elf-as 2.40 takes them (a number is refused there too).
+        let Some(kind) = crate::reloc::by_name(ty) else {
             self.diag(
                 Severity::Error,
                 line,
@@ -743,6 +743,11 @@ impl Assembler<'_> {
                 let here = self.here() as i64;
                 let pad = (boundary - here % boundary) % boundary;
                 if max_skip.is_some_and(|m| pad > m) {
+                    // Skipped, but the section is aligned still (gas's record_alignment).
+                    if self.absolute.is_none() {
+                        let a = self.align.entry(self.sect).or_insert(1);
+                        *a = (*a).max(boundary as u32);
+                    }
                     return;
                 }
                 self.align_to(boundary as u32, fill);

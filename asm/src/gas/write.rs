@@ -604,7 +604,8 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
                 });
                 continue;
             }
-            SymVal::Abs(v) if v.sect.is_some() && v.sym.is_none() => {
+            // Equated to a place in a section (through a global label too): that place.
+            SymVal::Abs(v) if v.sect.is_some() => {
                 (SymSection::Section(v.sect.unwrap_or(0)), v.v as u64)
             }
             SymVal::Abs(v) if !v.reloc && !v.cross => (SymSection::Absolute, v.v as u64),
