@@ -47,7 +47,10 @@ impl Assembler<'_> {
                 Err((c, m)) => self.diag(Severity::Error, line, c + 1, m),
             },
             ".irp" | ".irpc" => {
-                let (var, values) = irp_values(kind == ".irpc", args);
+                let (var, mut values) = irp_values(kind == ".irpc", args);
+                if values.is_empty() {
+                    values.push(String::new()); // macro.c: no values, the body once
+                }
                 for v in values {
                     if self.exitm || self.expanded > MAX_EXPANDED {
                         break;

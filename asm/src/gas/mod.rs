@@ -157,6 +157,8 @@ struct Assembler<'o> {
     extensions: spu_isa::Extensions,
     /// The order the final walk made symbols in (an object's symbol table order).
     chain: std::cell::RefCell<Chain>,
+    /// `.end` was read: the walk reads nothing more.
+    ended: bool,
 }
 
 /// What a `.sched` block's schedule is made from: its lines, options and start address.
@@ -230,6 +232,7 @@ impl<'o> Assembler<'o> {
             symvers: Vec::new(),
             dwarf: Default::default(),
             chain: Default::default(),
+            ended: false,
         };
         // gas always has .text, .data and .bss, in that order.
         for name in [".text", ".data", ".bss"] {
@@ -257,6 +260,7 @@ impl<'o> Assembler<'o> {
         self.altmacro = false;
         self.local_counter = 0;
         self.dwarf = Default::default();
+        self.ended = false;
         if pass == 2 {
             // gas makes the `--defsym` symbols (the last given first), then .text, .data
             // and .bss (and their symbols), before reading.

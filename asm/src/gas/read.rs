@@ -57,7 +57,7 @@ impl Assembler<'_> {
         }
         let mut i = 0;
         let mut cond: Vec<(bool, bool)> = Vec::new(); // (active, any branch taken)
-        while i < lines.len() {
+        while i < lines.len() && !self.ended {
             let line = &lines[i];
             self.expanded += 1;
             if self.expanded > MAX_EXPANDED {
@@ -678,8 +678,10 @@ impl Assembler<'_> {
                     self.note_symbol(n.trim());
                 }
             }
-            ".extern" | ".brinfo" | ".end" | ".nolist" | ".list" | ".eject" | ".psize"
-            | ".title" | ".sbttl" | ".version" | ".gnu_attribute" | ".lflags" => {}
+            // read.c s_end: nothing after it is read.
+            ".end" => self.ended = true,
+            ".extern" | ".brinfo" | ".nolist" | ".list" | ".eject" | ".psize" | ".title"
+            | ".sbttl" | ".version" | ".gnu_attribute" | ".lflags" => {}
             // read.c's s_ignore entries (COFF debugging and MRI listing control), and
             // `.func`/`.endfunc`, which emit nothing without stabs debugging.
             ".debug" | ".dim" | ".endef" | ".scl" | ".tag" | ".val" | ".ln" | ".func"
@@ -709,19 +711,20 @@ impl Assembler<'_> {
                 let v = vals.first().copied().flatten().unwrap_or(0);
                 let boundary = if d == ".balign" {
                     v
-                } else if v > 15 {
-                    // GNU as: "alignment too large: 15 assumed".
+                } else if v > 31 {
+                    // read.c s_align: past the address size, with a warning.
                     self.diag(
                         Severity::Warning,
                         line,
                         col,
-                        "alignment too large: 15 assumed",
+                        "alignment too large: 31 assumed",
                     );
-                    1 << 15
+                    1 << 31
                 } else {
                     1i64 << v.max(0)
                 };
-                if boundary > 1 << 15 {
+                if boundary > LOCAL_STORE as i64 {
+                    // GNU as pads that far; nothing so aligned fits the local store.
                     self.diag(
                         Severity::Error,
                         line,
@@ -729,6 +732,9 @@ impl Assembler<'_> {
                         format!("alignment too large: {boundary}"),
                     );
                     return;
+                }
+                if boundary == 0 {
+                    return; // `.balign 0`: no alignment, as in gas
                 }
                 if boundary <= 0 || boundary & (boundary - 1) != 0 {
                     self.diag(
@@ -799,6 +805,13 @@ impl Assembler<'_> {
             ".float" | ".single" | ".ffloat" | ".double" | ".dfloat" => {
                 for part in split_top(args, ',') {
                     let t = part.trim();
+                    // `0f1.5`, `0d-2e3`: gas's floating-point prefix (FLT_CHARS "dDfF").
+                    let t = match t.as_bytes() {
+                        [b'0', b'f' | b'F' | b'd' | b'D', ..] if t[2..].parse::<f64>().is_ok() => {
+                            &t[2..]
+                        }
+                        _ => t,
+                    };
                     let v: f64 = match t.parse::<f64>() {
                         Ok(v) => v,
                         Err(_) => match self.eval(t) {

@@ -44,6 +44,10 @@ impl Chain {
         }
     }
 
+    pub(super) fn has_section(&self, d: usize) -> bool {
+        self.sections.contains(&d)
+    }
+
     pub(super) fn section(&mut self, d: usize) {
         if self.sections.insert(d) {
             self.links.push(Link::Section(d));
