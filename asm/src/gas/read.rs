@@ -4,6 +4,7 @@
 //! `.set`, `.include`, `.reloc`, messages.
 
 use super::macros::collect_block;
+use super::symbols::SymVal;
 use super::{Assembler, Macro, Severity, LOCAL_STORE, MAX_EXPANDED, MAX_NESTING};
 use crate::expr::{is_ident, Val};
 use crate::lex::{bytes_as_text, read_source, split_top, strip_comment, to_lines, unquote, Line};
@@ -497,7 +498,18 @@ impl Assembler<'_> {
         };
         let value = match parts.get(2) {
             Some(e) => match self.eval_val(e.trim()) {
-                Ok((v, _, _)) => v,
+                Ok((mut v, _, _)) => {
+                    // write.c leaves a `.reloc` against the symbol named, local or not
+                    // (never its section's symbol), unless gas made the name (`.L`).
+                    let name: String = e.trim().chars().take_while(|&c| is_ident(c)).collect();
+                    if self.object && v.sym.is_none() && !name.starts_with(".L") {
+                        if let Some(SymVal::Label(c, off)) = self.symbols.get(&name) {
+                            let at = self.bases.get(c).copied().unwrap_or(0) + off;
+                            v.sym = Some((name.as_str().into(), at as i64));
+                        }
+                    }
+                    v
+                }
                 Err((c, m)) => {
                     self.diag(Severity::Error, line, col + c, m);
                     return;

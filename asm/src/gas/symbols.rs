@@ -287,6 +287,23 @@ impl Assembler<'_> {
         match result {
             Ok(v) => {
                 self.symbols.insert(name.to_string(), SymVal::Abs(v));
+                // read.c pseudo_set: equated to a symbol, it takes that symbol's type and
+                // size (copy_symbol_attributes).
+                let target = expr.trim();
+                if target != name
+                    && crate::expr::is_ident_start(target.chars().next().unwrap_or(' '))
+                    && target.chars().all(crate::expr::is_ident)
+                {
+                    if let Some(t) = self.attrs.get(target).cloned() {
+                        let a = self.attrs.entry(name.to_string()).or_default();
+                        if a.kind == 0 {
+                            a.kind = t.kind;
+                        }
+                        if a.size.is_none() {
+                            a.size = t.size;
+                        }
+                    }
+                }
             }
             Err((c, m)) => self.diag(Severity::Error, line, c + 1, m),
         }
