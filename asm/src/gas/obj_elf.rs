@@ -313,6 +313,16 @@ impl Assembler<'_> {
         self.note_symbol(&name);
         if d == ".comm" {
             self.attrs.entry(name.clone()).or_default().global = true;
+            if let Some(SymVal::Common(old, _)) = self.symbols.get(&name) {
+                // read.c s_comm_internal: the first size stays.
+                if *old as i64 != size {
+                    let m = format!("size of \"{name}\" is already {old}; not changing to {size}");
+                    self.diag(Severity::Warning, line, col, m);
+                }
+                if self.object {
+                    return;
+                }
+            }
             if self.object {
                 if matches!(self.symbols.get(&name), Some(SymVal::Label(..))) {
                     self.diag(

@@ -690,6 +690,8 @@ impl Assembler<'_> {
                     self.note_symbol(n.trim());
                 }
             }
+            // read.c s_print writes its string to standard output: here, nothing.
+            ".print" => {}
             // read.c s_end: nothing after it is read.
             ".end" => self.ended = true,
             ".extern" | ".brinfo" | ".nolist" | ".list" | ".eject" | ".psize" | ".title"
@@ -1069,7 +1071,6 @@ const DIRECTIVES: &[&str] = &[
     ".protected",
     ".pushsection",
     ".reloc",
-    ".rodata",
     ".section",
     ".set",
     ".short",
@@ -1090,6 +1091,7 @@ const DIRECTIVES: &[&str] = &[
     ".zero",
     ".brinfo",
     ".end",
+    ".print",
     ".nolist",
     ".list",
     ".eject",
