@@ -1087,6 +1087,79 @@ pub(crate) fn testsuite_sources() -> Vec<PathBuf> {
         .collect()
 }
 
+/// GNU as's quirks that `spu as` does not copy, each by a piece of the sources it shows
+/// in and why: a corpus file holding the piece may differ, and must (so that the list
+/// cannot outlive the difference).
+const KNOWN_DIFFERENCES: &[(&str, &str)] = &[
+    (
+        "\t.eqv sym, .\n",
+        "`.eqv` of `.`: gas gives the symbol the location where it resolves it last; we give \
+         the location of the definition",
+    ),
+    (
+        ".symver f, f@@VERS_2, remove\n\t.symver f, f@VERS_1\n\tbrsl",
+        "gas refuses a removed symbol of two versions used in a relocation; we keep the \
+         symbol",
+    ),
+    (
+        "\t.section .debug_info",
+        "gas adds an empty .debug_line to a source with its own .debug_info and no .loc",
+    ),
+    (
+        "y:\t.long x - y",
+        "a difference of labels in two sections whose second is here: gas makes a \
+         pc-relative R_SPU_REL32; we refuse it",
+    ),
+    (
+        "\t.long y - x\n",
+        "the same, the second label before the statement",
+    ),
+    (
+        ".byte '\\c'",
+        "gas does not substitute an .irpc parameter after a quote",
+    ),
+    (
+        "\t.long -x\n",
+        "the negation of a label: gas makes an R_SPU_REL32 against no symbol; we store the \
+         negated offset",
+    ),
+    (
+        "\tnop $3\n",
+        "`nop` with an operand: gas reads `$3` as a symbol and adds it undefined to the \
+         table; we read the register",
+    ),
+];
+
+/// The failures `KNOWN_DIFFERENCES` accounts for taken out of `failures` (and counted);
+/// an error for each of its pieces that no failure showed.
+pub(crate) fn without_known(failures: Vec<String>) -> (Vec<String>, usize) {
+    let mut seen = vec![false; KNOWN_DIFFERENCES.len()];
+    let mut left = Vec::new();
+    let mut known = 0;
+    for f in failures {
+        let path = f.split(": ").next().unwrap_or("");
+        let text = std::fs::read_to_string(path).unwrap_or_default();
+        match KNOWN_DIFFERENCES
+            .iter()
+            .position(|(piece, _)| text.contains(piece))
+        {
+            Some(k) => {
+                seen[k] = true;
+                known += 1;
+            }
+            None => left.push(f),
+        }
+    }
+    for (k, (piece, why)) in KNOWN_DIFFERENCES.iter().enumerate() {
+        if !seen[k] {
+            left.push(format!(
+                "no file differs any more where {piece:?} is ({why}): take it off KNOWN_DIFFERENCES"
+            ));
+        }
+    }
+    (left, known)
+}
+
 /// The symbols the project assembles a kernel with: the refit kernel's buffer sizes.
 pub(crate) fn project_defines(file: &Path) -> Vec<(String, i64)> {
     if file.ends_with("kernels/refit.s") {
@@ -1115,21 +1188,24 @@ fn objects_match_gnu_as() {
     files.extend(write_corpus(&tmp.join("corpus")));
     files.extend(testsuite_sources());
     let d = differential(gas, &files, &tmp, project_defines);
+    let (failures, known) = without_known(d.failures);
     eprintln!(
-        "{} files: {} objects identical or compared, {} refused by both, {} use this project's own directives; {} differences",
+        "{} files: {} compared with GNU as, {} refused by both, {} use this project's own \
+         directives; {} known quirks, {} differences",
         files.len(),
         d.compared,
         d.refused_by_both,
         d.extensions,
-        d.failures.len()
+        known,
+        failures.len()
     );
     let _ = std::fs::remove_dir_all(&tmp);
     assert!(
-        d.compared > 300,
+        d.compared > 1000,
         "GNU as assembled only {} files",
         d.compared
     );
-    assert!(d.failures.is_empty(), "{}", d.failures.join("\n"));
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 /// `spu dis` (its listing of each code section) against `objdump -d` on GNU's objects,
