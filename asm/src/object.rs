@@ -176,7 +176,8 @@ impl Object {
             } else {
                 s.data(endian, data).map_err(err)?.to_vec()
             };
-            let align = s.sh_addralign(endian).clamp(1, 1 << 15);
+            // Past the local store an alignment means nothing more (and `spu as` makes none).
+            let align = s.sh_addralign(endian).clamp(1, 1 << 18);
             ours[i] = Some(obj.sections.len());
             obj.sections.push(ObjSection {
                 name: nm,

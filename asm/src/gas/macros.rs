@@ -235,7 +235,7 @@ impl Assembler<'_> {
                 // `LOCAL a, b`: each name a new label of its own per expansion.
                 let t = strip_comment(&l.text);
                 let t = t.trim();
-                if t.len() > 6 && t[..6].eq_ignore_ascii_case("local ") {
+                if t.len() > 6 && t.get(..6).is_some_and(|w| w.eq_ignore_ascii_case("local ")) {
                     for name in t[6..].split(',').map(str::trim).filter(|n| !n.is_empty()) {
                         self.local_counter += 1;
                         subst.push((name.to_string(), format!(".LL{:04x}", self.local_counter)));

@@ -323,18 +323,6 @@ impl<'o> Assembler<'o> {
         }
         self.run_pass(lines, 2);
         self.dwarf_finish_checks();
-        if self.nonzero_in_nobits {
-            self.diags.push(Diagnostic {
-                severity: Severity::Error,
-                location: Location {
-                    file: lines.first().map(|l| l.file.clone()).unwrap_or_default(),
-                    line: 0,
-                    column: 0,
-                },
-                message: "attempt to store non-zero value in a NOBITS section (.bss)".into(),
-                source_line: String::new(),
-            });
-        }
     }
 }
 

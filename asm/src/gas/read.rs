@@ -132,6 +132,17 @@ impl Assembler<'_> {
                 continue;
             }
             self.statement(line, &text);
+            if self.nonzero_in_nobits {
+                // write.c (subsegs) refuses it at the statement that stored it.
+                self.nonzero_in_nobits = false;
+                let name = self.defs[self.chunks[self.sect].0].name.clone();
+                self.diag(
+                    Severity::Error,
+                    line,
+                    1,
+                    format!("attempt to store non-zero value in section `{name}'"),
+                );
+            }
             i += 1;
         }
         if !cond.is_empty() && !self.exitm {
