@@ -55,16 +55,16 @@ impl StringTable {
         }
         let mut bytes = vec![0u8];
         let mut offsets = std::collections::HashMap::new();
-        for k in 0..n {
-            if inside[k].is_none() {
-                offsets.insert(self.strings[k].clone(), bytes.len() as u32);
-                bytes.extend_from_slice(&self.strings[k]);
+        for (s, within) in self.strings.iter().zip(&inside) {
+            if within.is_none() {
+                offsets.insert(s.clone(), bytes.len() as u32);
+                bytes.extend_from_slice(s);
                 bytes.push(0);
             }
         }
-        for k in 0..n {
-            if let Some(e) = inside[k] {
-                let (long, short) = (&self.strings[e], &self.strings[k]);
+        for (short, within) in self.strings.iter().zip(&inside) {
+            if let Some(e) = *within {
+                let long = &self.strings[e];
                 let at = offsets[long] + (long.len() - short.len()) as u32;
                 offsets.insert(short.clone(), at);
             }
