@@ -313,6 +313,10 @@ impl Eval<'_> {
             match node {
                 Node::Unary(op) => {
                     let a = stack.pop().unwrap_or_default();
+                    if *op == '~' && a.reloc && !self.env.lenient() {
+                        // expr.c: no relocation can carry the complement of an address.
+                        return Err((0, "invalid operand (an address) for `~'".into()));
+                    }
                     let v = match op {
                         '-' => a.v.wrapping_neg(),
                         '~' => !a.v,
@@ -405,6 +409,14 @@ impl Eval<'_> {
                     cross: cross || !same,
                     ..Default::default()
                 }
+            }
+            // expr.c resolves (in)equality of addresses at once: equal only at the same
+            // place of the same section (an undefined symbol equals nothing known).
+            "==" | "!=" | "<>"
+                if (a.reloc || b.reloc) && !cross && a.sym.is_none() && b.sym.is_none() =>
+            {
+                let same = a.sect == b.sect && a.reloc == b.reloc && x == y;
+                Val::abs(t(same == (op == "==")))
             }
             // Anything else that involves an address can only be resolved once addresses
             // are known (an executable), not by a relocation.

@@ -18,6 +18,7 @@ mod lex;
 pub mod link;
 mod link_debug;
 pub mod object;
+mod object_write;
 pub mod reloc;
 pub mod sched;
 

@@ -1,7 +1,7 @@
 //! Relocatable SPU objects (ELF32 big-endian, `ET_REL`, `EM_SPU`): the in-memory form the
-//! assembler produces and the linker consumes, written and read with the `object` crate
-//! (one well-kept ELF implementation for section headers, symbol tables, string tables
-//! and RELA sections, rather than a second hand-written one).
+//! assembler produces and the linker consumes, read with the `object` crate (one
+//! well-kept ELF reader) and written as GNU as writes them (`object_write`: byte for byte
+//! the same file, which no general ELF writer gives).
 //!
 //! It is the bottom of the assembler's house: the section types and flags, relocations
 //! and the local-store placement of sections live here, so that the assembler (`gas`)
@@ -9,7 +9,6 @@
 
 use object::elf;
 use object::read::elf::{FileHeader, Rela as _, SectionHeader as _, Sym as _};
-use object::write::elf::{FileHeader as WFileHeader, Rel, SectionHeader, Sym, Writer};
 use object::BigEndian;
 
 /// ELF section types and flags the assembler sets and the linker reads.
@@ -87,8 +86,10 @@ pub struct ObjSymbol {
     pub section: SymSection,
     pub global: bool,
     pub weak: bool,
-    pub hidden: bool,
-    /// STT_* type (0 none, 1 object, 2 function).
+    /// STV_* visibility (0 default, 1 internal, 2 hidden, 3 protected).
+    pub visibility: u8,
+    /// STT_* type (0 none, 1 object, 2 function, 3 a section's own symbol (nameless; it
+    /// places the section's symbol in the table), 4 a source file).
     pub kind: u8,
 }
 
@@ -119,193 +120,10 @@ pub struct Object {
 }
 
 impl Object {
-    /// Writes the object as gas lays it out: the sections, their `.rela` sections, then
-    /// `.symtab` (section symbols and locals first), `.strtab` and `.shstrtab`.
+    /// Writes the object as GNU as lays it out (`object_write`), checked to lie inside
+    /// its own bytes.
     pub fn to_elf(&self) -> Result<Vec<u8>, String> {
-        let mut out = Vec::new();
-        let mut w = Writer::new(object::Endianness::Big, false, &mut out);
-        w.reserve_file_header();
-        // Section indices: every content section, then each one's .rela.
-        let names: Vec<String> = self.sections.iter().map(|s| s.name.clone()).collect();
-        let rela_names: Vec<String> = names.iter().map(|n| format!(".rela{n}")).collect();
-        let mut index = Vec::new();
-        let mut name_ids = Vec::new();
-        w.reserve_null_section_index();
-        for s in &self.sections {
-            index.push(w.reserve_section_index());
-            name_ids.push(w.add_section_name(s.name.as_bytes()));
-        }
-        let mut rela_index = Vec::new();
-        for (k, s) in self.sections.iter().enumerate() {
-            if s.relocs.is_empty() {
-                rela_index.push(None);
-            } else {
-                let id = w.add_section_name(rela_names[k].as_bytes());
-                rela_index.push(Some((w.reserve_section_index(), id)));
-            }
-        }
-        // Symbols: null, one per section, locals, then globals.
-        w.reserve_null_symbol_index();
-        let mut section_sym = Vec::new();
-        for i in &index {
-            section_sym.push(w.reserve_symbol_index(Some(*i)));
-        }
-        let mut order: Vec<&ObjSymbol> = self.symbols.iter().filter(|s| !s.global).collect();
-        let num_local = (1 + self.sections.len() + order.len()) as u32;
-        order.extend(self.symbols.iter().filter(|s| s.global));
-        let mut sym_index = std::collections::HashMap::new();
-        let mut str_ids = Vec::new();
-        for s in &order {
-            let sect = match s.section {
-                SymSection::Section(k) => index.get(k).copied(),
-                _ => None,
-            };
-            let i = w.reserve_symbol_index(sect);
-            sym_index.insert(s.name.clone(), i);
-            str_ids.push(w.add_string(s.name.as_bytes()));
-        }
-        let symtab_index = w.reserve_symtab_section_index();
-        w.reserve_strtab_section_index();
-        w.reserve_shstrtab_section_index();
-        // File layout.
-        let mut offsets = Vec::new();
-        for s in &self.sections {
-            let len = if s.ty == SHT_NOBITS { 0 } else { s.data.len() };
-            offsets.push(w.reserve(len as u64, s.align.max(1) as usize as u64));
-        }
-        let mut rela_offsets = Vec::new();
-        for s in &self.sections {
-            rela_offsets.push(if s.relocs.is_empty() {
-                0
-            } else {
-                w.reserve_relocations(s.relocs.len(), true)
-            });
-        }
-        w.reserve_symtab();
-        w.reserve_strtab().map_err(|e| e.to_string())?;
-        w.reserve_shstrtab().map_err(|e| e.to_string())?;
-        w.reserve_section_headers();
-        // Contents.
-        w.write_file_header(&WFileHeader {
-            os_abi: elf::ELFOSABI_NONE,
-            abi_version: 0,
-            e_type: elf::ET_REL,
-            e_machine: elf::EM_SPU,
-            e_entry: 0,
-            e_flags: elf::FileFlags(0),
-        })
-        .map_err(|e| e.to_string())?;
-        for (k, s) in self.sections.iter().enumerate() {
-            // A NOBITS section's offset is aligned too (`reserve` aligned it): the padding
-            // must be written, or every offset after it points past what was written.
-            w.write_align(s.align.max(1) as usize as u64);
-            debug_assert_eq!(w.len(), offsets[k]);
-            if s.ty != SHT_NOBITS {
-                w.write(&s.data);
-            }
-        }
-        for (k, s) in self.sections.iter().enumerate() {
-            if s.relocs.is_empty() {
-                continue;
-            }
-            w.write_align_relocation();
-            for r in &s.relocs {
-                let r_sym = match &r.target {
-                    RelocTarget::Section(t) => {
-                        section_sym.get(*t).map(|i| i.0).ok_or_else(|| {
-                            format!("relocation against section {t} that is not there")
-                        })?
-                    }
-                    RelocTarget::Symbol(n) if n.is_empty() => 0,
-                    RelocTarget::Symbol(n) => sym_index.get(n).map(|i| i.0).ok_or_else(|| {
-                        format!("relocation against `{n}', which is not in the symbol table")
-                    })?,
-                };
-                w.write_relocation(
-                    true,
-                    &Rel {
-                        r_offset: r.offset as u64,
-                        r_sym,
-                        r_type: elf::RelocationType(r.kind),
-                        r_addend: r.addend,
-                    },
-                );
-            }
-            let _ = k;
-        }
-        w.write_null_symbol();
-        for i in &index {
-            w.write_symbol(&Sym {
-                st_name: 0,
-                section: Some(i.0),
-                st_info: elf::SymbolInfo::new(elf::STB_LOCAL, elf::STT_SECTION),
-                st_other: elf::SymbolOther(0),
-                st_shndx: elf::SymbolSection(0),
-                st_value: 0,
-                st_size: 0,
-            });
-        }
-        for (s, id) in order.iter().zip(&str_ids) {
-            let (section, shndx) = match s.section {
-                SymSection::Section(k) => (index.get(k).copied(), elf::SymbolSection(0)),
-                SymSection::Undefined => (None, elf::SHN_UNDEF),
-                SymSection::Absolute => (None, elf::SHN_ABS),
-                SymSection::Common => (None, elf::SHN_COMMON),
-            };
-            let bind = if s.weak {
-                elf::STB_WEAK
-            } else if s.global {
-                elf::STB_GLOBAL
-            } else {
-                elf::STB_LOCAL
-            };
-            w.write_symbol(&Sym {
-                st_name: w.string_offset(Some(*id)),
-                section: section.map(|i| i.0),
-                st_info: elf::SymbolInfo::new(bind, elf::SymbolType(s.kind)),
-                st_other: if s.hidden {
-                    elf::SymbolOther(elf::STV_HIDDEN.0)
-                } else {
-                    elf::SymbolOther(0)
-                },
-                st_shndx: shndx,
-                st_value: s.value,
-                st_size: s.size,
-            });
-        }
-        w.write_strtab();
-        w.write_shstrtab();
-        w.write_null_section_header();
-        for (k, s) in self.sections.iter().enumerate() {
-            w.write_section_header(&SectionHeader {
-                sh_name: w.section_name_offset(Some(name_ids[k])),
-                sh_type: elf::SectionType(s.ty),
-                sh_flags: elf::SectionFlags(s.flags),
-                sh_addr: 0,
-                sh_offset: offsets[k],
-                sh_size: s.size as u64,
-                sh_link: 0,
-                sh_info: 0,
-                sh_addralign: s.align.max(1) as u64,
-                sh_entsize: s.entsize,
-            });
-        }
-        for (k, r) in rela_index.iter().enumerate() {
-            if let Some((_, id)) = r {
-                w.write_relocation_section_header(
-                    *id,
-                    index[k],
-                    symtab_index,
-                    rela_offsets[k],
-                    self.sections[k].relocs.len(),
-                    true,
-                );
-            }
-        }
-        w.write_symtab_section_header(num_local);
-        w.write_strtab_section_header();
-        w.write_shstrtab_section_header();
-        drop(w);
+        let out = crate::object_write::write(self)?;
         let broken = crate::elf_check::layout_errors(&out);
         if !broken.is_empty() {
             return Err(format!(
@@ -358,7 +176,8 @@ impl Object {
             } else {
                 s.data(endian, data).map_err(err)?.to_vec()
             };
-            let align = s.sh_addralign(endian).clamp(1, 1 << 15);
+            // Past the local store an alignment means nothing more (and `spu as` makes none).
+            let align = s.sh_addralign(endian).clamp(1, 1 << 18);
             ours[i] = Some(obj.sections.len());
             obj.sections.push(ObjSection {
                 name: nm,
@@ -397,18 +216,21 @@ impl Object {
                 targets.push(RelocTarget::Symbol(String::new()));
                 continue;
             }
-            if st_type == elf::STT_SECTION.0 {
-                if let SymSection::Section(k) = section {
-                    targets.push(RelocTarget::Section(k));
-                    continue;
-                }
-            }
-            if st_type == elf::STT_FILE.0 {
-                targets.push(RelocTarget::Symbol(String::new()));
-                continue;
-            }
             let bind = sym.st_bind();
-            targets.push(RelocTarget::Symbol(nm.clone()));
+            let nm = if st_type == elf::STT_SECTION.0 {
+                match section {
+                    SymSection::Section(k) => targets.push(RelocTarget::Section(k)),
+                    _ => targets.push(RelocTarget::Symbol(String::new())),
+                }
+                String::new()
+            } else {
+                if st_type == elf::STT_FILE.0 {
+                    targets.push(RelocTarget::Symbol(String::new()));
+                } else {
+                    targets.push(RelocTarget::Symbol(nm.clone()));
+                }
+                nm
+            };
             obj.symbols.push(ObjSymbol {
                 name: nm,
                 value: sym.st_value(endian) as u64,
@@ -416,7 +238,7 @@ impl Object {
                 section,
                 global: bind != elf::STB_LOCAL,
                 weak: bind == elf::STB_WEAK,
-                hidden: sym.st_visibility() == elf::STV_HIDDEN,
+                visibility: sym.st_other().0 & 3,
                 kind: st_type,
             });
         }

@@ -60,7 +60,6 @@ pub fn by_name(text: &str) -> Option<u32> {
     Some(match upper.as_str() {
         "BFD_RELOC_NONE" => R_SPU_NONE,
         "BFD_RELOC_32" => R_SPU_ADDR32,
-        "BFD_RELOC_32_PCREL" => R_SPU_REL32,
         _ => return None,
     })
 }

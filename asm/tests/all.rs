@@ -5,6 +5,7 @@
 mod debug_line;
 mod eh_frame;
 mod gnu_compat;
+mod gnu_objects;
 mod never_panics;
 mod objects_and_limits;
 mod sched;

@@ -138,7 +138,7 @@ fn linked_objects_equal_one_assembly() {
 /// when a program has no data at all.
 #[test]
 fn the_data_segment_starts_at_align_0x80() {
-    let src = "\t.text\n\t.global _start\n_start:\tila\t$3, tab\n\tila\t$4, _edata\n\tila\t$5, _end\n\tstop\t0x2000\n\t.section .rodata\nro:\t.long\t1\n\t.data\ntab:\t.long\t2\n\t.bss\nb:\t.space\t4\n";
+    let src = "\t.text\n\t.global _start\n_start:\tila\t$3, tab\n\tila\t$4, _edata\n\tila\t$5, _end\n\tstop\t0x2000\n\t.section .rodata\nro:\t.long\t1\n\t.data\ntab:\t.long\t2\n\t.section .bss\nb:\t.space\t4\n";
     let linked = link(&[object(src)], &LinkOptions::default()).unwrap();
     let at = |n: &str| linked.symbols.iter().find(|s| s.0 == n).unwrap().1;
     let sect = |n: &str| linked.sections.iter().find(|s| s.0 == n).unwrap().1;
@@ -365,11 +365,20 @@ fn symver_aliases_and_versioned_references() {
     let f = find("f").unwrap();
     let v1 = find("f@VERS_1").unwrap();
     assert_eq!(
-        (v1.value, v1.section, v1.global, v1.hidden),
-        (4, f.section, true, false)
+        (v1.value, v1.section, v1.global, v1.visibility),
+        (4, f.section, true, 0)
     );
     let v2 = find("f_h@@VERS_2").unwrap();
-    assert_eq!((v2.value, v2.global, v2.hidden), (4, true, true));
+    // GNU as 2.40 hides the symbol itself, not the alias, and lists the aliases last first.
+    assert_eq!((v2.value, v2.global, v2.visibility), (4, true, 0));
+    assert_eq!(f.visibility, 2);
+    let order: Vec<&str> = obj
+        .symbols
+        .iter()
+        .map(|s| s.name.as_str())
+        .filter(|n| !n.is_empty())
+        .collect();
+    assert_eq!(order, ["f", "ext@VERS_3", "f_h@@VERS_2", "f@VERS_1"]);
     assert_eq!(
         obj.sections[0].relocs[0].target,
         RelocTarget::Symbol("ext@VERS_3".into())

@@ -17,17 +17,18 @@
 	.short -32768, -1, 65535, 0x12345	# => 8000ffffffff2345
 # warning: 17:28: value 0x12345 truncated to 0x2345
 	.byte -1, 255, -128, -256	# => ffff8000
+# warning: 19:23: value 0xffffffffffffff00 truncated to 0x0
 	.byte -257		# => ff
-# warning: 20:8: value 0xfffffffffffffeff truncated to 0xff
+# warning: 21:8: value 0xfffffffffffffeff truncated to 0xff
 	.quad 1<<40		# => 0000010000000000
 	.space 0
-# warning: 23:2: .space repeat count is zero, ignored
+# warning: 24:2: .space repeat count is zero, ignored
 	.skip -4
-# warning: 25:2: .space repeat count is negative, ignored
+# warning: 26:2: .space repeat count is negative, ignored
 	.fill -1, 4, 9
-# warning: 27:2: repeat < 0; .fill ignored
+# warning: 28:2: repeat < 0; .fill ignored
 	.fill 1, -2, 9
-# warning: 29:2: size negative; .fill ignored
-	.fill 1, 9, 0x11	# => 0000000000000011
-# warning: 31:2: .fill size clamped to 8
+# warning: 30:2: size negative; .fill ignored
+	.fill 1, 9, 0x11	# => 0000001100000000
+# warning: 32:2: .fill size clamped to 8
 	.byte 0x77		# => 77

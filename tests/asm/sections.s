@@ -28,7 +28,7 @@ dval:	.byte 1			# => 01
 	.section .rodata
 rval:	.byte 0xa5		# => a5
 	.p2align 2,0x5a		# => 5a5a5a
-	.bss
+	.section .bss
 bval:	.space 16
 	.section .text
 	il $9,4			# => 40800209

@@ -47,7 +47,10 @@ impl Assembler<'_> {
                 Err((c, m)) => self.diag(Severity::Error, line, c + 1, m),
             },
             ".irp" | ".irpc" => {
-                let (var, values) = irp_values(kind == ".irpc", args);
+                let (var, mut values) = irp_values(kind == ".irpc", args);
+                if values.is_empty() {
+                    values.push(String::new()); // macro.c: no values, the body once
+                }
                 for v in values {
                     if self.exitm || self.expanded > MAX_EXPANDED {
                         break;
@@ -232,7 +235,7 @@ impl Assembler<'_> {
                 // `LOCAL a, b`: each name a new label of its own per expansion.
                 let t = strip_comment(&l.text);
                 let t = t.trim();
-                if t.len() > 6 && t[..6].eq_ignore_ascii_case("local ") {
+                if t.len() > 6 && t.get(..6).is_some_and(|w| w.eq_ignore_ascii_case("local ")) {
                     for name in t[6..].split(',').map(str::trim).filter(|n| !n.is_empty()) {
                         self.local_counter += 1;
                         subst.push((name.to_string(), format!(".LL{:04x}", self.local_counter)));

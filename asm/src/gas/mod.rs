@@ -39,7 +39,7 @@ use macros::Macro;
 use obj_elf::SectionDef;
 use std::collections::HashMap;
 use std::path::PathBuf;
-use symbols::{SymAttrs, SymVal};
+use symbols::{Chain, SymAttrs, SymVal};
 
 /// Assembler settings.
 #[derive(Clone, Debug, Default)]
@@ -155,6 +155,10 @@ struct Assembler<'o> {
     dwarf: dwarf2::LineState,
     /// The ISA extensions on at this point of the walk (the options', then `.spu_ext`).
     extensions: spu_isa::Extensions,
+    /// The order the final walk made symbols in (an object's symbol table order).
+    chain: std::cell::RefCell<Chain>,
+    /// `.end` was read: the walk reads nothing more.
+    ended: bool,
 }
 
 /// What a `.sched` block's schedule is made from: its lines, options and start address.
@@ -227,6 +231,8 @@ impl<'o> Assembler<'o> {
             local_counter: 0,
             symvers: Vec::new(),
             dwarf: Default::default(),
+            chain: Default::default(),
+            ended: false,
         };
         // gas always has .text, .data and .bss, in that order.
         for name in [".text", ".data", ".bss"] {
@@ -254,7 +260,18 @@ impl<'o> Assembler<'o> {
         self.altmacro = false;
         self.local_counter = 0;
         self.dwarf = Default::default();
+        self.ended = false;
         if pass == 2 {
+            // gas makes the `--defsym` symbols (the last given first), then .text, .data
+            // and .bss (and their symbols), before reading.
+            let mut chain = Chain::default();
+            for (n, _) in self.opts.defines.iter().rev() {
+                chain.symbol(n);
+            }
+            for d in 0..3 {
+                chain.section(d);
+            }
+            *self.chain.borrow_mut() = chain;
             self.bytes.clear();
             self.relocs.clear();
             self.listing.clear();
@@ -306,18 +323,6 @@ impl<'o> Assembler<'o> {
         }
         self.run_pass(lines, 2);
         self.dwarf_finish_checks();
-        if self.nonzero_in_nobits {
-            self.diags.push(Diagnostic {
-                severity: Severity::Error,
-                location: Location {
-                    file: lines.first().map(|l| l.file.clone()).unwrap_or_default(),
-                    line: 0,
-                    column: 0,
-                },
-                message: "attempt to store non-zero value in a NOBITS section (.bss)".into(),
-                source_line: String::new(),
-            });
-        }
     }
 }
 

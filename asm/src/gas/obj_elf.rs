@@ -17,14 +17,65 @@ pub(super) struct SectionDef {
 }
 
 impl SectionDef {
+    /// A section BFD knows by name (`elf.c`'s special sections, `elf32-spu.c`'s `._ea`
+    /// and `.toe`): its type and flags, if `name` is one.
+    pub(super) fn special(name: &str) -> Option<SectionDef> {
+        let def = SectionDef::named(name);
+        let has = |p: &str| name == p || name.starts_with(&format!("{p}."));
+        let known = [
+            ".text",
+            ".init",
+            ".fini",
+            ".bss",
+            ".tbss",
+            ".data",
+            ".tdata",
+            ".rodata",
+            ".note",
+            ".init_array",
+            ".fini_array",
+            ".preinit_array",
+            "._ea",
+            ".toe",
+            ".comment",
+        ]
+        .iter()
+        .any(|p| has(p))
+            || name.starts_with(".debug");
+        known.then_some(def)
+    }
+
     /// GNU as's defaults for a section named without flags (`obj-elf.c` special sections).
     pub(super) fn named(name: &str) -> SectionDef {
         let has = |p: &str| name == p || name.starts_with(&format!("{p}."));
-        let (ty, flags) = if has(".text") || has(".init") || has(".fini") {
+        let array = [
+            (".init_array", 14),
+            (".fini_array", 15),
+            (".preinit_array", 16),
+        ];
+        if let Some((_, ty)) = array.iter().find(|(p, _)| has(p)) {
+            return SectionDef {
+                name: name.to_string(),
+                ty: *ty,
+                flags: SHF_ALLOC | SHF_WRITE,
+                entsize: 4,
+            };
+        }
+        let (ty, flags) = if name == ".toe" {
+            (SHT_NOBITS, SHF_ALLOC)
+        } else if has(".tbss") {
+            (SHT_NOBITS, SHF_ALLOC | SHF_WRITE | 0x400)
+        } else if has(".tdata") {
+            (SHT_PROGBITS, SHF_ALLOC | SHF_WRITE | 0x400)
+        } else if has(".note") {
+            (7, 0)
+        } else if name == "._ea" {
+            (SHT_PROGBITS, SHF_WRITE)
+        } else if has(".text") || has(".init") || has(".fini") {
             (SHT_PROGBITS, SHF_ALLOC | SHF_EXECINSTR)
-        } else if has(".bss") || has(".sbss") || has(".tbss") {
+        } else if has(".bss") {
             (SHT_NOBITS, SHF_ALLOC | SHF_WRITE)
-        } else if has(".data") || has(".sdata") || has(".tdata") || has(".ctors") || has(".dtors") {
+        } else if has(".data") {
             (SHT_PROGBITS, SHF_ALLOC | SHF_WRITE)
         } else if has(".rodata") {
             (SHT_PROGBITS, SHF_ALLOC)
@@ -73,8 +124,11 @@ impl Assembler<'_> {
         if let Some(flags) = parts.get(1).map(|f| f.trim()) {
             if let Some(letters) = flags.strip_prefix('"').and_then(|f| f.strip_suffix('"')) {
                 let mut f = 0;
+                // obj-elf.c's compatibility spellings: "am" is "aM", "ams" is "aMS".
+                let letters = letters.replacen("ams", "aMS", 1).replacen("am", "aM", 1);
                 for c in letters.chars() {
                     match c {
+                        'e' => f |= 0x8000_0000,
                         'a' => f |= SHF_ALLOC,
                         'w' => f |= SHF_WRITE,
                         'x' => f |= SHF_EXECINSTR,
@@ -83,7 +137,7 @@ impl Assembler<'_> {
                         'G' => f |= 0x200,
                         'T' => f |= 0x400,
                         'o' => f |= 0x80,
-                        'e' | 'R' | 'd' | '?' => {}
+                        'R' | 'd' | '?' => {}
                         other => {
                             self.diag(
                                 Severity::Error,
@@ -95,7 +149,44 @@ impl Assembler<'_> {
                         }
                     }
                 }
-                def.flags = f;
+                if f & 0x10 != 0 && parts.len() < 4 {
+                    f &= !0x10; // obj-elf.c drops SHF_MERGE without an entity size
+                    self.diag(
+                        Severity::Warning,
+                        line,
+                        col,
+                        "entity size for SHF_MERGE not specified",
+                    );
+                }
+                if f & 0x200 != 0 && parts.len() < 5 {
+                    f &= !0x200; // and SHF_GROUP without a group
+                    self.diag(
+                        Severity::Warning,
+                        line,
+                        col,
+                        "group name for SHF_GROUP not specified",
+                    );
+                }
+                // A special section named with attributes it lacks takes them as given,
+                // with a warning; otherwise it keeps its own as well (obj-elf.c).
+                let known = self.first_in_walk(&name);
+                let special = SectionDef::special(&name);
+                match special {
+                    Some(sp) if f & !sp.flags & 0xfff != 0 => {
+                        let note_alloc = sp.ty == 7 && (f == SHF_ALLOC || f == SHF_EXECINSTR);
+                        if known && !note_alloc {
+                            self.diag(
+                                Severity::Warning,
+                                line,
+                                col,
+                                format!("setting incorrect section attributes for {name}"),
+                            );
+                        }
+                        def.flags = f;
+                    }
+                    Some(sp) => def.flags = f | sp.flags,
+                    None => def.flags = f,
+                }
             } else if !flags.is_empty() && !flags.starts_with(['#', '@', '%']) {
                 // `.section NAME, SUBSECTION` (the non-ELF form gas also takes).
                 sub = self.subsection(flags, line, col);
@@ -106,9 +197,10 @@ impl Assembler<'_> {
                 "progbits" => def.ty = SHT_PROGBITS,
                 "nobits" => def.ty = SHT_NOBITS,
                 "note" => def.ty = 7,
-                "init_array" => def.ty = 14,
-                "fini_array" => def.ty = 15,
-                "preinit_array" => def.ty = 16,
+                // BFD gives the array sections their entries' size.
+                "init_array" => (def.ty, def.entsize) = (14, 4),
+                "fini_array" => (def.ty, def.entsize) = (15, 4),
+                "preinit_array" => (def.ty, def.entsize) = (16, 4),
                 other => {
                     self.diag(
                         Severity::Error,
@@ -127,7 +219,7 @@ impl Assembler<'_> {
         }
         if let Some(existing) = self.defs.iter().find(|d| d.name == name).cloned() {
             // Re-entering a section keeps what it was declared with.
-            if parts.len() > 1 && existing != def && self.pass == 1 {
+            if parts.len() > 1 && existing != def && !self.first_in_walk(&name) {
                 self.diag(
                     Severity::Warning,
                     line,
@@ -140,11 +232,31 @@ impl Assembler<'_> {
         Some((def, sub))
     }
 
+    /// Whether the final walk meets section `name` here for the first time (gas makes it
+    /// now; .text, .data and .bss are made before): where gas warns of attributes.
+    fn first_in_walk(&self, name: &str) -> bool {
+        self.pass == 2
+            && self
+                .defs
+                .iter()
+                .position(|d| d.name == name)
+                .is_none_or(|d| !self.chain.borrow().has_section(d))
+    }
+
     /// `.lcomm NAME, SIZE[, ALIGN]` reserves space in `.bss`; `.comm` does too in an
     /// executable, and leaves a common symbol for the linker in an object.
     pub(super) fn common(&mut self, d: &str, args: &str, line: &Line, col: usize) {
         let parts = split_top(args, ',');
         let name = parts[0].trim().to_string();
+        if d == ".bss" && (name.is_empty() || parts.len() < 3) {
+            let m = if name.is_empty() {
+                "expected symbol name"
+            } else {
+                "expected alignment after size"
+            };
+            self.diag(Severity::Error, line, col, m);
+            return;
+        }
         if name.is_empty() || parts.len() < 2 {
             self.diag(
                 Severity::Error,
@@ -198,8 +310,19 @@ impl Assembler<'_> {
             );
             return;
         }
+        self.note_symbol(&name);
         if d == ".comm" {
             self.attrs.entry(name.clone()).or_default().global = true;
+            if let Some(SymVal::Common(old, _)) = self.symbols.get(&name) {
+                // read.c s_comm_internal: the first size stays.
+                if *old as i64 != size {
+                    let m = format!("size of \"{name}\" is already {old}; not changing to {size}");
+                    self.diag(Severity::Warning, line, col, m);
+                }
+                if self.object {
+                    return;
+                }
+            }
             if self.object {
                 if matches!(self.symbols.get(&name), Some(SymVal::Label(..))) {
                     self.diag(
@@ -215,6 +338,10 @@ impl Assembler<'_> {
                 return;
             }
         }
+        // read.c bss_alloc: a symbol of its size, an object unless `.bss` made it.
+        let a = self.attrs.entry(name.clone()).or_default();
+        a.kind = if d == ".bss" { 0 } else { 1 };
+        a.size = Some(size);
         let here = self.sect;
         let bss = self.chunk(SectionDef::named(".bss"), 0);
         self.sect = bss;
@@ -252,9 +379,13 @@ impl Assembler<'_> {
     /// The section and symbol-attribute directives; whether `d` was one.
     pub(super) fn elf_directive(&mut self, d: &str, args: &str, line: &Line, col: usize) -> bool {
         match d {
-            ".text" | ".data" | ".bss" | ".rodata" => {
+            // tc-spu.c: `.bss NAME, SIZE, ALIGN` reserves space in .bss (s_lcomm_bytes);
+            // it does not switch to it, and there is no `.rodata` directive.
+            ".bss" => self.common(d, args, line, col),
+            ".text" | ".data" => {
                 let sub = self.subsection(args, line, col);
                 let c = self.chunk(SectionDef::named(d), sub);
+                self.note_section(self.chunks[c].0);
                 self.switch_to(c);
             }
             ".subsection" => {
@@ -271,6 +402,7 @@ impl Assembler<'_> {
                     self.sect_stack.push((self.sect, self.prev_sect));
                 }
                 let c = self.chunk(def, sub);
+                self.note_section(self.chunks[c].0);
                 self.switch_to(c);
             }
             ".popsection" => match self.sect_stack.pop() {
@@ -328,11 +460,14 @@ impl Assembler<'_> {
                     if n.is_empty() {
                         continue;
                     }
+                    self.note_symbol(n);
                     let a = self.attrs.entry(n.to_string()).or_default();
                     match d {
                         ".weak" => a.weak = true,
                         ".global" | ".globl" => a.global = true,
-                        _ => a.hidden = true,
+                        ".internal" => a.visibility = 1,
+                        ".hidden" => a.visibility = 2,
+                        _ => a.visibility = 3,
                     }
                 }
             }
@@ -341,6 +476,7 @@ impl Assembler<'_> {
                 let name = parts[0].trim().to_string();
                 let kind = parts.get(1).map(|k| {
                     k.trim()
+                        .trim_matches('"')
                         .trim_start_matches(['@', '%', '#'])
                         .to_ascii_lowercase()
                 });
@@ -349,7 +485,14 @@ impl Assembler<'_> {
                     Some("object" | "stt_object") => 1,
                     Some("notype" | "stt_notype") => 0,
                     Some("tls_object" | "stt_tls") => 6,
-                    Some("common" | "stt_common") => 5,
+                    // obj-elf.c: a common-typed symbol is a global object.
+                    Some("common" | "stt_common") => {
+                        self.note_symbol(&name);
+                        let a = self.attrs.entry(name).or_default();
+                        a.kind = 1;
+                        a.global = true;
+                        return true;
+                    }
                     _ => {
                         self.diag(
                             Severity::Error,
@@ -363,6 +506,7 @@ impl Assembler<'_> {
                         return true;
                     }
                 };
+                self.note_symbol(&name);
                 self.attrs.entry(name).or_default().kind = kind;
             }
             ".size" => {
@@ -377,6 +521,7 @@ impl Assembler<'_> {
                     return true;
                 }
                 let name = parts[0].trim().to_string();
+                self.note_symbol(&name);
                 match self.eval_val(parts[1..].join(",").trim()) {
                     Ok((v, _, _)) if !v.reloc || self.pass == 1 => {
                         self.attrs.entry(name).or_default().size = Some(v.v)

@@ -4,6 +4,7 @@
 //! `.set`, `.include`, `.reloc`, messages.
 
 use super::macros::collect_block;
+use super::symbols::SymVal;
 use super::{Assembler, Macro, Severity, LOCAL_STORE, MAX_EXPANDED, MAX_NESTING};
 use crate::expr::{is_ident, Val};
 use crate::lex::{bytes_as_text, read_source, split_top, strip_comment, to_lines, unquote, Line};
@@ -57,7 +58,7 @@ impl Assembler<'_> {
         }
         let mut i = 0;
         let mut cond: Vec<(bool, bool)> = Vec::new(); // (active, any branch taken)
-        while i < lines.len() {
+        while i < lines.len() && !self.ended {
             let line = &lines[i];
             self.expanded += 1;
             if self.expanded > MAX_EXPANDED {
@@ -131,6 +132,17 @@ impl Assembler<'_> {
                 continue;
             }
             self.statement(line, &text);
+            if self.nonzero_in_nobits {
+                // write.c (subsegs) refuses it at the statement that stored it.
+                self.nonzero_in_nobits = false;
+                let name = self.defs[self.chunks[self.sect].0].name.clone();
+                self.diag(
+                    Severity::Error,
+                    line,
+                    1,
+                    format!("attempt to store non-zero value in section `{name}'"),
+                );
+            }
             i += 1;
         }
         if !cond.is_empty() && !self.exitm {
@@ -478,8 +490,8 @@ impl Assembler<'_> {
             return;
         }
         let ty = parts[1].trim();
-        let kind = crate::reloc::by_name(ty).or_else(|| self.eval(ty).ok().map(|v| v.0 as u32));
-        let Some(kind) = kind.filter(|k| crate::reloc::name(*k).is_some()) else {
+        // Names only, as spu-elf-as 2.40 takes them (a number is refused there too).
+        let Some(kind) = crate::reloc::by_name(ty) else {
             self.diag(
                 Severity::Error,
                 line,
@@ -497,7 +509,18 @@ impl Assembler<'_> {
         };
         let value = match parts.get(2) {
             Some(e) => match self.eval_val(e.trim()) {
-                Ok((v, _, _)) => v,
+                Ok((mut v, _, _)) => {
+                    // write.c leaves a `.reloc` against the symbol named, local or not
+                    // (never its section's symbol), unless gas made the name (`.L`).
+                    let name: String = e.trim().chars().take_while(|&c| is_ident(c)).collect();
+                    if self.object && v.sym.is_none() && !name.starts_with(".L") {
+                        if let Some(SymVal::Label(c, off)) = self.symbols.get(&name) {
+                            let at = self.bases.get(c).copied().unwrap_or(0) + off;
+                            v.sym = Some((name.as_str().into(), at as i64));
+                        }
+                    }
+                    v
+                }
                 Err((c, m)) => {
                     self.diag(Severity::Error, line, col + c, m);
                     return;
@@ -664,9 +687,26 @@ impl Assembler<'_> {
             ".file" if !args.trim_start().starts_with('"') => self.dwarf_file(args, line, col),
             ".loc" => self.dwarf_loc(args, line, col),
             ".loc_mark_labels" => self.dwarf_mark_labels(args, line, col),
-            ".extern" | ".file" | ".local" | ".brinfo" | ".end" | ".nolist" | ".list"
-            | ".eject" | ".psize" | ".title" | ".sbttl" | ".version" | ".gnu_attribute"
-            | ".lflags" => {}
+            ".file" => {
+                if let Some(name) = crate::lex::unquote(args.trim()) {
+                    if self.pass == 2 {
+                        let name: String = name.iter().map(|&b| b as char).collect();
+                        self.chain.borrow_mut().file(&name);
+                    }
+                }
+            }
+            ".local" => {
+                // obj-elf.c obj_elf_local makes each symbol (an undefined one stays global).
+                for n in split_top(args, ',') {
+                    self.note_symbol(n.trim());
+                }
+            }
+            // read.c s_print writes its string to standard output: here, nothing.
+            ".print" => {}
+            // read.c s_end: nothing after it is read.
+            ".end" => self.ended = true,
+            ".extern" | ".brinfo" | ".nolist" | ".list" | ".eject" | ".psize" | ".title"
+            | ".sbttl" | ".version" | ".gnu_attribute" | ".lflags" => {}
             // read.c's s_ignore entries (COFF debugging and MRI listing control), and
             // `.func`/`.endfunc`, which emit nothing without stabs debugging.
             ".debug" | ".dim" | ".endef" | ".scl" | ".tag" | ".val" | ".ln" | ".func"
@@ -696,19 +736,20 @@ impl Assembler<'_> {
                 let v = vals.first().copied().flatten().unwrap_or(0);
                 let boundary = if d == ".balign" {
                     v
-                } else if v > 15 {
-                    // GNU as: "alignment too large: 15 assumed".
+                } else if v > 31 {
+                    // read.c s_align: past the address size, with a warning.
                     self.diag(
                         Severity::Warning,
                         line,
                         col,
-                        "alignment too large: 15 assumed",
+                        "alignment too large: 31 assumed",
                     );
-                    1 << 15
+                    1 << 31
                 } else {
                     1i64 << v.max(0)
                 };
-                if boundary > 1 << 15 {
+                if boundary > LOCAL_STORE as i64 {
+                    // GNU as pads that far; nothing so aligned fits the local store.
                     self.diag(
                         Severity::Error,
                         line,
@@ -716,6 +757,9 @@ impl Assembler<'_> {
                         format!("alignment too large: {boundary}"),
                     );
                     return;
+                }
+                if boundary == 0 {
+                    return; // `.balign 0`: no alignment, as in gas
                 }
                 if boundary <= 0 || boundary & (boundary - 1) != 0 {
                     self.diag(
@@ -730,6 +774,11 @@ impl Assembler<'_> {
                 let here = self.here() as i64;
                 let pad = (boundary - here % boundary) % boundary;
                 if max_skip.is_some_and(|m| pad > m) {
+                    // Skipped, but the section is aligned still (gas's record_alignment).
+                    if self.absolute.is_none() {
+                        let a = self.align.entry(self.sect).or_insert(1);
+                        *a = (*a).max(boundary as u32);
+                    }
                     return;
                 }
                 self.align_to(boundary as u32, fill);
@@ -781,6 +830,13 @@ impl Assembler<'_> {
             ".float" | ".single" | ".ffloat" | ".double" | ".dfloat" => {
                 for part in split_top(args, ',') {
                     let t = part.trim();
+                    // `0f1.5`, `0d-2e3`: gas's floating-point prefix (FLT_CHARS "dDfF").
+                    let t = match t.as_bytes() {
+                        [b'0', b'f' | b'F' | b'd' | b'D', ..] if t[2..].parse::<f64>().is_ok() => {
+                            &t[2..]
+                        }
+                        _ => t,
+                    };
                     let v: f64 = match t.parse::<f64>() {
                         Ok(v) => v,
                         Err(_) => match self.eval(t) {
@@ -855,8 +911,9 @@ impl Assembler<'_> {
                     let b = value.to_be_bytes();
                     let s = size as usize;
                     let mut word = vec![0u8; s];
+                    // md_number_to_chars of at most 4 bytes at the start; zeros after.
                     let k = s.min(4);
-                    word[s - k..].copy_from_slice(&b[8 - k..]);
+                    word[..k].copy_from_slice(&b[8 - k..]);
                     self.emit(&word);
                 }
             }
@@ -1025,7 +1082,6 @@ const DIRECTIVES: &[&str] = &[
     ".protected",
     ".pushsection",
     ".reloc",
-    ".rodata",
     ".section",
     ".set",
     ".short",
@@ -1046,6 +1102,7 @@ const DIRECTIVES: &[&str] = &[
     ".zero",
     ".brinfo",
     ".end",
+    ".print",
     ".nolist",
     ".list",
     ".eject",

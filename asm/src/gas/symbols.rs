@@ -17,6 +17,54 @@ pub(super) enum SymVal {
     Common(u32, u32),
 }
 
+/// One link of gas's symbol chain: the order symbols are made in (first mention, by
+/// reference or definition), which is the order of an object's symbol table.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(super) enum Link {
+    Symbol(String),
+    /// A section's own symbol, made with the section by a section directive.
+    Section(usize),
+    /// `.file "NAME"`: the first goes to the head of the chain.
+    File(String),
+}
+
+/// The symbol chain of the final walk.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Chain {
+    pub(super) links: Vec<Link>,
+    names: std::collections::HashSet<String>,
+    sections: std::collections::HashSet<usize>,
+}
+
+impl Chain {
+    pub(super) fn symbol(&mut self, name: &str) {
+        if !self.names.contains(name) {
+            self.names.insert(name.to_string());
+            self.links.push(Link::Symbol(name.to_string()));
+        }
+    }
+
+    pub(super) fn has_section(&self, d: usize) -> bool {
+        self.sections.contains(&d)
+    }
+
+    pub(super) fn section(&mut self, d: usize) {
+        if self.sections.insert(d) {
+            self.links.push(Link::Section(d));
+        }
+    }
+
+    /// obj-elf.c's `elf_file_symbol`: at the head unless a file symbol is there already.
+    pub(super) fn file(&mut self, name: &str) {
+        let link = Link::File(name.to_string());
+        if matches!(self.links.first(), Some(Link::File(_))) {
+            self.links.push(link);
+        } else {
+            self.links.insert(0, link);
+        }
+    }
+}
+
 /// `.type NAME, @function`: an ELF `STT_FUNC` symbol.
 pub(super) const STT_FUNC: u8 = 2;
 
@@ -25,7 +73,8 @@ pub(super) const STT_FUNC: u8 = 2;
 pub(super) struct SymAttrs {
     pub(super) global: bool,
     pub(super) weak: bool,
-    pub(super) hidden: bool,
+    /// STV_* from `.internal` (1), `.hidden` (2), `.protected` (3).
+    pub(super) visibility: u8,
     /// STT_* from `.type` (1 object, 2 function).
     pub(super) kind: u8,
     pub(super) size: Option<i64>,
@@ -33,6 +82,7 @@ pub(super) struct SymAttrs {
 
 impl Env for Assembler<'_> {
     fn symbol(&self, name: &str) -> Option<Val> {
+        self.note_symbol(name);
         if !self.symbols.contains_key(name) {
             self.forward_refs.borrow_mut().push(name.to_string());
         } else if let Some(deps) = self.set_forward.get(name) {
@@ -78,6 +128,21 @@ impl Env for Assembler<'_> {
 }
 
 impl Assembler<'_> {
+    /// A name mentioned in the final walk: it joins the symbol chain if it is new.
+    pub(super) fn note_symbol(&self, name: &str) {
+        // Numeric local labels (`1:`) are gas's own internal names, never in the table.
+        if self.pass == 2 && !name.is_empty() && !name.bytes().all(|b| b.is_ascii_digit()) {
+            self.chain.borrow_mut().symbol(name);
+        }
+    }
+
+    /// A section made (or first entered) by a section directive in the final walk.
+    pub(super) fn note_section(&self, d: usize) {
+        if self.pass == 2 {
+            self.chain.borrow_mut().section(d);
+        }
+    }
+
     /// A defined symbol's address or value (executables).
     pub(super) fn symbol_address(&self, name: &str) -> Option<i64> {
         self.symbols.get(name).map(|s| self.value_of(name, s).v)
@@ -178,6 +243,7 @@ impl Assembler<'_> {
     }
 
     pub(super) fn define_label(&mut self, name: &str, line: &Line) {
+        self.note_symbol(name);
         if let Some(off) = self.absolute {
             // A label in the absolute section (`.struct`) is a number.
             self.symbols
@@ -214,12 +280,30 @@ impl Assembler<'_> {
             self.org(expr, 0, line, col);
             return;
         }
+        self.note_symbol(name);
         let col = line.text.find(expr).map_or(1, |c| c + 1);
         let result = self.eval_reported(expr, line, col);
         let forward: Vec<String> = std::mem::take(&mut *self.forward_refs.borrow_mut());
         match result {
             Ok(v) => {
                 self.symbols.insert(name.to_string(), SymVal::Abs(v));
+                // read.c pseudo_set: equated to a symbol, it takes that symbol's type and
+                // size (copy_symbol_attributes).
+                let target = expr.trim();
+                if target != name
+                    && crate::expr::is_ident_start(target.chars().next().unwrap_or(' '))
+                    && target.chars().all(crate::expr::is_ident)
+                {
+                    if let Some(t) = self.attrs.get(target).cloned() {
+                        let a = self.attrs.entry(name.to_string()).or_default();
+                        if a.kind == 0 {
+                            a.kind = t.kind;
+                        }
+                        if a.size.is_none() {
+                            a.size = t.size;
+                        }
+                    }
+                }
             }
             Err((c, m)) => self.diag(Severity::Error, line, c + 1, m),
         }
@@ -251,8 +335,10 @@ impl Assembler<'_> {
             return;
         }
         let mask = !0u64 << (8 * size);
-        let high = v as u64 & mask;
-        if high != 0 && high != mask {
+        // read.c emit_expr: leading bits holding both 0s and 1s, of the value and of its
+        // negation (so -256 in a byte warns, -128 does not).
+        let (high, negated_high) = (v as u64 & mask, (v as u64).wrapping_neg() & mask);
+        if high != 0 && negated_high != 0 {
             let kept = v as u64 & !mask;
             self.diag(
                 Severity::Warning,

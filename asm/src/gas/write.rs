@@ -4,7 +4,7 @@
 //! ELF or as a relocatable object.
 
 use super::obj_elf::SectionDef;
-use super::symbols::SymVal;
+use super::symbols::{Link, SymVal};
 use super::target::code_padding;
 use super::{Assembler, Diagnostic, Location, Output, Sect, Severity, LOCAL_STORE};
 use crate::expr::Val;
@@ -419,6 +419,20 @@ pub(super) fn executable(
     })
 }
 
+/// Section `d`'s own symbol (nameless, placing it in the table).
+fn section_symbol(d: usize) -> ObjSymbol {
+    ObjSymbol {
+        name: String::new(),
+        value: 0,
+        size: 0,
+        section: SymSection::Section(d),
+        global: false,
+        weak: false,
+        visibility: 0,
+        kind: 3,
+    }
+}
+
 /// An assembled program (without errors) as a relocatable object: each section from
 /// offset 0 with its relocations, and the symbol table gas would write.
 pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
@@ -496,8 +510,6 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
         }
         obj.sections[*d].relocs.push(r);
     }
-    let mut names: Vec<&String> = asm.symbols.keys().collect();
-    names.sort();
     let mut referenced: std::collections::BTreeSet<String> = Default::default();
     for s in &obj.sections {
         for r in &s.relocs {
@@ -508,9 +520,73 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
             }
         }
     }
-    for name in names {
-        let attrs = asm.attrs.get(name).cloned().unwrap_or_default();
-        let (section, value) = match &asm.symbols[name] {
+    // The symbols in chain order (names no walk mentioned, from the options, last).
+    let mut links = asm.chain.borrow().links.clone();
+    let mut rest: Vec<&String> = asm
+        .symbols
+        .keys()
+        .filter(|n| !links.contains(&Link::Symbol(n.to_string())))
+        .collect();
+    rest.sort();
+    links.extend(rest.into_iter().map(|n| Link::Symbol(n.clone())));
+    // dwarf2dbg.c's dwarf2_finish makes the debug unit's section symbols after the
+    // source's, in the order its fixups first name them.
+    for debug in [
+        ".debug_info",
+        ".debug_abbrev",
+        ".debug_line",
+        ".debug_ranges",
+        ".debug_str",
+        ".debug_aranges",
+    ] {
+        if let Some(k) = obj.sections.iter().position(|s| s.name == debug) {
+            if asm.defs.iter().all(|d| d.name != debug) {
+                links.push(Link::Section(k));
+            }
+        }
+    }
+    for link in links {
+        let name = match link {
+            Link::Section(d) => {
+                obj.symbols.push(section_symbol(d));
+                continue;
+            }
+            Link::File(name) => {
+                obj.symbols.push(ObjSymbol {
+                    name,
+                    value: 0,
+                    size: 0,
+                    section: SymSection::Absolute,
+                    global: false,
+                    weak: false,
+                    visibility: 0,
+                    kind: 4,
+                });
+                continue;
+            }
+            Link::Symbol(name) => name,
+        };
+        let attrs = asm.attrs.get(&name).cloned().unwrap_or_default();
+        let Some(sym) = asm.symbols.get(&name) else {
+            // Made but never defined: an undefined symbol, global (write.c), unless a
+            // local label or only `.weak` named it and nothing refers to it.
+            let used = referenced.contains(&name);
+            if name.starts_with(".L") || (attrs.weak && !used) {
+                continue;
+            }
+            obj.symbols.push(ObjSymbol {
+                name,
+                value: 0,
+                size: attrs.size.unwrap_or(0) as u64,
+                section: SymSection::Undefined,
+                global: true,
+                weak: attrs.weak,
+                visibility: attrs.visibility,
+                kind: attrs.kind,
+            });
+            continue;
+        };
+        let (section, value) = match sym {
             SymVal::Label(c, off) => (
                 SymSection::Section(asm.chunks[*c].0),
                 (asm.bases[c] + off) as u64,
@@ -523,12 +599,13 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
                     section: SymSection::Common,
                     global: true,
                     weak: false,
-                    hidden: attrs.hidden,
+                    visibility: attrs.visibility,
                     kind: 1,
                 });
                 continue;
             }
-            SymVal::Abs(v) if v.sect.is_some() && v.sym.is_none() => {
+            // Equated to a place in a section (through a global label too): that place.
+            SymVal::Abs(v) if v.sect.is_some() => {
                 (SymSection::Section(v.sect.unwrap_or(0)), v.v as u64)
             }
             SymVal::Abs(v) if !v.reloc && !v.cross => (SymSection::Absolute, v.v as u64),
@@ -545,33 +622,36 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
             section,
             global: attrs.global || attrs.weak,
             weak: attrs.weak,
-            hidden: attrs.hidden,
+            visibility: attrs.visibility,
             kind: attrs.kind,
         });
     }
-    // `.symver`: a defined symbol gets its versioned alias beside it (the same place,
-    // binding and type; `local`/`hidden` make the alias so, `remove` drops the original);
-    // references to an undefined one name the versioned symbol instead.
-    for (name, alias, vis) in &asm.symvers {
-        if asm.symbols.contains_key(name) {
-            let Some(k) = obj.symbols.iter().position(|s| &s.name == name) else {
-                continue;
-            };
-            let mut a = obj.symbols[k].clone();
-            a.name = alias.replace("@@@", "@@");
-            match vis.as_str() {
-                "local" => {
-                    a.global = false;
-                    a.weak = false;
-                }
-                "hidden" => a.hidden = true,
-                "remove" => {
-                    obj.symbols.remove(k);
-                }
-                _ => {}
+    // `.symver` (obj-elf.c elf_frob_symbol): a defined symbol's versioned names follow
+    // the symbols, each symbol's last first, with its place, size, type and binding; the
+    // visibility given (`local`, `hidden`, `remove`) applies to the symbol itself. An
+    // undefined symbol takes its versioned name in its place (`@@@` reads as `@`).
+    let mut aliases = Vec::new();
+    for s in &obj.symbols {
+        if s.kind == 3 || s.section == SymSection::Undefined {
+            continue;
+        }
+        for (name, alias, _) in asm.symvers.iter().rev() {
+            if *name == s.name {
+                let mut a = s.clone();
+                a.name = alias.replace("@@@", "@@");
+                aliases.push(a);
             }
-            obj.symbols.push(a);
-        } else {
+        }
+    }
+    for (name, alias, vis) in &asm.symvers {
+        let Some(k) = obj
+            .symbols
+            .iter()
+            .position(|s| &s.name == name && s.kind != 3)
+        else {
+            continue;
+        };
+        if obj.symbols[k].section == SymSection::Undefined {
             let versioned = alias.replace("@@@", "@");
             for s in &mut obj.sections {
                 for r in &mut s.relocs {
@@ -580,13 +660,27 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
                     }
                 }
             }
+            obj.symbols[k].name = versioned.clone();
             if referenced.remove(name) {
                 referenced.insert(versioned);
             }
+            continue;
+        }
+        match vis.as_str() {
+            "local" => {
+                obj.symbols[k].global = false;
+                obj.symbols[k].weak = false;
+            }
+            "hidden" => obj.symbols[k].visibility = 2,
+            "remove" if !referenced.contains(name) => {
+                obj.symbols.remove(k);
+            }
+            _ => {}
         }
     }
+    obj.symbols.extend(aliases);
     for name in referenced {
-        if !asm.symbols.contains_key(&name) {
+        if !obj.symbols.iter().any(|s| s.name == name && s.kind != 3) {
             let attrs = asm.attrs.get(&name).cloned().unwrap_or_default();
             obj.symbols.push(ObjSymbol {
                 name,
@@ -595,7 +689,7 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
                 section: SymSection::Undefined,
                 global: true,
                 weak: attrs.weak,
-                hidden: attrs.hidden,
+                visibility: attrs.visibility,
                 kind: attrs.kind,
             });
         }
