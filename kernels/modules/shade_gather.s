@@ -48,84 +48,84 @@
         il      $82, 0                        # groups to do * 256
         il      $83, 0                        # records' list bytes (32 a group)
         il      $84, 0                        # records fetched
-.Lsh_gstep:
-        .irp    H, 0, 1
+.Lsh_gstep:                                   # (both groups of a step in one block: the
         .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
         ila     %gfb, sh_gfail
         ila     %gsb, sh_gstep
         lqx     %okp, %gfb, $80
         lqx     %st, %gsb, $80
-        rotqbyi %ok, %okp, 8*\H               # the fast path did it
-        ai      %g, %st, 16*\H                # the group * 16
-        a       %rp, $99, %g
-        a       %gp, $66, %g
-        lqd     %ids, CTX_RAY_ID(%rp)
-        ceqi    %nh, %ids, -1                 # the lanes without a hit
-        gb      %nhb, %nh
-        ceqi    %allm, %nhb, 15
-        rotqbyi %r4, %ids, 4                  # a lane without a hit looks up the
-        cgt     %c4, %ids, %r4                # largest id of the group (a hit's)
-        selb    %m4, %r4, %ids, %c4
-        rotqbyi %r8, %m4, 8
-        cgt     %c8, %m4, %r8
-        selb    %mx, %r8, %m4, %c8
-        shufb   %mxs, %mx, %mx, $91
-        selb    %idv, %ids, %mxs, %nh         # the ids looked up
         shufb   %tt, TTAGS, TTAGS, $91
         shufb   %td, TDATA, TDATA, $91
         shufb   %tm, TMASK, TMASK, $91
-        and     %ti, %idv, %tm
-        shli    %to, %ti, 4
-        lgwx    %tag, %tt, %to                # the lanes' triangle tags
-        shli    %tl, %ti, 6
-        a       %line, %tl, %td
-        ceq     %th, %tag, %idv
-        or      %have, %th, %nh
-        gb      %hb, %have
-        ceqi    %allh, %hb, 15                # every record in the cache
-        il      %sz, 64                       # else the group's 4 records, a list
-        shufb   %eat, EATRIS, EATRIS, $91     # element each (64 bytes, the EA)
-        shli    %eo, %idv, 6
-        a       %ea, %eo, %eat
+        shufb   %eat, EATRIS, EATRIS, $91
         lqa     %plo, sh_const
         lqa     %phi, sh_const+16
-        shufb   %e0, %sz, %ea, %plo
-        shufb   %e1, %sz, %ea, %phi
-        ila     %lrb, sh_glr
-        a       %lra, %lrb, $83
-      ~ stqd    %e0, 0(%lra)
-      ~ stqd    %e1, 16(%lra)
-        ila     %grb, sh_grec
-        shli    %ro, $83, 3
-        a       %rb0, %grb, %ro
-        shufb   %rbs, %rb0, %rb0, $91
         lqa     %lanes, sh_gather_lanes
-        a       %rec, %rbs, %lanes
-        shufb   %ahs, %allh, %allh, $91
-        selb    %ra, %rec, %line, %ahs        # each lane's record
-        or      %skip, %ok, %allm
-        nor     %fe, %allh, %skip             # its records fetched
-        andi    %fe32, %fe, 32
-        a       $83, $83, %fe32
-        xori    %nhv, %hb, 15
-        cntb    %nc, %nhv
-        and     %nc2, %nc, %fe
-        a       $84, $84, %nc2
-        lqd     %om, SH_MAT(%gp)              # no hit: no material
-        andc    %em, %allm, %ok
-        shufb   %ems, %em, %em, $91
-        selb    %nm, %om, %nh, %ems
-      ~ stqd    %nm, SH_MAT(%gp)
+        il      %sz, 64
+        ila     %lrb, sh_glr
+        ila     %grb, sh_grec
         ila     %gkb, sh_gk
-        a       %gka, %gkb, $82
-      ~ stqd    %g, 0(%gka)
-      ~ stqd    %ra, 16(%gka)
-      ~ stqd    %nh, 32(%gka)
-        nor     %d, %skip, %skip              # to do
-        andi    %d256, %d, 256
-        a       $82, $82, %d256
-        .endsched
+        .irp    H, 0, 1                       # second's stores after the first's)
+        rotqbyi %ok\H, %okp, 8*\H               # the fast path did it
+        ai      %g\H, %st, 16*\H                # the group * 16
+        a       %rp\H, $99, %g\H
+        a       %gp\H, $66, %g\H
+        lqd     %ids\H, CTX_RAY_ID(%rp\H)
+        ceqi    %nh\H, %ids\H, -1                 # the lanes without a hit
+        gb      %nhb\H, %nh\H
+        ceqi    %allm\H, %nhb\H, 15
+        rotqbyi %r4\H, %ids\H, 4                  # a lane without a hit looks up the
+        cgt     %c4\H, %ids\H, %r4\H                # largest id of the group (a hit's)
+        selb    %m4\H, %r4\H, %ids\H, %c4\H
+        rotqbyi %r8\H, %m4\H, 8
+        cgt     %c8\H, %m4\H, %r8\H
+        selb    %mx\H, %r8\H, %m4\H, %c8\H
+        shufb   %mxs\H, %mx\H, %mx\H, $91
+        selb    %idv\H, %ids\H, %mxs\H, %nh\H         # the ids looked up
+        and     %ti\H, %idv\H, %tm
+        shli    %to\H, %ti\H, 4
+        lgwx    %tag\H, %tt, %to\H                # the lanes' triangle tags
+        shli    %tl\H, %ti\H, 6
+        a       %line\H, %tl\H, %td
+        ceq     %th\H, %tag\H, %idv\H
+        or      %have\H, %th\H, %nh\H
+        gb      %hb\H, %have\H
+        ceqi    %allh\H, %hb\H, 15                # every record in the cache
+        shli    %eo\H, %idv\H, 6
+        a       %ea\H, %eo\H, %eat
+        shufb   %e0\H, %sz, %ea\H, %plo
+        shufb   %e1\H, %sz, %ea\H, %phi
+        a       %lra\H, %lrb, $83
+        stqd    %e0\H, 0(%lra\H)
+        stqd    %e1\H, 16(%lra\H)
+        shli    %ro\H, $83, 3
+        a       %rb0\H, %grb, %ro\H
+        shufb   %rbs\H, %rb0\H, %rb0\H, $91
+        a       %rec\H, %rbs\H, %lanes
+        shufb   %ahs\H, %allh\H, %allh\H, $91
+        selb    %ra\H, %rec\H, %line\H, %ahs\H        # each lane's record
+        or      %skip\H, %ok\H, %allm\H
+        nor     %fe\H, %allh\H, %skip\H             # its records fetched
+        andi    %fe32\H, %fe\H, 32
+        a       $83, $83, %fe32\H
+        xori    %nhv\H, %hb\H, 15
+        cntb    %nc\H, %nhv\H
+        and     %nc2\H, %nc\H, %fe\H
+        a       $84, $84, %nc2\H
+        lqd     %om\H, SH_MAT(%gp\H)              # no hit: no material
+        andc    %em\H, %allm\H, %ok\H
+        shufb   %ems\H, %em\H, %em\H, $91
+        selb    %nm\H, %om\H, %nh\H, %ems\H
+      ~ stqd    %nm\H, SH_MAT(%gp\H)
+        a       %gka\H, %gkb, $82
+        stqd    %g\H, 0(%gka\H)
+        stqd    %ra\H, 16(%gka\H)
+        stqd    %nh\H, 32(%gka\H)
+        nor     %d\H, %skip\H, %skip\H              # to do
+        andi    %d256\H, %d\H, 256
+        a       $82, $82, %d256\H
         .endr
+        .endsched
         ai      $80, $80, 16
         ceq     $86, $80, $81
         brz     $86, .Lsh_gstep
@@ -152,6 +152,8 @@
         il      $80, 0
         il      $84, 0                        # vertices missed
         il      $85, 0                        # normals' list bytes (96 a group)
+        il      $81, 0                        # groups with a miss * 16 (sh_gml)
+        il      $83, 0                        # groups without * 16 (sh_gmh)
         brz     $82, .Lsh_gdone               # no group to do
 .Lsh_gvloop:
         .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
@@ -220,6 +222,14 @@
         xori    %nah, %allhit, -1
         andi    %n96, %nah, 96
         a       $85, $85, %n96
+        ila     %mlb, sh_gml
+        ila     %hlb, sh_gmh
+        stqx    $80, %mlb, $81                # the group, listed as missing or not
+        stqx    $80, %hlb, $83
+        andi    %n16, %nah, 16
+        andi    %h16, %allhit, 16
+        a       $81, $81, %n16
+        a       $83, $83, %h16
         ai      $80, $80, 256
         ceq     %end, $80, $82
         hbrr    .Lsh_gv_br, .Lsh_gvloop
@@ -233,22 +243,24 @@
         ila     $86, sh_gnst
         ila     $87, sh_glv
         il      $88, SH_TAG
-        il      $89, 0x44                     # getl
-        wrch    $MFC_LSA, $86
+        il      $89, 0x44                     # getl (waited for after the groups that
+        wrch    $MFC_LSA, $86                 # hit are done)
         wrch    $MFC_EAH, ZERO
         wrch    $MFC_EAL, $87
         wrch    $MFC_Size, $85
         wrch    $MFC_TagID, $88
         wrch    $MFC_Cmd, $89
-        SH_WAIT $86
 
-        # ---- C. the groups' values
-.Lsh_gc:
-        il      $80, 0
-.Lsh_gcloop:
+        # ---- C. the groups' values: first those that hit, then (their normals waited
+        # for) those that missed
+# the groups listed at LIST (END: its bytes), looped at LOOP (BR its branch)
+        .macro  SH_GATHER_GROUPS list, end, loop, br
+\loop:
         .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
         ila     %gkb, sh_gk
-        a       %gka, %gkb, $80
+        ila     %lsb, \list
+        lqx     %k, %lsb, $80
+        a       %gka, %gkb, %k
         lqd     %g, 0(%gka)
         lqd     %ra, 16(%gka)
         lqd     %nh, 32(%gka)
@@ -296,28 +308,37 @@
         stqd    %cg1, SH_STATS+SHS_GROUPS($66)
         stqd    %ct1, SH_STATS+SHS_TLOOK($66)
         stqd    %cs1, SH_STATS+SHS_SAME($66)
-        ai      $80, $80, 256
-        ceq     %end, $80, $82
-        hbrr    .Lsh_gc_br, .Lsh_gcloop
-.Lsh_gc_br:
-        brz     %end, .Lsh_gcloop
+        ai      $80, $80, 16
+        ceq     %end, $80, \end
+        hbrr    \br, \loop
+\br:
+        brz     %end, \loop
         .endsched
+        .endm
+
+.Lsh_gc:
+        il      $80, 0
+        brz     $83, .Lsh_gcm0
+        SH_GATHER_GROUPS sh_gmh, $83, .Lsh_gch, .Lsh_gch_br
+.Lsh_gcm0:
+        brz     $81, .Lsh_gdone               # no vertex missed
+        SH_WAIT $86
+        il      $80, 0
+        SH_GATHER_GROUPS sh_gml, $81, .Lsh_gcm, .Lsh_gcm_br
 
         # ---- D. the vertex cache: a group with a miss has all 12 of its normals fetched,
         # so each of its lookups (a hit's too: the same vertex and normal again) is
         # stored to its line and tag, in lookup order (vertex, lane), without a branch
-        brz     $85, .Lsh_gdone               # no vertex missed
         il      $80, 0
 .Lsh_gland:
+        ila     $86, sh_gml
+        lqx     $87, $86, $80
         ila     $86, sh_gk
-        a       $81, $86, $80                 # the group's record
-        lqd     $83, 192($81)                 # its misses
-        ai      $80, $80, 256
-        brz     $83, .Lsh_gland_next
+        a       $83, $86, $87                 # the group's record
         .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
-        lqd     %nb, 48($81)                  # its normals' slots (lane 0's, vertex 0)
+        lqd     %nb, 48($83)                  # its normals' slots (lane 0's, vertex 0)
         .irp    I, 0, 1, 2
-        lqd     %vi\I, 96+16*\I($81)
+        lqd     %vi\I, 96+16*\I($83)
         and     %x\I, %vi\I, $121
         shli    %xl\I, %x\I, 6
         .irp    L, 0, 1, 2, 3
@@ -329,10 +350,12 @@
         stqx    %v\I\L, $115, %t\I\L           # the vertex to its tag
         .endr
         .endr
+        ai      $80, $80, 16
+        ceq     %end, $80, $81
+        hbrr    .Lsh_gland_br, .Lsh_gland
+.Lsh_gland_br:
+        brz     %end, .Lsh_gland
         .endsched
-.Lsh_gland_next:
-        ceq     $86, $80, $82
-        brz     $86, .Lsh_gland
 .Lsh_gdone:
         lqa     $92, sh_const+80              # (the fast path's patterns)
         lqa     $93, sh_const+96
@@ -362,3 +385,7 @@ sh_glr:                                       # the records' list (4 elements a 
         .space  16 * 32
 sh_glv:                                       # the normals' list (12 elements a group)
         .space  16 * 96
+sh_gml:                                       # the groups with a vertex miss (their
+        .space  16 * 16                       # offsets in sh_gk)
+sh_gmh:                                       # ... and those without
+        .space  16 * 16
