@@ -6,6 +6,7 @@
 # return) and landed once per group. Out of line, after the end of shade_packet; back to
 # the fast path's loop (.Lsh_group) or, after the last group, to .Lsh_iset_done. Saves
 # and restores the fast path's $120..$124 (SH_SAVE) and reloads $92, $93, $120.
+# With EXT_GATHER (the gather load) modules/shade_gather.s takes its place.
 
         .ifdef  EXT_GATHER
         .include "modules/shade_gather.s"   # the gather variant's: batched per packet
