@@ -621,8 +621,22 @@ fn the_gather_module_builds_the_baseline_i_set() {
     assert_eq!(differing, 0, "packets whose i-set differs");
     let (b, g) = (base.counters(), gather.counters());
     assert_eq!(
-        (g.groups, g.same, g.passes, g.packets, g.material_lookups, g.triangle_lookups),
-        (b.groups, b.same, b.passes, b.packets, b.material_lookups, b.triangle_lookups)
+        (
+            g.groups,
+            g.same,
+            g.passes,
+            g.packets,
+            g.material_lookups,
+            g.triangle_lookups
+        ),
+        (
+            b.groups,
+            b.same,
+            b.passes,
+            b.packets,
+            b.material_lookups,
+            b.triangle_lookups
+        )
     );
     assert!(
         g.triangle_misses.0 > 0 && g.vertex_misses.0 > 0,
