@@ -17,8 +17,9 @@
 #      cache's lines.
 #   C. per such group: the normals' and the records' columns (lgw) and the group's
 #      values, as SH_GROUP_COLUMNS computes them for every path.
-#   D. the missed vertices' normals and tags to the vertex cache, in lookup order (so a
-#      line holds the last vertex looked up there), for the groups of later packets.
+#   D. per group that missed: each of its 12 lookups (all fetched; a hit's is the same
+#      vertex and normal again) to its line and tag, in lookup order (so a line holds the
+#      last vertex looked up there), for the fast path of later packets.
 # The baseline's slow path is not assembled in this variant. Registers as the fast path's
 # (modules/shade_iset.s); the loops' own state is in $80..$85.
 
