@@ -28,6 +28,8 @@
 #                              the colour block and its put
 #   modules/shade_iset_slow.s  1. the i-set's slow path: mixed groups, lane by lane, with
 #                              the triangle records' and vertices' DMA staging
+#   modules/shade_gather.s     1. with EXT_GATHER, in its place: the slow path batched per
+#                              packet, DMA lists and gathers (docs/extensions.md)
 #   modules/shade_cache.s      the first call's set-up of the area, and the vertex and
 #                              material caches' (and triangle records') misses
 

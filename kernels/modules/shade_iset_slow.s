@@ -6,7 +6,11 @@
 # return) and landed once per group. Out of line, after the end of shade_packet; back to
 # the fast path's loop (.Lsh_group) or, after the last group, to .Lsh_iset_done. Saves
 # and restores the fast path's $120..$124 (SH_SAVE) and reloads $92, $93, $120.
+# With EXT_GATHER (the gather load) modules/shade_gather.s takes its place.
 
+        .ifdef  EXT_GATHER
+        .include "modules/shade_gather.s"   # the gather variant's: batched per packet
+        .else
         # ---- out of line: the slow path, no light, a material miss
 
         # the slow path: an empty or mixed group, or a cache miss
@@ -25,223 +29,6 @@
         brnz    $77, .Lsh_slow_next
         brnz    $75, .Lsh_slow_empty
 
-        .ifdef  EXT_GATHER
-        # The gather variant (--ext gather, docs/extensions.md): a group on different
-        # triangles, whatever its misses, looked up for its 4 lanes at once with lgw
-        # (the triangle tags, the records' columns, the vertex tags and normals) instead
-        # of the mixed block below (all in the caches) or lane by lane (a miss). A
-        # same-triangle group still goes lane by lane (its one record, its one lookup).
-        # Only the missing lanes and vertices call the miss handlers, in lookup order;
-        # a hit's normal is gathered before any lands (a miss may land in its line).
-        .spu_ext gather
-        .sched  pool=68,71-77,80-90,92-96,98,100-105,110-114,116-118,120,125-127 scratch=66-127
-        a       %rp, $99, $67
-        lqd     %ids, CTX_RAY_ID(%rp)
-        ceqi    $69, %ids, -1                 # the lanes without a hit
-        shufb   %s0, %ids, %ids, $91
-        ceq     %same, %ids, %s0
-        gb      %sameb, %same
-        ceqi    %samec, %sameb, 15
-        rotqbyi %r4, %ids, 4                  # a lane without a hit looks up the
-        cgt     %c4, %ids, %r4                # largest id of the group (a hit's)
-        selb    %m4, %r4, %ids, %c4
-        rotqbyi %r8, %m4, 8
-        cgt     %c8, %m4, %r8
-        selb    %mx, %r8, %m4, %c8
-        shufb   %mxs, %mx, %mx, $91
-        selb    $70, %ids, %mxs, $69          # the ids looked up
-        shufb   %tt, TTAGS, TTAGS, $91
-        shufb   %td, TDATA, TDATA, $91
-        shufb   %tm, TMASK, TMASK, $91
-        and     %ti, $70, %tm
-        shli    %to, %ti, 4
-        lgwx    %tag, %tt, %to                # the lanes' triangle tags
-        shli    %tl, %ti, 6
-        a       %line, %tl, %td
-        ceq     %th, %tag, $70
-        or      %have, %th, $69
-        xori    $78, %have, -1                # the lanes whose record is fetched
-        shufb   %area, $66, $66, $91
-        lqa     %lanes, sh_gather_lanes
-        ila     %so, SH_STAGE
-        a       %st0, %area, %so
-        a       %st, %st0, %lanes
-        selb    $79, %st, %line, %have        # each lane's record
-        ila     $106, sh_tri_miss
-        brnz    %samec, .Lsh_slow_body        # one triangle: lane by lane
-        .endsched
-        .irp    L, 0, 1, 2, 3                 # the records past the triangle cache
-        rotqbyi $81, $78, 4*\L
-        rotqbyi $80, $70, 4*\L
-        SH_ADDI $82, $66, SH_STAGE+\L*64
-        ila     $88, 1f
-        binz    $81, $106
-1:
-        .endr
-        SH_WAIT $85
-        .sched  pool=68,71-77,80-90,92,94,96,100,106,114,120,125-127 scratch=66-127
-        shufb   %vt, $115, $115, $91
-        shufb   %vl, $123, $123, $91
-        .irp    I, 0, 1, 2
-        ai      %ra\I, $79, 48+4*\I
-        lgw     %vi\I, %ra\I                  # vertex I's index, the lanes'
-        and     %vx\I, %vi\I, $121
-        shli    %vo\I, %vx\I, 4
-        a       %va\I, %vo\I, %vt
-        lgw     %tg\I, %va\I                  # its tag
-        ceq     %h\I, %tg\I, %vi\I
-        or      %hh\I, %h\I, $69
-        shli    %lo\I, %vx\I, 6
-        a       %ln\I, %lo\I, %vl
-        .endr
-        lgw     $104, %ln0                    # the normals the hits read, now
-        ai      %ly0, %ln0, 4
-        lgw     $105, %ly0
-        ai      %lz0, %ln0, 8
-        lgw     $110, %lz0
-        lgw     $111, %ln1
-        ai      %ly1, %ln1, 4
-        lgw     $112, %ly1
-        ai      %lz1, %ln1, 8
-        lgw     $113, %lz1
-        lgw     $116, %ln2
-        ai      %ly2, %ln2, 4
-        lgw     $117, %ly2
-        ai      %lz2, %ln2, 8
-        lgw     $118, %lz2
-        ori     $93, %vi0, 0
-        ori     $95, %vi1, 0
-        ori     $98, %vi2, 0
-        xori    $101, %hh0, -1                # the vertices that miss
-        xori    $102, %hh1, -1
-        xori    $103, %hh2, -1
-        and     %a01, %hh0, %hh1
-        and     %a012, %a01, %hh2
-        gb      %ab, %a012
-        ceqi    %allhit, %ab, 15
-        hbrr    .Lsh_gather_br, .Lsh_gather_cols
-.Lsh_gather_br:
-        brnz    %allhit, .Lsh_gather_cols
-        .endsched
-        # a vertex missed: the misses one by one in lookup order (lane by lane, vertex by
-        # vertex, as SH_NORMALS makes them), each call's return the next miss or the
-        # landing (no branch back: the call's target and its return are both hinted),
-        # landed, and their normals gathered from the lanes' SH_NRM slots where they
-        # landed
-        ila     $114, sh_vertex_miss
-        lqd     $100, SH_BLOCK($66)           # the vertex records' EA
-        .sched  pool=71-77,85-87,90,92,125-127 scratch=66-127
-        andi    %b0, $101, 4                  # per lane, its vertices' misses: 0 in
-        andi    %b1, $102, 2                  # bit 2, 1 in bit 1, 2 in bit 0
-        andi    %b2, $103, 1
-        or      %b01, %b0, %b1
-        or      %b, %b01, %b2
-        lqa     %sh, sh_gather_lanes+16
-        shl     %bs, %b, %sh                  # lane 0's in bits 11..9, lane 3's in 2..0
-        rotqbyi %r4, %bs, 4
-        or      %o4, %bs, %r4
-        rotqbyi %r8, %o4, 8
-        or      $120, %o4, %r8
-        .endsched
-        .sched  pool=71-77,85-87,90 scratch=66-127
-.Lsh_gmiss:
-        hbr     .Lsh_gmiss_call, $114
-        clz     %z, $120
-        ai      %q, %z, -20                   # 3 lane + vertex, the highest bit's
-        mpyi    %q11, %q, 11
-        rotmi   %l, %q11, -5                  # the lane (q / 3 for q < 12)
-        mpyi    %l3, %l, 3
-        sf      %i, %l3, %q                   # the vertex
-        ceqi    %i0, %i, 0
-        ceqi    %i1, %i, 1
-        selb    %v12, $98, $95, %i1
-        selb    %vs, %v12, $93, %i0           # the vertex's lanes
-        shli    %lb, %l, 2
-        rotqby  $81, %vs, %lb                 # the vertex
-        and     %x, $81, $121
-        shli    %xo, %x, 4
-        a       $83, %xo, $115                # its tag
-        shli    %xl, %x, 6
-        a       %ln, %xl, $123
-        ai      $84, %ln, -16                 # its line
-        shli    %lo, %l, 6
-        shli    %io, %i, 4
-        a       %o1, %lo, %io
-        ila     %nb, SH_NRM
-        a       $89, %o1, %nb                 # the lane's normal
-        il      %top, 0x800
-        sfi     %nq, %q, 0
-        rotm    %bit, %top, %nq
-        andc    $120, $120, %bit
-        ila     %next, .Lsh_gmiss
-        ila     %done, .Lsh_gmiss_done
-        ceqi    %last, $120, 0
-        selb    $88, %next, %done, %last      # back: the next miss, or the landing
-.Lsh_gmiss_call:
-        bi      $114
-        .endsched
-.Lsh_gmiss_done:
-        SH_LAND
-        .sched  pool=68,71-77,80-90,92,94,96,100,106,114,120,125-127 scratch=66-127
-        shufb   %area, $66, $66, $91
-        lqa     %lanes, sh_gather_lanes
-        ila     %no, SH_NRM
-        a       %b0, %area, %no
-        a       %base, %b0, %lanes
-        .irp    I, 0, 1, 2
-        ai      %nx\I, %base, 16*\I
-        ai      %ny\I, %base, 16*\I+4
-        ai      %nz\I, %base, 16*\I+8
-        lgw     %mx\I, %nx\I
-        lgw     %my\I, %ny\I
-        lgw     %mz\I, %nz\I
-        .endr
-        selb    $104, $104, %mx0, $101
-        selb    $105, $105, %my0, $101
-        selb    $110, $110, %mz0, $101
-        selb    $111, $111, %mx1, $102
-        selb    $112, $112, %my1, $102
-        selb    $113, $113, %mz1, $102
-        selb    $116, $116, %mx2, $103
-        selb    $117, $117, %my2, $103
-        selb    $118, $118, %mz2, $103
-        .endsched
-.Lsh_gather_cols:
-        # the records' columns, the normal's differences, the group's values
-        .sched  pool=68,70-78,80-90,92-96,98,100-103,106,114,120,125-127 scratch=66-127
-        a       %gp, $66, $67
-        .irp    W, 12, 16, 20, 24, 32, 36, 40, 60
-        ai      %ra\W, $79, \W
-        lgw     %w\W, %ra\W
-        .endr
-        or      %mat, %w60, $69               # no hit: no material
-      ~ stqd    %mat, SH_MAT(%gp)
-        fs      %d1x, $111, $104              # n1 - n0
-        fs      %d1y, $112, $105
-        fs      %d1z, $113, $110
-        fs      %d2x, $116, $104              # n2 - n0
-        fs      %d2y, $117, $105
-        fs      %d2z, $118, $110
-        a       %rp, $99, $67
-        SH_GROUP_COLUMNS %w12, %w16, %w20, %w24, %w32, %w36, %w40, $104, $105, $110, %d1x, %d1y, %d1z, %d2x, %d2y, %d2z
-        gb      %mb, $69
-        cntb    %mc1, %mb                     # counted: a group, its hit lanes
-        sfi     %hits, %mc1, 4
-        lqd     %cg, SH_STATS+SHS_GROUPS($66)
-        lqd     %ct, SH_STATS+SHS_TLOOK($66)
-        ai      %cg1, %cg, 1
-        a       %ct1, %ct, %hits
-        stqd    %cg1, SH_STATS+SHS_GROUPS($66)
-        stqd    %ct1, SH_STATS+SHS_TLOOK($66)
-        hbrr    .Lsh_gather_next, .Lsh_slow_next
-.Lsh_gather_next:
-        br      .Lsh_slow_next
-        .endsched
-        .align  4
-sh_gather_lanes:                              # the lanes' 64-byte strides
-        .long   0, 64, 128, 192
-        .long   9, 6, 3, 0                    # +16: the lanes' misses to bits
-        .endif
 
 
         # Rays on different triangles, every lane's record and vertices in the caches (the
@@ -485,6 +272,8 @@ sh_gather_lanes:                              # the lanes' 64-byte strides
         SH_ADDI $75, $66, SH_MAT
         stqx    $74, $75, $67
         br      .Lsh_slow_next
+
+        .endif
 
 .Lsh_empty:                                   # no ray hit
         il      $70, -1

@@ -19,6 +19,10 @@
 
         # the fast groups' counters (groups, same, triangle lookups) to SH_STATS
 .Lsh_iset_done:
+        .ifdef  EXT_GATHER                    # steps the fast path left: the batch
+        lqa     $74, sh_gn                    # (modules/shade_gather.s)
+        brnz    $74, .Lsh_gbatch
+        .endif
         .ifdef  REFLECT                       # the reflection's normals, the next level's
         brsl    $127, reflect_iset            # rays (modules/reflect.s)
         .endif

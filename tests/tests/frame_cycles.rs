@@ -287,6 +287,9 @@ const MODULE_ENTRIES: &[(&str, &[&str])] = &[
     // within it, and the shading counters of the snapshots count what they did.
     ("shade_area.s", &[]),
     ("shade_cache.s", &["sh_vertex_miss", "sh_tri_miss"]),
+    // The gather variant's slow path (EXT_GATHER) runs in its own frames only
+    // (isa_extensions' gather kernel, shade_module's gather module).
+    ("shade_gather.s", &[]),
     ("shade_iset.s", &[]),
     ("shade_iset_slow.s", &[]),
     ("shade_light.s", &[]),

@@ -91,9 +91,20 @@ fn harness(staged: &StagedScene, scene: &Scene, block: ShadingBlock) -> Harness 
 
 /// [`harness`] for a `size` x `size` frame.
 fn harness_sized(staged: &StagedScene, scene: &Scene, block: ShadingBlock, size: u32) -> Harness {
+    harness_of(DRIVER, staged, scene, block, size)
+}
+
+/// [`harness_sized`] with the driver source `driver`.
+fn harness_of(
+    driver: &str,
+    staged: &StagedScene,
+    scene: &Scene,
+    block: ShadingBlock,
+    size: u32,
+) -> Harness {
     let basis = scene.camera.basis(size, size);
     let layout = FrameLayout::new(staged, &basis, size, size, 1, 256, 256).unwrap();
-    let mut h = ModuleHarness::new(DRIVER, "driver.s", MainMemory::new(Vec::new()));
+    let mut h = ModuleHarness::new(driver, "driver.s", MainMemory::new(Vec::new()));
     let mut layout = layout.with_shading(staged, block).unwrap();
     layout.set_shading_area(h.sym("area")).unwrap();
     h.memory = MainMemory::new(layout.memory_image(staged));
@@ -574,4 +585,61 @@ fn vertex_misses_of_a_group_land_together() {
         assert_eq!(counters, model.counters, "vertex cache of 2^{vertex_log2}");
         assert!(counters.vertex_misses.0 > 64, "{counters:?}");
     }
+}
+
+/// The gather variant of the module (`EXT_GATHER`, `modules/shade_gather.s`: the groups
+/// the fast path leaves batched per packet, records and normals by DMA lists, lookups by
+/// `lgw`/`lgwx`) on an SPU with the gather load: every packet of a 64x64 room frame, with
+/// small caches that miss and a 16-line triangle cache that holds records 0 to 15 only,
+/// gives the baseline module's colours and the same i-set (hit points and normals, bit for
+/// bit, in the shading area); groups, passes and material lookups are counted alike, and
+/// the batch ran (only it counts triangle records and vertices fetched).
+#[test]
+fn the_gather_module_builds_the_baseline_i_set() {
+    let (scene, staged, reference) = room_setup();
+    let lights = vec![Light::white(glam::Vec3::new(-0.6, 2.7, 0.4))];
+    let mut base = harness(&staged, &scene, block(lights.clone(), 4, 4));
+    let gather_driver = format!("        .set EXT_GATHER, 1\n{DRIVER}");
+    let mut gather = harness_of(&gather_driver, &staged, &scene, block(lights, 4, 4), 64);
+    gather
+        .h
+        .spu
+        .set_extensions(spu_isa::Extensions::parse("gather").unwrap());
+    let i_set = |h: &Harness| {
+        let area = h.h.sym("area");
+        let at = |name: &str| area + h.h.value(name);
+        h.h.bytes(at("SH_NX"), at("SH_MAT") - at("SH_NX"))
+    };
+    let mut differing = 0;
+    for index in 0..64u32 {
+        let (x0, y0) = ((index % 8) * 8, (index / 8) * 8);
+        let packet = trace_packet(&reference, &scene, x0, y0);
+        let colours = base.shade(&packet, index);
+        assert_eq!(gather.shade(&packet, index), colours, "packet {index}");
+        differing += (i_set(&gather) != i_set(&base)) as usize;
+    }
+    assert_eq!(differing, 0, "packets whose i-set differs");
+    let (b, g) = (base.counters(), gather.counters());
+    assert_eq!(
+        (
+            g.groups,
+            g.same,
+            g.passes,
+            g.packets,
+            g.material_lookups,
+            g.triangle_lookups
+        ),
+        (
+            b.groups,
+            b.same,
+            b.passes,
+            b.packets,
+            b.material_lookups,
+            b.triangle_lookups
+        )
+    );
+    assert!(
+        g.triangle_misses.0 > 0 && g.vertex_misses.0 > 0,
+        "the batch fetched records and normals: {g:?}"
+    );
 }

@@ -1,0 +1,392 @@
+# shade_gather.s — the i-set's slow path for SPUs with the gather load (--ext gather,
+# docs/extensions.md): the groups the fast path (modules/shade_iset.s) could not do are
+# batched per packet instead of done one by one, so a packet waits for main memory at
+# most twice (its missing triangle records, then its groups' vertex normals), not twice
+# per group, and every lookup is a gather (lgw, lgwx) from local store.
+#
+# The fast path runs all 8 of its steps; a step it cannot finish (.Lsh_slow) is noted in
+# sh_gfail (which of its two groups the fast path did, and the step) and the loop goes
+# on. Then (.Lsh_gbatch, also from .Lsh_iset_done when the last step was done):
+#   A. per group not done: its lanes' triangle tags (lgwx); a group with a record past
+#      the traversal's triangle cache gets its 4 records by one DMA list for the packet
+#      (sh_glr, into sh_grec), the others read the cache's lines; a group with no hit
+#      gets material -1.
+#   B. per such group: the vertex indices and the vertex cache's tags (lgw); a group with
+#      a vertex miss gets its 12 vertex normals (the quadword of each record the module
+#      reads) by one DMA list for the packet (sh_glv, into sh_gnst), the others read the
+#      cache's lines.
+#   C. per such group: the normals' and the records' columns (lgw) and the group's
+#      values, as SH_GROUP_COLUMNS computes them for every path.
+#   D. per group that missed: each of its 12 lookups (all fetched; a hit's is the same
+#      vertex and normal again) to its line and tag, in lookup order (so a line holds the
+#      last vertex looked up there), for the fast path of later packets.
+# The baseline's slow path is not assembled in this variant. Registers as the fast path's
+# (modules/shade_iset.s); the loops' own state is in $80..$85.
+
+        .spu_ext gather
+
+        # a step of the fast path with a group it could not do: noted, and the loop goes on
+.Lsh_slow:
+        hbrr    .Lsh_slow_back, .Lsh_group
+        lqd     $77, SH_DONE($66)             # its groups' flags (words 0, 2)
+        lqa     $74, sh_gn
+        ai      $75, $67, -32                 # the step's first group * 16
+        ila     $76, sh_gfail
+        ila     $78, sh_gstep
+        ceqi    $79, $67, 256
+        stqx    $77, $76, $74
+        stqx    $75, $78, $74
+        ai      $74, $74, 16
+        stqa    $74, sh_gn
+.Lsh_slow_back:
+        brz     $79, .Lsh_group
+        # (after the last step: the batch)
+
+        # ---- the batch: A. the groups' records
+.Lsh_gbatch:
+        lqa     $81, sh_gn                    # the steps noted * 16
+        il      $80, 0
+        il      $82, 0                        # groups to do * 256
+        il      $83, 0                        # records' list bytes (32 a group)
+        il      $84, 0                        # records fetched
+.Lsh_gstep:                                   # (both groups of a step in one block: the
+        .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
+        ila     %gfb, sh_gfail
+        ila     %gsb, sh_gstep
+        lqx     %okp, %gfb, $80
+        lqx     %st, %gsb, $80
+        shufb   %tt, TTAGS, TTAGS, $91
+        shufb   %td, TDATA, TDATA, $91
+        shufb   %tm, TMASK, TMASK, $91
+        shufb   %eat, EATRIS, EATRIS, $91
+        lqa     %plo, sh_const
+        lqa     %phi, sh_const+16
+        lqa     %lanes, sh_gather_lanes
+        il      %sz, 64
+        ila     %lrb, sh_glr
+        ila     %grb, sh_grec
+        ila     %gkb, sh_gk
+        .irp    H, 0, 1                       # second's stores after the first's)
+        rotqbyi %ok\H, %okp, 8*\H               # the fast path did it
+        ai      %g\H, %st, 16*\H                # the group * 16
+        a       %rp\H, $99, %g\H
+        a       %gp\H, $66, %g\H
+        lqd     %ids\H, CTX_RAY_ID(%rp\H)
+        ceqi    %nh\H, %ids\H, -1                 # the lanes without a hit
+        gb      %nhb\H, %nh\H
+        ceqi    %allm\H, %nhb\H, 15
+        rotqbyi %r4\H, %ids\H, 4                  # a lane without a hit looks up the
+        cgt     %c4\H, %ids\H, %r4\H                # largest id of the group (a hit's)
+        selb    %m4\H, %r4\H, %ids\H, %c4\H
+        rotqbyi %r8\H, %m4\H, 8
+        cgt     %c8\H, %m4\H, %r8\H
+        selb    %mx\H, %r8\H, %m4\H, %c8\H
+        shufb   %mxs\H, %mx\H, %mx\H, $91
+        selb    %idv\H, %ids\H, %mxs\H, %nh\H         # the ids looked up
+        and     %ti\H, %idv\H, %tm
+        shli    %to\H, %ti\H, 4
+        lgwx    %tag\H, %tt, %to\H                # the lanes' triangle tags
+        shli    %tl\H, %ti\H, 6
+        a       %line\H, %tl\H, %td
+        ceq     %th\H, %tag\H, %idv\H
+        or      %have\H, %th\H, %nh\H
+        gb      %hb\H, %have\H
+        ceqi    %allh\H, %hb\H, 15                # every record in the cache
+        shli    %eo\H, %idv\H, 6
+        a       %ea\H, %eo\H, %eat
+        shufb   %e0\H, %sz, %ea\H, %plo
+        shufb   %e1\H, %sz, %ea\H, %phi
+        a       %lra\H, %lrb, $83
+        stqd    %e0\H, 0(%lra\H)
+        stqd    %e1\H, 16(%lra\H)
+        shli    %ro\H, $83, 3
+        a       %rb0\H, %grb, %ro\H
+        shufb   %rbs\H, %rb0\H, %rb0\H, $91
+        a       %rec\H, %rbs\H, %lanes
+        shufb   %ahs\H, %allh\H, %allh\H, $91
+        selb    %ra\H, %rec\H, %line\H, %ahs\H        # each lane's record
+        or      %skip\H, %ok\H, %allm\H
+        nor     %fe\H, %allh\H, %skip\H             # its records fetched
+        andi    %fe32\H, %fe\H, 32
+        a       $83, $83, %fe32\H
+        xori    %nhv\H, %hb\H, 15
+        cntb    %nc\H, %nhv\H
+        and     %nc2\H, %nc\H, %fe\H
+        a       $84, $84, %nc2\H
+        lqd     %om\H, SH_MAT(%gp\H)              # no hit: no material
+        andc    %em\H, %allm\H, %ok\H
+        shufb   %ems\H, %em\H, %em\H, $91
+        selb    %nm\H, %om\H, %nh\H, %ems\H
+      ~ stqd    %nm\H, SH_MAT(%gp\H)
+        a       %gka\H, %gkb, $82
+        stqd    %g\H, 0(%gka\H)
+        stqd    %ra\H, 16(%gka\H)
+        stqd    %nh\H, 32(%gka\H)
+        nor     %d\H, %skip\H, %skip\H              # to do
+        andi    %d256\H, %d\H, 256
+        a       $82, $82, %d256\H
+        .endr
+        .endsched
+        ai      $80, $80, 16
+        ceq     $86, $80, $81
+        brz     $86, .Lsh_gstep
+        il      $86, 0
+        stqa    $86, sh_gn                    # (the next packet's steps)
+        lqd     $86, SH_STATS+SHS_TMISS($66)
+        a       $86, $86, $84
+        stqd    $86, SH_STATS+SHS_TMISS($66)
+        brz     $83, .Lsh_gv                  # no record to fetch
+        ila     $86, sh_grec
+        ila     $87, sh_glr
+        il      $88, SH_TAG
+        il      $89, 0x44                     # getl
+        wrch    $MFC_LSA, $86
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $87
+        wrch    $MFC_Size, $83
+        wrch    $MFC_TagID, $88
+        wrch    $MFC_Cmd, $89
+        SH_WAIT $86
+
+        # ---- B. the groups' vertices
+.Lsh_gv:
+        il      $80, 0
+        il      $84, 0                        # vertices missed
+        il      $85, 0                        # normals' list bytes (96 a group)
+        il      $81, 0                        # groups with a miss * 16 (sh_gml)
+        il      $83, 0                        # groups without * 16 (sh_gmh)
+        brz     $82, .Lsh_gdone               # no group to do
+.Lsh_gvloop:
+        .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
+        ila     %gkb, sh_gk
+        a       %gka, %gkb, $80
+        lqd     %ra, 16(%gka)
+        lqd     %nh, 32(%gka)
+        lqd     %blk, SH_BLOCK($66)           # the vertex records' EA
+        shufb   %evs, %blk, %blk, $91
+        ai      %ev, %evs, 16                 # (their normals)
+        shufb   %vt, $115, $115, $91
+        shufb   %vl, $123, $123, $91
+        il      %sz, 16
+        lqa     %plo, sh_const
+        lqa     %phi, sh_const+16
+        ila     %lvb, sh_glv
+        a       %lva, %lvb, $85
+        .irp    I, 0, 1, 2
+        ai      %ra\I, %ra, 48+4*\I
+        lgw     %vi\I, %ra\I                  # vertex I's index, the lanes'
+        and     %x\I, %vi\I, $121
+        shli    %to\I, %x\I, 4
+        a       %ta\I, %to\I, %vt
+        lgw     %tg\I, %ta\I                  # its tag
+        ceq     %h\I, %tg\I, %vi\I
+        or      %hh\I, %h\I, %nh
+        xori    %m\I, %hh\I, -1               # missed
+        shli    %lo\I, %x\I, 6
+        a       %ln\I, %lo\I, %vl             # its line's normal
+        shli    %eo\I, %vi\I, 6
+        a       %ea\I, %eo\I, %ev
+        shufb   %el\I, %sz, %ea\I, %plo       # list elements: 16 bytes, the EA
+        shufb   %eh\I, %sz, %ea\I, %phi
+      ~ stqd    %el\I, 32*\I(%lva)
+      ~ stqd    %eh\I, 32*\I+16(%lva)
+      ~ stqd    %vi\I, 96+16*\I(%gka)
+      ~ stqd    %m\I, 144+16*\I(%gka)
+        gb      %mb\I, %m\I
+        .endr
+        and     %a01, %hh0, %hh1
+        and     %a, %a01, %hh2
+        gb      %ab, %a
+        ceqi    %allhit, %ab, 15
+        shufb   %ahs, %allhit, %allhit, $91
+        shli    %n2, $85, 1                   # the group's normals' slots: 64 bytes a
+        ila     %nsb, sh_gnst                 # vertex, 16 a lane
+        a       %ns0, %nsb, %n2
+        shufb   %nss, %ns0, %ns0, $91
+        lqa     %l16, sh_gather_lanes+32
+        a       %ns, %nss, %l16
+        .irp    I, 0, 1, 2
+        ai      %nsi\I, %ns, 64*\I
+        selb    %na\I, %nsi\I, %ln\I, %ahs
+      ~ stqd    %na\I, 48+16*\I(%gka)
+        .endr
+        shli    %mb0s, %mb0, 8                # the misses, lookup order (vertex, lane)
+        shli    %mb1s, %mb1, 4                # from bit 11 down
+        or      %mb01, %mb0s, %mb1s
+        or      %mbits, %mb01, %mb2
+      ~ stqd    %mbits, 192(%gka)
+        cntb    %mc, %mbits
+        rotqbyi %mc2, %mc, 2
+        a       %mc3, %mc, %mc2
+        andi    %mc4, %mc3, 255
+        a       $84, $84, %mc4
+        xori    %nah, %allhit, -1
+        andi    %n96, %nah, 96
+        a       $85, $85, %n96
+        ila     %mlb, sh_gml
+        ila     %hlb, sh_gmh
+        stqx    $80, %mlb, $81                # the group, listed as missing or not
+        stqx    $80, %hlb, $83
+        andi    %n16, %nah, 16
+        andi    %h16, %allhit, 16
+        a       $81, $81, %n16
+        a       $83, $83, %h16
+        ai      $80, $80, 256
+        ceq     %end, $80, $82
+        hbrr    .Lsh_gv_br, .Lsh_gvloop
+.Lsh_gv_br:
+        brz     %end, .Lsh_gvloop
+        .endsched
+        lqd     $86, SH_STATS+SHS_VMISS($66)
+        a       $86, $86, $84
+        stqd    $86, SH_STATS+SHS_VMISS($66)
+        brz     $85, .Lsh_gc                  # every vertex in the cache
+        ila     $86, sh_gnst
+        ila     $87, sh_glv
+        il      $88, SH_TAG
+        il      $89, 0x44                     # getl (waited for after the groups that
+        wrch    $MFC_LSA, $86                 # hit are done)
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $87
+        wrch    $MFC_Size, $85
+        wrch    $MFC_TagID, $88
+        wrch    $MFC_Cmd, $89
+
+        # ---- C. the groups' values: first those that hit, then (their normals waited
+        # for) those that missed
+# the groups listed at LIST (END: its bytes), looped at LOOP (BR its branch)
+        .macro  SH_GATHER_GROUPS list, end, loop, br
+\loop:
+        .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
+        ila     %gkb, sh_gk
+        ila     %lsb, \list
+        lqx     %k, %lsb, $80
+        a       %gka, %gkb, %k
+        lqd     %g, 0(%gka)
+        lqd     %ra, 16(%gka)
+        lqd     %nh, 32(%gka)
+        lqd     %na0, 48(%gka)
+        lqd     %na1, 64(%gka)
+        lqd     %na2, 80(%gka)
+        a       %gp, $66, %g
+        a       %rp, $99, %g
+        .irp    I, 0, 1, 2
+        lgw     %nx\I, %na\I
+        ai      %ay\I, %na\I, 4
+        lgw     %ny\I, %ay\I
+        ai      %az\I, %na\I, 8
+        lgw     %nz\I, %az\I
+        .endr
+        .irp    W, 12, 16, 20, 24, 32, 36, 40, 60
+        ai      %ra\W, %ra, \W
+        lgw     %w\W, %ra\W
+        .endr
+        or      %mat, %w60, %nh               # no hit: no material
+      ~ stqd    %mat, SH_MAT(%gp)
+        fs      %d1x, %nx1, %nx0              # n1 - n0
+        fs      %d1y, %ny1, %ny0
+        fs      %d1z, %nz1, %nz0
+        fs      %d2x, %nx2, %nx0              # n2 - n0
+        fs      %d2y, %ny2, %ny0
+        fs      %d2z, %nz2, %nz0
+        SH_GROUP_COLUMNS %w12, %w16, %w20, %w24, %w32, %w36, %w40, %nx0, %ny0, %nz0, %d1x, %d1y, %d1z, %d2x, %d2y, %d2z
+        lqd     %ids, CTX_RAY_ID(%rp)         # counted: a group, its records looked
+        shufb   %s0, %ids, %ids, $91          # up (one for one triangle), one triangle
+        ceq     %same, %ids, %s0
+        gb      %sameb, %same
+        ceqi    %samec, %sameb, 15
+        gb      %mb, %nh
+        cntb    %mc1, %mb
+        sfi     %hits, %mc1, 4
+        il      %one, 1
+        selb    %looks, %hits, %one, %samec
+        lqd     %cg, SH_STATS+SHS_GROUPS($66)
+        lqd     %ct, SH_STATS+SHS_TLOOK($66)
+        lqd     %cs, SH_STATS+SHS_SAME($66)
+        ai      %cg1, %cg, 1
+        a       %ct1, %ct, %looks
+        sf      %cs1, %samec, %cs
+        stqd    %cg1, SH_STATS+SHS_GROUPS($66)
+        stqd    %ct1, SH_STATS+SHS_TLOOK($66)
+        stqd    %cs1, SH_STATS+SHS_SAME($66)
+        ai      $80, $80, 16
+        ceq     %end, $80, \end
+        hbrr    \br, \loop
+\br:
+        brz     %end, \loop
+        .endsched
+        .endm
+
+.Lsh_gc:
+        il      $80, 0
+        brz     $83, .Lsh_gcm0
+        SH_GATHER_GROUPS sh_gmh, $83, .Lsh_gch, .Lsh_gch_br
+.Lsh_gcm0:
+        brz     $81, .Lsh_gdone               # no vertex missed
+        SH_WAIT $86
+        il      $80, 0
+        SH_GATHER_GROUPS sh_gml, $81, .Lsh_gcm, .Lsh_gcm_br
+
+        # ---- D. the vertex cache: a group with a miss has all 12 of its normals fetched,
+        # so each of its lookups (a hit's too: the same vertex and normal again) is
+        # stored to its line and tag, in lookup order (vertex, lane), without a branch
+        il      $80, 0
+.Lsh_gland:
+        ila     $86, sh_gml
+        lqx     $87, $86, $80
+        ila     $86, sh_gk
+        a       $83, $86, $87                 # the group's record
+        .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
+        lqd     %nb, 48($83)                  # its normals' slots (lane 0's, vertex 0)
+        .irp    I, 0, 1, 2
+        lqd     %vi\I, 96+16*\I($83)
+        and     %x\I, %vi\I, $121
+        shli    %xl\I, %x\I, 6
+        .irp    L, 0, 1, 2, 3
+        rotqbyi %v\I\L, %vi\I, 4*\L
+        rotqbyi %o\I\L, %xl\I, 4*\L
+        rotmi   %t\I\L, %o\I\L, -2
+        lqd     %n\I\L, 64*\I+16*\L(%nb)
+        stqx    %n\I\L, $123, %o\I\L           # the normal to its line
+        stqx    %v\I\L, $115, %t\I\L           # the vertex to its tag
+        .endr
+        .endr
+        ai      $80, $80, 16
+        ceq     %end, $80, $81
+        hbrr    .Lsh_gland_br, .Lsh_gland
+.Lsh_gland_br:
+        brz     %end, .Lsh_gland
+        .endsched
+.Lsh_gdone:
+        lqa     $92, sh_const+80              # (the fast path's patterns)
+        lqa     $93, sh_const+96
+        lqa     $120, sh_const+208
+        br      .Lsh_iset_done
+
+        .align  4
+sh_gather_lanes:                              # the lanes' 64-byte strides
+        .long   0, 64, 128, 192
+        .long   0, 0, 0, 0
+        .long   0, 16, 32, 48                 # +32: the lanes' 16-byte strides
+sh_gn:  .long   0, 0, 0, 0                    # the steps noted * 16
+sh_gfail:                                     # per step noted: its groups' flags
+        .space  128
+sh_gstep:                                     # ... and its first group * 16
+        .space  128
+        .align  7
+sh_gk:                                        # per group to do: the group * 16, the
+        .space  16 * 256                      # lanes' records, no-hit lanes, normals'
+                                              # addresses (3), vertices (3), misses (3),
+                                              # the misses' bits (+192)
+sh_grec:                                      # the records fetched (4 a group)
+        .space  16 * 256
+sh_gnst:                                      # the normals fetched (12 a group)
+        .space  16 * 192
+sh_glr:                                       # the records' list (4 elements a group)
+        .space  16 * 32
+sh_glv:                                       # the normals' list (12 elements a group)
+        .space  16 * 96
+sh_gml:                                       # the groups with a vertex miss (their
+        .space  16 * 16                       # offsets in sh_gk)
+sh_gmh:                                       # ... and those without
+        .space  16 * 16
