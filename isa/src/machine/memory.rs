@@ -159,8 +159,9 @@ fn settle_memory_bus(spus: &mut [Spu], memory: &mut MainMemory) {
 /// logged them) in (`cycle`, SPU index, order in its log) order, the order a sort of all
 /// entries by that key gives, and empties the logs (keeping their room for the next
 /// quantum). A log is nearly always in cycle order already; one that is not is first
-/// sorted stably on its own. The logs are then merged through a heap of their heads: a
-/// quantum's entries cost a comparison per SPU logging anything, not a sort of them all.
+/// sorted stably on its own. The logs are then merged through a heap of their heads (one
+/// per SPU), which costs each entry a few comparisons instead of a sort of all entries;
+/// one log alone needs neither.
 fn in_order<T>(
     mut logs: Vec<&mut Vec<T>>,
     cycle: impl Fn(&T) -> u64,
@@ -168,22 +169,28 @@ fn in_order<T>(
 ) {
     use std::cmp::Reverse;
     use std::collections::BinaryHeap;
-    let mut heads = BinaryHeap::new();
-    let mut entries = Vec::with_capacity(logs.len());
-    for (i, log) in logs.iter_mut().enumerate() {
+    for log in logs.iter_mut() {
         if !log.is_sorted_by_key(&cycle) {
             log.sort_by_key(&cycle);
         }
+    }
+    let mut logging = (0..logs.len()).filter(|&i| !logs[i].is_empty());
+    match (logging.next(), logging.next()) {
+        (None, _) => return,
+        (Some(i), None) => {
+            // One SPU logged anything (always so with one SPU): its log is the order.
+            logs[i].drain(..).for_each(|e| visit(i, e));
+            return;
+        }
+        _ => {}
+    }
+    let mut heads = BinaryHeap::with_capacity(logs.len());
+    let mut entries = Vec::with_capacity(logs.len());
+    for (i, log) in logs.iter_mut().enumerate() {
         if let Some(first) = log.first() {
             heads.push(Reverse((cycle(first), i)));
         }
         entries.push(log.drain(..));
-    }
-    if heads.len() == 1 {
-        // One SPU logged anything: its log is the order.
-        let Reverse((_, i)) = heads.pop().expect("one head");
-        entries[i].by_ref().for_each(|e| visit(i, e));
-        return;
     }
     while let Some(mut head) = heads.peek_mut() {
         let i = head.0 .1;
@@ -201,6 +208,11 @@ fn in_order<T>(
 /// Applies every SPU's logged main-memory writes in (cycle, SPU index, sequence) order and
 /// settles `putllc` outcomes and lost reservations (see the module docs).
 pub fn apply_quantum(spus: &mut [Spu], memory: &mut MainMemory) {
+    if spus.iter().all(|s| s.writes.is_empty()) {
+        // Nearly half of a 16-SPE frame's quanta (docs/parallel.md): no log to take out.
+        settle_memory_bus(spus, memory);
+        return;
+    }
     // Taken out, so that applying them may change any SPU; given back empty, with their room.
     let mut logs: Vec<Vec<LoggedWrite>> = spus
         .iter_mut()
