@@ -128,25 +128,25 @@ impl MainMemory {
 /// does): sharing takes effect one quantum late, and the outcome depends only on simulated
 /// time (`docs/memory-model.md`). One SPU alone never waits for it (8 <= 8 < 10.67).
 fn settle_memory_bus(spus: &mut [Spu], memory: &mut MainMemory) {
-    let mut traffic: Vec<(u64, usize, usize, BusRequest)> = Vec::new();
-    for (i, spu) in spus.iter_mut().enumerate() {
-        for (k, request) in spu.bus_log.drain(..).enumerate() {
-            traffic.push((request.earliest, i, k, request));
-        }
-    }
     let Some(first) = spus.first() else {
         return;
     };
     let chip = first.timing_config.chip_bytes_per_cycle();
     let port = first.timing_config.eib_port_bytes_per_cycle;
-    traffic.sort_unstable_by_key(|(earliest, i, k, _)| (*earliest, *i, *k));
     let mut busy = memory.bus_busy_until;
     let mut port_busy = memory.port_busy_until;
-    for (earliest, _, _, request) in traffic {
-        busy = busy.max(earliest as f64) + request.bytes as f64 / chip;
-        let way = &mut port_busy[request.write as usize];
-        *way = way.max(earliest as f64) + request.bytes as f64 / port;
-    }
+    // The queue is a fold in floating point, so its order is kept exactly; each SPU's
+    // log is already in issue order, so merging the logs costs less than sorting them all.
+    let logs: Vec<&mut Vec<BusRequest>> = spus.iter_mut().map(|s| &mut s.bus_log).collect();
+    in_order(
+        logs,
+        |r| r.earliest,
+        |_, request| {
+            busy = busy.max(request.earliest as f64) + request.bytes as f64 / chip;
+            let way = &mut port_busy[request.write as usize];
+            *way = way.max(request.earliest as f64) + request.bytes as f64 / port;
+        },
+    );
     memory.bus_busy_until = busy;
     memory.port_busy_until = port_busy;
     for spu in spus.iter_mut() {
@@ -155,56 +155,152 @@ fn settle_memory_bus(spus: &mut [Spu], memory: &mut MainMemory) {
     }
 }
 
+/// Hands `visit` every entry of the SPUs' logs (`logs[i]` is SPU `i`'s, in the order it
+/// logged them) in (`cycle`, SPU index, order in its log) order, the order a sort of all
+/// entries by that key gives, and empties the logs (keeping their room for the next
+/// quantum). A log is nearly always in cycle order already; one that is not is first
+/// sorted stably on its own. The logs are then merged through a heap of their heads (one
+/// per SPU), which costs each entry a few comparisons instead of a sort of all entries;
+/// one log alone needs neither.
+fn in_order<T>(
+    mut logs: Vec<&mut Vec<T>>,
+    cycle: impl Fn(&T) -> u64,
+    mut visit: impl FnMut(usize, T),
+) {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    for log in logs.iter_mut() {
+        if !log.is_sorted_by_key(&cycle) {
+            log.sort_by_key(&cycle);
+        }
+    }
+    let mut logging = (0..logs.len()).filter(|&i| !logs[i].is_empty());
+    match (logging.next(), logging.next()) {
+        (None, _) => return,
+        (Some(i), None) => {
+            // One SPU logged anything (always so with one SPU): its log is the order.
+            logs[i].drain(..).for_each(|e| visit(i, e));
+            return;
+        }
+        _ => {}
+    }
+    let mut heads = BinaryHeap::with_capacity(logs.len());
+    let mut entries = Vec::with_capacity(logs.len());
+    for (i, log) in logs.iter_mut().enumerate() {
+        if let Some(first) = log.first() {
+            heads.push(Reverse((cycle(first), i)));
+        }
+        entries.push(log.drain(..));
+    }
+    while let Some(mut head) = heads.peek_mut() {
+        let i = head.0 .1;
+        let entry = entries[i].next().expect("a head has an entry");
+        match entries[i].as_slice().first() {
+            Some(next) => head.0 .0 = cycle(next),
+            None => {
+                std::collections::binary_heap::PeekMut::pop(head);
+            }
+        }
+        visit(i, entry);
+    }
+}
+
 /// Applies every SPU's logged main-memory writes in (cycle, SPU index, sequence) order and
 /// settles `putllc` outcomes and lost reservations (see the module docs).
 pub fn apply_quantum(spus: &mut [Spu], memory: &mut MainMemory) {
-    let mut all: Vec<(u64, usize, u64, LoggedWrite)> = Vec::new();
-    for (i, spu) in spus.iter_mut().enumerate() {
-        for w in spu.writes.drain(..) {
-            all.push((w.cycle, i, w.seq, w));
-        }
+    if spus.iter().all(|s| s.writes.is_empty()) {
+        // Nearly half of a 16-SPE frame's quanta (docs/parallel.md): no log to take out.
+        settle_memory_bus(spus, memory);
+        return;
     }
-    all.sort_by_key(|(c, i, s, _)| (*c, *i, *s));
+    // Taken out, so that applying them may change any SPU; given back empty, with their room.
+    let mut logs: Vec<Vec<LoggedWrite>> = spus
+        .iter_mut()
+        .map(|s| std::mem::take(&mut s.writes))
+        .collect();
     settle_memory_bus(spus, memory);
-    for (_, i, _, w) in all {
-        if let WriteKind::Signal { spu, which } = w.kind {
-            // A signal for an SPU that is not running here goes nowhere.
-            let value = u32::from_be_bytes([w.data[0], w.data[1], w.data[2], w.data[3]]);
-            if let Some(target) = spus.iter_mut().find(|s| s.index == spu) {
-                target.write_signal(which as usize, value);
+    // A reservation is only ever lost here, so those who hold one now are all who can lose it.
+    let holders: Vec<usize> = (0..spus.len())
+        .filter(|&j| spus[j].reservation.is_some())
+        .collect();
+    in_order(
+        logs.iter_mut().collect(),
+        |w| w.cycle,
+        |i, w| {
+            if let WriteKind::Signal { spu, which } = w.kind {
+                // A signal for an SPU that is not running here goes nowhere.
+                let value = u32::from_be_bytes([w.data[0], w.data[1], w.data[2], w.data[3]]);
+                if let Some(target) = spus.iter_mut().find(|s| s.index == spu) {
+                    target.write_signal(which as usize, value);
+                }
+                return;
             }
-            continue;
-        }
-        let line = w.ea & !127;
-        let apply = match w.kind {
-            WriteKind::Conditional => {
-                let ok = spus[i].reservation == Some(line);
-                spus[i].reservation = None;
-                spus[i].atomic_pending = false;
-                spus[i].atomic_stat = Some((if ok { 0 } else { 1 }, 0));
-                ok
+            let line = w.ea & !127;
+            let apply = match w.kind {
+                WriteKind::Conditional => {
+                    let ok = spus[i].reservation == Some(line);
+                    spus[i].reservation = None;
+                    spus[i].atomic_pending = false;
+                    spus[i].atomic_stat = Some((if ok { 0 } else { 1 }, 0));
+                    ok
+                }
+                _ => true,
+            };
+            if !apply {
+                return;
             }
-            _ => true,
-        };
-        if !apply {
-            continue;
-        }
-        let start = w.ea as usize;
-        if let Some(dst) = memory.bytes.get_mut(start..start + w.data.len()) {
-            dst.copy_from_slice(&w.data);
-        }
-        let first_line = w.ea & !127;
-        let last_line = (w.ea + w.data.len().max(1) as u32 - 1) & !127;
-        for (j, other) in spus.iter_mut().enumerate() {
-            if j == i {
-                continue;
+            let start = w.ea as usize;
+            if let Some(dst) = memory.bytes.get_mut(start..start + w.data.len()) {
+                dst.copy_from_slice(&w.data);
             }
-            if let Some(r) = other.reservation {
-                if r >= first_line && r <= last_line {
-                    other.reservation = None;
-                    other.event_status |= event::LR;
+            let first_line = w.ea & !127;
+            let last_line = (w.ea + w.data.len().max(1) as u32 - 1) & !127;
+            for &j in &holders {
+                if j == i {
+                    continue;
+                }
+                let other = &mut spus[j];
+                if let Some(r) = other.reservation {
+                    if r >= first_line && r <= last_line {
+                        other.reservation = None;
+                        other.event_status |= event::LR;
+                    }
                 }
             }
+        },
+    );
+    for (spu, log) in spus.iter_mut().zip(logs) {
+        spu.writes = log;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The merge of the logs visits exactly what a sort of all entries by (cycle, SPU,
+        /// place in its log) gives, with ties of cycle within and across logs, logs out of
+        /// cycle order and empty logs; and leaves every log empty.
+        #[test]
+        fn logs_are_visited_in_the_order_a_sort_of_all_gives(
+            cycles in prop::collection::vec(prop::collection::vec(0u64..6, 0..8), 0..6)
+        ) {
+            let mut logs: Vec<Vec<(u64, usize)>> = cycles
+                .iter()
+                .map(|log| log.iter().enumerate().map(|(k, &c)| (c, k)).collect())
+                .collect();
+            let mut expected: Vec<(usize, (u64, usize))> = logs
+                .iter()
+                .enumerate()
+                .flat_map(|(i, log)| log.iter().map(move |&e| (i, e)))
+                .collect();
+            expected.sort_by_key(|&(i, (c, k))| (c, i, k));
+            let mut visited = Vec::new();
+            in_order(logs.iter_mut().collect(), |e| e.0, |i, e| visited.push((i, e)));
+            prop_assert_eq!(visited, expected);
+            prop_assert!(logs.iter().all(Vec::is_empty));
         }
     }
 }

@@ -59,7 +59,6 @@ fn signal_target(ea: u64) -> Option<(u32, u8)> {
 #[derive(Clone, Debug)]
 pub(super) struct LoggedWrite {
     pub(super) cycle: u64,
-    pub(super) seq: u64,
     pub(super) ea: u32,
     pub(super) data: Vec<u8>,
     pub(super) kind: WriteKind,
@@ -461,10 +460,8 @@ impl Spu {
 
     pub(super) fn log_write(&mut self, cycle: u64, ea: u32, data: Vec<u8>, kind: WriteKind) {
         self.traffic.count(ea as u64, data.len() as u64, true);
-        self.seq += 1;
         self.writes.push(LoggedWrite {
             cycle,
-            seq: self.seq,
             ea,
             data,
             kind,

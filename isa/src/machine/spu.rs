@@ -185,8 +185,8 @@ pub struct Spu {
     pub(super) atomic_stat: Option<(u32, u64)>,
     pub(super) atomic_pending: bool,
     pub(super) reservation: Option<u32>,
+    /// This quantum's main-memory writes, in the order logged (which breaks ties of cycle).
     pub(super) writes: Vec<LoggedWrite>,
-    pub(super) seq: u64,
     pub(super) timing_config: TimingConfig,
     /// The ISA extensions this SPU decodes and times ([`Spu::set_extensions`]).
     pub(super) extensions: Extensions,
@@ -296,7 +296,6 @@ impl Spu {
             atomic_pending: false,
             reservation: None,
             writes: Vec::new(),
-            seq: 0,
             timing_config: TimingConfig::default(),
             extensions: Extensions::NONE,
             dma_ctx: (0, 0, 0, 0, 0),
