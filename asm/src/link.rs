@@ -1,7 +1,7 @@
 //! `spu ld`: links relocatable SPU objects into an executable local-store image, as GNU
 //! ld's default SPU script lays it out (code, read-only data, data, bss, commons at the
 //! end of bss), resolving symbols across objects and applying the SPU relocations.
-//! Overlays are not supported.
+//! Overlays are not supported (docs/linker.md).
 
 use crate::archive::Archive;
 use crate::object::{
@@ -16,6 +16,9 @@ pub struct LinkOptions {
     pub text_addr: u32,
     /// Entry symbol: `-e` (default `_start`, else the start of the code).
     pub entry: Option<String>,
+    /// The output file's name as given (`-o`; default `a.out`), which GNU ld's SPU
+    /// backend records in the `.note.spu_name` note for the PPE's embedder.
+    pub output: Option<String>,
 }
 
 /// One input of a link, in command-line order.
@@ -250,11 +253,27 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             addr = addr.next_multiple_of(DATA_SEGMENT_ALIGN as u64);
             data_start = Some(addr);
         }
-        let a = outs[k].align.max(16) as u64;
+        if outs[k].size == 0 {
+            // GNU ld drops an output section that received nothing: it takes no room
+            // and moves nothing; its (empty) inputs' labels stand where it would be.
+            outs[k].addr = addr.min(u32::MAX as u64) as u32;
+            continue;
+        }
+        let a = outs[k].align.max(1) as u64;
         if n > 0 || !addr.is_multiple_of(a) {
             addr = addr.div_ceil(a) * a;
         }
         outs[k].addr = addr.min(u32::MAX as u64) as u32;
+        if outs[k].name == ".bss" {
+            // The script's `. = ALIGN(. != 0 ? 16 : 1)` at the end of .bss.
+            let end = addr + outs[k].size as u64;
+            let padded = if end != 0 {
+                end.next_multiple_of(16)
+            } else {
+                end
+            };
+            outs[k].size = (padded - addr).min(u32::MAX as u64) as u32;
+        }
         addr += outs[k].size as u64;
     }
     let data_start = data_start.unwrap_or_else(|| addr.next_multiple_of(DATA_SEGMENT_ALIGN as u64));
@@ -399,7 +418,7 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         return Err(errors);
     }
     // Output sections in address order, and the symbols of the output.
-    let mut by_addr: Vec<&OutSection> = outs.iter().collect();
+    let mut by_addr: Vec<&OutSection> = outs.iter().filter(|x| x.size > 0).collect();
     by_addr.sort_by_key(|x| x.addr);
     let out_sections: Vec<crate::executable::Section> = by_addr
         .iter()
@@ -434,12 +453,10 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                     size: s.size as u32,
                     kind: s.kind,
                     bind: 0,
-                    place: crate::executable::Place::Section(
-                        by_addr
-                            .iter()
-                            .position(|x| x.name == output_name(&obj.sections[i].name))
-                            .unwrap_or(0),
-                    ),
+                    place: by_addr
+                        .iter()
+                        .position(|x| x.name == output_name(&obj.sections[i].name))
+                        .map_or_else(|| place_of(a), crate::executable::Place::Section),
                 });
             }
         }
@@ -507,6 +524,16 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                 warnings.push(format!(
                     "cannot find entry symbol {entry_name}; defaulting to {a:08x}"
                 ));
+                // GNU ld's ENTRY() leaves the name it looked for in the symbol table,
+                // undefined.
+                out_symbols.push(crate::executable::Symbol {
+                    name: entry_name.clone(),
+                    value: 0,
+                    size: 0,
+                    kind: 0,
+                    bind: 1,
+                    place: crate::executable::Place::Undefined,
+                });
                 a
             }
         },
@@ -528,7 +555,13 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             None => global_address(n),
         },
     };
-    let unloaded = crate::link_debug::sections(objects, &resolve)?;
+    let mut unloaded = crate::link_debug::sections(objects, &resolve)?;
+    if !objects
+        .iter()
+        .any(|o| o.sections.iter().any(|s| s.name == SPU_NAME_NOTE))
+    {
+        unloaded.push(spu_name_note(opts.output.as_deref().unwrap_or("a.out")));
+    }
     let elf = crate::executable::write(&image, &out_sections, &unloaded, &out_symbols, entry);
     Ok(Linked {
         image,
@@ -538,6 +571,32 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         sections,
         warnings,
     })
+}
+
+/// The note section GNU ld's SPU backend adds to every executable
+/// (`spu_elf_create_sections`): the PPE side's embedder names the program after it.
+const SPU_NAME_NOTE: &str = ".note.spu_name";
+
+/// `.note.spu_name`: an ELF note of type 1, name `SPUNAME`, whose descriptor is the
+/// output file's name as given.
+fn spu_name_note(output: &str) -> crate::executable::Unloaded {
+    const NOTE_NAME: &[u8] = b"SPUNAME\0";
+    let name_len = output.len() + 1;
+    let mut data = Vec::new();
+    data.extend((NOTE_NAME.len() as u32).to_be_bytes());
+    data.extend((name_len as u32).to_be_bytes());
+    data.extend(1u32.to_be_bytes());
+    data.extend(NOTE_NAME);
+    data.extend(output.as_bytes());
+    data.resize(20 + name_len.next_multiple_of(4), 0);
+    crate::executable::Unloaded {
+        name: SPU_NAME_NOTE.into(),
+        ty: 7,
+        flags: 0,
+        entsize: 0,
+        align: 16,
+        data,
+    }
 }
 
 /// Whether some object refers to `name` without defining it.

@@ -1,11 +1,84 @@
-//! The debugging sections of a link: every input's `.debug_*` sections (DWARF from
-//! `.file`/`.loc`), joined by name in input order and relocated, as GNU ld keeps them in
-//! an executable. They take no address and no part in the loaded image; a reference
+//! The unloaded sections of a link: every input's non-allocated sections (DWARF from
+//! `.file`/`.loc`, `.comment`, notes), joined by name in input order, relocated, and
+//! ordered as GNU ld's default script orders them in an executable. They take no address and no part in the loaded image; a reference
 //! from one to another (`.debug_info` to `.debug_line`, `.debug_abbrev`, `.debug_str`)
 //! becomes an offset in the joined section.
 
 use crate::executable::Unloaded;
 use crate::object::{Object, RelocTarget, SymSection, SHF_ALLOC, SHT_PROGBITS};
+
+const SHT_NOTE: u32 = 7;
+
+/// What GNU ld's default script throws away (`/DISCARD/`), by name prefix.
+const DISCARDED: [&str; 3] = [".note.GNU-stack", ".gnu_debuglink", ".gnu.lto_"];
+
+/// The unloaded output sections of GNU ld's default SPU script, in its order.
+const SCRIPT: [&str; 38] = [
+    ".stab",
+    ".stabstr",
+    ".stab.excl",
+    ".stab.exclstr",
+    ".stab.index",
+    ".stab.indexstr",
+    ".comment",
+    ".gnu.build.attributes",
+    ".debug",
+    ".line",
+    ".debug_srcinfo",
+    ".debug_sfnames",
+    ".debug_aranges",
+    ".debug_pubnames",
+    ".debug_info",
+    ".debug_abbrev",
+    ".debug_line",
+    ".debug_frame",
+    ".debug_str",
+    ".debug_loc",
+    ".debug_macinfo",
+    ".debug_weaknames",
+    ".debug_funcnames",
+    ".debug_typenames",
+    ".debug_varnames",
+    ".debug_pubtypes",
+    ".debug_ranges",
+    ".debug_addr",
+    ".debug_line_str",
+    ".debug_loclists",
+    ".debug_macro",
+    ".debug_names",
+    ".debug_rnglists",
+    ".debug_str_offsets",
+    ".debug_sup",
+    ".gnu.attributes",
+    ".note.spu_name",
+    "._ea",
+];
+
+/// The output section the script sends an unloaded input section to (its name, or the
+/// name of the statement whose wildcard takes it).
+fn output_name(name: &str) -> &str {
+    if name.starts_with(".gnu.linkonce.wi.") {
+        ".debug_info"
+    } else if name.starts_with(".debug_line.") || name == ".debug_line_end" {
+        ".debug_line"
+    } else if name.starts_with(".gnu.build.attributes.") {
+        ".gnu.build.attributes"
+    } else if name.starts_with("._ea.") {
+        "._ea"
+    } else {
+        name
+    }
+}
+
+/// Where an unloaded output section stands: the script's order, and a section the
+/// script does not name (an orphan) right after `.comment`, as GNU ld places one.
+fn script_rank(name: &str) -> usize {
+    let at = |n: &str| SCRIPT.iter().position(|s| *s == n);
+    match at(name) {
+        Some(i) => 2 * i,
+        None => 2 * at(".comment").unwrap_or(0) + 1,
+    }
+}
 use std::collections::HashMap;
 
 /// The joined and relocated debugging sections. `resolve` gives the address of a
@@ -19,14 +92,19 @@ pub(crate) fn sections(
     let mut at: HashMap<(usize, usize), (usize, u32)> = HashMap::new();
     for (o, obj) in objects.iter().enumerate() {
         for (i, s) in obj.sections.iter().enumerate() {
-            if s.flags & SHF_ALLOC != 0 || s.ty != SHT_PROGBITS || !s.name.starts_with(".debug") {
+            if s.flags & SHF_ALLOC != 0
+                || !(s.ty == SHT_PROGBITS || s.ty == SHT_NOTE)
+                || DISCARDED.iter().any(|d| s.name.starts_with(d))
+            {
                 continue;
             }
-            let k = match out.iter().position(|u| u.name == s.name) {
+            let name = output_name(&s.name);
+            let k = match out.iter().position(|u| u.name == name) {
                 Some(k) => k,
                 None => {
                     out.push(Unloaded {
-                        name: s.name.clone(),
+                        name: name.to_string(),
+                        ty: s.ty,
                         flags: s.flags,
                         entsize: s.entsize,
                         align: 1,
@@ -88,6 +166,7 @@ pub(crate) fn sections(
         }
     }
     if errors.is_empty() {
+        out.sort_by_key(|u| script_rank(&u.name));
         Ok(out)
     } else {
         errors.sort();

@@ -122,6 +122,7 @@ fn linked_objects_equal_one_assembly() {
         &LinkOptions {
             text_addr: 0x100,
             entry: Some("f".into()),
+            ..Default::default()
         },
     )
     .unwrap();

@@ -106,10 +106,149 @@ fn executables_match_gnu_ld() {
             Archive::read("libm.a", &std::fs::read(dir.join("libm.a")).unwrap()).unwrap(),
         ),
     ];
-    let linked = link(&resolve_inputs(inputs).unwrap(), &LinkOptions::default()).unwrap();
+    let opts = LinkOptions {
+        output: Some("gnu.elf".into()),
+        ..Default::default()
+    };
+    let linked = link(&resolve_inputs(inputs).unwrap(), &opts).unwrap();
     std::fs::write(dir.join("ours.elf"), &linked.elf).unwrap();
-    let gnu = summary(&readelf, &dir.join("gnu.elf"));
-    let ours = summary(&readelf, &dir.join("ours.elf"));
-    assert_eq!(ours.0, gnu.0, "segments");
-    assert_eq!(ours.1, gnu.1, "symbols");
+    let differences = executable_differences(&readelf, &dir.join("gnu.elf"), &dir.join("ours.elf"));
+    assert!(differences.is_empty(), "{}", differences.join("\n"));
+}
+
+/// An ELF32 big-endian file's section headers as (name, type, flags, addr, size, align,
+/// contents) and its entry point: enough to compare two executables without readelf's
+/// file offsets.
+type Sections = Vec<(String, u32, u32, u32, u32, u32, Vec<u8>)>;
+
+fn elf_sections(data: &[u8]) -> (u32, Sections) {
+    let u16_at = |o: usize| u16::from_be_bytes([data[o], data[o + 1]]) as usize;
+    let u32_at = |o: usize| u32::from_be_bytes(data[o..o + 4].try_into().unwrap());
+    let (shoff, shnum, shstrndx) = (u32_at(32) as usize, u16_at(48), u16_at(50));
+    let header = |i: usize| {
+        let h = shoff + 40 * i;
+        (0..10).map(|k| u32_at(h + 4 * k)).collect::<Vec<u32>>()
+    };
+    let names = header(shstrndx);
+    let name = |off: u32| {
+        let start = (names[4] + off) as usize;
+        let end = data[start..].iter().position(|b| *b == 0).unwrap() + start;
+        String::from_utf8_lossy(&data[start..end]).into_owned()
+    };
+    let sections = (1..shnum)
+        .map(|i| {
+            let h = header(i);
+            let contents = if h[1] == 8 {
+                Vec::new()
+            } else {
+                data[h[4] as usize..(h[4] + h[5]) as usize].to_vec()
+            };
+            (name(h[0]), h[1], h[2], h[3], h[5], h[8], contents)
+        })
+        .collect();
+    (u32_at(24), sections)
+}
+
+/// The differences between GNU ld's executable and ours: entry, sections (name, type,
+/// flags, address, size, alignment, contents), loadable segments and symbols.
+fn executable_differences(readelf: &Path, gnu: &Path, ours: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    let (ge, gs) = elf_sections(&std::fs::read(gnu).unwrap());
+    let (oe, os) = elf_sections(&std::fs::read(ours).unwrap());
+    if ge != oe {
+        out.push(format!("entry {oe:#x}, GNU {ge:#x}"));
+    }
+    let brief = |s: &Sections| -> Vec<String> {
+        s.iter()
+            .filter(|x| !matches!(x.1, 2 | 3)) // the symbol and string tables: below
+            .map(|x| {
+                format!(
+                    "{} type {} flags {:#x} at {:#x} size {:#x} align {}",
+                    x.0, x.1, x.2, x.3, x.4, x.5
+                )
+            })
+            .collect()
+    };
+    let (gb, ob) = (brief(&gs), brief(&os));
+    if gb != ob {
+        out.push(format!("sections {ob:?}, GNU {gb:?}"));
+    } else {
+        for (g, o) in gs.iter().zip(&os) {
+            if g.1 != 2 && g.1 != 3 && g.6 != o.6 {
+                let at = g.6.iter().zip(&o.6).position(|(a, b)| a != b).unwrap_or(0);
+                out.push(format!("{} contents differ at +{at:#x}", g.0));
+            }
+        }
+    }
+    let (g, o) = (summary(readelf, gnu), summary(readelf, ours));
+    if g.0 != o.0 {
+        out.push(format!("segments {:?}, GNU {:?}", o.0, g.0));
+    }
+    if g.1 != o.1 {
+        out.push(format!("global symbols {:?}, GNU {:?}", o.1, g.1));
+    }
+    out
+}
+
+/// Every project source and generated-corpus file that GNU as assembles and GNU ld links
+/// on its own: linked by `spu ld` too, the two executables compared section by section
+/// (addresses, sizes, flags, contents), segment by segment and symbol by symbol, and
+/// `spu dis` compared with `objdump -d` on both.
+#[test]
+#[cfg_attr(
+    not(has_binutils),
+    ignore = "needs GNU binutils for SPU: scripts/build-spu-binutils.sh"
+)]
+fn single_objects_link_as_gnu_ld() {
+    use crate::gnu_differential::{dis_difference, gnu_object, project_sources, write_corpus};
+    let (gas, gld, readelf) = (Path::new(GNU_AS), sibling("ld"), sibling("readelf"));
+    let objdump = sibling("objdump");
+    let tmp = std::env::temp_dir().join(format!("spu-gnu-ld1-{}", std::process::id()));
+    let mut files = project_sources();
+    files.extend(write_corpus(&tmp.join("corpus")));
+    let (mut compared, mut failures) = (0, Vec::new());
+    for file in &files {
+        let Some(obj) = gnu_object(gas, file, &tmp) else {
+            continue;
+        };
+        let gnu_elf = tmp.join("gnu.elf");
+        let _ = std::fs::remove_file(&gnu_elf);
+        let gnu_ok = Command::new(&gld)
+            .arg(tmp.join("gnu.o"))
+            .arg("-o")
+            .arg(&gnu_elf)
+            .current_dir(&tmp)
+            .output()
+            .unwrap()
+            .status
+            .success();
+        let opts = LinkOptions {
+            output: Some(gnu_elf.display().to_string()),
+            ..Default::default()
+        };
+        let ours = link(&[obj], &opts);
+        let name = file.display();
+        match (gnu_ok, ours) {
+            (false, Err(_)) => continue,
+            (false, Ok(_)) => failures.push(format!("{name}: GNU ld refuses what spu ld links")),
+            (true, Err(e)) => failures.push(format!("{name}: spu ld refuses: {e:?}")),
+            (true, Ok(linked)) => {
+                compared += 1;
+                let ours_elf = tmp.join("ours.elf");
+                std::fs::write(&ours_elf, &linked.elf).unwrap();
+                for d in executable_differences(&readelf, &gnu_elf, &ours_elf) {
+                    failures.push(format!("{name}: {d}"));
+                }
+                failures.extend(dis_difference(&objdump, &gnu_elf));
+                failures.extend(dis_difference(&objdump, &ours_elf));
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&tmp);
+    eprintln!(
+        "linked {compared} objects with GNU ld and spu ld, {} differences",
+        failures.len()
+    );
+    assert!(compared > 200, "GNU ld linked only {compared} objects");
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
