@@ -4,7 +4,7 @@
 //! section symbols, then the locals, then the globals with their types, sizes and
 //! bindings kept, so that `readelf -a` reads the two linkers' outputs alike.
 
-use crate::object::{SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE};
+use crate::object::{SHF_ALLOC, SHF_EXECINSTR, SHF_TLS, SHF_WRITE};
 
 const EM_SPU: u16 = 23;
 const SHT_NOTE: u32 = 7;
@@ -73,8 +73,8 @@ fn be32(v: u32) -> [u8; 4] {
 fn segments(sections: &[Section]) -> Vec<(u32, usize, usize)> {
     let mut out: Vec<(u32, usize, usize)> = Vec::new();
     for (i, s) in sections.iter().enumerate() {
-        if s.flags & SHF_ALLOC == 0 {
-            continue;
+        if s.flags & SHF_ALLOC == 0 || (s.nobits && s.flags & SHF_TLS != 0) {
+            continue; // not loaded: thread-local bss takes no local store
         }
         // R, and W or X where a section of the segment is writable or code: read-only
         // data shares the code's segment, as GNU ld puts it.
@@ -235,7 +235,7 @@ pub fn write(
     sh(&mut out, [0; 10]);
     for (s, &n) in sections.iter().zip(&names) {
         let ty = if s.nobits { 8 } else { 1 };
-        let flags = (s.flags & (SHF_ALLOC | SHF_WRITE | SHF_EXECINSTR)) as u32;
+        let flags = (s.flags & (SHF_ALLOC | SHF_WRITE | SHF_EXECINSTR | SHF_TLS)) as u32;
         let off = image_off + s.addr;
         sh(
             &mut out,

@@ -169,9 +169,30 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                 out.ty = 1;
             }
             out.flags |= s.flags;
+            out.inputs.push((o, i, 0));
+        }
+    }
+    // The inputs in the script's order (`.text.hot` before `.text`...), then laid out.
+    for out in &mut outs {
+        if out.name == ".text" {
+            out.inputs.sort_by_cached_key(|&(o, i, _)| {
+                let name = &objects[o].sections[i].name;
+                let rank = text_rank(name);
+                (
+                    rank,
+                    if rank == 4 {
+                        name.clone()
+                    } else {
+                        String::new()
+                    },
+                )
+            });
+        }
+        for input in &mut out.inputs {
+            let s = &objects[input.0].sections[input.1];
             out.align = out.align.max(s.align.max(1));
             let at = out.size.div_ceil(s.align.max(1)) * s.align.max(1);
-            out.inputs.push((o, i, at));
+            input.2 = at;
             out.size = at.saturating_add(s.size);
         }
     }
@@ -186,6 +207,10 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             if s.section == SymSection::Common {
                 match commons.iter_mut().find(|c| c.0 == s.name) {
                     Some(c) => {
+                        // The larger definition's object owns it (BFD's `BIG` case).
+                        if s.size > c.1 {
+                            c.3 = o;
+                        }
                         c.1 = c.1.max(s.size);
                         c.2 = c.2.max(s.value);
                     }
@@ -232,13 +257,32 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                 outs.len() - 1
             }
         };
-        for (name, size, align, _) in &commons {
-            let a = (*align).clamp(1, 1 << 15) as u32;
+        // GNU ld gives each object a COMMON section of the commons it owns, taken by
+        // `*(COMMON)` in input order; within one, the commons come in the order its
+        // symbol hash table holds them (bucket by bucket, the later entry first).
+        let mut first_seen: HashMap<&str, usize> = HashMap::new();
+        for s in objects.iter().flat_map(|o| &o.symbols).filter(|s| s.global) {
+            let n = first_seen.len();
+            first_seen.entry(s.name.as_str()).or_insert(n);
+        }
+        commons.sort_by_key(|c| {
+            let seen = first_seen.get(c.0.as_str()).copied().unwrap_or(0);
+            (c.3, bfd_hash_bucket(&c.0), std::cmp::Reverse(seen))
+        });
+        let align_of = |c: &(String, u64, u64, usize)| c.2.clamp(1, 1 << 15) as u32;
+        for (i, c) in commons.iter().enumerate() {
             let out = &mut outs[k];
+            if i == 0 || commons[i - 1].3 != c.3 {
+                // A new object's COMMON section, aligned to its largest common.
+                let group = commons[i..].iter().take_while(|d| d.3 == c.3);
+                let a = group.map(align_of).max().unwrap_or(1);
+                out.size = out.size.div_ceil(a) * a;
+            }
+            let a = align_of(c);
             out.align = out.align.max(a);
             let at = out.size.div_ceil(a) * a;
-            common_at.insert(name.clone(), at);
-            out.size = at.saturating_add((*size).min(LOCAL_STORE) as u32);
+            common_at.insert(c.0.clone(), at);
+            out.size = at.saturating_add(c.1.min(LOCAL_STORE) as u32);
         }
     }
     let mut order: Vec<usize> = (0..outs.len()).collect();
@@ -274,7 +318,9 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             };
             outs[k].size = (padded - addr).min(u32::MAX as u64) as u32;
         }
-        addr += outs[k].size as u64;
+        if !is_tbss(&outs[k]) {
+            addr += outs[k].size as u64;
+        }
     }
     let data_start = data_start.unwrap_or_else(|| addr.next_multiple_of(DATA_SEGMENT_ALIGN as u64));
     // Overlaps and the local store.
@@ -313,6 +359,7 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
     };
     let end = outs
         .iter()
+        .filter(|x| !is_tbss(x))
         .map(|x| x.addr as u64 + x.size as u64)
         .max()
         .unwrap_or(0);
@@ -597,6 +644,46 @@ fn spu_name_note(output: &str) -> crate::executable::Unloaded {
         align: 16,
         data,
     }
+}
+
+/// Which of the default script's `.text` input statements takes an input section: the
+/// unlikely, exit, startup and hot code first, then `.text.sorted.*` by name, then the
+/// rest (`.text`, `.text.*`) in input order.
+fn text_rank(name: &str) -> u8 {
+    let family = |base: &str| name == base || name.starts_with(&format!("{base}."));
+    if family(".text.unlikely") || (name.starts_with(".text.") && name.ends_with("_unlikely")) {
+        0
+    } else if family(".text.exit") {
+        1
+    } else if family(".text.startup") {
+        2
+    } else if family(".text.hot") {
+        3
+    } else if name.starts_with(".text.sorted.") {
+        4
+    } else {
+        5
+    }
+}
+
+/// The bucket of BFD's linker hash table (`bfd_hash_hash` on a 64-bit host, 4051
+/// buckets, its default size) a name falls in: the order GNU ld walks symbols in.
+fn bfd_hash_bucket(name: &str) -> u64 {
+    let mut hash: u64 = 0;
+    for &c in name.as_bytes() {
+        hash = hash.wrapping_add(c as u64 + ((c as u64) << 17));
+        hash ^= hash >> 2;
+    }
+    let len = name.len() as u64;
+    hash = hash.wrapping_add(len + (len << 17));
+    hash ^= hash >> 2;
+    hash % 4051
+}
+
+/// Thread-local bss (`.tbss`): it has an address but, as in GNU ld, takes no room in
+/// the layout (the location counter does not move past it) and no loadable segment.
+fn is_tbss(x: &OutSection) -> bool {
+    x.ty == SHT_NOBITS && x.flags & crate::object::SHF_TLS != 0
 }
 
 /// Whether some object refers to `name` without defining it.

@@ -8,6 +8,8 @@ use crate::executable::Unloaded;
 use crate::object::{Object, RelocTarget, SymSection, SHF_ALLOC, SHT_PROGBITS};
 
 const SHT_NOTE: u32 = 7;
+const SHF_MERGE: u64 = 0x10;
+const SHF_STRINGS: u64 = 0x20;
 
 /// What GNU ld's default script throws away (`/DISCARD/`), by name prefix.
 const DISCARDED: [&str; 3] = [".note.GNU-stack", ".gnu_debuglink", ".gnu.lto_"];
@@ -166,10 +168,73 @@ pub(crate) fn sections(
         }
     }
     if errors.is_empty() {
+        let targeted = targeted_sections(objects);
+        for u in &mut out {
+            if u.flags & (SHF_MERGE | SHF_STRINGS) == SHF_MERGE | SHF_STRINGS
+                && u.entsize <= 1
+                && !targeted.contains(u.name.as_str())
+            {
+                merge_strings(&mut u.data);
+            }
+        }
         out.sort_by_key(|u| script_rank(&u.name));
         Ok(out)
     } else {
         errors.sort();
         Err(errors)
     }
+}
+
+/// The names of the sections some relocation points into (by section or by a symbol
+/// defined in it): their contents must keep their offsets.
+fn targeted_sections(objects: &[Object]) -> std::collections::HashSet<&str> {
+    let mut out = std::collections::HashSet::new();
+    for obj in objects {
+        for s in &obj.sections {
+            for r in &s.relocs {
+                let t = match &r.target {
+                    RelocTarget::Section(t) => Some(*t),
+                    RelocTarget::Symbol(n) => {
+                        obj.symbols
+                            .iter()
+                            .find(|x| x.name == *n)
+                            .and_then(|x| match x.section {
+                                SymSection::Section(t) => Some(t),
+                                _ => None,
+                            })
+                    }
+                };
+                if let Some(t) = t.and_then(|t| obj.sections.get(t)) {
+                    out.insert(output_name(&t.name));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// GNU ld's merging of a string section (`SHF_MERGE|SHF_STRINGS`, as `.comment`): each
+/// string once, in the order first seen, and none that is the tail of another (the
+/// empty string `.ident` puts first is the tail of every string).
+fn merge_strings(data: &mut Vec<u8>) {
+    if data.last() != Some(&0) {
+        return; // not a string table: left as it is
+    }
+    let mut unique: Vec<&[u8]> = Vec::new();
+    for s in data[..data.len() - 1].split(|b| *b == 0) {
+        if !unique.contains(&s) {
+            unique.push(s);
+        }
+    }
+    let kept: Vec<&[u8]> = unique
+        .iter()
+        .filter(|s| !unique.iter().any(|t| t.len() > s.len() && t.ends_with(s)))
+        .copied()
+        .collect();
+    let mut merged = Vec::new();
+    for s in kept {
+        merged.extend_from_slice(s);
+        merged.push(0);
+    }
+    *data = merged;
 }
