@@ -303,7 +303,10 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             outs[k].addr = addr.min(u32::MAX as u64) as u32;
             continue;
         }
-        let a = outs[k].align.max(1) as u64;
+        let mut a = outs[k].align.max(1) as u64;
+        if outs[k].name == ".toe" {
+            a = a.max(128); // the script's `.toe ALIGN(128)` (the overlay manager's table of effective addresses)
+        }
         if n > 0 || !addr.is_multiple_of(a) {
             addr = addr.div_ceil(a) * a;
         }

@@ -354,3 +354,69 @@ fn single_objects_link_as_gnu_ld() {
     assert!(compared > 200, "GNU ld linked only {compared} objects");
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// binutils' own SPU linker test sources (`ld/testsuite/ld-spu/*.s`, overlay, icache,
+/// PIC and `_EAR_` ones, read where SPU_LD_TESTSUITE names their directory, never kept in
+/// the repository), linked without their scripts and options (which spu ld does not
+/// take: docs/linker.md): both linkers link each alike, or both refuse it.
+#[test]
+#[cfg_attr(
+    not(has_binutils),
+    ignore = "needs GNU binutils for SPU: scripts/build-spu-binutils.sh"
+)]
+fn ld_spu_testsuite_sources_link_as_gnu_ld_without_scripts() {
+    let Some(suite) = std::env::var_os("SPU_LD_TESTSUITE") else {
+        eprintln!("SPU_LD_TESTSUITE is unset: binutils' ld/testsuite/ld-spu sources not compared");
+        return;
+    };
+    let (gas, gld, readelf) = (Path::new(GNU_AS), sibling("ld"), sibling("readelf"));
+    let tmp = std::env::temp_dir().join(format!("spu-ld-spu-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let mut sources: Vec<PathBuf> = std::fs::read_dir(&suite)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "s"))
+        .collect();
+    sources.sort();
+    let (mut compared, mut failures) = (0, Vec::new());
+    for source in &sources {
+        let Some(obj) = crate::gnu_differential::gnu_object(gas, source, &tmp) else {
+            continue;
+        };
+        let gnu_elf = tmp.join("gnu.elf");
+        let _ = std::fs::remove_file(&gnu_elf);
+        let gnu_ok = Command::new(&gld)
+            .arg("gnu.o")
+            .args(["-o", "gnu.elf"])
+            .current_dir(&tmp)
+            .output()
+            .unwrap()
+            .status
+            .success();
+        let opts = LinkOptions {
+            output: Some("gnu.elf".into()),
+            ..Default::default()
+        };
+        let name = source.display();
+        match (gnu_ok, link(&[obj], &opts)) {
+            (false, Err(_)) => compared += 1,
+            (false, Ok(_)) => failures.push(format!("{name}: GNU ld refuses what spu ld links")),
+            (true, Err(e)) => failures.push(format!("{name}: spu ld refuses: {e:?}")),
+            (true, Ok(linked)) => {
+                compared += 1;
+                std::fs::write(tmp.join("ours.elf"), &linked.elf).unwrap();
+                let d = executable_differences(&readelf, &gnu_elf, &tmp.join("ours.elf"));
+                failures.extend(d.iter().map(|d| format!("{name}: {d}")));
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&tmp);
+    eprintln!("{compared} ld-spu sources linked (or refused) alike");
+    assert!(
+        compared > 0,
+        "no ld-spu source in {}",
+        suite.to_string_lossy()
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
