@@ -256,9 +256,8 @@ fn skipped_address_chars(vma: u32, end: u32) -> usize {
         .bytes()
         .take_while(|b| *b == b'0')
         .count();
-    if zeros == 8 && vma != 0 {
-        0
-    } else if zeros == 0 {
+    // No zeros, or all eight on an overflow past the end of the address space: none go.
+    if zeros == 0 || (zeros == 8 && vma != 0) {
         0
     } else {
         (zeros - 1) & !3
