@@ -142,6 +142,9 @@ pub fn write(
         }));
     }
     let mut body = image.to_vec();
+    // Zeros to the next 16 bytes: the LOAD sizes are rounded up to 16 (`round_loads`),
+    // and what they load past the last section must be zeros, as in GNU ld's file.
+    body.resize(body.len().next_multiple_of(16), 0);
     let align4 = |v: &mut Vec<u8>| v.resize(v.len().next_multiple_of(4), 0);
     let mut unloaded_off = Vec::new();
     for u in unloaded {
