@@ -4,9 +4,10 @@
 //! section symbols, then the locals, then the globals with their types, sizes and
 //! bindings kept, so that `readelf -a` reads the two linkers' outputs alike.
 
-use crate::object::{SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE};
+use crate::object::{SHF_ALLOC, SHF_EXECINSTR, SHF_TLS, SHF_WRITE};
 
 const EM_SPU: u16 = 23;
+const SHT_NOTE: u32 = 7;
 /// GNU ld's page size for the SPU (`MAXPAGESIZE`): segments start at file offsets
 /// congruent to their addresses modulo this.
 pub const PAGE: u32 = 0x80;
@@ -15,6 +16,8 @@ pub const PAGE: u32 = 0x80;
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Unloaded {
     pub name: String,
+    /// SHT_* type: PROGBITS, or NOTE for `.note.spu_name` (which gets a PT_NOTE segment).
+    pub ty: u32,
     pub flags: u64,
     pub entsize: u64,
     pub align: u32,
@@ -41,6 +44,8 @@ pub enum Place {
     /// Index into the sections.
     Section(usize),
     Absolute,
+    /// Undefined: the entry symbol GNU ld's `ENTRY(_start)` looked for and did not find.
+    Undefined,
 }
 
 /// One symbol of the output.
@@ -68,17 +73,19 @@ fn be32(v: u32) -> [u8; 4] {
 fn segments(sections: &[Section]) -> Vec<(u32, usize, usize)> {
     let mut out: Vec<(u32, usize, usize)> = Vec::new();
     for (i, s) in sections.iter().enumerate() {
-        if s.flags & SHF_ALLOC == 0 {
-            continue;
+        if s.flags & SHF_ALLOC == 0 || (s.nobits && s.flags & SHF_TLS != 0) {
+            continue; // not loaded: thread-local bss takes no local store
         }
-        let flags = if s.flags & SHF_WRITE != 0 {
-            6 // R+W
-        } else {
-            5 // R+X: read-only data shares the code's segment, as GNU ld puts it
-        };
+        // R, and W or X where a section of the segment is writable or code: read-only
+        // data shares the code's segment, as GNU ld puts it.
+        let write = if s.flags & SHF_WRITE != 0 { 2 } else { 0 };
+        let exec = if s.flags & SHF_EXECINSTR != 0 { 1 } else { 0 };
         match out.last_mut() {
-            Some(last) if last.0 == flags => last.2 = i,
-            _ => out.push((flags, i, i)),
+            Some(last) if last.0 & 2 == write => {
+                last.0 |= exec;
+                last.2 = i;
+            }
+            _ => out.push((4 | write | exec, i, i)),
         }
     }
     out
@@ -94,10 +101,12 @@ pub fn write(
     entry: u32,
 ) -> Vec<u8> {
     let segs = segments(sections);
+    let notes = unloaded.iter().filter(|u| u.ty == SHT_NOTE).count();
+    let phnum = segs.len() + notes;
     let ehsize = 52u32;
     let phoff = ehsize;
     // The image at an offset congruent to address 0 modulo the page, after the headers.
-    let image_off = (ehsize + 32 * segs.len() as u32).div_ceil(PAGE) * PAGE;
+    let image_off = (ehsize + 32 * phnum as u32).div_ceil(PAGE) * PAGE;
     let mut shstr = vec![0u8];
     let mut strtab = vec![0u8];
     let add_name = |s: &str, table: &mut Vec<u8>| {
@@ -129,9 +138,13 @@ pub fn write(
         symtab.extend(be16(match s.place {
             Place::Section(k) => k as u16 + 1,
             Place::Absolute => 0xfff1,
+            Place::Undefined => 0,
         }));
     }
     let mut body = image.to_vec();
+    // Zeros to the next 16 bytes: the LOAD sizes are rounded up to 16 (`round_loads`),
+    // and what they load past the last section must be zeros, as in GNU ld's file.
+    body.resize(body.len().next_multiple_of(16), 0);
     let align4 = |v: &mut Vec<u8>| v.resize(v.len().next_multiple_of(4), 0);
     let mut unloaded_off = Vec::new();
     for u in unloaded {
@@ -167,34 +180,52 @@ pub fn write(
     out.extend(be16(EM_SPU));
     out.extend(be32(1));
     out.extend(be32(entry));
-    out.extend(be32(if segs.is_empty() { 0 } else { phoff }));
+    out.extend(be32(if phnum == 0 { 0 } else { phoff }));
     out.extend(be32(shoff));
     out.extend(be32(0));
     out.extend(be16(ehsize as u16));
     out.extend(be16(32));
-    out.extend(be16(segs.len() as u16));
+    out.extend(be16(phnum as u16));
     out.extend(be16(40));
     out.extend(be16(shnum));
     out.extend(be16(shnum - 1));
-    for &(flags, first, last) in &segs {
-        let start = sections[first].addr;
-        let end = |s: &Section| s.addr + s.size;
-        let file_end = sections[first..=last]
-            .iter()
-            .filter(|s| !s.nobits)
-            .map(end)
-            .max()
-            .unwrap_or(start);
-        let mem_end = sections[first..=last]
-            .iter()
-            .map(end)
-            .max()
-            .unwrap_or(start);
-        for v in [1, image_off + start, start, start] {
+    // (offset, address, file size, memory size, flags) of each loadable segment.
+    let mut loads: Vec<[u32; 5]> = segs
+        .iter()
+        .map(|&(flags, first, last)| {
+            let start = sections[first].addr;
+            let end = |s: &Section| s.addr + s.size;
+            let file_end = sections[first..=last]
+                .iter()
+                .filter(|s| !s.nobits)
+                .map(end)
+                .max()
+                .unwrap_or(start);
+            let mem_end = sections[first..=last]
+                .iter()
+                .map(end)
+                .max()
+                .unwrap_or(start);
+            [
+                image_off + start,
+                start,
+                file_end - start,
+                mem_end - start,
+                flags,
+            ]
+        })
+        .collect();
+    round_loads(&mut loads);
+    for [off, addr, filesz, memsz, flags] in loads {
+        for v in [1, off, addr, addr, filesz, memsz, flags, PAGE] {
             out.extend(be32(v));
         }
-        for v in [file_end - start, mem_end - start, flags, PAGE] {
-            out.extend(be32(v));
+    }
+    for (u, &off) in unloaded.iter().zip(&unloaded_off) {
+        if u.ty == SHT_NOTE {
+            for v in [4, off, 0, 0, u.data.len() as u32, 0, 4, u.align] {
+                out.extend(be32(v));
+            }
         }
     }
     out.resize(image_off as usize, 0);
@@ -207,7 +238,7 @@ pub fn write(
     sh(&mut out, [0; 10]);
     for (s, &n) in sections.iter().zip(&names) {
         let ty = if s.nobits { 8 } else { 1 };
-        let flags = (s.flags & (SHF_ALLOC | SHF_WRITE | SHF_EXECINSTR)) as u32;
+        let flags = (s.flags & (SHF_ALLOC | SHF_WRITE | SHF_EXECINSTR | SHF_TLS)) as u32;
         let off = image_off + s.addr;
         sh(
             &mut out,
@@ -219,7 +250,18 @@ pub fn write(
         let size = u.data.len() as u32;
         sh(
             &mut out,
-            [n, 1, flags, 0, off, size, 0, 0, u.align, u.entsize as u32],
+            [
+                n,
+                u.ty,
+                flags,
+                0,
+                off,
+                size,
+                0,
+                0,
+                u.align,
+                u.entsize as u32,
+            ],
         );
     }
     let symtab_index = (sections.len() + unloaded.len()) as u32 + 1;
@@ -269,4 +311,34 @@ pub fn write(
         ],
     );
     out
+}
+
+/// GNU ld's SPU backend (`spu_elf_modify_headers`) rounds the loadable segments' file
+/// and memory sizes up to multiples of 16, unless that would make one run into the next.
+fn round_loads(loads: &mut [[u32; 5]]) {
+    let mut last: Option<[u32; 5]> = None;
+    for l in loads.iter().rev() {
+        let [off, addr, filesz, memsz, _] = *l;
+        if let Some([last_off, last_addr, ..]) = last {
+            let adjust = filesz.wrapping_neg() & 15;
+            if adjust != 0 && off + filesz > last_off.wrapping_sub(adjust) {
+                return;
+            }
+            let adjust = memsz.wrapping_neg() & 15;
+            if adjust != 0
+                && filesz != 0
+                && addr + memsz > last_addr.wrapping_sub(adjust)
+                && addr + memsz <= last_addr
+            {
+                return;
+            }
+        }
+        if filesz != 0 {
+            last = Some(*l);
+        }
+    }
+    for l in loads.iter_mut() {
+        l[2] = l[2].next_multiple_of(16);
+        l[3] = l[3].next_multiple_of(16);
+    }
 }

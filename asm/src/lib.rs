@@ -9,6 +9,7 @@
 //! and not on each other.
 
 pub mod archive;
+pub mod disasm;
 pub mod elf_check;
 pub mod executable;
 mod expand;

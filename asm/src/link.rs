@@ -1,7 +1,7 @@
 //! `spu ld`: links relocatable SPU objects into an executable local-store image, as GNU
 //! ld's default SPU script lays it out (code, read-only data, data, bss, commons at the
 //! end of bss), resolving symbols across objects and applying the SPU relocations.
-//! Overlays are not supported.
+//! Overlays are not supported (docs/linker.md).
 
 use crate::archive::Archive;
 use crate::object::{
@@ -16,6 +16,9 @@ pub struct LinkOptions {
     pub text_addr: u32,
     /// Entry symbol: `-e` (default `_start`, else the start of the code).
     pub entry: Option<String>,
+    /// The output file's name as given (`-o`; default `a.out`), which GNU ld's SPU
+    /// backend records in the `.note.spu_name` note for the PPE's embedder.
+    pub output: Option<String>,
 }
 
 /// One input of a link, in command-line order.
@@ -166,9 +169,30 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                 out.ty = 1;
             }
             out.flags |= s.flags;
+            out.inputs.push((o, i, 0));
+        }
+    }
+    // The inputs in the script's order (`.text.hot` before `.text`...), then laid out.
+    for out in &mut outs {
+        if out.name == ".text" {
+            out.inputs.sort_by_cached_key(|&(o, i, _)| {
+                let name = &objects[o].sections[i].name;
+                let rank = text_rank(name);
+                (
+                    rank,
+                    if rank == 4 {
+                        name.clone()
+                    } else {
+                        String::new()
+                    },
+                )
+            });
+        }
+        for input in &mut out.inputs {
+            let s = &objects[input.0].sections[input.1];
             out.align = out.align.max(s.align.max(1));
             let at = out.size.div_ceil(s.align.max(1)) * s.align.max(1);
-            out.inputs.push((o, i, at));
+            input.2 = at;
             out.size = at.saturating_add(s.size);
         }
     }
@@ -183,6 +207,10 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             if s.section == SymSection::Common {
                 match commons.iter_mut().find(|c| c.0 == s.name) {
                     Some(c) => {
+                        // The larger definition's object owns it (BFD's `BIG` case).
+                        if s.size > c.1 {
+                            c.3 = o;
+                        }
                         c.1 = c.1.max(s.size);
                         c.2 = c.2.max(s.value);
                     }
@@ -229,13 +257,32 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                 outs.len() - 1
             }
         };
-        for (name, size, align, _) in &commons {
-            let a = (*align).clamp(1, 1 << 15) as u32;
+        // GNU ld gives each object a COMMON section of the commons it owns, taken by
+        // `*(COMMON)` in input order; within one, the commons come in the order its
+        // symbol hash table holds them (bucket by bucket, the later entry first).
+        let mut first_seen: HashMap<&str, usize> = HashMap::new();
+        for s in objects.iter().flat_map(|o| &o.symbols).filter(|s| s.global) {
+            let n = first_seen.len();
+            first_seen.entry(s.name.as_str()).or_insert(n);
+        }
+        commons.sort_by_key(|c| {
+            let seen = first_seen.get(c.0.as_str()).copied().unwrap_or(0);
+            (c.3, bfd_hash_bucket(&c.0), std::cmp::Reverse(seen))
+        });
+        let align_of = |c: &(String, u64, u64, usize)| c.2.clamp(1, 1 << 15) as u32;
+        for (i, c) in commons.iter().enumerate() {
             let out = &mut outs[k];
+            if i == 0 || commons[i - 1].3 != c.3 {
+                // A new object's COMMON section, aligned to its largest common.
+                let group = commons[i..].iter().take_while(|d| d.3 == c.3);
+                let a = group.map(align_of).max().unwrap_or(1);
+                out.size = out.size.div_ceil(a) * a;
+            }
+            let a = align_of(c);
             out.align = out.align.max(a);
             let at = out.size.div_ceil(a) * a;
-            common_at.insert(name.clone(), at);
-            out.size = at.saturating_add((*size).min(LOCAL_STORE) as u32);
+            common_at.insert(c.0.clone(), at);
+            out.size = at.saturating_add(c.1.min(LOCAL_STORE) as u32);
         }
     }
     let mut order: Vec<usize> = (0..outs.len()).collect();
@@ -250,12 +297,33 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             addr = addr.next_multiple_of(DATA_SEGMENT_ALIGN as u64);
             data_start = Some(addr);
         }
-        let a = outs[k].align.max(16) as u64;
+        if outs[k].size == 0 {
+            // GNU ld drops an output section that received nothing: it takes no room
+            // and moves nothing; its (empty) inputs' labels stand where it would be.
+            outs[k].addr = addr.min(u32::MAX as u64) as u32;
+            continue;
+        }
+        let mut a = outs[k].align.max(1) as u64;
+        if outs[k].name == ".toe" {
+            a = a.max(128); // the script's `.toe ALIGN(128)` (the overlay manager's table of effective addresses)
+        }
         if n > 0 || !addr.is_multiple_of(a) {
             addr = addr.div_ceil(a) * a;
         }
         outs[k].addr = addr.min(u32::MAX as u64) as u32;
-        addr += outs[k].size as u64;
+        if outs[k].name == ".bss" {
+            // The script's `. = ALIGN(. != 0 ? 16 : 1)` at the end of .bss.
+            let end = addr + outs[k].size as u64;
+            let padded = if end != 0 {
+                end.next_multiple_of(16)
+            } else {
+                end
+            };
+            outs[k].size = (padded - addr).min(u32::MAX as u64) as u32;
+        }
+        if !is_tbss(&outs[k]) {
+            addr += outs[k].size as u64;
+        }
     }
     let data_start = data_start.unwrap_or_else(|| addr.next_multiple_of(DATA_SEGMENT_ALIGN as u64));
     // Overlaps and the local store.
@@ -294,6 +362,7 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
     };
     let end = outs
         .iter()
+        .filter(|x| !is_tbss(x))
         .map(|x| x.addr as u64 + x.size as u64)
         .max()
         .unwrap_or(0);
@@ -399,7 +468,7 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         return Err(errors);
     }
     // Output sections in address order, and the symbols of the output.
-    let mut by_addr: Vec<&OutSection> = outs.iter().collect();
+    let mut by_addr: Vec<&OutSection> = outs.iter().filter(|x| x.size > 0).collect();
     by_addr.sort_by_key(|x| x.addr);
     let out_sections: Vec<crate::executable::Section> = by_addr
         .iter()
@@ -434,12 +503,10 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                     size: s.size as u32,
                     kind: s.kind,
                     bind: 0,
-                    place: crate::executable::Place::Section(
-                        by_addr
-                            .iter()
-                            .position(|x| x.name == output_name(&obj.sections[i].name))
-                            .unwrap_or(0),
-                    ),
+                    place: by_addr
+                        .iter()
+                        .position(|x| x.name == output_name(&obj.sections[i].name))
+                        .map_or_else(|| place_of(a), crate::executable::Place::Section),
                 });
             }
         }
@@ -507,6 +574,16 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                 warnings.push(format!(
                     "cannot find entry symbol {entry_name}; defaulting to {a:08x}"
                 ));
+                // GNU ld's ENTRY() leaves the name it looked for in the symbol table,
+                // undefined.
+                out_symbols.push(crate::executable::Symbol {
+                    name: entry_name.clone(),
+                    value: 0,
+                    size: 0,
+                    kind: 0,
+                    bind: 1,
+                    place: crate::executable::Place::Undefined,
+                });
                 a
             }
         },
@@ -528,7 +605,13 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             None => global_address(n),
         },
     };
-    let unloaded = crate::link_debug::sections(objects, &resolve)?;
+    let mut unloaded = crate::link_debug::sections(objects, &resolve)?;
+    if !objects
+        .iter()
+        .any(|o| o.sections.iter().any(|s| s.name == SPU_NAME_NOTE))
+    {
+        unloaded.push(spu_name_note(opts.output.as_deref().unwrap_or("a.out")));
+    }
     let elf = crate::executable::write(&image, &out_sections, &unloaded, &out_symbols, entry);
     Ok(Linked {
         image,
@@ -538,6 +621,72 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         sections,
         warnings,
     })
+}
+
+/// The note section GNU ld's SPU backend adds to every executable
+/// (`spu_elf_create_sections`): the PPE side's embedder names the program after it.
+const SPU_NAME_NOTE: &str = ".note.spu_name";
+
+/// `.note.spu_name`: an ELF note of type 1, name `SPUNAME`, whose descriptor is the
+/// output file's name as given.
+fn spu_name_note(output: &str) -> crate::executable::Unloaded {
+    const NOTE_NAME: &[u8] = b"SPUNAME\0";
+    let name_len = output.len() + 1;
+    let mut data = Vec::new();
+    data.extend((NOTE_NAME.len() as u32).to_be_bytes());
+    data.extend((name_len as u32).to_be_bytes());
+    data.extend(1u32.to_be_bytes());
+    data.extend(NOTE_NAME);
+    data.extend(output.as_bytes());
+    data.resize(20 + name_len.next_multiple_of(4), 0);
+    crate::executable::Unloaded {
+        name: SPU_NAME_NOTE.into(),
+        ty: 7,
+        flags: 0,
+        entsize: 0,
+        align: 16,
+        data,
+    }
+}
+
+/// Which of the default script's `.text` input statements takes an input section: the
+/// unlikely, exit, startup and hot code first, then `.text.sorted.*` by name, then the
+/// rest (`.text`, `.text.*`) in input order.
+fn text_rank(name: &str) -> u8 {
+    let family = |base: &str| name == base || name.starts_with(&format!("{base}."));
+    if family(".text.unlikely") || (name.starts_with(".text.") && name.ends_with("_unlikely")) {
+        0
+    } else if family(".text.exit") {
+        1
+    } else if family(".text.startup") {
+        2
+    } else if family(".text.hot") {
+        3
+    } else if name.starts_with(".text.sorted.") {
+        4
+    } else {
+        5
+    }
+}
+
+/// The bucket of BFD's linker hash table (`bfd_hash_hash` on a 64-bit host, 4051
+/// buckets, its default size) a name falls in: the order GNU ld walks symbols in.
+fn bfd_hash_bucket(name: &str) -> u64 {
+    let mut hash: u64 = 0;
+    for &c in name.as_bytes() {
+        hash = hash.wrapping_add(c as u64 + ((c as u64) << 17));
+        hash ^= hash >> 2;
+    }
+    let len = name.len() as u64;
+    hash = hash.wrapping_add(len + (len << 17));
+    hash ^= hash >> 2;
+    hash % 4051
+}
+
+/// Thread-local bss (`.tbss`): it has an address but, as in GNU ld, takes no room in
+/// the layout (the location counter does not move past it) and no loadable segment.
+fn is_tbss(x: &OutSection) -> bool {
+    x.ty == SHT_NOBITS && x.flags & crate::object::SHF_TLS != 0
 }
 
 /// Whether some object refers to `name` without defining it.

@@ -1,11 +1,86 @@
-//! The debugging sections of a link: every input's `.debug_*` sections (DWARF from
-//! `.file`/`.loc`), joined by name in input order and relocated, as GNU ld keeps them in
-//! an executable. They take no address and no part in the loaded image; a reference
+//! The unloaded sections of a link: every input's non-allocated sections (DWARF from
+//! `.file`/`.loc`, `.comment`, notes), joined by name in input order, relocated, and
+//! ordered as GNU ld's default script orders them in an executable. They take no address and no part in the loaded image; a reference
 //! from one to another (`.debug_info` to `.debug_line`, `.debug_abbrev`, `.debug_str`)
 //! becomes an offset in the joined section.
 
 use crate::executable::Unloaded;
 use crate::object::{Object, RelocTarget, SymSection, SHF_ALLOC, SHT_PROGBITS};
+
+const SHT_NOTE: u32 = 7;
+const SHF_MERGE: u64 = 0x10;
+const SHF_STRINGS: u64 = 0x20;
+
+/// What GNU ld's default script throws away (`/DISCARD/`), by name prefix.
+const DISCARDED: [&str; 3] = [".note.GNU-stack", ".gnu_debuglink", ".gnu.lto_"];
+
+/// The unloaded output sections of GNU ld's default SPU script, in its order.
+const SCRIPT: [&str; 38] = [
+    ".stab",
+    ".stabstr",
+    ".stab.excl",
+    ".stab.exclstr",
+    ".stab.index",
+    ".stab.indexstr",
+    ".comment",
+    ".gnu.build.attributes",
+    ".debug",
+    ".line",
+    ".debug_srcinfo",
+    ".debug_sfnames",
+    ".debug_aranges",
+    ".debug_pubnames",
+    ".debug_info",
+    ".debug_abbrev",
+    ".debug_line",
+    ".debug_frame",
+    ".debug_str",
+    ".debug_loc",
+    ".debug_macinfo",
+    ".debug_weaknames",
+    ".debug_funcnames",
+    ".debug_typenames",
+    ".debug_varnames",
+    ".debug_pubtypes",
+    ".debug_ranges",
+    ".debug_addr",
+    ".debug_line_str",
+    ".debug_loclists",
+    ".debug_macro",
+    ".debug_names",
+    ".debug_rnglists",
+    ".debug_str_offsets",
+    ".debug_sup",
+    ".gnu.attributes",
+    ".note.spu_name",
+    "._ea",
+];
+
+/// The output section the script sends an unloaded input section to (its name, or the
+/// name of the statement whose wildcard takes it).
+fn output_name(name: &str) -> &str {
+    if name.starts_with(".gnu.linkonce.wi.") {
+        ".debug_info"
+    } else if name.starts_with(".debug_line.") || name == ".debug_line_end" {
+        ".debug_line"
+    } else if name.starts_with(".gnu.build.attributes.") {
+        ".gnu.build.attributes"
+    } else if name.starts_with("._ea.") {
+        "._ea"
+    } else {
+        name
+    }
+}
+
+/// Where an unloaded output section stands: the script's order, and a section the
+/// script does not name (an orphan) right after `.comment`, as GNU ld places one.
+fn script_rank(name: &str) -> usize {
+    let at = |n: &str| SCRIPT.iter().position(|s| *s == n);
+    match at(name) {
+        Some(i) => 2 * i,
+        None => 2 * at(".comment").unwrap_or(0) + 1,
+    }
+}
 use std::collections::HashMap;
 
 /// The joined and relocated debugging sections. `resolve` gives the address of a
@@ -19,14 +94,19 @@ pub(crate) fn sections(
     let mut at: HashMap<(usize, usize), (usize, u32)> = HashMap::new();
     for (o, obj) in objects.iter().enumerate() {
         for (i, s) in obj.sections.iter().enumerate() {
-            if s.flags & SHF_ALLOC != 0 || s.ty != SHT_PROGBITS || !s.name.starts_with(".debug") {
+            if s.flags & SHF_ALLOC != 0
+                || !(s.ty == SHT_PROGBITS || s.ty == SHT_NOTE)
+                || DISCARDED.iter().any(|d| s.name.starts_with(d))
+            {
                 continue;
             }
-            let k = match out.iter().position(|u| u.name == s.name) {
+            let name = output_name(&s.name);
+            let k = match out.iter().position(|u| u.name == name) {
                 Some(k) => k,
                 None => {
                     out.push(Unloaded {
-                        name: s.name.clone(),
+                        name: name.to_string(),
+                        ty: s.ty,
                         flags: s.flags,
                         entsize: s.entsize,
                         align: 1,
@@ -88,9 +168,73 @@ pub(crate) fn sections(
         }
     }
     if errors.is_empty() {
+        let targeted = targeted_sections(objects);
+        for u in &mut out {
+            if u.flags & (SHF_MERGE | SHF_STRINGS) == SHF_MERGE | SHF_STRINGS
+                && u.entsize <= 1
+                && !targeted.contains(u.name.as_str())
+            {
+                merge_strings(&mut u.data);
+            }
+        }
+        out.sort_by_key(|u| script_rank(&u.name));
         Ok(out)
     } else {
         errors.sort();
         Err(errors)
     }
+}
+
+/// The names of the sections some relocation points into (by section or by a symbol
+/// defined in it): their contents must keep their offsets.
+fn targeted_sections(objects: &[Object]) -> std::collections::HashSet<&str> {
+    let mut out = std::collections::HashSet::new();
+    for obj in objects {
+        for s in &obj.sections {
+            for r in &s.relocs {
+                let t = match &r.target {
+                    RelocTarget::Section(t) => Some(*t),
+                    RelocTarget::Symbol(n) => {
+                        obj.symbols
+                            .iter()
+                            .find(|x| x.name == *n)
+                            .and_then(|x| match x.section {
+                                SymSection::Section(t) => Some(t),
+                                _ => None,
+                            })
+                    }
+                };
+                if let Some(t) = t.and_then(|t| obj.sections.get(t)) {
+                    out.insert(output_name(&t.name));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// GNU ld's merging of a string section (`SHF_MERGE|SHF_STRINGS`, as `.comment`): each
+/// string once, in the order first seen, and none that is the tail of another (the
+/// empty string `.ident` puts first is the tail of every string).
+fn merge_strings(data: &mut Vec<u8>) {
+    if data.last() != Some(&0) {
+        return; // not a string table: left as it is
+    }
+    let mut unique: Vec<&[u8]> = Vec::new();
+    for s in data[..data.len() - 1].split(|b| *b == 0) {
+        if !unique.contains(&s) {
+            unique.push(s);
+        }
+    }
+    let kept: Vec<&[u8]> = unique
+        .iter()
+        .filter(|s| !unique.iter().any(|t| t.len() > s.len() && t.ends_with(s)))
+        .copied()
+        .collect();
+    let mut merged = Vec::new();
+    for s in kept {
+        merged.extend_from_slice(s);
+        merged.push(0);
+    }
+    *data = merged;
 }

@@ -17,6 +17,7 @@ pub const SHT_NOBITS: u32 = 8;
 pub const SHF_WRITE: u64 = 1;
 pub const SHF_ALLOC: u64 = 2;
 pub const SHF_EXECINSTR: u64 = 4;
+pub const SHF_TLS: u64 = 0x400;
 
 /// A relocation the assembler leaves for the linker (objects only), or applies itself
 /// (`.reloc` in an executable).

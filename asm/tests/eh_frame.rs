@@ -112,11 +112,11 @@ fn spu_ld_keeps_eh_frame_loaded_with_the_function_address_in_it() {
         .find(|s| s.0 == ".eh_frame")
         .unwrap()
         .clone();
-    // Read-only data after the code, in the loaded image (on the 16-byte boundary
-    // `spu ld` starts every output section at).
+    // Read-only data right after the code (at its own 4-byte alignment, as GNU ld puts
+    // it), in the loaded image.
     assert_eq!(
         (*text_at, *text_size, at, size, code),
-        (0, 0x18, 0x20, 40, false)
+        (0, 0x18, 0x18, 40, false)
     );
     let mut expected = EH_FRAME;
     expected[0x18..0x1c].copy_from_slice(&8u32.to_be_bytes()); // _start's address

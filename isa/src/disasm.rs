@@ -24,6 +24,16 @@ pub trait Symbolizer {
     fn address_prefix(&self) -> &'static str {
         ""
     }
+    /// A branch or load target as objdump prints it: hex without `0x`, then `<sym>` or
+    /// `<sym+0xoff>`.
+    fn address_text(&self, addr: u32) -> String {
+        match self.symbol_for(addr) {
+            None => format!("{}{addr:x}", self.address_prefix()),
+            Some((name, at)) if at == addr => format!("{addr:x} <{name}>"),
+            Some((name, at)) if at < addr => format!("{addr:x} <{name}+0x{:x}>", addr - at),
+            Some((name, at)) => format!("{addr:x} <{name}-0x{:x}>", at - addr),
+        }
+    }
 }
 
 /// No symbols: addresses print as bare hex.
@@ -103,12 +113,7 @@ impl Symbolizer for SymbolTable {
 
 /// An address as objdump prints it: hex without `0x`, then `<sym>` or `<sym+0xoff>`.
 pub fn format_address(addr: u32, symbols: &dyn Symbolizer) -> String {
-    match symbols.symbol_for(addr) {
-        None => format!("{}{addr:x}", symbols.address_prefix()),
-        Some((name, at)) if at == addr => format!("{addr:x} <{name}>"),
-        Some((name, at)) if at < addr => format!("{addr:x} <{name}+0x{:x}>", addr - at),
-        Some((name, at)) => format!("{addr:x} <{name}-0x{:x}>", at - addr),
-    }
+    symbols.address_text(addr)
 }
 
 /// The instruction text of `word` at `pc` (mnemonic, tab, operands, optional comment).
@@ -163,21 +168,21 @@ pub fn instruction_text_ext(
             OperandKind::Spr => out.push_str(&format!("$sp{value}")),
             OperandKind::Ch => out.push_str(&format!("$ch{value}")),
             OperandKind::Scale173 | OperandKind::Scale155 => out.push_str(&value.to_string()),
-            OperandKind::BrInst => out.push_str(&format_address(value as u32, symbols)),
+            OperandKind::BrInst => out.push_str(&symbols.address_text(value as u32)),
             OperandKind::Rel18 => {
                 if inst.imm == 0 {
                     out.push('0');
                 } else {
                     // binutils keeps the unmasked target for the `# hex` comment.
                     hex_value = pc as i64 + (((word << 9) as i32) >> 16) as i64 * 4;
-                    out.push_str(&format_address(value as u32, symbols));
+                    out.push_str(&symbols.address_text(value as u32));
                 }
             }
             OperandKind::Abs18 => {
                 if value == 0 {
                     out.push('0');
                 } else {
-                    out.push_str(&format_address(value as u32, symbols));
+                    out.push_str(&symbols.address_text(value as u32));
                 }
             }
             OperandKind::U18 => {
@@ -185,7 +190,7 @@ pub fn instruction_text_ext(
                     hex_value = value;
                     out.push_str(&value.to_string());
                 } else {
-                    out.push_str(&format_address(value as u32, symbols));
+                    out.push_str(&symbols.address_text(value as u32));
                 }
             }
             _ => {

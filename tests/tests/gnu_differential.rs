@@ -1050,7 +1050,7 @@ fn compare_one(gas: &Path, file: &Path, out: &Path, defines: &[(String, i64)]) -
 }
 
 /// GNU as's object for `file` (None when GNU as refuses it too).
-fn gnu_object(gas: &Path, file: &Path, tmp: &Path) -> Option<Object> {
+pub(crate) fn gnu_object(gas: &Path, file: &Path, tmp: &Path) -> Option<Object> {
     let out = tmp.join("gnu.o");
     let mut cmd = std::process::Command::new(gas);
     if let Some(dir) = file.parent() {
@@ -1208,8 +1208,38 @@ fn objects_match_gnu_as() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// `spu dis` (its listing of each code section) against `objdump -d` on GNU's objects,
-/// instruction by instruction: address, word and text.
+/// `spu dis`'s text for `file` against `objdump -d`'s, line by line (the file name
+/// line aside, as both print the path they were given): the first difference, if any.
+pub fn dis_difference(objdump: &Path, file: &Path) -> Option<String> {
+    let dump = std::process::Command::new(objdump)
+        .arg("-d")
+        .arg(file)
+        .output()
+        .unwrap();
+    assert!(dump.status.success(), "objdump -d {}", file.display());
+    let theirs = String::from_utf8_lossy(&dump.stdout).into_owned();
+    let data = std::fs::read(file).unwrap();
+    let ours = spu_asm::disasm::objdump(&file.display().to_string(), &data, Default::default())
+        .unwrap_or_else(|e| e);
+    if ours == theirs {
+        return None;
+    }
+    let (a, b): (Vec<&str>, Vec<&str>) = (ours.lines().collect(), theirs.lines().collect());
+    let first = (0..a.len().max(b.len()))
+        .find(|&i| a.get(i) != b.get(i))
+        .unwrap_or(0);
+    Some(format!(
+        "{}: line {}: ours {:?}, objdump {:?}",
+        file.display(),
+        first + 1,
+        a.get(first),
+        b.get(first)
+    ))
+}
+
+/// `spu dis` against `objdump -d` on GNU's objects of every project source and the
+/// generated corpus: the whole text, header lines, `<symbol>:` blocks, `<sym+off>`
+/// targets, data in code and `...` for zeros.
 #[test]
 #[cfg_attr(
     not(has_binutils),
@@ -1224,55 +1254,21 @@ fn disassembly_matches_objdump() {
     files.extend(write_corpus(&tmp.join("corpus")));
     let mut failures = Vec::new();
     let mut compared = 0;
-    // An instruction line of either listing: "addr:\tHH HH HH HH \ttext", spaces folded.
-    let insns = |text: &str| -> Vec<String> {
-        text.lines()
-            .filter(|l| {
-                let t = l.trim_start();
-                t.split(':')
-                    .next()
-                    .is_some_and(|a| !a.is_empty() && a.chars().all(|c| c.is_ascii_hexdigit()))
-                    && t.contains('\t')
-            })
-            .map(|l| l.split_whitespace().collect::<Vec<_>>().join(" "))
-            .collect()
-    };
     for file in &files {
-        if assemble_object_file(file, &Options::default()).is_err() {
+        if assemble_object_file(file, &Options::default()).is_err()
+            || gnu_object(gas, file, &tmp).is_none()
+        {
             continue;
-        }
-        let Some(theirs) = gnu_object(gas, file, &tmp) else {
-            continue;
-        };
-        let dump = std::process::Command::new(&objdump)
-            .arg("-d")
-            .arg(tmp.join("gnu.o"))
-            .output()
-            .unwrap();
-        let mut ours = String::new();
-        for s in &theirs.sections {
-            if s.flags & spu_asm::object::SHF_EXECINSTR != 0 && !s.data.is_empty() {
-                ours.push_str(&spu_isa::disasm::listing(
-                    &s.data,
-                    0,
-                    &spu_isa::disasm::SymbolTable::default(),
-                ));
-            }
         }
         compared += 1;
-        let (a, b) = (insns(&ours), insns(&String::from_utf8_lossy(&dump.stdout)));
-        if a != b {
-            let first = a.iter().zip(&b).position(|(x, y)| x != y).unwrap_or(0);
-            failures.push(format!(
-                "{}: first difference at instruction {first}: ours {:?}, objdump {:?}",
-                file.display(),
-                a.get(first),
-                b.get(first)
-            ));
-        }
+        failures.extend(dis_difference(&objdump, &tmp.join("gnu.o")));
     }
     let _ = std::fs::remove_dir_all(&tmp);
-    eprintln!("compared {compared} disassemblies with objdump");
+    eprintln!(
+        "compared {compared} disassemblies with objdump, {} differ",
+        failures.len()
+    );
+    assert!(compared > 300, "GNU as assembled only {compared} files");
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 

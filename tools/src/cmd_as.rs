@@ -171,7 +171,11 @@ fn objects(args: &Args, opts: &Options) -> exit::Result<ExitCode> {
         exit::write_file(&args.output, &bytes)?;
         return Ok(ExitCode::SUCCESS);
     }
-    let linked = match link(&objects, &LinkOptions::default()) {
+    let opts = LinkOptions {
+        output: Some(args.output.display().to_string()),
+        ..Default::default()
+    };
+    let linked = match link(&objects, &opts) {
         Ok(l) => l,
         Err(errors) => {
             for e in &errors {

@@ -145,6 +145,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     let opts = LinkOptions {
         text_addr: args.text.unwrap_or(0),
         entry: args.entry.clone(),
+        output: Some(args.output.display().to_string()),
     };
     match link(&objects, &opts) {
         Ok(linked) => {

@@ -111,9 +111,16 @@ fn only_the_needed_member_is_linked() {
         "{names:?}"
     );
     // main's text (8 bytes), square's at 8 (8), square's data at 0x80 (GNU ld's data
-    // segment starts at ALIGN(0x80)): a code segment R+X and a data segment R+W, as GNU ld
-    // writes them.
-    assert_eq!(phdrs, [[1, 0, 0x10, 0x10, 5], [1, 0x80, 16, 16, 6]]);
+    // segment starts at ALIGN(0x80)): a code segment R+X and a data segment R+W, and the
+    // PT_NOTE of `.note.spu_name` (naming "prog.elf", 32 bytes), as GNU ld writes them.
+    assert_eq!(
+        phdrs,
+        [
+            [1, 0, 0x10, 0x10, 5],
+            [1, 0x80, 16, 16, 6],
+            [4, 0, 32, 0, 4]
+        ]
+    );
     let sym = |n: &str| syms.iter().find(|s| s.0 == n).unwrap().clone();
     // FUNC (2) and OBJECT (1), GLOBAL (1 << 4), sizes kept; sections 1 .text, 2 .data.
     assert_eq!(sym("square"), ("square".into(), 8, 8, 0x12, 1));
