@@ -94,8 +94,15 @@ pub struct FrameStats {
 }
 
 impl Animator {
-    /// The animation `scene` of `frames` frames, its tree built for frame 0.
-    pub fn new(scene: &str, frames: u32, policy: RebuildPolicy) -> Result<Animator, String> {
+    /// The animation `scene` of `frames` frames, its tree built for frame 0 (and rebuilt
+    /// when the policy says) on `threads` host threads (`--threads`; the trees do not
+    /// depend on it).
+    pub fn new(
+        scene: &str,
+        frames: u32,
+        policy: RebuildPolicy,
+        threads: usize,
+    ) -> Result<Animator, String> {
         if policy.ratio.is_nan() || policy.ratio <= 1.0 {
             return Err(format!(
                 "rebuild ratio {}: must be above 1 (a tree is never cheaper than built)",
@@ -103,7 +110,11 @@ impl Animator {
             ));
         }
         let animation = Animation::open(scene, frames)?;
-        let tree = AnimatedBvh::new(animation.first(), &BvhConfig::default(), policy);
+        let config = BvhConfig {
+            threads: threads.max(1),
+            ..BvhConfig::default()
+        };
+        let tree = AnimatedBvh::new(animation.first(), &config, policy);
         Ok(Animator {
             animation,
             tree,

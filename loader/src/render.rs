@@ -276,9 +276,19 @@ pub struct Prepared {
 }
 
 impl Prepared {
-    /// `scene`, built and staged, under `name`.
+    /// `scene`, built (on the host's cores) and staged, under `name`.
     pub fn from_scene(name: &str, scene: Scene) -> Result<Prepared, String> {
-        let bvh = Bvh::build(&scene, &BvhConfig::default());
+        Prepared::from_scene_on(name, scene, BvhConfig::default().threads)
+    }
+
+    /// [`Prepared::from_scene`] with the BVH built on `threads` host threads (`--threads`:
+    /// 1 is one thread; the hierarchy does not depend on it).
+    pub fn from_scene_on(name: &str, scene: Scene, threads: usize) -> Result<Prepared, String> {
+        let config = BvhConfig {
+            threads: threads.max(1),
+            ..BvhConfig::default()
+        };
+        let bvh = Bvh::build(&scene, &config);
         let staged = StagedScene::new(&scene, &bvh, SCENE_BASE)?;
         Ok(Prepared {
             name: name.to_string(),
@@ -288,13 +298,18 @@ impl Prepared {
     }
 }
 
-/// Loads the built-in scene or the file `scene` and prepares it.
+/// Loads the built-in scene or the file `scene` and prepares it on the host's cores.
 pub fn prepare(scene: &str) -> Result<Prepared, String> {
+    prepare_on(scene, BvhConfig::default().threads)
+}
+
+/// [`prepare`] with the BVH built on `threads` host threads (`--threads`).
+pub fn prepare_on(scene: &str, threads: usize) -> Result<Prepared, String> {
     let loaded = match procedural::by_name(scene) {
         Some(built_in) => built_in,
         None => Scene::load(scene).map_err(|e| e.to_string())?,
     };
-    Prepared::from_scene(scene, loaded)
+    Prepared::from_scene_on(scene, loaded, threads)
 }
 
 /// A rendered frame: the runtime's outcome and the image.
@@ -914,6 +929,16 @@ mod tests {
         match render(&wrong_scene.unwrap(), &ok, &code) {
             Err(FrameError::Setup(m)) => assert!(m.contains("prepared scene"), "{m}"),
             _ => panic!("a frame of another scene is refused"),
+        }
+    }
+
+    #[test]
+    fn a_scene_prepared_on_one_thread_is_the_one_prepared_on_several() {
+        // `--threads 1` builds the BVH on one thread: the staged scene is the same
+        let one = prepare_on("conference", 1).unwrap();
+        for threads in [2, 3] {
+            let more = prepare_on("conference", threads).unwrap();
+            assert!(one.staged.image == more.staged.image, "{threads} threads");
         }
     }
 }

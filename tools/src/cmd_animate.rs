@@ -133,6 +133,7 @@ pub fn run(args: &Args) -> exit::Result<ExitCode> {
         RebuildPolicy {
             ratio: args.rebuild_ratio,
         },
+        config.threads,
     )?;
     let first = animator.animation.first();
     eprintln!(

@@ -2,15 +2,16 @@
 //! numbers and ours side by side (report.md, report.html, report.json, the figures).
 //!
 //! The runs are independent frames, one [`spu_loader::render::RenderConfig`] each: rendered
-//! here on host threads (sharing prepared scenes and compiled blocks, [`Kept`]), or listed
-//! as `spu render` commands (`--list-jobs`) to spread over machines and collected
-//! afterwards (`--collect`).
+//! here on host threads (sharing prepared scenes and compiled blocks, [`Kept`], and
+//! admitted against a memory budget, [`Budget`]), or listed as `spu render` commands
+//! (`--list-jobs`) to spread over machines and collected afterwards (`--collect`).
 
 use crate::exit::{self, Error};
+use crate::job_budget::{frame_estimate, Budget};
 use crate::paper_jobs::{select_scenes, shell_word, Job};
 use crate::paper_report::{build, Figure, HeatMaps, Report, ReportScene};
 use crate::paper_tables::{tables, Measured, Setup, TableSpec};
-use crate::prepared::Kept;
+use crate::prepared::{Kept, Sizes};
 use spu_loader::stats::FrameStats;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -28,9 +29,14 @@ pub struct Args {
     /// Every run at 256x256 instead of the paper's 1024x1024 (a first look, CI).
     #[arg(long)]
     quick: bool,
-    /// Jobs run at once (each job simulates its SPEs on one host thread).
+    /// Jobs run at once (each job simulates its SPEs on one host thread; a scene's BVH is
+    /// built on this many).
     #[arg(long)]
     threads: Option<usize>,
+    /// MiB the jobs in flight and the scenes kept prepared may take, by estimate: a thread
+    /// waits before a job that does not fit (one larger than the whole budget runs alone).
+    #[arg(long, value_name = "MIB", default_value_t = crate::job_budget::DEFAULT_MIB)]
+    memory_budget: u64,
     /// Comma-separated scenes: room, conference, beetle (built in), shared-cornell-suzanne,
     /// shared-conference, shared-dragon (from --shared-scenes). Default: all present.
     #[arg(long)]
@@ -70,6 +76,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         // said below, where the runs are known
         crate::options::threads(Some(threads), threads, ("run", "runs"), threads)?;
     }
+    let budget = crate::job_budget::parse_mib(args.memory_budget).map_err(Error::input)?;
     let (scenes, notes) = select_scenes(args.scenes.as_deref(), &args.shared_scenes)?;
     let setup = Setup {
         scenes,
@@ -118,6 +125,8 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         )?
     };
     prepare_out(&args.out)?;
+    // the most the budget saw in flight and kept at once, for the closing note
+    let mut estimated = None;
     let stats_dir = match &args.collect {
         Some(dir) => {
             if !dir.is_dir() {
@@ -134,7 +143,16 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
                 eprintln!("spu: {note}");
             }
             std::fs::create_dir_all(&jobs_dir).map_err(|e| Error::output(&jobs_dir, e))?;
-            run_jobs(&jobs, &jobs_dir, threads, args.ext.ext);
+            let budget = Budget::new(budget);
+            run_jobs(&jobs, &jobs_dir, threads, &budget, args.ext.ext);
+            if budget.ran_alone() > 0 {
+                eprintln!(
+                    "spu paper: {} runs were estimated larger than --memory-budget {} MiB and ran alone",
+                    budget.ran_alone(),
+                    args.memory_budget
+                );
+            }
+            estimated = Some(budget.most());
             jobs_dir
         }
     };
@@ -203,8 +221,15 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
                 n => format!("up to {n} runs at once"),
             },
         };
+        let estimated = estimated.map_or(String::new(), |b: u64| {
+            format!(
+                "; at most {} MiB estimated in flight, budget {} MiB",
+                b.div_ceil(1 << 20),
+                args.memory_budget
+            )
+        });
         eprintln!(
-            "peak memory: {} MiB resident on this host ({runs})",
+            "peak memory: {} MiB resident on this host ({runs}{estimated})",
             bytes.div_ceil(1 << 20)
         );
     }
@@ -388,9 +413,9 @@ fn write(path: &Path, text: &str) -> exit::Result<()> {
     exit::write_file(path, text.as_bytes())
 }
 
-/// Runs the jobs on `threads` host threads, one bar over all of them; a job that fails
-/// leaves no stats file and the report names it.
-fn run_jobs(jobs: &[Job], dir: &Path, threads: usize, ext: spu_isa::Extensions) {
+/// Runs the jobs on `threads` host threads, one bar over all of them, each job admitted
+/// against `budget`; a job that fails leaves no stats file and the report names it.
+fn run_jobs(jobs: &[Job], dir: &Path, threads: usize, budget: &Budget, ext: spu_isa::Extensions) {
     // the heaviest scenes first, so that no long job starts last
     let mut order: Vec<&Job> = jobs.iter().collect();
     order.sort_by_key(|j| std::cmp::Reverse(weight(j)));
@@ -402,8 +427,9 @@ fn run_jobs(jobs: &[Job], dir: &Path, threads: usize, ext: spu_isa::Extensions) 
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let next = AtomicUsize::new(0);
-    // Each scene is prepared once and kept while runs of it remain.
-    let kept = Kept::default();
+    // Each scene is prepared once (its BVH on all the threads) and kept while runs of it
+    // remain.
+    let kept = Kept::new(threads);
     let mut left: BTreeMap<&str, usize> = BTreeMap::new();
     for job in jobs {
         *left.entry(job.scene_arg.as_str()).or_default() += 1;
@@ -417,14 +443,23 @@ fn run_jobs(jobs: &[Job], dir: &Path, threads: usize, ext: spu_isa::Extensions) 
     std::thread::scope(|scope| {
         for _ in 0..threads.min(jobs.len()).max(1) {
             scope.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(job) = order.get(i) else { break };
+                // the ticket of the job: jobs are admitted in this order, every ticket
+                // once (a failed preparation too), so none waits for a ticket never shown
+                let ticket = next.fetch_add(1, Ordering::Relaxed);
+                let Some(job) = order.get(ticket) else { break };
                 let name = job.name();
+                let prepared = estimate(job, &kept, budget);
+                let bytes = prepared.as_ref().map_or(0, |(bytes, _)| *bytes);
+                let admission = budget.admit(ticket, bytes);
                 if let Ok(mut r) = running.lock() {
                     r.insert(name.clone());
                     show(&r);
                 }
-                if let Err(e) = run_job(job, dir, &kept, ext) {
+                let outcome = prepared.and_then(|(_, scene)| {
+                    run_job(job, scene.as_deref(), dir, &kept, threads, ext)
+                });
+                drop(admission);
+                if let Err(e) = outcome {
                     if let Ok(mut f) = failures.lock() {
                         f.push(format!("{name}: {e}"));
                     }
@@ -433,7 +468,9 @@ fn run_jobs(jobs: &[Job], dir: &Path, threads: usize, ext: spu_isa::Extensions) 
                     let n = left.entry(job.scene_arg.as_str()).or_default();
                     *n = n.saturating_sub(1);
                     if *n == 0 {
-                        kept.forget(&job.scene_arg);
+                        if let Some(sizes) = kept.forget(&job.scene_arg) {
+                            budget.release(sizes.prepared);
+                        }
                     }
                 }
                 if let Ok(mut r) = running.lock() {
@@ -448,6 +485,44 @@ fn run_jobs(jobs: &[Job], dir: &Path, threads: usize, ext: spu_isa::Extensions) 
     for f in failures.into_inner().unwrap_or_default() {
         eprintln!("spu paper: run failed: {f}");
     }
+}
+
+/// The bytes `job` is estimated to take (docs/parallel.md, "Peak memory"), with its scene
+/// prepared (kept, and counted in `budget` while kept) where it is a still frame.
+fn estimate(
+    job: &Job,
+    kept: &Kept,
+    budget: &Budget,
+) -> Result<(u64, Option<std::sync::Arc<spu_loader::render::Prepared>>), String> {
+    let pixels = job.size as u64 * job.size as u64;
+    let keep = |sizes: Sizes| budget.keep(sizes.prepared);
+    if job.frames == 0 {
+        let scene = kept.prepare(&job.scene_arg, keep)?;
+        let sizes = Sizes::of(&scene);
+        return Ok((
+            frame_estimate(sizes.image, pixels, job.spes as u64),
+            Some(scene),
+        ));
+    }
+    // A moving scene prepares its own frames: its animation and tree, and each frame
+    // staged, beside a frame's main memory, each about its still scene's size. The still
+    // scene is prepared if it has not been yet (its own frames follow and forget it).
+    let still = crate::paper_next::still_scene(&job.scene_arg).and_then(|still| {
+        kept.sizes(still)
+            .or_else(|| kept.prepare(still, keep).ok().map(|p| Sizes::of(&p)))
+    });
+    Ok(match still {
+        Some(sizes) => (
+            (2 * sizes.prepared).saturating_add(frame_estimate(
+                sizes.image,
+                pixels,
+                job.spes as u64,
+            )),
+            None,
+        ),
+        // not a scene known to move: the whole budget, so it runs alone
+        None => (budget.limit(), None),
+    })
 }
 
 /// The frame `job` renders, on SPUs with the ISA extensions `ext` (`--ext`: every run of
@@ -475,28 +550,30 @@ fn weight(job: &Job) -> u64 {
     scene * job.size as u64 * job.size as u64
 }
 
-/// One job in this process, as `spu render` renders and writes a frame; its stats file is
-/// removed first so that a failed run leaves none.
-fn run_job(job: &Job, dir: &Path, kept: &Kept, ext: spu_isa::Extensions) -> Result<(), String> {
+/// One job in this process, as `spu render` renders and writes a frame of `prepared`
+/// (none for a moving scene, which prepares its frames itself, its trees built on
+/// `bvh_threads`); its stats file is removed first so that a failed run leaves none.
+fn run_job(
+    job: &Job,
+    prepared: Option<&spu_loader::render::Prepared>,
+    dir: &Path,
+    kept: &Kept,
+    bvh_threads: usize,
+    ext: spu_isa::Extensions,
+) -> Result<(), String> {
     let stats = job.stats_path(dir);
     let _ = std::fs::remove_file(&stats);
-    if job.frames > 0 {
-        // a moving scene prepares each frame itself
+    let Some(prepared) = prepared else {
         return crate::paper_next::run_frames(
             &with_ext(job, ext),
             job.frames,
             &job.outputs(dir),
             &kept.code,
+            bvh_threads,
         );
-    }
-    let prepared = kept.prepare(&job.scene_arg)?;
-    crate::cmd_render::frame(
-        &prepared,
-        &with_ext(job, ext),
-        &job.outputs(dir),
-        &kept.code,
-    )
-    .map_err(|e| e.message.unwrap_or_default())?;
+    };
+    crate::cmd_render::frame(prepared, &with_ext(job, ext), &job.outputs(dir), &kept.code)
+        .map_err(|e| e.message.unwrap_or_default())?;
     Ok(())
 }
 

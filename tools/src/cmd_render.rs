@@ -22,7 +22,8 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     }
     let (config, outputs) = args.config()?;
     let started = Instant::now();
-    let prepared = render::prepare(&config.scene)?;
+    // the BVH on --threads too, so that --threads 1 is one thread
+    let prepared = render::prepare_on(&config.scene, config.threads)?;
     eprintln!(
         "scene {}: {} triangles, {} BVH nodes, prepared in {:.2} s",
         config.scene,

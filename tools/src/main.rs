@@ -19,6 +19,7 @@ mod cmd_sched;
 mod cmd_timing;
 mod frame_views;
 mod heatmap;
+mod job_budget;
 mod options;
 mod outputs;
 mod paper_beyond;

@@ -82,13 +82,17 @@ pub const FRAMES: u32 = 2;
 /// SPE counts of the moving scenes' runs.
 pub const MOVING_SPES: [usize; 2] = [1, 16];
 
+/// The report scenes that have a moving version (`spu render --frames`), and its name.
+const MOVING: [(&str, &str); 2] = [("room", "room-flag"), ("beetle", "beetle-drive")];
+
 /// The moving scene standing in for a report scene (`spu render --frames`), if any.
 pub fn moving_scene(scene_id: &str) -> Option<&'static str> {
-    match scene_id {
-        "room" => Some("room-flag"),
-        "beetle" => Some("beetle-drive"),
-        _ => None,
-    }
+    MOVING.iter().find(|(s, _)| *s == scene_id).map(|(_, m)| *m)
+}
+
+/// The report scene a moving scene moves, if `moving` is one.
+pub fn still_scene(moving: &str) -> Option<&'static str> {
+    MOVING.iter().find(|(_, m)| *m == moving).map(|(s, _)| *s)
 }
 
 /// Per SPE count: the refit's and the frame's cycles and the frame rate with and without
@@ -205,14 +209,16 @@ pub fn verdicts(tables: &[Table], scenes: &[String]) -> Vec<String> {
 }
 
 /// A moving scene's job in this process, as `spu render --frames` writes it: each frame a
-/// numbered PNG beside `outputs.image`, and the frames' statistics as one JSON array.
+/// numbered PNG beside `outputs.image`, and the frames' statistics as one JSON array; the
+/// trees are built on `bvh_threads` host threads.
 pub fn run_frames(
     config: &RenderConfig,
     frames: u32,
     outputs: &Outputs,
     code: &CodeCache,
+    bvh_threads: usize,
 ) -> Result<(), String> {
-    let mut animator = Animator::new(&config.scene, frames, RebuildPolicy::default())?;
+    let mut animator = Animator::new(&config.scene, frames, RebuildPolicy::default(), bvh_threads)?;
     let mut stats: Vec<FrameStats> = Vec::new();
     for index in 0..frames {
         let frame = animator

@@ -80,7 +80,8 @@ fn quick_report_has_every_table_and_the_figure() {
             .find(|l| l.starts_with("peak memory: "))
             .unwrap_or_else(|| panic!("no peak memory line in {err}"));
         assert!(
-            line.ends_with(" MiB resident on this host (up to 2 runs at once)"),
+            line.contains(" MiB resident on this host (up to 2 runs at once; at most ")
+                && line.ends_with(" MiB estimated in flight, budget 1536 MiB)"),
             "{line}"
         );
     }
@@ -246,6 +247,25 @@ fn quick_report_has_every_table_and_the_figure() {
     assert!(collected.status.success());
     assert_eq!(
         std::fs::read_to_string(again.join("results.md")).unwrap(),
+        results
+    );
+    // a budget smaller than any beetle run: those run alone, the others beside each
+    // other on 3 threads, and the report is the same, byte for byte
+    let budgeted = dir.join("budgeted");
+    let run = spu(&[
+        &common[..8],
+        &["--out", budgeted.to_str().unwrap()],
+        &["--threads", "3", "--memory-budget", "64"],
+    ]
+    .concat());
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    assert!(
+        err.contains(" runs were estimated larger than --memory-budget 64 MiB and ran alone\n"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(budgeted.join("results.md")).unwrap(),
         results
     );
 
@@ -558,5 +578,36 @@ fn bad_scenes_and_output_are_named_before_any_work() {
     ]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("nowhere"));
+
+    // the memory budget is checked before any work, --list-jobs too
+    for (budget, listing) in [("0", false), ("63", true), ("2000000000", false)] {
+        let mut args = vec![
+            "paper",
+            "--scenes",
+            "room",
+            "--memory-budget",
+            budget,
+            "--out",
+            dir.to_str().unwrap(),
+        ];
+        if listing {
+            args.push("--list-jobs");
+        }
+        let out = spu(&args);
+        assert_eq!(out.status.code(), Some(2), "--memory-budget {budget}");
+        assert!(out.stdout.is_empty());
+        assert_eq!(
+            String::from_utf8_lossy(&out.stderr),
+            format!("spu: --memory-budget {budget}: must be 64 to 1073741824 MiB\n")
+        );
+    }
+    let out = spu(&[
+        "paper",
+        "--memory-budget",
+        "lots",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
     let _ = std::fs::remove_dir_all(&dir);
 }
