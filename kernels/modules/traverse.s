@@ -229,6 +229,44 @@ trav:
         .endsched
         .endif
 
+# one vector V of 4 rays against the child's box: the entry (largest near plane, at least 0)
+# and exit (smallest far plane, at most t) distances from the sorted plane distances, widened
+# by the rounding margins ($113, $114); %miss\V set where the ray misses the box
+        .macro  SLAB_MISS V
+        fcgt    %m1\V, %lx\V, %ly\V
+        selb    %e1\V, %ly\V, %lx\V, %m1\V
+        fcgt    %m2\V, %lz\V, ZERO
+        selb    %e2\V, ZERO, %lz\V, %m2\V
+        fcgt    %m3\V, %e1\V, %e2\V
+        selb    %en\V, %e2\V, %e1\V, %m3\V
+        fcgt    %m4\V, %hx\V, %hy\V
+        selb    %x1\V, %hx\V, %hy\V, %m4\V
+        fcgt    %m5\V, %hz\V, %t\V
+        selb    %x2\V, %hz\V, %t\V, %m5\V
+        fcgt    %m6\V, %x1\V, %x2\V
+        selb    %ex\V, %x1\V, %x2\V, %m6\V
+        fm      %enw\V, %en\V, $113
+        fm      %exw\V, %ex\V, $114
+        fcgt    %miss\V, %enw\V, %exw\V
+        .endm
+
+# the first of the pass's 8 rays (two vectors) that are active and enter the box, as a
+# bit mask in $103 (0: none), the pass moved on by 8 rays, $104 set when the packet is done
+        .macro  FF_FIRST_HIT
+        ai      %idx1, $117, 4
+        cgt     %act0, $117, $89
+        cgt     %act1, %idx1, $89
+        andc    %hit0, %act0, %miss0
+        andc    %hit1, %act1, %miss1
+        gb      %g0, %hit0
+        gb      %g1, %hit1
+        shli    %g0s, %g0, 4
+        or      $103, %g0s, %g1
+        ai      $86, $86, 32
+        ai      $117, $117, 8
+        ceqi    $104, $86, 256
+        .endm
+
 # FIND_FIRST: the first ray from FIRST on whose slab intervals with the box ($80/$81 min/max
 # x, $82/$83 y, $84/$85 z planes, splats) overlap within [0, t], widened by 1 -/+ 2^-16;
 # its index in $97, or -1. Uses $80..$111, $113..$124, $127. Inline in `slow`, twice: a
@@ -281,34 +319,9 @@ trav:
         selb    %hy\V, %by\V, %ay\V, %my\V
         selb    %lz\V, %az\V, %bz\V, %mz\V
         selb    %hz\V, %bz\V, %az\V, %mz\V
-        fcgt    %m1\V, %lx\V, %ly\V
-        selb    %e1\V, %ly\V, %lx\V, %m1\V
-        fcgt    %m2\V, %lz\V, ZERO
-        selb    %e2\V, ZERO, %lz\V, %m2\V
-        fcgt    %m3\V, %e1\V, %e2\V
-        selb    %en\V, %e2\V, %e1\V, %m3\V
-        fcgt    %m4\V, %hx\V, %hy\V
-        selb    %x1\V, %hx\V, %hy\V, %m4\V
-        fcgt    %m5\V, %hz\V, %t\V
-        selb    %x2\V, %hz\V, %t\V, %m5\V
-        fcgt    %m6\V, %x1\V, %x2\V
-        selb    %ex\V, %x1\V, %x2\V, %m6\V
-        fm      %enw\V, %en\V, $113
-        fm      %exw\V, %ex\V, $114
-        fcgt    %miss\V, %enw\V, %exw\V
+        SLAB_MISS \V
         .endr
-        ai      %idx1, $117, 4
-        cgt     %act0, $117, $89
-        cgt     %act1, %idx1, $89
-        andc    %hit0, %act0, %miss0
-        andc    %hit1, %act1, %miss1
-        gb      %g0, %hit0
-        gb      %g1, %hit1
-        shli    %g0s, %g0, 4
-        or      $103, %g0s, %g1
-        ai      $86, $86, 32
-        ai      $117, $117, 8
-        ceqi    $104, $86, 256
+        FF_FIRST_HIT
         hbrr    .Lff_br\@, 1b                 # (most searches take a few passes)
       ! brnz    $103, 2f
 .Lff_br\@:
@@ -378,34 +391,9 @@ trav:
         fm      %hy\V, $83, %ry\V
         fm      %lz\V, $84, %rz\V
         fm      %hz\V, $85, %rz\V
-        fcgt    %m1\V, %lx\V, %ly\V
-        selb    %e1\V, %ly\V, %lx\V, %m1\V
-        fcgt    %m2\V, %lz\V, ZERO
-        selb    %e2\V, ZERO, %lz\V, %m2\V
-        fcgt    %m3\V, %e1\V, %e2\V
-        selb    %en\V, %e2\V, %e1\V, %m3\V
-        fcgt    %m4\V, %hx\V, %hy\V
-        selb    %x1\V, %hx\V, %hy\V, %m4\V
-        fcgt    %m5\V, %hz\V, %t\V
-        selb    %x2\V, %hz\V, %t\V, %m5\V
-        fcgt    %m6\V, %x1\V, %x2\V
-        selb    %ex\V, %x1\V, %x2\V, %m6\V
-        fm      %enw\V, %en\V, $113
-        fm      %exw\V, %ex\V, $114
-        fcgt    %miss\V, %enw\V, %exw\V
+        SLAB_MISS \V
         .endr
-        ai      %idx1, $117, 4
-        cgt     %act0, $117, $89
-        cgt     %act1, %idx1, $89
-        andc    %hit0, %act0, %miss0
-        andc    %hit1, %act1, %miss1
-        gb      %g0, %hit0
-        gb      %g1, %hit1
-        shli    %g0s, %g0, 4
-        or      $103, %g0s, %g1
-        ai      $86, $86, 32
-        ai      $117, $117, 8
-        ceqi    $104, $86, 256
+        FF_FIRST_HIT
         hbrr    .Lff_br\@, 1b                 # (most searches take a few passes)
       ! brnz    $103, 2f
 .Lff_br\@:

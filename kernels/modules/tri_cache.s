@@ -202,17 +202,10 @@ leaf_resume:
         ila     $89, CTX_STAGE_TRIS           # and its record at CTX_STAGE_TRIS + 64 j
         a       $89, $89, RAYS
         il      $100, -1
-        .ifdef  EXT_MULTIHINT
-        # (multihint) one scheduled block per slot, whose way on (the next slot or, after
-        # the last, the leaf's cull) is chosen as it starts and hinted in an entry of its own
-        ila     $101, .Lres
-        ila     $102, leaf_cull
-        .sched  scratch=66-127
-.Lres:
-        ai      $77, $77, -1
-        ceqi    $103, $77, 0
-        selb    $104, $101, $102, $103
-        hbr     .Lres_br, $104
+# one slot of a resumed leaf's staged triangles: the cache line and the staged record
+# read, the record installed where its stage tag names the triangle (its fetch came back),
+# the line left as it is otherwise; then the next slot
+        .macro  STAGE_INSTALL_SLOT
         and     $80, $76, TMASK
         lqd     $85, CTX_STAGE_TAGS($88)
         shli    $81, $80, 4
@@ -244,42 +237,27 @@ leaf_resume:
         ai      $76, $76, 1
         ai      $88, $88, 16
         ai      $89, $89, 64
+        .endm
+
+        .ifdef  EXT_MULTIHINT
+        # (multihint) one scheduled block per slot, whose way on (the next slot or, after
+        # the last, the leaf's cull) is chosen as it starts and hinted in an entry of its own
+        ila     $101, .Lres
+        ila     $102, leaf_cull
+        .sched  scratch=66-127
+.Lres:
+        ai      $77, $77, -1
+        ceqi    $103, $77, 0
+        selb    $104, $101, $102, $103
+        hbr     .Lres_br, $104
+        STAGE_INSTALL_SLOT
 .Lres_br:
       ! bi      $104
         .endsched
         .else
         hbrr    .Lres_br, .Lres
-.Lres:  and     $80, $76, TMASK
-        lqd     $85, CTX_STAGE_TAGS($88)
-        shli    $81, $80, 4
-        shli    $82, $80, 6
-        a       $83, TTAGS, $81
-        a       $84, TDATA, $82
-        lqd     $86, 0($83)                   # the line as it is
-        lqd     $91, 0($84)
-        lqd     $92, 16($84)
-        lqd     $93, 32($84)
-        lqd     $94, 48($84)
-        lqd     $95, 0($89)                   # the staged record
-        lqd     $96, 16($89)
-        lqd     $97, 32($89)
-        lqd     $98, 48($89)
-        ceq     $99, $85, $76                 # staged: install it
-        shufb   $99, $99, $99, PAT0
-        selb    $86, $86, $76, $99
-        selb    $91, $91, $95, $99
-        selb    $92, $92, $96, $99
-        selb    $93, $93, $97, $99
-        selb    $94, $94, $98, $99
-        stqd    $86, 0($83)
-        stqd    $91, 0($84)
-        stqd    $92, 16($84)
-        stqd    $93, 32($84)
-        stqd    $94, 48($84)
-        stqd    $100, CTX_STAGE_TAGS($88)
-        ai      $76, $76, 1
-        ai      $88, $88, 16
-        ai      $89, $89, 64
+.Lres:
+        STAGE_INSTALL_SLOT
         ai      $77, $77, -1
 .Lres_br:
         brnz    $77, .Lres
