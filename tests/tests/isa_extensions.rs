@@ -498,7 +498,6 @@ fn the_gather_kernel_shades_the_same_frame_in_fewer_cycles() {
 /// SHT 4, so that BVH and triangle misses, suspensions and every traversal case occur.
 #[test]
 fn the_multihint_kernel_times_the_same_with_and_without_block_memoization() {
-    use spu_isa::jit::CodeCache;
     use spu_loader::kernels::KernelVariant;
     use spu_loader::render::{prepare, RenderConfig};
     let conference = prepare("conference").unwrap();
@@ -514,40 +513,7 @@ fn the_multihint_kernel_times_the_same_with_and_without_block_memoization() {
             extensions,
             ..RenderConfig::new("conference")
         };
-        let program = config.kernel.program().unwrap();
-        let layout = spu_loader::render::frame_layout(&conference, &config, &program, &[]).unwrap();
-        let run = |memoize: bool| {
-            spu_loader::runtime::run_frame(
-                &spu_loader::runtime::Frame {
-                    staged: &conference.staged,
-                    layout: &layout,
-                    program: &program,
-                    kernel: config.kernel,
-                    spes: config.spes,
-                    threads: 1,
-                    timing: TimingConfig {
-                        memoize,
-                        ..Default::default()
-                    },
-                    timed: true,
-                    engine: config.engine,
-                    max_cycles: 20_000_000_000,
-                    event_log: false,
-                    code: &CodeCache::default(),
-                    extensions,
-                },
-                &mut |_, _| {},
-            )
-            .unwrap()
-        };
-        let (plain, memo) = (run(false), run(true));
-        assert_eq!(plain.frame_buffer, memo.frame_buffer, "{ext}");
-        assert_eq!(plain.frame_cycles, memo.frame_cycles, "{ext}");
-        let (pp, pm) = (plain.profile.unwrap(), memo.profile.unwrap());
-        assert_eq!(pp.totals, pm.totals, "{ext}");
-        let per_address =
-            |p: &Profile| -> Vec<_> { p.addresses().map(|(pc, s)| (pc, *s)).collect() };
-        assert_eq!(per_address(&pp), per_address(&pm), "{ext}");
+        let pp = crate::runtime_frames::assert_memo_times_the_same(&conference, &config, ext);
         assert!(
             pp.totals.branch_misses > 0 && pp.totals.hint_hits > 1_000,
             "{ext}"

@@ -277,12 +277,24 @@ fn raytrace_kernel_times_the_same_with_and_without_block_memoization() {
         tri_cache: 128,
         ..config("conference", 24, 16, 2, 1)
     };
+    let pp = assert_memo_times_the_same(&conference, &config, "");
+    assert!(pp.totals.branch_misses > 0 && pp.totals.instructions > 100_000);
+}
+
+/// Runs `config`'s frame of `prepared` (one host thread) with the block memo off and on and
+/// asserts the same image, cycles, profile totals and per-address counters; gives the
+/// profile. `what` names the case in a failure.
+pub(crate) fn assert_memo_times_the_same(
+    prepared: &Prepared,
+    config: &RenderConfig,
+    what: &str,
+) -> spu_isa::profile::Profile {
     let program = config.kernel.program().unwrap();
-    let layout = spu_loader::render::frame_layout(&conference, &config, &program, &[]).unwrap();
+    let layout = spu_loader::render::frame_layout(prepared, config, &program, &[]).unwrap();
     let run = |memoize: bool| {
         spu_loader::runtime::run_frame(
             &spu_loader::runtime::Frame {
-                staged: &conference.staged,
+                staged: &prepared.staged,
                 layout: &layout,
                 program: &program,
                 kernel: config.kernel,
@@ -297,22 +309,22 @@ fn raytrace_kernel_times_the_same_with_and_without_block_memoization() {
                 max_cycles: 20_000_000_000,
                 event_log: false,
                 code: &CodeCache::default(),
-                extensions: Default::default(),
+                extensions: config.extensions,
             },
             &mut |_, _| {},
         )
         .unwrap()
     };
     let (plain, memo) = (run(false), run(true));
-    assert_eq!(plain.frame_buffer, memo.frame_buffer);
-    assert_eq!(plain.frame_cycles, memo.frame_cycles);
+    assert_eq!(plain.frame_buffer, memo.frame_buffer, "{what}");
+    assert_eq!(plain.frame_cycles, memo.frame_cycles, "{what}");
     let (pp, pm) = (plain.profile.unwrap(), memo.profile.unwrap());
-    assert_eq!(pp.totals, pm.totals);
+    assert_eq!(pp.totals, pm.totals, "{what}");
     let per_address = |p: &spu_isa::profile::Profile| -> Vec<_> {
         p.addresses().map(|(pc, s)| (pc, *s)).collect()
     };
-    assert_eq!(per_address(&pp), per_address(&pm));
-    assert!(pp.totals.branch_misses > 0 && pp.totals.instructions > 100_000);
+    assert_eq!(per_address(&pp), per_address(&pm), "{what}");
+    pp
 }
 
 /// Every frame program through the render API on a 64x64 room on two SPEs: the ray tracers
