@@ -120,7 +120,15 @@ pub fn write(
                 .iter()
                 .enumerate()
                 .filter(|(_, s)| s.late)
-                .map(|(k, s)| (crate::link_debug::script_rank(&s.name) + 1, true, k)),
+                .map(|(k, s)| {
+                    // An orphan note stands after `.note.spu_name`.
+                    let name = if crate::link_debug::in_script(&s.name) {
+                        s.name.as_str()
+                    } else {
+                        ".note.spu_name"
+                    };
+                    (crate::link_debug::script_rank(name) + 1, true, k)
+                }),
         )
         .collect();
     tail.sort_by_key(|t| t.0);

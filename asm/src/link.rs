@@ -171,6 +171,28 @@ fn is_late(name: &str, ty: u32) -> bool {
 }
 
 const SHT_NOTE: u32 = 7;
+/// A `.ctors`/`.dtors` section that the script puts in `.init_array`/`.fini_array`:
+/// GNU ld copies its words in reverse order (`SEC_ELF_REVERSE_COPY`), as the arrays
+/// run the other way.
+fn reverse_copied(s: &crate::object::ObjSection) -> bool {
+    let family = |base: &str| s.name == base || s.name.starts_with(&format!("{base}."));
+    (family(".ctors") || family(".dtors")) && s.ty != SHT_NOBITS && s.size.is_multiple_of(4)
+}
+
+/// `obj` with its `.ctors`/`.dtors` sections' words (and their relocations) reversed.
+fn reverse_ctors(obj: &Object) -> Object {
+    let mut obj = obj.clone();
+    for s in obj.sections.iter_mut().filter(|s| reverse_copied(s)) {
+        let size = s.size;
+        let words: Vec<&[u8]> = s.data.chunks(4).collect();
+        s.data = words.into_iter().rev().flatten().copied().collect();
+        for r in &mut s.relocs {
+            r.offset = size - 4 - (r.offset & !3) + (r.offset & 3);
+        }
+    }
+    obj
+}
+
 /// SHF_EXCLUDE: GNU ld leaves such a section out of an executable.
 const SHF_EXCLUDE: u64 = 0x8000_0000;
 
@@ -198,6 +220,16 @@ struct Definition {
 
 /// Links `objects`; errors name the object and symbol concerned.
 pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String>> {
+    let reversed;
+    let objects = if objects
+        .iter()
+        .any(|o| o.sections.iter().any(reverse_copied))
+    {
+        reversed = objects.iter().map(reverse_ctors).collect::<Vec<_>>();
+        &reversed[..]
+    } else {
+        objects
+    };
     let mut errors = Vec::new();
     // Output sections in GNU ld's order.
     let mut outs: Vec<OutSection> = Vec::new();
@@ -324,9 +356,10 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                     ));
                 }
             } else if let Some((base, _)) = s.name.split_once('@') {
-                if globals.get(base).is_some_and(|d| {
-                    d.object == o && d.section == s.section && d.value == s.value
-                }) {
+                if globals
+                    .get(base)
+                    .is_some_and(|d| d.object == o && d.section == s.section && d.value == s.value)
+                {
                     replaced.insert(base.to_string());
                 }
             }
@@ -425,6 +458,14 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         spu_note_size
     };
     let mut late_addr = spu_note_size;
+    // Unallocated `.ctors`/`.init_array`... inputs: the script's `.init_array : {...}`
+    // still moves the location counter past them, at the start of the data.
+    let unallocated_arrays: u64 = objects
+        .iter()
+        .flat_map(|o| &o.sections)
+        .filter(|s| s.flags & (SHF_ALLOC | SHF_EXCLUDE) == 0 && array_output(&s.name).is_some())
+        .map(|s| s.size as u64)
+        .sum();
     let mut addr = opts.text_addr as u64;
     // GNU ld's `. = DATA_ADDR` after the read-only sections: the first writable section
     // starts there, and `_edata` and `_end` stand past it even when there is none.
@@ -445,6 +486,7 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         if data_start.is_none() && matches!(class, 2 | 3) {
             addr = addr.next_multiple_of(DATA_SEGMENT_ALIGN as u64);
             data_start = Some(addr);
+            addr += unallocated_arrays;
         }
         if outs[k].size == 0 {
             // GNU ld drops an output section that received nothing: it takes no room
@@ -474,7 +516,8 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             addr += outs[k].size as u64;
         }
     }
-    let data_start = data_start.unwrap_or_else(|| addr.next_multiple_of(DATA_SEGMENT_ALIGN as u64));
+    let data_start = data_start.unwrap_or_else(|| addr.next_multiple_of(DATA_SEGMENT_ALIGN as u64))
+        + unallocated_arrays;
     // Overlaps and the local store.
     for (i, a) in outs.iter().enumerate() {
         let a_end = a.addr as u64 + a.size as u64;
