@@ -8,6 +8,8 @@ use crate::object::{SHF_ALLOC, SHF_EXECINSTR, SHF_TLS, SHF_WRITE};
 
 const EM_SPU: u16 = 23;
 const SHT_NOTE: u32 = 7;
+const SHT_NOBITS: u32 = 8;
+const SHF_STRINGS: u64 = 0x20;
 /// GNU ld's page size for the SPU (`MAXPAGESIZE`): segments start at file offsets
 /// congruent to their addresses modulo this.
 pub const PAGE: u32 = 0x80;
@@ -16,7 +18,8 @@ pub const PAGE: u32 = 0x80;
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Unloaded {
     pub name: String,
-    /// SHT_* type: PROGBITS, or NOTE for `.note.spu_name` (which gets a PT_NOTE segment).
+    /// SHT_* type: PROGBITS, NOTE (`.note.spu_name` gets a PT_NOTE segment), NOBITS
+    /// (`data` is zeros of its size, not written), INIT_ARRAY...
     pub ty: u32,
     pub flags: u64,
     pub entsize: u64,
@@ -34,6 +37,11 @@ pub struct Section {
     pub flags: u64,
     /// `.bss`-like: takes no file space.
     pub nobits: bool,
+    /// SHT_* type (PROGBITS, NOBITS, NOTE, INIT_ARRAY...).
+    pub ty: u32,
+    /// Placed after the script's `_end` (an allocated note, `._ea`): its header goes
+    /// among the unloaded sections', in the script's order.
+    pub late: bool,
     /// The largest alignment of its inputs.
     pub align: u32,
 }
@@ -81,7 +89,7 @@ fn segments(sections: &[Section]) -> Vec<(u32, usize, usize)> {
         let write = if s.flags & SHF_WRITE != 0 { 2 } else { 0 };
         let exec = if s.flags & SHF_EXECINSTR != 0 { 1 } else { 0 };
         match out.last_mut() {
-            Some(last) if last.0 & 2 == write => {
+            Some(last) if last.0 & 2 == write && s.late == sections[last.2].late => {
                 last.0 |= exec;
                 last.2 = i;
             }
@@ -101,6 +109,39 @@ pub fn write(
     entry: u32,
 ) -> Vec<u8> {
     let segs = segments(sections);
+    // The section headers' order: the loaded sections, then the unloaded and late ones
+    // by the script's order; `index[k]` is loaded section k's header index.
+    let mut tail: Vec<(usize, bool, usize)> = unloaded
+        .iter()
+        .enumerate()
+        .map(|(j, u)| (crate::link_debug::script_rank(&u.name), false, j))
+        .chain(
+            sections
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| s.late)
+                .map(|(k, s)| {
+                    // An orphan note stands after `.note.spu_name`.
+                    let name = if crate::link_debug::in_script(&s.name) {
+                        s.name.as_str()
+                    } else {
+                        ".note.spu_name"
+                    };
+                    (crate::link_debug::script_rank(name) + 1, true, k)
+                }),
+        )
+        .collect();
+    tail.sort_by_key(|t| t.0);
+    let early: Vec<usize> = (0..sections.len()).filter(|&k| !sections[k].late).collect();
+    let mut index = vec![0u16; sections.len()];
+    for (n, &k) in early.iter().enumerate() {
+        index[k] = n as u16 + 1;
+    }
+    for (n, t) in tail.iter().enumerate() {
+        if t.1 {
+            index[t.2] = (early.len() + n) as u16 + 1;
+        }
+    }
     let notes = unloaded.iter().filter(|u| u.ty == SHT_NOTE).count();
     let phnum = segs.len() + notes;
     let ehsize = 52u32;
@@ -123,7 +164,7 @@ pub fn write(
         symtab.extend(be32(0));
         symtab.push(3); // STB_LOCAL, STT_SECTION
         symtab.push(0);
-        symtab.extend(be16(k as u16 + 1));
+        symtab.extend(be16(index[k]));
     }
     let mut ordered: Vec<&Symbol> = symbols.iter().filter(|s| s.bind == 0).collect();
     let first_global = sections.len() + 1 + ordered.len();
@@ -136,7 +177,7 @@ pub fn write(
         symtab.push((s.bind << 4) | (s.kind & 0xf));
         symtab.push(0);
         symtab.extend(be16(match s.place {
-            Place::Section(k) => k as u16 + 1,
+            Place::Section(k) => index[k],
             Place::Absolute => 0xfff1,
             Place::Undefined => 0,
         }));
@@ -150,7 +191,9 @@ pub fn write(
     for u in unloaded {
         body.resize(body.len().next_multiple_of(u.align.max(1) as usize), 0);
         unloaded_off.push(image_off + body.len() as u32);
-        body.extend(&u.data);
+        if u.ty != SHT_NOBITS {
+            body.extend(&u.data);
+        }
     }
     align4(&mut body);
     let symtab_off = image_off + body.len() as u32;
@@ -236,16 +279,23 @@ pub fn write(
         }
     };
     sh(&mut out, [0; 10]);
-    for (s, &n) in sections.iter().zip(&names) {
-        let ty = if s.nobits { 8 } else { 1 };
-        let flags = (s.flags & (SHF_ALLOC | SHF_WRITE | SHF_EXECINSTR | SHF_TLS)) as u32;
+    let loaded_header = |out: &mut Vec<u8>, s: &Section, n: u32| {
+        let ty = s.ty;
+        // GNU ld keeps SHF_STRINGS on an output section and drops SHF_MERGE.
+        let flags =
+            (s.flags & (SHF_ALLOC | SHF_WRITE | SHF_EXECINSTR | SHF_TLS | SHF_STRINGS)) as u32;
         let off = image_off + s.addr;
-        sh(
-            &mut out,
-            [n, ty, flags, s.addr, off, s.size, 0, 0, s.align, 0],
-        );
+        sh(out, [n, ty, flags, s.addr, off, s.size, 0, 0, s.align, 0]);
+    };
+    for &k in &early {
+        loaded_header(&mut out, &sections[k], names[k]);
     }
-    for ((u, &n), &off) in unloaded.iter().zip(&unloaded_names).zip(&unloaded_off) {
+    for &(_, late, j) in &tail {
+        if late {
+            loaded_header(&mut out, &sections[j], names[j]);
+            continue;
+        }
+        let (u, n, off) = (&unloaded[j], unloaded_names[j], unloaded_off[j]);
         let flags = u.flags as u32;
         let size = u.data.len() as u32;
         sh(

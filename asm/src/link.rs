@@ -107,6 +107,9 @@ const LOCAL_STORE: u64 = 256 * 1024;
 
 /// The output section an input section goes to (GNU ld's default script).
 fn output_name(name: &str) -> String {
+    if let Some(out) = array_output(name) {
+        return out.to_string();
+    }
     for base in [".text", ".data", ".rodata", ".bss"] {
         if name == base || name.starts_with(&format!("{base}.")) {
             return base.to_string();
@@ -114,6 +117,84 @@ fn output_name(name: &str) -> String {
     }
     name.to_string()
 }
+
+/// The constructor arrays of the default script: `.init_array` takes `.ctors` and
+/// `.init_array.*`/`.ctors.*` too, `.fini_array` the `.dtors`.
+pub(crate) fn array_output(name: &str) -> Option<&'static str> {
+    let family = |base: &str| name == base || name.starts_with(&format!("{base}."));
+    if family(".init_array") || family(".ctors") {
+        Some(".init_array")
+    } else if family(".fini_array") || family(".dtors") {
+        Some(".fini_array")
+    } else if name == ".preinit_array" {
+        Some(".preinit_array")
+    } else {
+        None
+    }
+}
+
+/// Where GNU ld's default script (or, for a section it does not name, its orphan
+/// placement, `ldelf_place_orphan`) puts an allocated output section: (class, rank) as
+/// `placement` gives them, class 5 for what stands after the script's `_end` (an
+/// allocated note goes after `.note.spu_name`, `._ea` and the DWARF sections at 0).
+fn script_placement(name: &str, ty: u32, flags: u64) -> (u8, i8) {
+    let rank = placement(name, ty, flags).1;
+    match name {
+        ".interrupt" | ".init" | ".text" | ".fini" => return (0, rank),
+        ".rodata" => return (1, 0),
+        ".preinit_array" => return (2, -3),
+        ".init_array" => return (2, -2),
+        ".fini_array" => return (2, -1),
+        ".data" => return (2, 0),
+        ".bss" => return (3, 0),
+        _ => {}
+    }
+    if is_late(name, ty) {
+        return (5, (name == "._ea") as i8);
+    }
+    let class = if ty == SHT_NOBITS {
+        3
+    } else if flags & SHF_WRITE != 0 {
+        2
+    } else if flags & SHF_EXECINSTR != 0 {
+        0
+    } else {
+        1
+    };
+    (class, rank)
+}
+
+/// An allocated section placed after the script's `_end`: a note (after
+/// `.note.spu_name`) or `._ea` (at 0, as the script's `._ea 0 :` puts it).
+fn is_late(name: &str, ty: u32) -> bool {
+    ty == SHT_NOTE || crate::link_debug::in_script(name)
+}
+
+const SHT_NOTE: u32 = 7;
+/// A `.ctors`/`.dtors` section that the script puts in `.init_array`/`.fini_array`:
+/// GNU ld copies its words in reverse order (`SEC_ELF_REVERSE_COPY`), as the arrays
+/// run the other way.
+fn reverse_copied(s: &crate::object::ObjSection) -> bool {
+    let family = |base: &str| s.name == base || s.name.starts_with(&format!("{base}."));
+    (family(".ctors") || family(".dtors")) && s.ty != SHT_NOBITS && s.size.is_multiple_of(4)
+}
+
+/// `obj` with its `.ctors`/`.dtors` sections' words (and their relocations) reversed.
+fn reverse_ctors(obj: &Object) -> Object {
+    let mut obj = obj.clone();
+    for s in obj.sections.iter_mut().filter(|s| reverse_copied(s)) {
+        let size = s.size;
+        let words: Vec<&[u8]> = s.data.chunks(4).collect();
+        s.data = words.into_iter().rev().flatten().copied().collect();
+        for r in &mut s.relocs {
+            r.offset = size - 4 - (r.offset & !3) + (r.offset & 3);
+        }
+    }
+    obj
+}
+
+/// SHF_EXCLUDE: GNU ld leaves such a section out of an executable.
+const SHF_EXCLUDE: u64 = 0x8000_0000;
 
 struct OutSection {
     name: String,
@@ -139,12 +220,22 @@ struct Definition {
 
 /// Links `objects`; errors name the object and symbol concerned.
 pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String>> {
+    let reversed;
+    let objects = if objects
+        .iter()
+        .any(|o| o.sections.iter().any(reverse_copied))
+    {
+        reversed = objects.iter().map(reverse_ctors).collect::<Vec<_>>();
+        &reversed[..]
+    } else {
+        objects
+    };
     let mut errors = Vec::new();
     // Output sections in GNU ld's order.
     let mut outs: Vec<OutSection> = Vec::new();
     for (o, obj) in objects.iter().enumerate() {
         for (i, s) in obj.sections.iter().enumerate() {
-            if s.flags & SHF_ALLOC == 0 {
+            if s.flags & SHF_ALLOC == 0 || s.flags & SHF_EXCLUDE != 0 {
                 continue;
             }
             let name = output_name(&s.name);
@@ -152,8 +243,13 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                 Some(k) => k,
                 None => {
                     outs.push(OutSection {
+                        ty: match name.as_str() {
+                            ".init_array" => 14,
+                            ".fini_array" => 15,
+                            ".preinit_array" => 16,
+                            _ => s.ty,
+                        },
                         name,
-                        ty: s.ty,
                         flags: s.flags,
                         align: 1,
                         inputs: Vec::new(),
@@ -187,6 +283,11 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                     },
                 )
             });
+        }
+        // GNU ld's `lang_add_section`: the output section is read-only as its first
+        // input is (in the script's order); the other flags gather from all.
+        if let Some(&(o, i, _)) = out.inputs.first() {
+            out.flags = (out.flags & !SHF_WRITE) | (objects[o].sections[i].flags & SHF_WRITE);
         }
         for input in &mut out.inputs {
             let s = &objects[input.0].sections[input.1];
@@ -238,6 +339,55 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             }
         }
     }
+    // Symbol versions (`.symver`): a default version `f@@V` stands for `f` too, so a
+    // defined `f` beside it is a second definition; a hidden version `f@V` defined where
+    // the same object's `f` is replaces it in the output.
+    let mut replaced: HashSet<String> = HashSet::new();
+    for (o, obj) in objects.iter().enumerate() {
+        for s in obj.symbols.iter().filter(|s| s.global) {
+            if s.section == SymSection::Undefined || s.section == SymSection::Common {
+                continue;
+            }
+            if let Some((base, _)) = s.name.split_once("@@") {
+                if globals.contains_key(base) {
+                    errors.push(format!(
+                        "{}: multiple definition of `{base}'; first defined in {}",
+                        obj.name, objects[globals[base].object].name
+                    ));
+                }
+            } else if let Some((base, _)) = s.name.split_once('@') {
+                if globals
+                    .get(base)
+                    .is_some_and(|d| d.object == o && d.section == s.section && d.value == s.value)
+                {
+                    replaced.insert(base.to_string());
+                }
+            }
+        }
+    }
+    // An undefined symbol of other than default visibility must be defined in the link.
+    for obj in objects {
+        for s in &obj.symbols {
+            if s.section == SymSection::Undefined
+                && !s.weak
+                && !s.name.is_empty()
+                && s.visibility != 0
+                && !globals.contains_key(&s.name)
+                && !commons.iter().any(|c| c.0 == s.name)
+            {
+                let what = match s.visibility {
+                    1 => "internal",
+                    2 => "hidden",
+                    _ => "protected",
+                };
+                errors.push(format!(
+                    "{}: {what} symbol `{}' isn't defined",
+                    opts.output.as_deref().unwrap_or("a.out"),
+                    s.name
+                ));
+            }
+        }
+    }
     // Commons not defined elsewhere go at the end of .bss.
     commons.retain(|c| !globals.contains_key(&c.0));
     let mut common_at: HashMap<String, u32> = HashMap::new();
@@ -286,16 +436,57 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         }
     }
     let mut order: Vec<usize> = (0..outs.len()).collect();
-    order.sort_by_key(|&k| (placement(&outs[k].name, outs[k].ty, outs[k].flags), k));
+    order.sort_by_key(|&k| {
+        (
+            script_placement(&outs[k].name, outs[k].ty, outs[k].flags),
+            k,
+        )
+    });
+    // `.note.spu_name 0 :` leaves the location counter past the note, where an
+    // allocated note (an orphan placed after it) starts.
+    let spu_note_size = objects
+        .iter()
+        .flat_map(|o| &o.sections)
+        .filter(|s| s.name == SPU_NAME_NOTE)
+        .map(|s| s.size as u64)
+        .sum::<u64>();
+    let spu_note_size = if spu_note_size == 0 {
+        spu_name_note(opts.output.as_deref().unwrap_or("a.out"))
+            .data
+            .len() as u64
+    } else {
+        spu_note_size
+    };
+    let mut late_addr = spu_note_size;
+    // Unallocated `.ctors`/`.init_array`... inputs: the script's `.init_array : {...}`
+    // still moves the location counter past them, at the start of the data.
+    let unallocated_arrays: u64 = objects
+        .iter()
+        .flat_map(|o| &o.sections)
+        .filter(|s| s.flags & (SHF_ALLOC | SHF_EXCLUDE) == 0 && array_output(&s.name).is_some())
+        .map(|s| s.size as u64)
+        .sum();
     let mut addr = opts.text_addr as u64;
     // GNU ld's `. = DATA_ADDR` after the read-only sections: the first writable section
     // starts there, and `_edata` and `_end` stand past it even when there is none.
     let mut data_start = None;
     for (n, &k) in order.iter().enumerate() {
-        let class = placement(&outs[k].name, outs[k].ty, outs[k].flags).0;
+        let class = script_placement(&outs[k].name, outs[k].ty, outs[k].flags).0;
+        if class == 5 {
+            let a = outs[k].align.max(1) as u64;
+            let at = if crate::link_debug::in_script(&outs[k].name) {
+                0 // the script's `NAME 0 :`
+            } else {
+                late_addr.next_multiple_of(a)
+            };
+            outs[k].addr = at.min(u32::MAX as u64) as u32;
+            late_addr = at + outs[k].size as u64;
+            continue;
+        }
         if data_start.is_none() && matches!(class, 2 | 3) {
             addr = addr.next_multiple_of(DATA_SEGMENT_ALIGN as u64);
             data_start = Some(addr);
+            addr += unallocated_arrays;
         }
         if outs[k].size == 0 {
             // GNU ld drops an output section that received nothing: it takes no room
@@ -325,7 +516,8 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             addr += outs[k].size as u64;
         }
     }
-    let data_start = data_start.unwrap_or_else(|| addr.next_multiple_of(DATA_SEGMENT_ALIGN as u64));
+    let data_start = data_start.unwrap_or_else(|| addr.next_multiple_of(DATA_SEGMENT_ALIGN as u64))
+        + unallocated_arrays;
     // Overlaps and the local store.
     for (i, a) in outs.iter().enumerate() {
         let a_end = a.addr as u64 + a.size as u64;
@@ -360,7 +552,14 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             _ => None,
         }
     };
+    let late = |x: &OutSection| is_late(&x.name, x.ty);
     let end = outs
+        .iter()
+        .filter(|x| !is_tbss(x) && !late(x))
+        .map(|x| x.addr as u64 + x.size as u64)
+        .max()
+        .unwrap_or(0);
+    let image_end = outs
         .iter()
         .filter(|x| !is_tbss(x))
         .map(|x| x.addr as u64 + x.size as u64)
@@ -369,7 +568,7 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
     // The script's symbols, where its location counter stands.
     let end_of = |keep: &dyn Fn(&OutSection) -> bool| {
         outs.iter()
-            .filter(|x| keep(x))
+            .filter(|x| keep(x) && !late(x))
             .map(|x| x.addr as u64 + x.size as u64)
             .max()
     };
@@ -401,7 +600,7 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         }
         script.get(name).copied()
     };
-    let mut image = vec![0u8; end as usize];
+    let mut image = vec![0u8; image_end as usize];
     for out in &outs {
         for &(o, i, at) in &out.inputs {
             let s = &objects[o].sections[i];
@@ -469,7 +668,7 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
     }
     // Output sections in address order, and the symbols of the output.
     let mut by_addr: Vec<&OutSection> = outs.iter().filter(|x| x.size > 0).collect();
-    by_addr.sort_by_key(|x| x.addr);
+    by_addr.sort_by_key(|x| (is_late(&x.name, x.ty), x.addr));
     let out_sections: Vec<crate::executable::Section> = by_addr
         .iter()
         .map(|x| crate::executable::Section {
@@ -478,6 +677,8 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             size: x.size,
             flags: x.flags,
             nobits: x.ty == SHT_NOBITS,
+            ty: x.ty,
+            late: is_late(&x.name, x.ty),
             align: x.align,
         })
         .collect();
@@ -519,6 +720,9 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         .collect();
     names.sort();
     for n in names {
+        if replaced.contains(n) {
+            continue;
+        }
         let Some(a) = global_address(n) else { continue };
         let (size, kind, bind, place) = match (globals.get(n), common_at.contains_key(n)) {
             (Some(d), _) => {
@@ -610,7 +814,13 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         .iter()
         .any(|o| o.sections.iter().any(|s| s.name == SPU_NAME_NOTE))
     {
-        unloaded.push(spu_name_note(opts.output.as_deref().unwrap_or("a.out")));
+        let note = spu_name_note(opts.output.as_deref().unwrap_or("a.out"));
+        let rank = crate::link_debug::script_rank(SPU_NAME_NOTE);
+        let at = unloaded
+            .iter()
+            .position(|u| crate::link_debug::script_rank(&u.name) > rank)
+            .unwrap_or(unloaded.len());
+        unloaded.insert(at, note);
     }
     let elf = crate::executable::write(&image, &out_sections, &unloaded, &out_symbols, entry);
     Ok(Linked {

@@ -8,7 +8,22 @@ use crate::executable::Unloaded;
 use crate::object::{Object, RelocTarget, SymSection, SHF_ALLOC, SHT_PROGBITS};
 
 const SHT_NOTE: u32 = 7;
+const SHT_NOBITS: u32 = 8;
 const SHF_MERGE: u64 = 0x10;
+const SHF_EXCLUDE: u64 = 0x8000_0000;
+/// The section types an unloaded output section takes: PROGBITS, NOTE, NOBITS and the
+/// constructor arrays (INIT_ARRAY, FINI_ARRAY, PREINIT_ARRAY).
+const KEPT_TYPES: [u32; 6] = [SHT_PROGBITS, SHT_NOTE, SHT_NOBITS, 14, 15, 16];
+
+/// The type GNU ld gives an output section of the constructor arrays' names.
+fn array_type(name: &str) -> Option<u32> {
+    match name {
+        ".init_array" => Some(14),
+        ".fini_array" => Some(15),
+        ".preinit_array" => Some(16),
+        _ => None,
+    }
+}
 const SHF_STRINGS: u64 = 0x20;
 
 /// What GNU ld's default script throws away (`/DISCARD/`), by name prefix.
@@ -67,6 +82,8 @@ fn output_name(name: &str) -> &str {
         ".gnu.build.attributes"
     } else if name.starts_with("._ea.") {
         "._ea"
+    } else if let Some(out) = crate::link::array_output(name) {
+        out
     } else {
         name
     }
@@ -74,7 +91,12 @@ fn output_name(name: &str) -> &str {
 
 /// Where an unloaded output section stands: the script's order, and a section the
 /// script does not name (an orphan) right after `.comment`, as GNU ld places one.
-fn script_rank(name: &str) -> usize {
+/// Whether the script names `name` among its unloaded sections (`NAME 0 : ...`).
+pub(crate) fn in_script(name: &str) -> bool {
+    SCRIPT.contains(&name)
+}
+
+pub(crate) fn script_rank(name: &str) -> usize {
     let at = |n: &str| SCRIPT.iter().position(|s| *s == n);
     match at(name) {
         Some(i) => 2 * i,
@@ -95,7 +117,8 @@ pub(crate) fn sections(
     for (o, obj) in objects.iter().enumerate() {
         for (i, s) in obj.sections.iter().enumerate() {
             if s.flags & SHF_ALLOC != 0
-                || !(s.ty == SHT_PROGBITS || s.ty == SHT_NOTE)
+                || s.flags & SHF_EXCLUDE != 0
+                || !KEPT_TYPES.contains(&s.ty)
                 || DISCARDED.iter().any(|d| s.name.starts_with(d))
             {
                 continue;
@@ -106,7 +129,7 @@ pub(crate) fn sections(
                 None => {
                     out.push(Unloaded {
                         name: name.to_string(),
-                        ty: s.ty,
+                        ty: array_type(name).unwrap_or(s.ty),
                         flags: s.flags,
                         entsize: s.entsize,
                         align: 1,
@@ -120,7 +143,11 @@ pub(crate) fn sections(
             u.align = u.align.max(align as u32);
             u.data.resize(u.data.len().next_multiple_of(align), 0);
             at.insert((o, i), (k, u.data.len() as u32));
-            u.data.extend_from_slice(&s.data);
+            if s.ty == SHT_NOBITS {
+                u.data.resize(u.data.len() + s.size as usize, 0);
+            } else {
+                u.data.extend_from_slice(&s.data);
+            }
         }
     }
     let mut errors = Vec::new();
@@ -177,6 +204,8 @@ pub(crate) fn sections(
                 merge_strings(&mut u.data);
             }
         }
+        // GNU ld drops an output section that received nothing.
+        out.retain(|u| !u.data.is_empty());
         out.sort_by_key(|u| script_rank(&u.name));
         Ok(out)
     } else {

@@ -280,10 +280,7 @@ fn executable_differences(readelf: &Path, gnu: &Path, ours: &Path) -> Vec<String
 }
 
 /// The files whose executables are known to differ, and how.
-const KNOWN: &[(&str, &str)] = &[(
-    "stmt_99.s",
-    "`.symver f, f@V1`: GNU ld leaves the unversioned `f` out of the executable, spu ld keeps it",
-)];
+const KNOWN: &[(&str, &str)] = &[];
 
 /// Every project source and generated-corpus file that GNU as assembles and GNU ld links
 /// on its own: linked by `spu ld` too, the two executables compared section by section

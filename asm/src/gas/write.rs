@@ -368,6 +368,8 @@ pub(super) fn executable(
                 size,
                 flags: def.flags,
                 nobits: def.ty == SHT_NOBITS,
+                ty: if def.ty == SHT_NOBITS { 8 } else { 1 },
+                late: false,
                 align,
             }
         })
