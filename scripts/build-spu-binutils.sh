@@ -57,4 +57,10 @@ cd build
     --without-zstd >/dev/null
 make -j"$(nproc 2>/dev/null || echo 2)" MAKEINFO=true all-gas all-ld all-binutils >/dev/null
 make MAKEINFO=true install-gas install-ld install-binutils >/dev/null
-echo "installed: $prefix/bin/spu-elf-as (and spu-elf-ld, spu-elf-objdump, spu-elf-readelf)"
+# ld's own SPU test sources (overlays, icache, pic...), which the linker comparison links
+# when present (tests/build.rs looks for them here); on this machine only, never committed.
+mkdir -p "$prefix/share/spu-binutils-testsuite"
+rm -rf "$prefix/share/spu-binutils-testsuite/ld-spu"
+cp -R "../$src/ld/testsuite/ld-spu" "$prefix/share/spu-binutils-testsuite/"
+echo "installed: $prefix/bin/spu-elf-as (and spu-elf-ld, spu-elf-objdump, spu-elf-readelf),"
+echo "           $prefix/share/spu-binutils-testsuite/ld-spu (binutils' ld-spu test sources)"

@@ -5,12 +5,16 @@
 //! - `cfg(has_binutils)` and `SPU_ELF_AS` (its path): GNU as for SPU, where
 //!   `scripts/build-spu-binutils.sh` installs it (`$SPU_BINUTILS/bin`,
 //!   `~/.local/spu-binutils/bin`) or on `PATH` (`tests/gnu_differential.rs`);
+//! - `cfg(has_ld_spu_testsuite)` and `SPU_LD_TESTSUITE_DIR`: binutils' own
+//!   `ld/testsuite/ld-spu` sources, which the script installs beside it
+//!   (`share/spu-binutils-testsuite/ld-spu`) or `SPU_LD_TESTSUITE` names
+//!   (`tests/gnu_ld_differential.rs`);
 //! - `cfg(has_shared_scenes)`: the scene files beside the repository,
 //!   `<repo>/../shared/scenes`, where `spu_loader::scene::shared_scenes_dir` looks
 //!   (`tests/shared_scenes.rs`). Only whether the directory is there is looked at; nothing
 //!   of it is read by the build.
 //!
-//! Both are looked for again when `SPU_BINUTILS`, `HOME` or `PATH` changes or the program
+//! All are looked for again when `SPU_BINUTILS`, `SPU_LD_TESTSUITE`, `HOME` or `PATH` changes or the program
 //! found changes; a reference that appears otherwise is seen after
 //! `cargo clean -p spu-tests`.
 
@@ -18,8 +22,9 @@ use std::path::{Path, PathBuf};
 
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(has_binutils)");
+    println!("cargo::rustc-check-cfg=cfg(has_ld_spu_testsuite)");
     println!("cargo::rustc-check-cfg=cfg(has_shared_scenes)");
-    for var in ["SPU_BINUTILS", "HOME", "PATH"] {
+    for var in ["SPU_BINUTILS", "SPU_LD_TESTSUITE", "HOME", "PATH"] {
         println!("cargo::rerun-if-env-changed={var}");
     }
     println!("cargo::rerun-if-changed=build.rs");
@@ -41,6 +46,19 @@ fn main() {
         println!("cargo::rerun-if-changed={}", gas.display());
         println!("cargo::rustc-cfg=has_binutils");
         println!("cargo::rustc-env=SPU_ELF_AS={}", gas.display());
+        let beside = gas
+            .parent()
+            .and_then(Path::parent)
+            .map(|prefix| prefix.join("share/spu-binutils-testsuite/ld-spu"))
+            .unwrap_or_default();
+        let suite = std::env::var_os("SPU_LD_TESTSUITE")
+            .map(PathBuf::from)
+            .unwrap_or(beside);
+        if suite.is_dir() {
+            println!("cargo::rerun-if-changed={}", suite.display());
+            println!("cargo::rustc-cfg=has_ld_spu_testsuite");
+            println!("cargo::rustc-env=SPU_LD_TESTSUITE_DIR={}", suite.display());
+        }
     }
     let manifest = std::env::var_os("CARGO_MANIFEST_DIR").expect("CARGO_MANIFEST_DIR");
     if Path::new(&manifest).join("../../shared/scenes").is_dir() {

@@ -16,6 +16,11 @@ use crate::gnu_differential::dis_difference;
 const GNU_AS: &str = env!("SPU_ELF_AS");
 #[cfg(not(has_binutils))]
 const GNU_AS: &str = "";
+/// binutils' `ld/testsuite/ld-spu` (its `.s` files are linked by both linkers).
+#[cfg(has_ld_spu_testsuite)]
+const LD_SPU_TESTSUITE: &str = env!("SPU_LD_TESTSUITE_DIR");
+#[cfg(not(has_ld_spu_testsuite))]
+const LD_SPU_TESTSUITE: &str = "";
 
 /// A binutils program beside GNU as (`spu-elf-as` -> `spu-elf-ld`).
 fn sibling(tool: &str) -> PathBuf {
@@ -353,23 +358,20 @@ fn single_objects_link_as_gnu_ld() {
 }
 
 /// binutils' own SPU linker test sources (`ld/testsuite/ld-spu/*.s`, overlay, icache,
-/// PIC and `_EAR_` ones, read where SPU_LD_TESTSUITE names their directory, never kept in
+/// PIC and `_EAR_` ones, installed beside GNU binutils by scripts/build-spu-binutils.sh or named by SPU_LD_TESTSUITE, never kept in
 /// the repository), linked without their scripts and options (which spu ld does not
 /// take: docs/linker.md): both linkers link each alike, or both refuse it.
 #[test]
 #[cfg_attr(
-    not(has_binutils),
-    ignore = "needs GNU binutils for SPU: scripts/build-spu-binutils.sh"
+    not(all(has_binutils, has_ld_spu_testsuite)),
+    ignore = "needs GNU binutils for SPU and binutils' ld/testsuite/ld-spu sources: scripts/build-spu-binutils.sh installs both (or SPU_LD_TESTSUITE=dir)"
 )]
 fn ld_spu_testsuite_sources_link_as_gnu_ld_without_scripts() {
-    let Some(suite) = std::env::var_os("SPU_LD_TESTSUITE") else {
-        eprintln!("SPU_LD_TESTSUITE is unset: binutils' ld/testsuite/ld-spu sources not compared");
-        return;
-    };
+    let suite = Path::new(LD_SPU_TESTSUITE);
     let (gas, gld, readelf) = (Path::new(GNU_AS), sibling("ld"), sibling("readelf"));
     let tmp = std::env::temp_dir().join(format!("spu-ld-spu-{}", std::process::id()));
     std::fs::create_dir_all(&tmp).unwrap();
-    let mut sources: Vec<PathBuf> = std::fs::read_dir(&suite)
+    let mut sources: Vec<PathBuf> = std::fs::read_dir(suite)
         .unwrap()
         .flatten()
         .map(|e| e.path())
