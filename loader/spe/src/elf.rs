@@ -229,6 +229,8 @@ mod tests {
             size: image.len() as u32,
             flags: 6, // SHF_ALLOC | SHF_EXECINSTR
             nobits: false,
+            ty: 1, // SHT_PROGBITS
+            late: false,
             align: 8,
         };
         let symbols: Vec<Symbol> = symbols
