@@ -11,7 +11,7 @@ use std::sync::{Condvar, Mutex, MutexGuard};
 /// The default `--memory-budget`, in MiB: with the prepared scenes and what the estimates
 /// leave out, `spu paper` at 1024x1024 then peaks below 2 GB on any thread count
 /// (docs/parallel.md, "Peak memory").
-pub const DEFAULT_MIB: u64 = 1536;
+pub const DEFAULT_MIB: u64 = 1280;
 
 /// The smallest and largest `--memory-budget` accepted, in MiB.
 pub const MIB_RANGE: std::ops::RangeInclusive<u64> = 64..=1 << 30;

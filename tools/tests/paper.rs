@@ -81,7 +81,7 @@ fn quick_report_has_every_table_and_the_figure() {
             .unwrap_or_else(|| panic!("no peak memory line in {err}"));
         assert!(
             line.contains(" MiB resident on this host (up to 2 runs at once; at most ")
-                && line.ends_with(" MiB estimated in flight, budget 1536 MiB)"),
+                && line.ends_with(" MiB estimated in flight, budget 1280 MiB)"),
             "{line}"
         );
     }
