@@ -229,6 +229,41 @@ trav:
         .endsched
         .endif
 
+# a search's start: the box's planes relative to the packet's origin, the even vector at
+# or below FIRST ($86 its byte offset, $117 its lanes' ray indices), the rounding margins
+# ($113, $114) and the ray directions' base ($88)
+        .macro  FF_START
+        fs      $80, $80, OXS
+        fs      $81, $81, OXS
+        fs      $82, $82, OYS
+        fs      $83, $83, OYS
+        fs      $84, $84, OZS
+        fs      $85, $85, OZS
+        rotmi   $86, FIRST, -3
+        shli    $86, $86, 5                   # byte offset of the even vector at or below FIRST's
+        rotmi   $117, $86, -2                 # its first ray
+        lqa     $90, k_idx
+        a       $117, $117, $90               # the ray indices of its lanes
+        ai      $89, FIRST, -1
+        lqa     $113, k_epslo
+        lqa     $114, k_epshi
+        ila     $88, CTX_RAY_RX
+        a       $88, $88, RAYS
+        .endm
+
+# a pass's two vectors of rays: directions and t
+        .macro  FF_PASS_LOADS
+        a       $90, $88, $86
+        lqd     %rx0, 0($90)
+        lqd     %ry0, 256($90)
+        lqd     %rz0, 512($90)
+        lqd     %t0, 768($90)
+        lqd     %rx1, 16($90)
+        lqd     %ry1, 272($90)
+        lqd     %rz1, 528($90)
+        lqd     %t1, 784($90)
+        .endm
+
 # one vector V of 4 rays against the child's box: the entry (largest near plane, at least 0)
 # and exit (smallest far plane, at most t) distances from the sorted plane distances, widened
 # by the rounding margins ($113, $114); %miss\V set where the ray misses the box
@@ -272,37 +307,14 @@ trav:
 # its index in $97, or -1. Uses $80..$111, $113..$124, $127. Inline in `slow`, twice: a
 # call and its return were two more branches to mispredict per search.
         .macro  FIND_FIRST
-        fs      $80, $80, OXS
-        fs      $81, $81, OXS
-        fs      $82, $82, OYS
-        fs      $83, $83, OYS
-        fs      $84, $84, OZS
-        fs      $85, $85, OZS
-        rotmi   $86, FIRST, -3
-        shli    $86, $86, 5                   # byte offset of the even vector at or below FIRST's
-        rotmi   $117, $86, -2                 # its first ray
-        lqa     $90, k_idx
-        a       $117, $117, $90               # the ray indices of its lanes
-        ai      $89, FIRST, -1
-        lqa     $113, k_epslo
-        lqa     $114, k_epshi
-        ila     $88, CTX_RAY_RX
-        a       $88, $88, RAYS
+        FF_START
         .ifdef  EXT_MULTIHINT
         hbrr    .Lff_none\@, 3f               # the search's exit when no ray enters, hinted
         .endif                                # ahead: the loop's hint keeps its own entry
         # two vectors per pass (scheduled into even/odd pairs)
         .sched  pool=91-96,98-102,105-111,116,118-124,127,87 scratch=66-127
 1:
-        a       $90, $88, $86
-        lqd     %rx0, 0($90)
-        lqd     %ry0, 256($90)
-        lqd     %rz0, 512($90)
-        lqd     %t0, 768($90)
-        lqd     %rx1, 16($90)
-        lqd     %ry1, 272($90)
-        lqd     %rz1, 528($90)
-        lqd     %t1, 784($90)
+        FF_PASS_LOADS
         .irp    V, 0, 1
         fm      %ax\V, $80, %rx\V
         fm      %bx\V, $81, %rx\V
@@ -355,35 +367,12 @@ trav:
         selb    $94, $84, $85, $93
         selb    $85, $85, $84, $93
         ori     $84, $94, 0
-        fs      $80, $80, OXS
-        fs      $81, $81, OXS
-        fs      $82, $82, OYS
-        fs      $83, $83, OYS
-        fs      $84, $84, OZS
-        fs      $85, $85, OZS
-        rotmi   $86, FIRST, -3
-        shli    $86, $86, 5                   # byte offset of the even vector at or below FIRST's
-        rotmi   $117, $86, -2                 # its first ray
-        lqa     $90, k_idx
-        a       $117, $117, $90               # the ray indices of its lanes
-        ai      $89, FIRST, -1
-        lqa     $113, k_epslo
-        lqa     $114, k_epshi
-        ila     $88, CTX_RAY_RX
-        a       $88, $88, RAYS
+        FF_START
         hbrr    .Lff_none\@, 3f               # the search's exit when no ray enters, hinted
         # two vectors per pass (scheduled into even/odd pairs)
         .sched  pool=91-96,98-102,105-111,116,118-124,127,87 scratch=66-127
 1:
-        a       $90, $88, $86
-        lqd     %rx0, 0($90)
-        lqd     %ry0, 256($90)
-        lqd     %rz0, 512($90)
-        lqd     %t0, 768($90)
-        lqd     %rx1, 16($90)
-        lqd     %ry1, 272($90)
-        lqd     %rz1, 528($90)
-        lqd     %t1, 784($90)
+        FF_PASS_LOADS
         .irp    V, 0, 1
         fm      %lx\V, $80, %rx\V
         fm      %hx\V, $81, %rx\V
