@@ -35,6 +35,19 @@
         .endif
         .endm
 
+# the staging slot of triangle $76 in the pass that began at $66: its tag's address ($89),
+# its tag ($90) and its record's address ($84)
+        .macro  PF_SLOT
+        sf      $88, $66, $76                 # the slot
+        shli    $89, $88, 4
+        a       $89, $89, RAYS
+        lqd     $90, CTX_STAGE_TAGS($89)
+        shli    $84, $88, 6
+        ila     $91, CTX_STAGE_TRIS
+        a       $84, $84, $91
+        a       $84, $84, RAYS
+        .endm
+
 # prefetch misses: one context fetches straight into way 0
 .Lpf_one:
         a       $101, TTAGS, $81              # way 0's tag and line
@@ -90,14 +103,7 @@
         ceqi    $95, $95, 0
         selb    $96, $96, $97, $95
       ! hbr     .Lpf_stage_br, $96
-        sf      $88, $66, $76                 # the slot
-        shli    $89, $88, 4
-        a       $89, $89, RAYS
-        lqd     $90, CTX_STAGE_TAGS($89)
-        shli    $84, $88, 6
-        ila     $91, CTX_STAGE_TRIS
-        a       $84, $84, $91
-        a       $84, $84, RAYS
+        PF_SLOT
         lqd     $86, CTX_TAG(RAYS)
         il      $87, 0x40
         shli    $85, $76, 6
@@ -132,14 +138,7 @@
                                               # would: a fetch is in flight)
         selb    $96, $96, $97, $95
         hbr     .Lpf_stage_br, $96
-        sf      $88, $66, $76                 # the slot
-        shli    $89, $88, 4
-        a       $89, $89, RAYS
-        lqd     $90, CTX_STAGE_TAGS($89)
-        shli    $84, $88, 6
-        ila     $91, CTX_STAGE_TRIS
-        a       $84, $84, $91
-        a       $84, $84, RAYS
+        PF_SLOT
         ceq     $90, $90, $76
         brnz    $90, .Lpf_install
         stqd    $76, CTX_STAGE_TAGS($89)
