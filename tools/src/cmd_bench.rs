@@ -153,7 +153,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         for &engine in &engines {
             let (n, cycles, s) = measure_frame(&room, size, engine, &args.compile, args.ext.ext)?;
             outln!(
-                "{engine:6} room {size}x{size} frame: {:8.1} M simulated instructions per host second ({n} instructions, {cycles} cycles)",
+                "{engine:6} room {size}x{size} frame: {:8.1} M simulated instructions per host second ({n} instructions, {cycles} cycles, {s:.3} s)",
                 n as f64 / s.max(1e-9) / 1e6
             );
         }

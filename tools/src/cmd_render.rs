@@ -31,6 +31,12 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         prepared.staged.nodes.len(),
         started.elapsed().as_secs_f64()
     );
+    if std::env::var_os(PHASES_VARIABLE).is_some() {
+        eprintln!(
+            "phases: scene prepared in {:.4} s",
+            started.elapsed().as_secs_f64()
+        );
+    }
     let code = args.compile.cache();
     let status = frame(&prepared, &config, &outputs, &code)?;
     Ok(status.into())
@@ -70,7 +76,17 @@ pub fn frame(
         FrameError::SpuStopped { .. } => Error::new(Status::AbnormalStop, e.to_string()),
     })?;
     let host_seconds = sim_started.elapsed().as_secs_f64();
-    write_png(&outputs.image, &result.colours, width, height)?;
+    let encode_started = Instant::now();
+    let png = encode_png(&outputs.image, &result.colours, width, height)?;
+    let encode_seconds = encode_started.elapsed().as_secs_f64();
+    let write_started = Instant::now();
+    exit::write_file(&outputs.image, &png)?;
+    if std::env::var_os(PHASES_VARIABLE).is_some() {
+        eprintln!(
+            "phases: frame {host_seconds:.4} s, PNG encoding {encode_seconds:.4} s, writing {:.4} s",
+            write_started.elapsed().as_secs_f64()
+        );
+    }
     let validation = if outputs.validate {
         let v = render::validate(prepared, config, &result).map_err(Error::failure)?;
         for message in &v.messages {
@@ -219,14 +235,19 @@ fn validation_status(validation: Option<&Validation>) -> Status {
     }
 }
 
-fn write_png(path: &Path, colours: &[u32], width: u32, height: u32) -> exit::Result<()> {
+/// Set (to anything), `spu render` says on standard error how long the frame (staging,
+/// simulation, read-back), the PNG's encoding and its writing took: the split of a run's
+/// wall time that docs/parallel.md measures, without a profiler.
+const PHASES_VARIABLE: &str = "SPU_PHASES";
+
+/// The PNG file of the frame's `colours`, to be written to `path`.
+fn encode_png(path: &Path, colours: &[u32], width: u32, height: u32) -> exit::Result<Vec<u8>> {
     let mut rgb = Vec::with_capacity(colours.len() * 3);
     for colour in colours {
         let [r, g, b, _] = colour.to_be_bytes();
         rgb.extend([r, g, b]);
     }
-    let png = crate::png::encode_rgb(&rgb, width, height).map_err(|e| Error::output(path, e))?;
-    exit::write_file(path, &png)
+    crate::png::encode_rgb(&rgb, width, height).map_err(|e| Error::output(path, e))
 }
 
 #[cfg(test)]

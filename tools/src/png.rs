@@ -2,12 +2,18 @@
 //! the paper's figure), with the `png` crate alone: 8-bit RGB in, the file's bytes out, so that each
 //! caller writes its file whole or not at all.
 
+/// How hard the encoder compresses: `Fast` (the `fdeflate` coder) encodes a 1024x1024
+/// frame in about a tenth of the default's time (2.7 ms against 27 ms for the room, the
+/// file 172 KB against 71 KB); lossless either way, the pixels are the same.
+const COMPRESSION: png::Compression = png::Compression::Fast;
+
 /// The PNG file of a `width` x `height` image of packed 8-bit RGB pixels, row by row.
 pub fn encode_rgb(rgb: &[u8], width: u32, height: u32) -> Result<Vec<u8>, String> {
     let mut bytes = Vec::new();
     let mut encoder = png::Encoder::new(&mut bytes, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(COMPRESSION);
     let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
     writer.write_image_data(rgb).map_err(|e| e.to_string())?;
     writer.finish().map_err(|e| e.to_string())?;
@@ -26,6 +32,7 @@ pub fn encode_apng(
     let mut encoder = png::Encoder::new(&mut bytes, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(COMPRESSION);
     encoder
         .set_animated(frames.len() as u32, 0)
         .map_err(|e| e.to_string())?;

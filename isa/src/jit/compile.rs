@@ -3,7 +3,7 @@
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{mpsc, Arc, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::Instant;
 
 use cranelift_codegen::ir::condcodes::IntCC;
@@ -165,9 +165,17 @@ enum Made {
     Code(Arc<Code>),
     /// The compiler declined it (an instruction it cannot translate).
     Declined,
-    /// Asked of the background compiler, not done yet.
-    Queued,
+    /// Asked of the background compiler, not done yet; how often SPUs started the block
+    /// meanwhile (its [`Demand`]).
+    Queued(Demand),
 }
+
+/// How often SPUs started a block while it waited for the background compiler: the
+/// compiler takes the waiting block with the most instructions interpreted for want of it
+/// first, so that the hot loops a frame spends its time in run compiled soonest. (In the
+/// order asked, a 1024x1024 room frame's hottest blocks came 35th and 73rd of 90, 0.2-0.4 s
+/// after the first.) What is compiled first changes only how much runs compiled.
+pub(crate) type Demand = Arc<AtomicU64>;
 
 /// What an SPU asking for a block's code gets.
 pub(crate) enum Lookup {
@@ -175,8 +183,8 @@ pub(crate) enum Lookup {
     /// The block cannot be compiled.
     Declined,
     /// The background compiler has it in its queue: interpret the block meanwhile and ask
-    /// again once [`CodeCache::completed`] moved.
-    Pending,
+    /// again once [`CodeCache::completed`] moved, adding to its [`Demand`] each time.
+    Pending(Demand),
 }
 
 /// A block for the background compiler.
@@ -185,6 +193,67 @@ struct Request {
     pc: u32,
     insts: Box<[Inst]>,
     hook: StoreHook,
+    demand: Demand,
+}
+
+impl Request {
+    /// The instructions interpreted so far for want of this block's code.
+    fn want(&self) -> u64 {
+        self.demand
+            .load(Ordering::Relaxed)
+            .saturating_mul(self.insts.len() as u64)
+    }
+}
+
+/// The background compiler's queue of blocks, and whether the cache is gone.
+#[derive(Default)]
+struct Queue {
+    waiting: Mutex<(Vec<Request>, bool)>,
+    asked: Condvar,
+}
+
+impl Queue {
+    /// Adds a block, unless the compiler's thread has gone.
+    fn push(&self, request: Request) -> bool {
+        let mut guard = self.waiting.lock().unwrap_or_else(|e| e.into_inner());
+        if guard.1 {
+            return false;
+        }
+        guard.0.push(request);
+        self.asked.notify_one();
+        true
+    }
+
+    /// The waiting block most wanted (the first asked among equals), after waiting for
+    /// one; `None` once the cache is gone.
+    fn next(&self) -> Option<Request> {
+        let mut guard = self.waiting.lock().unwrap_or_else(|e| e.into_inner());
+        loop {
+            if guard.1 {
+                return None;
+            }
+            if !guard.0.is_empty() {
+                let mut best = 0;
+                let mut most = guard.0[0].want();
+                for (k, r) in guard.0.iter().enumerate().skip(1) {
+                    let want = r.want();
+                    if want > most {
+                        (best, most) = (k, want);
+                    }
+                }
+                return Some(guard.0.remove(best));
+            }
+            guard = self.asked.wait(guard).unwrap_or_else(|e| e.into_inner());
+        }
+    }
+
+    /// Ends the compiler's thread.
+    fn close(&self) {
+        let mut guard = self.waiting.lock().unwrap_or_else(|e| e.into_inner());
+        guard.1 = true;
+        guard.0.clear();
+        self.asked.notify_all();
+    }
 }
 
 struct Shared {
@@ -197,7 +266,15 @@ struct Shared {
     /// Blocks the background compiler finished (made or declined).
     completed: AtomicU64,
     /// The background compiler's queue; `None`: the asking SPU compiles the block itself.
-    requests: Option<mpsc::Sender<Request>>,
+    requests: Option<Arc<Queue>>,
+}
+
+impl Drop for Shared {
+    fn drop(&mut self) {
+        if let Some(queue) = &self.requests {
+            queue.close();
+        }
+    }
 }
 
 /// The compile cache of a machine: every SPU given the same cache (with
@@ -247,21 +324,21 @@ impl CodeCache {
                 requests: None,
             }));
         }
-        let (tx, rx) = mpsc::channel::<Request>();
+        let queue = Arc::new(Queue::default());
         let shared = Arc::new(Shared {
             made,
             compiler,
             stats: Mutex::default(),
             completed,
-            requests: Some(tx),
+            requests: Some(queue.clone()),
         });
         let weak = Arc::downgrade(&shared);
         // The thread holds the cache only while it compiles: it ends when the last SPU
-        // dropped the cache (and with it the queue's sender).
+        // dropped the cache (which closes the queue).
         let spawned = std::thread::Builder::new()
             .name("spu-jit".into())
             .spawn(move || {
-                while let Ok(r) = rx.recv() {
+                while let Some(r) = queue.next() {
                     let Some(shared) = weak.upgrade() else {
                         return;
                     };
@@ -317,18 +394,21 @@ impl CodeCache {
         match made.get(&key) {
             Some(Made::Code(code)) => Lookup::Ready(code.clone()),
             Some(Made::Declined) => Lookup::Declined,
-            Some(Made::Queued) => Lookup::Pending,
+            Some(Made::Queued(demand)) => Lookup::Pending(demand.clone()),
             None => {
-                made.insert(key.clone(), Made::Queued);
+                let demand = Demand::default();
+                made.insert(key.clone(), Made::Queued(demand.clone()));
                 let request = Request {
                     key,
                     pc,
                     insts: insts.into(),
                     hook,
+                    demand: demand.clone(),
                 };
-                match requests.send(request) {
-                    Ok(()) => Lookup::Pending,
-                    Err(_) => Lookup::Declined,
+                if requests.push(request) {
+                    Lookup::Pending(demand)
+                } else {
+                    Lookup::Declined
                 }
             }
         }
@@ -420,6 +500,9 @@ pub(crate) struct Blocks {
     /// cache's [`CodeCache::completed`] when last asked, as [`asked`] keeps it (asked
     /// again once it moved).
     pub pending: Vec<u32>,
+    /// Per local-store word of a block waiting for the background compiler: its
+    /// [`Demand`], counted each time the block starts interpreted.
+    pub demand: HashMap<u32, Demand>,
     /// Distinguishes this table (and each time it starts over) from every other its SPU
     /// had: what the SPU kept of a block (its entry, in its own timing memo) holds while
     /// this stays the same. A count per SPU from 1, so that no process-wide counter is
@@ -441,6 +524,7 @@ impl Blocks {
             heat: vec![0; LS_SIZE / 4],
             blocks: Vec::new(),
             pending: vec![0; LS_SIZE / 4],
+            demand: HashMap::new(),
             generation,
         }
     }
@@ -1721,4 +1805,51 @@ fn _assert_layout() {
     const _: () = assert!(offset_of!(Ctx, target) == CTX_TARGET as usize);
     const _: () = assert!(offset_of!(Ctx, budget) == CTX_BUDGET as usize);
     const _: () = assert!(offset_of!(Ctx, loops) == CTX_LOOPS as usize);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    unsafe extern "C" fn no_hook(_: *mut Ctx, _: u32, _: u32, _: u32, _: u32) -> u32 {
+        0
+    }
+
+    /// A request for a block of `n` nops at `pc`, started `starts` times while waiting.
+    fn request(pc: u32, n: usize, starts: u64) -> Request {
+        let insts: Box<[Inst]> = vec![crate::codec::decode(0x4020_0000); n].into();
+        Request {
+            key: (pc, insts.iter().map(|i| i.word).collect()),
+            pc,
+            insts,
+            hook: no_hook,
+            demand: Arc::new(AtomicU64::new(starts)),
+        }
+    }
+
+    #[test]
+    fn the_compiler_takes_the_block_most_interpreted_for_want_of_it_first() {
+        let queue = Queue::default();
+        // instructions interpreted meanwhile: 4 x 10, 8 x 10, 2 x 40, 80 x 0
+        for (pc, n, starts) in [(0, 4, 10), (0x100, 8, 10), (0x200, 2, 40), (0x300, 80, 0)] {
+            assert!(queue.push(request(pc, n, starts)));
+        }
+        let taken = |queue: &Queue| queue.next().map(|r| r.pc);
+        // 0x100 and 0x200 tie at 80: the first asked first
+        assert_eq!(taken(&queue), Some(0x100));
+        assert_eq!(taken(&queue), Some(0x200));
+        // a block's demand grows while it waits
+        queue.push(request(0x400, 1, 0));
+        queue.waiting.lock().unwrap().0[2]
+            .demand
+            .store(1000, Ordering::Relaxed);
+        assert_eq!(taken(&queue), Some(0x400));
+        assert_eq!(taken(&queue), Some(0));
+        assert_eq!(taken(&queue), Some(0x300));
+        // once the cache is gone nothing more is taken or queued
+        queue.push(request(0x500, 1, 5));
+        queue.close();
+        assert_eq!(taken(&queue), None);
+        assert!(!queue.push(request(0x600, 1, 5)));
+    }
 }

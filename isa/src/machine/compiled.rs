@@ -92,6 +92,7 @@ mod host {
     use crate::machine::exec::{TruncatingFloats, LS_MASK, LS_SIZE};
     use crate::table::Op;
     use crate::timing::ends_block;
+    use std::sync::atomic::Ordering;
 
     /// A block is compiled when it has started this often without compiled code: blocks
     /// entered only now and then (the rest of a block cut by a quantum's end, by a store
@@ -215,6 +216,9 @@ mod host {
             }
             // Queued for the background compiler: asked again once it finished a block.
             if blocks.pending[w] == asked(blocks.cache().completed()) {
+                if let Some(demand) = blocks.demand.get(&(w as u32)) {
+                    demand.fetch_add(1, Ordering::Relaxed);
+                }
                 return None;
             }
             let mut insts = Vec::new();
@@ -235,16 +239,19 @@ mod host {
                 Ok(id) => {
                     blocks.heat[w] = 0;
                     blocks.pending[w] = 0;
+                    blocks.demand.remove(&(w as u32));
                     blocks.blocks[id].verified = epoch;
                     Some(id)
                 }
-                Err(Lookup::Pending) => {
+                Err(Lookup::Pending(demand)) => {
                     blocks.pending[w] = asked(completed);
+                    blocks.demand.insert(w as u32, demand);
                     None
                 }
                 Err(_) => {
                     blocks.heat[w] = 0;
                     blocks.pending[w] = 0;
+                    blocks.demand.remove(&(w as u32));
                     if n.is_none() {
                         blocks.slots[w] = DECLINED;
                     }
