@@ -501,8 +501,8 @@ pub(crate) struct Blocks {
     /// again once it moved).
     pub pending: Vec<u32>,
     /// Per local-store word of a block waiting for the background compiler: its
-    /// [`Demand`], counted each time the block starts interpreted.
-    pub demand: HashMap<u32, Demand>,
+    /// [`Demand`], and the times the block started interpreted.
+    pub demand: HashMap<u32, (Demand, u32)>,
     /// Distinguishes this table (and each time it starts over) from every other its SPU
     /// had: what the SPU kept of a block (its entry, in its own timing memo) holds while
     /// this stays the same. A count per SPU from 1, so that no process-wide counter is

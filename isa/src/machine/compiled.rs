@@ -98,6 +98,9 @@ mod host {
     /// entered only now and then (the rest of a block cut by a quantum's end, by a store
     /// into it) stay interpreted rather than compiled again and again.
     const HOT: u8 = 16;
+    /// Starts of a block waiting for the background compiler counted before they are
+    /// added to its demand.
+    const DEMAND_BATCH: u32 = 16;
     /// A slot whose block the compiler declined: interpreted from then on.
     const DECLINED: u32 = u32::MAX;
     /// What a memo record keeps of its compiled block ([`crate::timing::Timing::memo_code`]):
@@ -216,8 +219,14 @@ mod host {
             }
             // Queued for the background compiler: asked again once it finished a block.
             if blocks.pending[w] == asked(blocks.cache().completed()) {
-                if let Some(demand) = blocks.demand.get(&(w as u32)) {
-                    demand.fetch_add(1, Ordering::Relaxed);
+                if let Some((demand, starts)) = blocks.demand.get_mut(&(w as u32)) {
+                    // Told to the compiler in batches: SPUs on other threads count the
+                    // same block, and one shared counter bumped at every start would be
+                    // fought over.
+                    *starts += 1;
+                    if *starts % DEMAND_BATCH == 0 {
+                        demand.fetch_add(DEMAND_BATCH as u64, Ordering::Relaxed);
+                    }
                 }
                 return None;
             }
@@ -245,7 +254,14 @@ mod host {
                 }
                 Err(Lookup::Pending(demand)) => {
                     blocks.pending[w] = asked(completed);
-                    blocks.demand.insert(w as u32, demand);
+                    // (the same block asked again keeps its count; another at this
+                    // address, of another length, starts its own)
+                    match blocks.demand.get(&(w as u32)) {
+                        Some((known, _)) if std::sync::Arc::ptr_eq(known, &demand) => {}
+                        _ => {
+                            blocks.demand.insert(w as u32, (demand, 0));
+                        }
+                    }
                     None
                 }
                 Err(_) => {
