@@ -1046,8 +1046,7 @@ impl PixelWords<'_> {
 
 /// Each pixel of a frame buffer, row by row, made by `pixel` from the pixel's words. A
 /// packet's row of [`PACKET_SIZE`] pixels is one run of words in each array, so its place
-/// is worked out once per run (a 1024x1024 frame's image is read back in about a third of
-/// the time of one [`pixel_location`] per pixel).
+/// is worked out once per run rather than once per pixel.
 fn decode_pixels<T>(
     fb: &[u8],
     width: u32,
