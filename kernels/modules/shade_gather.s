@@ -25,8 +25,141 @@
 
         .spu_ext gather
 
-        # a step of the fast path with a group it could not do: noted, and the loop goes on
+        # a step of the fast path with a group it could not do. A group on one triangle
+        # whose record is in the triangle cache failed for a vertex the vertex cache
+        # lacks: its 3 normals are fetched and landed now (one wait) and the step run
+        # again, once (sh_gresc: the step rerun), so the packet's later groups on its
+        # triangle find them too instead of all falling into the batch. Any other
+        # failure (or the rerun's) is noted for the batch and the loop goes on.
 .Lsh_slow:
+        .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
+        lqa     %cp, sh_gcand                 # (the fast step's: words 0, 2)
+        rotqbyi %cp2, %cp, 8
+        or      %any, %cp, %cp2
+        shli    %pk, $97, 9
+        or      $81, %pk, $67                 # this step of this packet
+        lqa     %last, sh_gresc
+        ceq     %again, $81, %last            # its rerun: no second rescue
+        andc    %go, %any, %again
+        brz     %go, .Lsh_note
+        .endsched
+        .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
+        lqd     %okp, SH_DONE($66)            # its groups' flags (words 0, 2)
+        ai      %st, $67, -32                 # the step's first group * 16
+        a       %rp, $99, %st
+        lqd     %blk, SH_BLOCK($66)           # the vertex records' EA
+        shufb   %evs, %blk, %blk, $91
+        ai      %ev, %evs, 16                 # (their normals)
+        il      %sz, 16
+        lqa     %plo, sh_const
+        lqa     %phi, sh_const+16
+        lqa     %w3, sh_gather_lanes+16       # words 0-2
+        .irp    H, 0, 16
+        rotqbyi %ok\H, %okp, \H/2
+        lqd     %ids\H, CTX_RAY_ID+\H(%rp)
+        shufb   %s0\H, %ids\H, %ids\H, $91
+        ceq     %same\H, %ids\H, %s0\H
+        gb      %sb\H, %same\H
+        ceqi    %all\H, %sb\H, 15
+        ceqi    %miss\H, %ids\H, -1
+        andc    %c1\H, %all\H, %miss\H
+        andc    %c2\H, %c1\H, %ok\H
+        and     %ti\H, %ids\H, TMASK
+        shli    %to\H, %ti\H, 4
+        lqx     %tag\H, TTAGS, %to\H
+        shli    %tl\H, %ti\H, 6
+        a       %line\H, %tl\H, TDATA
+        ceq     %th\H, %tag\H, %ids\H
+        and     %c3\H, %c2\H, %th\H
+        lqd     %q3\H, 48(%line\H)            # vertex indices, material
+        and     %vi\H, %q3\H, %w3
+        and     %x\H, %vi\H, $121
+        shli    %vo0\H, %x\H, 4
+        rotqbyi %vo1\H, %vo0\H, 4
+        rotqbyi %vo2\H, %vo0\H, 8
+        lqx     %vt0\H, $115, %vo0\H
+        lqx     %vt1\H, $115, %vo1\H
+        lqx     %vt2\H, $115, %vo2\H
+        rotqbyi %v1\H, %vi\H, 4
+        rotqbyi %v2\H, %vi\H, 8
+        ceq     %h0\H, %vt0\H, %vi\H
+        ceq     %h1\H, %vt1\H, %v1\H
+        ceq     %h2\H, %vt2\H, %v2\H
+        and     %h01\H, %h0\H, %h1\H
+        and     %hall\H, %h01\H, %h2\H
+        andc    %cand\H, %c3\H, %hall\H        # one triangle, cached, a vertex missed
+        shufb   %cs\H, %cand\H, %cand\H, $91
+        and     %vf\H, %vi\H, %cs\H             # the vertices fetched (else vertex 0)
+        shli    %eo\H, %vf\H, 6
+        a       %ea\H, %eo\H, %ev
+        shufb   %e0\H, %sz, %ea\H, %plo         # list elements: 16 bytes, the EA
+        shufb   %e1\H, %sz, %ea\H, %phi
+        stqa    %e0\H, sh_grlist+2*\H
+        stqa    %e1\H, sh_grlist+2*\H+16
+        stqa    %vi\H, sh_grv+\H
+        stqa    %cs\H, sh_grv+32+\H
+        a       %hs\H, %h0\H, %h1\H              # its misses: 3 - hits
+        a       %hs2\H, %hs\H, %h2\H
+        ai      %mc\H, %hs2\H, 3
+        and     %mcc\H, %mc\H, %cand\H
+        .endr
+        a       $80, %mcc0, %mcc16
+        lqa     %cinc, sh_const+240           # the fast step's counts, to be undone
+        shufb   %okv0, %ok0, %ok0, $91
+        shufb   %okv16, %ok16, %ok16, $91
+        and     %inc0, %cinc, %okv0
+        and     %inc16, %cinc, %okv16
+        a       $82, %inc0, %inc16
+        .endsched
+        ila     $83, sh_grst
+        ila     $84, sh_grlist
+        il      $85, 64
+        il      $86, SH_TAG
+        il      $87, 0x44                     # getl
+        wrch    $MFC_LSA, $83
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $84
+        wrch    $MFC_Size, $85
+        wrch    $MFC_TagID, $86
+        wrch    $MFC_Cmd, $87
+        stqa    $81, sh_gresc
+        lqd     $83, SH_STATS+SHS_VMISS($66)
+        sf      $124, $82, $124
+        a       $83, $83, $80
+        stqd    $83, SH_STATS+SHS_VMISS($66)
+        SH_WAIT $86
+        # landed in lookup order (vertex 0, 1, 2; the step's first group first), a group
+        # not fetched to a spare quadword
+        .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
+        ila     %dm, sh_grspare
+        sf      %dl1, $123, %dm
+        sf      %dt1, $115, %dm
+        shufb   %dl, %dl1, %dl1, $91
+        shufb   %dt, %dt1, %dt1, $91
+        .irp    H, 0, 16
+        lqa     %vi\H, sh_grv+\H
+        lqa     %c\H, sh_grv+32+\H
+        and     %x\H, %vi\H, $121
+        shli    %xl\H, %x\H, 6
+        shli    %xt\H, %x\H, 4
+        selb    %ol\H, %dl, %xl\H, %c\H
+        selb    %ot\H, %dt, %xt\H, %c\H
+        .irp    I, 0, 1, 2
+        rotqbyi %v\I\()\H, %vi\H, 4*\I
+        rotqbyi %l\I\()\H, %ol\H, 4*\I
+        rotqbyi %t\I\()\H, %ot\H, 4*\I
+        lqa     %n\I\()\H, sh_grst+4*\H+16*\I
+        stqx    %n\I\()\H, $123, %l\I\()\H           # the normal to its line
+        stqx    %v\I\()\H, $115, %t\I\()\H           # the vertex to its tag
+        .endr
+        .endr
+        ai      $67, $67, -32                 # the step again
+        hbrr    .Lsh_rescue_br, .Lsh_group
+.Lsh_rescue_br:
+        br      .Lsh_group
+        .endsched
+
+.Lsh_note:
         hbrr    .Lsh_slow_back, .Lsh_group
         lqd     $77, SH_DONE($66)             # its groups' flags (words 0, 2)
         lqa     $74, sh_gn
@@ -34,6 +167,7 @@
         ila     $76, sh_gfail
         ila     $78, sh_gstep
         ceqi    $79, $67, 256
+        stqa    ZERO, sh_gresc
         stqx    $77, $76, $74
         stqx    $75, $78, $74
         ai      $74, $74, 16
@@ -366,9 +500,21 @@
         .align  4
 sh_gather_lanes:                              # the lanes' 64-byte strides
         .long   0, 64, 128, 192
-        .long   0, 0, 0, 0
+        .long   -1, -1, -1, 0                 # +16: words 0-2
         .long   0, 16, 32, 48                 # +32: the lanes' 16-byte strides
 sh_gn:  .long   0, 0, 0, 0                    # the steps noted * 16
+sh_gcand:                                     # the fast step's groups to fetch at once
+        .long   0, 0, 0, 0
+sh_gresc:                                     # the step rerun (packet << 9 | step + 32)
+        .long   0, 0, 0, 0
+sh_grv:                                       # the rescue: vertices (2 groups), fetched?
+        .space  64
+sh_grspare:                                   # (a group not fetched lands here)
+        .space  16
+sh_grlist:                                    # its list (4 elements a group)
+        .space  64
+sh_grst:                                      # its normals (4 a group)
+        .space  128
 sh_gfail:                                     # per step noted: its groups' flags
         .space  128
 sh_gstep:                                     # ... and its first group * 16
