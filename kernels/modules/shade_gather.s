@@ -31,19 +31,8 @@
         # again, once (sh_gresc: the step rerun), so the packet's later groups on its
         # triangle find them too instead of all falling into the batch. Any other
         # failure (or the rerun's) is noted for the batch and the loop goes on.
-.Lsh_slow:
         .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
-        lqa     %cp, sh_gcand                 # (the fast step's: words 0, 2)
-        rotqbyi %cp2, %cp, 8
-        or      %any, %cp, %cp2
-        shli    %pk, $97, 9
-        or      $81, %pk, $67                 # this step of this packet
-        lqa     %last, sh_gresc
-        ceq     %again, $81, %last            # its rerun: no second rescue
-        andc    %go, %any, %again
-        brz     %go, .Lsh_note
-        .endsched
-        .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
+.Lsh_rescue:
         lqd     %okp, SH_DONE($66)            # its groups' flags (words 0, 2)
         ai      %st, $67, -32                 # the step's first group * 16
         a       %rp, $99, %st
@@ -159,21 +148,34 @@
         br      .Lsh_group
         .endsched
 
-.Lsh_note:
-        hbrr    .Lsh_slow_back, .Lsh_group
-        lqd     $77, SH_DONE($66)             # its groups' flags (words 0, 2)
-        lqa     $74, sh_gn
-        ai      $75, $67, -32                 # the step's first group * 16
-        ila     $76, sh_gfail
-        ila     $78, sh_gstep
-        ceqi    $79, $67, 256
+.Lsh_slow:
+        .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
+      ! hbrr    .Lsh_slow_back, .Lsh_group
+        lqa     %cp, sh_gcand                 # (the fast step's: words 0, 2)
+        rotqbyi %cp2, %cp, 8
+        or      %any, %cp, %cp2
+        shli    %pk, $97, 9
+        or      $81, %pk, $67                 # this step of this packet
+        lqa     %last, sh_gresc
+        ceq     %again, $81, %last            # its rerun: no second rescue
+        andc    %go, %any, %again
+        lqd     %okp, SH_DONE($66)            # noted (counted only if not fetched now):
+        lqa     %n, sh_gn                     # its groups' flags (words 0, 2) and its
+        ai      %fst, $67, -32                # first group * 16
+        ila     %fb, sh_gfail
+        ila     %sb, sh_gstep
+        ceqi    $80, $67, 256
+        stqx    %okp, %fb, %n
+        stqx    %fst, %sb, %n
+        il      %sixteen, 16
+        andc    %inc, %sixteen, %go
+        a       %n1, %n, %inc
+        stqa    %n1, sh_gn
         stqa    ZERO, sh_gresc
-        stqx    $77, $76, $74
-        stqx    $75, $78, $74
-        ai      $74, $74, 16
-        stqa    $74, sh_gn
+        brnz    %go, .Lsh_rescue
+        .endsched
 .Lsh_slow_back:
-        brz     $79, .Lsh_group
+        brz     $80, .Lsh_group
         # (after the last step: the batch)
 
         # ---- the batch: A. the groups' records
@@ -476,7 +478,11 @@
         lqd     %vi\I, 96+16*\I($83)
         and     %x\I, %vi\I, $121
         shli    %xl\I, %x\I, 6
-        .irp    L, 0, 1, 2, 3
+        rotmi   %t\I\()0, %xl\I, -2             # lane 0 (in the preferred slot)
+        lqd     %n\I\()0, 64*\I(%nb)
+        stqx    %n\I\()0, $123, %xl\I
+        stqx    %vi\I, $115, %t\I\()0
+        .irp    L, 1, 2, 3
         rotqbyi %v\I\L, %vi\I, 4*\L
         rotqbyi %o\I\L, %xl\I, 4*\L
         rotmi   %t\I\L, %o\I\L, -2
