@@ -293,6 +293,8 @@
         il      $85, 0                        # normals' list bytes (96 a group)
         il      $81, 0                        # groups with a miss * 16 (sh_gml)
         il      $83, 0                        # groups without * 16 (sh_gmh)
+        il      $67, 4                        # lgwx's offsets (B and C; C's others at
+        il      $92, 8                        # .Lsh_gc)
         brz     $82, .Lsh_gdone               # no group to do
 .Lsh_gvloop:
         .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
@@ -310,13 +312,14 @@
         lqa     %phi, sh_const+16
         ila     %lvb, sh_glv
         a       %lva, %lvb, $85
+        ai      %ra48, %ra, 48
+        lgw     %vi0, %ra48                   # vertex I's index, the lanes'
+        lgwx    %vi1, %ra48, $67
+        lgwx    %vi2, %ra48, $92
         .irp    I, 0, 1, 2
-        ai      %ra\I, %ra, 48+4*\I
-        lgw     %vi\I, %ra\I                  # vertex I's index, the lanes'
         and     %x\I, %vi\I, $121
         shli    %to\I, %x\I, 4
-        a       %ta\I, %to\I, %vt
-        lgw     %tg\I, %ta\I                  # its tag
+        lgwx    %tg\I, %vt, %to\I              # its tag
         ceq     %h\I, %tg\I, %vi\I
         or      %hh\I, %h\I, %nh
         xori    %m\I, %hh\I, -1               # missed
@@ -410,15 +413,18 @@
         a       %rp, $99, %g
         .irp    I, 0, 1, 2
         lgw     %nx\I, %na\I
-        ai      %ay\I, %na\I, 4
-        lgw     %ny\I, %ay\I
-        ai      %az\I, %na\I, 8
-        lgw     %nz\I, %az\I
+        lgwx    %ny\I, %na\I, $67            # (+4)
+        lgwx    %nz\I, %na\I, $92            # (+8)
         .endr
-        .irp    W, 12, 16, 20, 24, 32, 36, 40, 60
-        ai      %ra\W, %ra, \W
-        lgw     %w\W, %ra\W
-        .endr
+        lgwx    %w12, %ra, $93                # the records' words 3, 4-6, 8-10, 15
+        lgwx    %w16, %ra, $120
+        lgwx    %w20, %ra, $82
+        lgwx    %w24, %ra, $84
+        ai      %ra32, %ra, 32
+        lgw     %w32, %ra32
+        lgwx    %w36, %ra32, $67
+        lgwx    %w40, %ra32, $92
+        lgwx    %w60, %ra, $85
         or      %mat, %w60, %nh               # no hit: no material
       ~ stqd    %mat, SH_MAT(%gp)
         fs      %d1x, %nx1, %nx0              # n1 - n0
@@ -457,6 +463,11 @@
 
 .Lsh_gc:
         il      $80, 0
+        il      $93, 12                       # lgwx's offsets ($67: 4, $92: 8)
+        il      $120, 16
+        il      $82, 20
+        il      $84, 24
+        il      $85, 60
         brz     $83, .Lsh_gcm0
         SH_GATHER_GROUPS sh_gmh, $83, .Lsh_gch, .Lsh_gch_br
 .Lsh_gcm0:
