@@ -396,19 +396,21 @@
         # ---- C. the groups' values: first those that hit, then (their normals waited
         # for) those that missed
 # the groups listed at LIST (END: its bytes), looped at LOOP (BR its branch)
+# ($119: the group's record in sh_gk, the next one's found by the iteration before)
         .macro  SH_GATHER_GROUPS list, end, loop, br
+        lqa     $87, \list
+        ila     $86, sh_gk
+        a       $119, $86, $87
 \loop:
         .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
         ila     %gkb, sh_gk
         ila     %lsb, \list
-        lqx     %k, %lsb, $80
-        a       %gka, %gkb, %k
-        lqd     %g, 0(%gka)
-        lqd     %ra, 16(%gka)
-        lqd     %nh, 32(%gka)
-        lqd     %na0, 48(%gka)
-        lqd     %na1, 64(%gka)
-        lqd     %na2, 80(%gka)
+        lqd     %g, 0($119)
+        lqd     %ra, 16($119)
+        lqd     %nh, 32($119)
+        lqd     %na0, 48($119)
+        lqd     %na1, 64($119)
+        lqd     %na2, 80($119)
         a       %gp, $66, %g
         a       %rp, $99, %g
         .irp    I, 0, 1, 2
@@ -454,6 +456,8 @@
         stqd    %ct1, SH_STATS+SHS_TLOOK($66)
         stqd    %cs1, SH_STATS+SHS_SAME($66)
         ai      $80, $80, 16
+        lqx     %k, %lsb, $80                 # the next group
+        a       $119, %gkb, %k
         ceq     %end, $80, \end
         hbrr    \br, \loop
 \br:
@@ -512,6 +516,7 @@
         .endsched
 .Lsh_gdone:
         lqa     $92, sh_const+80              # (the fast path's patterns)
+        lqa     $119, sh_const+32
         lqa     $93, sh_const+96
         lqa     $120, sh_const+208
         br      .Lsh_iset_done
