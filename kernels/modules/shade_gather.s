@@ -296,11 +296,13 @@
         il      $67, 4                        # lgwx's offsets (B and C; C's others at
         il      $92, 8                        # .Lsh_gc)
         brz     $82, .Lsh_gdone               # no group to do
-.Lsh_gvloop:
+        lqa     $119, sh_gk+16                # the group's records (the next one's
+.Lsh_gvloop:                                  # loaded by the iteration before)
         .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
         ila     %gkb, sh_gk
         a       %gka, %gkb, $80
-        lqd     %ra, 16(%gka)
+        ai      %ra48, $119, 48
+        lqd     $119, 256+16(%gka)
         lqd     %nh, 32(%gka)
         lqd     %blk, SH_BLOCK($66)           # the vertex records' EA
         shufb   %evs, %blk, %blk, $91
@@ -312,7 +314,6 @@
         lqa     %phi, sh_const+16
         ila     %lvb, sh_glv
         a       %lva, %lvb, $85
-        ai      %ra48, %ra, 48
         lgw     %vi0, %ra48                   # vertex I's index, the lanes'
         lgwx    %vi1, %ra48, $67
         lgwx    %vi2, %ra48, $92
@@ -484,11 +485,10 @@
         # so each of its lookups (a hit's too: the same vertex and normal again) is
         # stored to its line and tag, in lookup order (vertex, lane), without a branch
         il      $80, 0
-.Lsh_gland:
-        ila     $86, sh_gml
-        lqx     $87, $86, $80
+        lqa     $87, sh_gml
         ila     $86, sh_gk
-        a       $83, $86, $87                 # the group's record
+        a       $83, $86, $87                 # the group's record (the next one's
+.Lsh_gland:                                   # found by the iteration before)
         .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
         lqd     %nb, 48($83)                  # its normals' slots (lane 0's, vertex 0)
         .irp    I, 0, 1, 2
@@ -509,6 +509,10 @@
         .endr
         .endr
         ai      $80, $80, 16
+        ila     %lsb, sh_gml
+        lqx     %k, %lsb, $80
+        ila     %gkb, sh_gk
+        a       $83, %gkb, %k
         ceq     %end, $80, $81
         hbrr    .Lsh_gland_br, .Lsh_gland
 .Lsh_gland_br:
