@@ -4,9 +4,11 @@
 # most twice (its missing triangle records, then its groups' vertex normals), not twice
 # per group, and every lookup is a gather (lgw, lgwx) from local store.
 #
-# The fast path runs all 8 of its steps; a step it cannot finish (.Lsh_slow) is noted in
-# sh_gfail (which of its two groups the fast path did, and the step) and the loop goes
-# on. Then (.Lsh_gbatch, also from .Lsh_iset_done when the last step was done):
+# The fast path runs all 8 of its steps; a step it cannot finish (.Lsh_slow) whose group
+# on one cached triangle only missed a vertex has that group's normals fetched at once
+# and runs again (.Lsh_rescue), else it is noted in sh_gfail (which of its two groups
+# the fast path did, and the step) and the loop goes on. Then (.Lsh_gbatch, also from
+# .Lsh_iset_done when the last step was done):
 #   A. per group not done: its lanes' triangle tags (lgwx); a group with a record past
 #      the traversal's triangle cache gets its 4 records by one DMA list for the packet
 #      (sh_glr, into sh_grec), the others read the cache's lines; a group with no hit
@@ -21,7 +23,9 @@
 #      vertex and normal again) to its line and tag, in lookup order (so a line holds the
 #      last vertex looked up there), for the fast path of later packets.
 # The baseline's slow path is not assembled in this variant. Registers as the fast path's
-# (modules/shade_iset.s); the loops' own state is in $80..$85.
+# (modules/shade_iset.s); the loops' own state is in $80..$85 and $119, lgwx's offsets in
+# $67, $92, $93, $120 (and $82, $84, $85 in C); .Lsh_gdone restores the fast path's
+# patterns. Also here: the lighting's later passes (.Lsh_later_g, modules/shade_light.s).
 
         .spu_ext gather
 
