@@ -4,9 +4,11 @@
 # most twice (its missing triangle records, then its groups' vertex normals), not twice
 # per group, and every lookup is a gather (lgw, lgwx) from local store.
 #
-# The fast path runs all 8 of its steps; a step it cannot finish (.Lsh_slow) is noted in
-# sh_gfail (which of its two groups the fast path did, and the step) and the loop goes
-# on. Then (.Lsh_gbatch, also from .Lsh_iset_done when the last step was done):
+# The fast path runs all 8 of its steps; a step it cannot finish (.Lsh_slow) whose group
+# on one cached triangle only missed a vertex has that group's normals fetched at once
+# and runs again (.Lsh_rescue), else it is noted in sh_gfail (which of its two groups
+# the fast path did, and the step) and the loop goes on. Then (.Lsh_gbatch, also from
+# .Lsh_iset_done when the last step was done):
 #   A. per group not done: its lanes' triangle tags (lgwx); a group with a record past
 #      the traversal's triangle cache gets its 4 records by one DMA list for the packet
 #      (sh_glr, into sh_grec), the others read the cache's lines; a group with no hit
@@ -21,25 +23,163 @@
 #      vertex and normal again) to its line and tag, in lookup order (so a line holds the
 #      last vertex looked up there), for the fast path of later packets.
 # The baseline's slow path is not assembled in this variant. Registers as the fast path's
-# (modules/shade_iset.s); the loops' own state is in $80..$85.
+# (modules/shade_iset.s); the loops' own state is in $80..$85 and $119, lgwx's offsets in
+# $67, $92, $93, $120 (and $82, $84, $85 in C); .Lsh_gdone restores the fast path's
+# patterns. Also here: the lighting's later passes (.Lsh_later_g, modules/shade_light.s).
 
         .spu_ext gather
 
-        # a step of the fast path with a group it could not do: noted, and the loop goes on
+        # a step of the fast path with a group it could not do. A group on one triangle
+        # whose record is in the triangle cache failed for a vertex the vertex cache
+        # lacks: its 3 normals are fetched and landed now (one wait) and the step run
+        # again, once (sh_gresc: the step rerun), so the packet's later groups on its
+        # triangle find them too instead of all falling into the batch. Any other
+        # failure (or the rerun's) is noted for the batch and the loop goes on.
+        .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
+.Lsh_rescue:
+        lqd     %okp, SH_DONE($66)            # its groups' flags (words 0, 2)
+        ai      %st, $67, -32                 # the step's first group * 16
+        a       %rp, $99, %st
+        lqd     %blk, SH_BLOCK($66)           # the vertex records' EA
+        shufb   %evs, %blk, %blk, $91
+        ai      %ev, %evs, 16                 # (their normals)
+        il      %sz, 16
+        lqa     %plo, sh_const
+        lqa     %phi, sh_const+16
+        lqa     %w3, sh_gather_lanes+16       # words 0-2
+        .irp    H, 0, 16
+        rotqbyi %ok\H, %okp, \H/2
+        lqd     %ids\H, CTX_RAY_ID+\H(%rp)
+        shufb   %s0\H, %ids\H, %ids\H, $91
+        ceq     %same\H, %ids\H, %s0\H
+        gb      %sb\H, %same\H
+        ceqi    %all\H, %sb\H, 15
+        ceqi    %miss\H, %ids\H, -1
+        andc    %c1\H, %all\H, %miss\H
+        andc    %c2\H, %c1\H, %ok\H
+        and     %ti\H, %ids\H, TMASK
+        shli    %to\H, %ti\H, 4
+        lqx     %tag\H, TTAGS, %to\H
+        shli    %tl\H, %ti\H, 6
+        a       %line\H, %tl\H, TDATA
+        ceq     %th\H, %tag\H, %ids\H
+        and     %c3\H, %c2\H, %th\H
+        lqd     %q3\H, 48(%line\H)            # vertex indices, material
+        and     %vi\H, %q3\H, %w3
+        and     %x\H, %vi\H, $121
+        shli    %vo0\H, %x\H, 4
+        rotqbyi %vo1\H, %vo0\H, 4
+        rotqbyi %vo2\H, %vo0\H, 8
+        lqx     %vt0\H, $115, %vo0\H
+        lqx     %vt1\H, $115, %vo1\H
+        lqx     %vt2\H, $115, %vo2\H
+        rotqbyi %v1\H, %vi\H, 4
+        rotqbyi %v2\H, %vi\H, 8
+        ceq     %h0\H, %vt0\H, %vi\H
+        ceq     %h1\H, %vt1\H, %v1\H
+        ceq     %h2\H, %vt2\H, %v2\H
+        and     %h01\H, %h0\H, %h1\H
+        and     %hall\H, %h01\H, %h2\H
+        andc    %cand\H, %c3\H, %hall\H        # one triangle, cached, a vertex missed
+        shufb   %cs\H, %cand\H, %cand\H, $91
+        and     %vf\H, %vi\H, %cs\H             # the vertices fetched (else vertex 0)
+        shli    %eo\H, %vf\H, 6
+        a       %ea\H, %eo\H, %ev
+        shufb   %e0\H, %sz, %ea\H, %plo         # list elements: 16 bytes, the EA
+        shufb   %e1\H, %sz, %ea\H, %phi
+        stqa    %e0\H, sh_grlist+2*\H
+        stqa    %e1\H, sh_grlist+2*\H+16
+        stqa    %vi\H, sh_grv+\H
+        stqa    %cs\H, sh_grv+32+\H
+        a       %hs\H, %h0\H, %h1\H              # its misses: 3 - hits
+        a       %hs2\H, %hs\H, %h2\H
+        ai      %mc\H, %hs2\H, 3
+        and     %mcc\H, %mc\H, %cand\H
+        .endr
+        a       $80, %mcc0, %mcc16
+        lqa     %cinc, sh_const+240           # the fast step's counts, to be undone
+        shufb   %okv0, %ok0, %ok0, $91
+        shufb   %okv16, %ok16, %ok16, $91
+        and     %inc0, %cinc, %okv0
+        and     %inc16, %cinc, %okv16
+        a       $82, %inc0, %inc16
+        .endsched
+        ila     $83, sh_grst
+        ila     $84, sh_grlist
+        il      $85, 64
+        il      $86, SH_TAG
+        il      $87, 0x44                     # getl
+        wrch    $MFC_LSA, $83
+        wrch    $MFC_EAH, ZERO
+        wrch    $MFC_EAL, $84
+        wrch    $MFC_Size, $85
+        wrch    $MFC_TagID, $86
+        wrch    $MFC_Cmd, $87
+        stqa    $81, sh_gresc
+        lqd     $83, SH_STATS+SHS_VMISS($66)
+        sf      $124, $82, $124
+        a       $83, $83, $80
+        stqd    $83, SH_STATS+SHS_VMISS($66)
+        SH_WAIT $86
+        # landed in lookup order (vertex 0, 1, 2; the step's first group first), a group
+        # not fetched to a spare quadword
+        .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
+        ila     %dm, sh_grspare
+        sf      %dl1, $123, %dm
+        sf      %dt1, $115, %dm
+        shufb   %dl, %dl1, %dl1, $91
+        shufb   %dt, %dt1, %dt1, $91
+        .irp    H, 0, 16
+        lqa     %vi\H, sh_grv+\H
+        lqa     %c\H, sh_grv+32+\H
+        and     %x\H, %vi\H, $121
+        shli    %xl\H, %x\H, 6
+        shli    %xt\H, %x\H, 4
+        selb    %ol\H, %dl, %xl\H, %c\H
+        selb    %ot\H, %dt, %xt\H, %c\H
+        .irp    I, 0, 1, 2
+        rotqbyi %v\I\()\H, %vi\H, 4*\I
+        rotqbyi %l\I\()\H, %ol\H, 4*\I
+        rotqbyi %t\I\()\H, %ot\H, 4*\I
+        lqa     %n\I\()\H, sh_grst+4*\H+16*\I
+        stqx    %n\I\()\H, $123, %l\I\()\H           # the normal to its line
+        stqx    %v\I\()\H, $115, %t\I\()\H           # the vertex to its tag
+        .endr
+        .endr
+        ai      $67, $67, -32                 # the step again
+        hbrr    .Lsh_rescue_br, .Lsh_group
+.Lsh_rescue_br:
+        br      .Lsh_group
+        .endsched
+
 .Lsh_slow:
-        hbrr    .Lsh_slow_back, .Lsh_group
-        lqd     $77, SH_DONE($66)             # its groups' flags (words 0, 2)
-        lqa     $74, sh_gn
-        ai      $75, $67, -32                 # the step's first group * 16
-        ila     $76, sh_gfail
-        ila     $78, sh_gstep
-        ceqi    $79, $67, 256
-        stqx    $77, $76, $74
-        stqx    $75, $78, $74
-        ai      $74, $74, 16
-        stqa    $74, sh_gn
+        .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
+      ! hbrr    .Lsh_slow_back, .Lsh_group
+        lqa     %cp, sh_gcand                 # (the fast step's: words 0, 2)
+        rotqbyi %cp2, %cp, 8
+        or      %any, %cp, %cp2
+        shli    %pk, $97, 9
+        or      $81, %pk, $67                 # this step of this packet
+        lqa     %last, sh_gresc
+        ceq     %again, $81, %last            # its rerun: no second rescue
+        andc    %go, %any, %again
+        lqd     %okp, SH_DONE($66)            # noted (counted only if not fetched now):
+        lqa     %n, sh_gn                     # its groups' flags (words 0, 2) and its
+        ai      %fst, $67, -32                # first group * 16
+        ila     %fb, sh_gfail
+        ila     %sb, sh_gstep
+        ceqi    $80, $67, 256
+        stqx    %okp, %fb, %n
+        stqx    %fst, %sb, %n
+        il      %sixteen, 16
+        andc    %inc, %sixteen, %go
+        a       %n1, %n, %inc
+        stqa    %n1, sh_gn
+        stqa    ZERO, sh_gresc
+        brnz    %go, .Lsh_rescue
+        .endsched
 .Lsh_slow_back:
-        brz     $79, .Lsh_group
+        brz     $80, .Lsh_group
         # (after the last step: the batch)
 
         # ---- the batch: A. the groups' records
@@ -126,10 +266,12 @@
         andi    %d256\H, %d\H, 256
         a       $82, $82, %d256\H
         .endr
-        .endsched
         ai      $80, $80, 16
-        ceq     $86, $80, $81
-        brz     $86, .Lsh_gstep
+        ceq     %end, $80, $81
+        hbrr    .Lsh_gstep_br, .Lsh_gstep
+.Lsh_gstep_br:
+        brz     %end, .Lsh_gstep
+        .endsched
         il      $86, 0
         stqa    $86, sh_gn                    # (the next packet's steps)
         lqd     $86, SH_STATS+SHS_TMISS($66)
@@ -155,12 +297,16 @@
         il      $85, 0                        # normals' list bytes (96 a group)
         il      $81, 0                        # groups with a miss * 16 (sh_gml)
         il      $83, 0                        # groups without * 16 (sh_gmh)
+        il      $67, 4                        # lgwx's offsets (B and C; C's others at
+        il      $92, 8                        # .Lsh_gc)
         brz     $82, .Lsh_gdone               # no group to do
-.Lsh_gvloop:
+        lqa     $119, sh_gk+16                # the group's records (the next one's
+.Lsh_gvloop:                                  # loaded by the iteration before)
         .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
         ila     %gkb, sh_gk
         a       %gka, %gkb, $80
-        lqd     %ra, 16(%gka)
+        ai      %ra48, $119, 48
+        lqd     $119, 256+16(%gka)
         lqd     %nh, 32(%gka)
         lqd     %blk, SH_BLOCK($66)           # the vertex records' EA
         shufb   %evs, %blk, %blk, $91
@@ -172,13 +318,13 @@
         lqa     %phi, sh_const+16
         ila     %lvb, sh_glv
         a       %lva, %lvb, $85
+        lgw     %vi0, %ra48                   # vertex I's index, the lanes'
+        lgwx    %vi1, %ra48, $67
+        lgwx    %vi2, %ra48, $92
         .irp    I, 0, 1, 2
-        ai      %ra\I, %ra, 48+4*\I
-        lgw     %vi\I, %ra\I                  # vertex I's index, the lanes'
         and     %x\I, %vi\I, $121
         shli    %to\I, %x\I, 4
-        a       %ta\I, %to\I, %vt
-        lgw     %tg\I, %ta\I                  # its tag
+        lgwx    %tg\I, %vt, %to\I              # its tag
         ceq     %h\I, %tg\I, %vi\I
         or      %hh\I, %h\I, %nh
         xori    %m\I, %hh\I, -1               # missed
@@ -255,32 +401,37 @@
         # ---- C. the groups' values: first those that hit, then (their normals waited
         # for) those that missed
 # the groups listed at LIST (END: its bytes), looped at LOOP (BR its branch)
+# ($119: the group's record in sh_gk, the next one's found by the iteration before)
         .macro  SH_GATHER_GROUPS list, end, loop, br
+        lqa     $87, \list
+        ila     $86, sh_gk
+        a       $119, $86, $87
 \loop:
         .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
         ila     %gkb, sh_gk
         ila     %lsb, \list
-        lqx     %k, %lsb, $80
-        a       %gka, %gkb, %k
-        lqd     %g, 0(%gka)
-        lqd     %ra, 16(%gka)
-        lqd     %nh, 32(%gka)
-        lqd     %na0, 48(%gka)
-        lqd     %na1, 64(%gka)
-        lqd     %na2, 80(%gka)
+        lqd     %g, 0($119)
+        lqd     %ra, 16($119)
+        lqd     %nh, 32($119)
+        lqd     %na0, 48($119)
+        lqd     %na1, 64($119)
+        lqd     %na2, 80($119)
         a       %gp, $66, %g
         a       %rp, $99, %g
         .irp    I, 0, 1, 2
         lgw     %nx\I, %na\I
-        ai      %ay\I, %na\I, 4
-        lgw     %ny\I, %ay\I
-        ai      %az\I, %na\I, 8
-        lgw     %nz\I, %az\I
+        lgwx    %ny\I, %na\I, $67            # (+4)
+        lgwx    %nz\I, %na\I, $92            # (+8)
         .endr
-        .irp    W, 12, 16, 20, 24, 32, 36, 40, 60
-        ai      %ra\W, %ra, \W
-        lgw     %w\W, %ra\W
-        .endr
+        lgwx    %w12, %ra, $93                # the records' words 3, 4-6, 8-10, 15
+        lgwx    %w16, %ra, $120
+        lgwx    %w20, %ra, $82
+        lgwx    %w24, %ra, $84
+        ai      %ra32, %ra, 32
+        lgw     %w32, %ra32
+        lgwx    %w36, %ra32, $67
+        lgwx    %w40, %ra32, $92
+        lgwx    %w60, %ra, $85
         or      %mat, %w60, %nh               # no hit: no material
       ~ stqd    %mat, SH_MAT(%gp)
         fs      %d1x, %nx1, %nx0              # n1 - n0
@@ -310,6 +461,8 @@
         stqd    %ct1, SH_STATS+SHS_TLOOK($66)
         stqd    %cs1, SH_STATS+SHS_SAME($66)
         ai      $80, $80, 16
+        lqx     %k, %lsb, $80                 # the next group
+        a       $119, %gkb, %k
         ceq     %end, $80, \end
         hbrr    \br, \loop
 \br:
@@ -319,6 +472,11 @@
 
 .Lsh_gc:
         il      $80, 0
+        il      $93, 12                       # lgwx's offsets ($67: 4, $92: 8)
+        il      $120, 16
+        il      $82, 20
+        il      $84, 24
+        il      $85, 60
         brz     $83, .Lsh_gcm0
         SH_GATHER_GROUPS sh_gmh, $83, .Lsh_gch, .Lsh_gch_br
 .Lsh_gcm0:
@@ -331,18 +489,21 @@
         # so each of its lookups (a hit's too: the same vertex and normal again) is
         # stored to its line and tag, in lookup order (vertex, lane), without a branch
         il      $80, 0
-.Lsh_gland:
-        ila     $86, sh_gml
-        lqx     $87, $86, $80
+        lqa     $87, sh_gml
         ila     $86, sh_gk
-        a       $83, $86, $87                 # the group's record
+        a       $83, $86, $87                 # the group's record (the next one's
+.Lsh_gland:                                   # found by the iteration before)
         .sched  pool=68-79,86-90,94-96,98,100-106,110-114,116-118,125-127 scratch=66-127
         lqd     %nb, 48($83)                  # its normals' slots (lane 0's, vertex 0)
         .irp    I, 0, 1, 2
         lqd     %vi\I, 96+16*\I($83)
         and     %x\I, %vi\I, $121
         shli    %xl\I, %x\I, 6
-        .irp    L, 0, 1, 2, 3
+        rotmi   %t\I\()0, %xl\I, -2             # lane 0 (in the preferred slot)
+        lqd     %n\I\()0, 64*\I(%nb)
+        stqx    %n\I\()0, $123, %xl\I
+        stqx    %vi\I, $115, %t\I\()0
+        .irp    L, 1, 2, 3
         rotqbyi %v\I\L, %vi\I, 4*\L
         rotqbyi %o\I\L, %xl\I, 4*\L
         rotmi   %t\I\L, %o\I\L, -2
@@ -352,6 +513,10 @@
         .endr
         .endr
         ai      $80, $80, 16
+        ila     %lsb, sh_gml
+        lqx     %k, %lsb, $80
+        ila     %gkb, sh_gk
+        a       $83, %gkb, %k
         ceq     %end, $80, $81
         hbrr    .Lsh_gland_br, .Lsh_gland
 .Lsh_gland_br:
@@ -359,16 +524,80 @@
         .endsched
 .Lsh_gdone:
         lqa     $92, sh_const+80              # (the fast path's patterns)
+        lqa     $119, sh_const+32
         lqa     $93, sh_const+96
         lqa     $120, sh_const+208
         br      .Lsh_iset_done
 
+        # A later pass of the lighting (modules/shade_light.s, .Lsh_run with no light
+        # left: a black light) shades from the stored sums without computing the
+        # irradiance it would add 0 to: the same colours and stores as .Lsh_shade_g's
+        # (or, og, ob are the sums: cs * 0 + s = s, the SPU having no NaN), in 64 even-
+        # pipe instructions per 4 groups instead of 174. It needs no gather.
+        .sched  pool=69,76-82,84,90-105,107-114,116-120 scratch=66-127
+.Lsh_later_g:
+        a       %gp, $66, $67
+        a       %pp, $85, $67
+        a       %op, $115, $67
+        il      %none, -1
+        .irp    H, 0, 16, 32, 48
+        lqd     %or\H, \H(%pp)                # the sums
+        lqd     %og\H, 256+\H(%pp)
+        lqd     %ob\H, 512+\H(%pp)
+      ~ stqd    %or\H, SH_IRR_R+\H(%gp)
+      ~ stqd    %og\H, SH_IRR_G+\H(%gp)
+      ~ stqd    %ob\H, SH_IRR_B+\H(%gp)
+        lqd     %m\H, SH_MAT+\H(%gp)
+        ceq     %sel\H, %m\H, $87            # this shader's rays
+        fa      %ra\H, %or\H, $124
+        fa      %ga\H, %og\H, $124
+        fa      %ba\H, %ob\H, $124
+        fm      %rk\H, %ra\H, $121
+        fm      %gk\H, %ga\H, $122
+        fm      %bk\H, %ba\H, $123
+        fma     %rs\H, %rk\H, $106, $126
+        cfltu   %ru\H, %rs\H, 24
+        fma     %gs\H, %gk\H, $106, $126
+        cfltu   %gu\H, %gs\H, 24
+        fma     %bs\H, %bk\H, $106, $126
+        cfltu   %bu\H, %bs\H, 24
+        shufb   %rg\H, %ru\H, %gu\H, $88
+        shufb   %col\H, %rg\H, %bu\H, $89
+        lqd     %o\H, \H(%op)
+        selb    %o2\H, %o\H, %col\H, %sel\H
+      ~ stqd    %o2\H, \H(%op)
+        selb    %mn\H, %m\H, %none, %sel\H
+      ~ stqd    %mn\H, SH_MAT+\H(%gp)
+        and     $86, $86, %mn\H
+        .endr
+        ai      $67, $67, 64
+        ceqi    %end, $67, 256
+        ila     %loop, .Lsh_later_g
+        ila     %exit, .Lsh_shade_end
+        selb    %to, %loop, %exit, %end
+        hbr     .Lsh_later_br, %to
+.Lsh_later_br:
+        bi      %to
+        .endsched
+
         .align  4
 sh_gather_lanes:                              # the lanes' 64-byte strides
         .long   0, 64, 128, 192
-        .long   0, 0, 0, 0
+        .long   -1, -1, -1, 0                 # +16: words 0-2
         .long   0, 16, 32, 48                 # +32: the lanes' 16-byte strides
 sh_gn:  .long   0, 0, 0, 0                    # the steps noted * 16
+sh_gcand:                                     # the fast step's groups to fetch at once
+        .long   0, 0, 0, 0
+sh_gresc:                                     # the step rerun (packet << 9 | step + 32)
+        .long   0, 0, 0, 0
+sh_grv:                                       # the rescue: vertices (2 groups), fetched?
+        .space  64
+sh_grspare:                                   # (a group not fetched lands here)
+        .space  16
+sh_grlist:                                    # its list (4 elements a group)
+        .space  64
+sh_grst:                                      # its normals (4 a group)
+        .space  128
 sh_gfail:                                     # per step noted: its groups' flags
         .space  128
 sh_gstep:                                     # ... and its first group * 16

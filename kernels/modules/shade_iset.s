@@ -291,6 +291,12 @@
         .endr
         shufb   %okp, %ok0, %ok16, $119
       ~ stqd    %okp, SH_DONE($66)          # which of the two groups are done
+        .ifdef  EXT_GATHER                  # which are on one cached triangle and
+        andc    %cnd0, %ok20, %h0120        # missed a vertex (modules/shade_gather.s:
+        andc    %cnd16, %ok216, %h01216     # fetched at once)
+        shufb   %cndp, %cnd0, %cnd16, $119
+      ~ stqa    %cndp, sh_gcand
+        .endif
         lqa     %cinc, sh_const+240
         shufb   %okv0, %ok0, %ok0, $91
         shufb   %okv16, %ok16, %ok16, $91

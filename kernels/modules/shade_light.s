@@ -201,6 +201,9 @@
         stqd    $84, SH_RUN+16($66)
         stqd    $110, SH_RUN+32($66)
         .endsched
+        .ifdef  EXT_GATHER                    # a later pass: from the stored sums
+        brz     $84, .Lsh_later_g             # (modules/shade_gather.s)
+        .endif
         .sched  pool=69,76-82,84,90-105,107-114,116-120 scratch=66-127
 .Lsh_shade_g:
         a       %gp, $66, $67
