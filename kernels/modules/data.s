@@ -71,6 +71,30 @@ k_abs:          .long 0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff
         .ifdef  EXT_MULTIHINT
 k_trav_to:      .long first_changed, leaf, .Ltrav_on, 0   # a step's ways (traverse.s)
 numbuf:         .space 128      # the leaf's triangles' n_d - o.n, by triangle & 7 (triangle.s)
+k_grow0:        .float 0.0, 2.0, 4.0, 6.0     # the groups' first rows (triangle.s)
+k_c171:         .float 1.0, 7.0, 1.0, 0.0     # (1, last column, 1, -)
+k_lane12:       .long 0, -1, -1, 0
+k_ctol:         .long 0x3b800000, 0x3b800000, 0x3b800000, 0x3b800000   # 2^-8
+# a leaf's range of groups to test (last, first: byte offsets of groups of 16 rays; last
+# -64: none) by the groups the cull keeps (bit 3 - g: group g), triangle.s
+k_grange:       .long -64, 0, 0, 0
+                .long 192, 192, 0, 0
+                .long 128, 128, 0, 0
+                .long 192, 128, 0, 0
+                .long 64, 64, 0, 0
+                .long 192, 64, 0, 0
+                .long 128, 64, 0, 0
+                .long 192, 64, 0, 0
+                .long 0, 0, 0, 0
+                .long 192, 0, 0, 0
+                .long 128, 0, 0, 0
+                .long 192, 0, 0, 0
+                .long 64, 0, 0, 0
+                .long 192, 0, 0, 0
+                .long 128, 0, 0, 0
+                .long 192, 0, 0, 0
+gforms:         .space 8*48     # per packet context (by tag): its directions' columns
+                                # per axis (raygen.s)
         .endif
 
         .align 7
