@@ -75,24 +75,24 @@ k_grow0:        .float 0.0, 2.0, 4.0, 6.0     # the groups' first rows (triangle
 k_c171:         .float 1.0, 7.0, 1.0, 0.0     # (1, last column, 1, -)
 k_lane12:       .long 0, -1, -1, 0
 k_ctol:         .long 0x3b800000, 0x3b800000, 0x3b800000, 0x3b800000   # 2^-8
-# a leaf's range of groups to test (last, first: byte offsets of groups of 16 rays; last
-# -64: none) by the groups the cull keeps (bit 3 - g: group g), triangle.s
-k_grange:       .long -64, 0, 0, 0
-                .long 192, 192, 0, 0
-                .long 128, 128, 0, 0
-                .long 192, 128, 0, 0
-                .long 64, 64, 0, 0
-                .long 192, 64, 0, 0
-                .long 128, 64, 0, 0
-                .long 192, 64, 0, 0
+# a triangle's verdict and range of groups to test (culled, first, last: byte offsets of
+# groups of 16 rays) by the groups the cull keeps (bit 3 - g: group g), triangle.s
+k_grange:       .long -1, 0, 0, 0
+                .long 0, 192, 192, 0
+                .long 0, 128, 128, 0
+                .long 0, 128, 192, 0
+                .long 0, 64, 64, 0
+                .long 0, 64, 192, 0
+                .long 0, 64, 128, 0
+                .long 0, 64, 192, 0
                 .long 0, 0, 0, 0
-                .long 192, 0, 0, 0
-                .long 128, 0, 0, 0
-                .long 192, 0, 0, 0
-                .long 64, 0, 0, 0
-                .long 192, 0, 0, 0
-                .long 128, 0, 0, 0
-                .long 192, 0, 0, 0
+                .long 0, 0, 192, 0
+                .long 0, 0, 128, 0
+                .long 0, 0, 192, 0
+                .long 0, 0, 64, 0
+                .long 0, 0, 192, 0
+                .long 0, 0, 128, 0
+                .long 0, 0, 192, 0
 gforms:         .space 8*48     # per packet context (by tag): its directions' columns
                                 # per axis (raygen.s)
         .endif

@@ -78,6 +78,11 @@ leaf_cull:
         lqa     $73, k_c171
         lqa     $68, k_grow0
         lqa     $69, k_lane12
+        rotmi   $70, FIRST, -4                # the active groups: FIRST's and after
+        shli    $70, $70, 4
+        ila     $71, k_lanege
+        lqx     $70, $71, $70
+        gb      $70, $70
         .endif
         .ifndef EXT_MULTIHINT
         .sched  pool=82-127 scratch=66-127
@@ -302,7 +307,8 @@ leaf_cull:
         gb      %m\T, %keep\T
         il      %all\T, 15
         selb    %mi\T, %all\T, %m\T, %th\T       # another triangle's line: every group
-        shli    %mo\T, %mi\T, 4
+        and     %ma\T, %mi\T, $70                # of the active ones
+        shli    %mo\T, %ma\T, 4
         lqx     %rg\T, $74, %mo\T
         andi    %sl\T, %tri\T, 7
         shli    %so\T, %sl\T, 4
@@ -332,11 +338,6 @@ tri_loop:
         lqx     $113, $101, $100
         a       $84, TDATA, $82
         ceq     $85, $83, $66
-        .ifdef  EXT_MULTIHINT                 # culled: the first active group comes
-        rotmi   $114, FIRST, -4               # after the last the cull keeps
-        shli    $114, $114, 6
-        cgt     $113, $114, $113
-        .endif
         sf      S_CULLED, $113, S_CULLED      # +1 when culled
         brnz    $113, tri_next
         brz     $85, tri_miss                 # hits fall through
@@ -392,14 +393,14 @@ tri_loop:
         ai      S_TRIS, S_TRIS, 1
 
         # the active rays, four vectors (16 rays) per pass, from FIRST's group on
+        .ifdef  EXT_MULTIHINT                 # (from the first active group the cull
+        ila     $115, cullbuf                 # keeps to the last, $112: leaf_cull)
+        lqx     $116, $115, $100
+        rotqbyi $119, $116, 4
+        rotqbyi $112, $116, 8
+        .else
         rotmi   $119, FIRST, -4
         shli    $119, $119, 6                 # byte offset of the first group
-        .ifdef  EXT_MULTIHINT                 # (and from the cull's first group on, to
-        ila     $115, cullbuf                 # its last: $112, leaf_cull)
-        lqx     $112, $115, $100
-        rotqbyi $116, $112, 4
-        cgt     $117, $116, $119
-        selb    $119, $119, $116, $117
         .endif
         .endsched
 
