@@ -75,9 +75,8 @@ leaf_cull:
         a       $79, $79, $74
         ila     $74, k_grange
         lqa     $72, k_ctol
-        lqa     $73, k_c171
+        lqa     $73, k_c7
         lqa     $68, k_grow0
-        lqa     $69, k_lane12
         rotmi   $70, FIRST, -4                # the active groups: FIRST's and after
         shli    $70, $70, 4
         ila     $71, k_lanege
@@ -184,6 +183,10 @@ leaf_cull:
 # offsets; none when every group is culled), which tri_loop and the test loop follow
         .sched  pool=82-127 scratch=66-127
 .Lcull:
+        lqa     %plo, k_plo                   # (a 4x4 transpose's patterns)
+        lqa     %phi, k_phi
+        lqa     %pa, k_pa
+        lqa     %pb, k_pb
         .irp    T, 0, 1
         ai      %tri\T, $76, \T
         and     %ln\T, %tri\T, TMASK
@@ -241,66 +244,45 @@ leaf_cull:
         fma     %fg\T, %num\T, %pg\T, %fg1\T
         fs      %fa1\T, %fd\T, %fb\T
         fs      %fa\T, %fa1\T, %fg\T            # (1 - beta - gamma) n.d
+        # the four forms' coefficients as columns (lanes: n.d, beta n.d, gamma n.d,
+        # (1 - beta - gamma) n.d), so that what follows is one vector op for the four
+        shufb   %ta\T, %fd\T, %fb\T, %plo
+        shufb   %tb\T, %fg\T, %fa\T, %plo
+        shufb   %tc\T, %fd\T, %fb\T, %phi
+        shufb   %te\T, %fg\T, %fa\T, %phi
+        shufb   %v0\T, %ta\T, %tb\T, %pa       # at column 0 row 0
+        shufb   %vc\T, %ta\T, %tb\T, %pb       # per column
+        shufb   %vr\T, %tc\T, %te\T, %pa       # per row
         # signs by num's, so that a ray in front has n.d > 0; then each edge's value
         # plus a margin of 2^-8 of n.d (far beyond the test's 2^-20 and its rounding)
         and     %sn\T, %num\T, SIGNS
-        xor     %gd\T, %fd\T, %sn\T
-        xor     %gb\T, %fb\T, %sn\T
-        xor     %gg\T, %fg\T, %sn\T
-        xor     %ga\T, %fa\T, %sn\T
-        fma     %hb\T, $72, %gd\T, %gb\T
-        fma     %hg\T, $72, %gd\T, %gg\T
-        fma     %ha\T, $72, %gd\T, %ga\T
-        # each one's largest over group g (columns 0..7, rows 2g, 2g+1), lanes g:
-        # v0 + max(0, 7 v_col) + max(0, v_row) + 2g v_row
-        fm      %wgd\T, %gd\T, $73
-        fcgt    %pgd\T, %wgd\T, ZERO
-        andc    %zgd\T, $69, %pgd\T
-        selb    %cgd\T, %wgd\T, ZERO, %zgd\T
-        rotqbyi %rgd\T, %cgd\T, 4
-        rotqbyi %sgd\T, %cgd\T, 8
-        fa      %tgd\T, %cgd\T, %rgd\T
-        fa      %ugd\T, %tgd\T, %sgd\T
-        shufb   %kgd\T, %ugd\T, %ugd\T, PAT0
-        shufb   %egd\T, %gd\T, %gd\T, PAT2
-        fma     %mgd\T, $68, %egd\T, %kgd\T
-        fm      %whb\T, %hb\T, $73
-        fcgt    %phb\T, %whb\T, ZERO
-        andc    %zhb\T, $69, %phb\T
-        selb    %chb\T, %whb\T, ZERO, %zhb\T
-        rotqbyi %rhb\T, %chb\T, 4
-        rotqbyi %shb\T, %chb\T, 8
-        fa      %thb\T, %chb\T, %rhb\T
-        fa      %uhb\T, %thb\T, %shb\T
-        shufb   %khb\T, %uhb\T, %uhb\T, PAT0
-        shufb   %ehb\T, %hb\T, %hb\T, PAT2
-        fma     %mhb\T, $68, %ehb\T, %khb\T
-        fm      %whg\T, %hg\T, $73
-        fcgt    %phg\T, %whg\T, ZERO
-        andc    %zhg\T, $69, %phg\T
-        selb    %chg\T, %whg\T, ZERO, %zhg\T
-        rotqbyi %rhg\T, %chg\T, 4
-        rotqbyi %shg\T, %chg\T, 8
-        fa      %thg\T, %chg\T, %rhg\T
-        fa      %uhg\T, %thg\T, %shg\T
-        shufb   %khg\T, %uhg\T, %uhg\T, PAT0
-        shufb   %ehg\T, %hg\T, %hg\T, PAT2
-        fma     %mhg\T, $68, %ehg\T, %khg\T
-        fm      %wha\T, %ha\T, $73
-        fcgt    %pha\T, %wha\T, ZERO
-        andc    %zha\T, $69, %pha\T
-        selb    %cha\T, %wha\T, ZERO, %zha\T
-        rotqbyi %rha\T, %cha\T, 4
-        rotqbyi %sha\T, %cha\T, 8
-        fa      %tha\T, %cha\T, %rha\T
-        fa      %uha\T, %tha\T, %sha\T
-        shufb   %kha\T, %uha\T, %uha\T, PAT0
-        shufb   %eha\T, %ha\T, %ha\T, PAT2
-        fma     %mha\T, $68, %eha\T, %kha\T
-        fcgt    %fr\T, %mgd\T, ZERO            # some ray of the group in front
-        fcgt    %ob\T, ZERO, %mhb\T            # every ray outside an edge
-        fcgt    %og\T, ZERO, %mhg\T
-        fcgt    %oa\T, ZERO, %mha\T
+        xor     %s0\T, %v0\T, %sn\T
+        xor     %sc\T, %vc\T, %sn\T
+        xor     %sr\T, %vr\T, %sn\T
+        shufb   %d0\T, %s0\T, %s0\T, PAT0
+        shufb   %dc\T, %sc\T, %sc\T, PAT0
+        shufb   %dr\T, %sr\T, %sr\T, PAT0
+        fma     %h0\T, $72, %d0\T, %s0\T
+        fma     %hc\T, $72, %dc\T, %sc\T
+        fma     %hr\T, $72, %dr\T, %sr\T
+        # each one's largest over group g (columns 0..7, rows 2g, 2g+1):
+        # v0 + max(0, 7 v_col) + max(0, v_row) + 2g v_row, lanes g
+        fm      %w\T, %hc\T, $73
+        fcgt    %pw\T, %w\T, ZERO
+        and     %mw\T, %w\T, %pw\T
+        fcgt    %pr\T, %hr\T, ZERO
+        and     %mr\T, %hr\T, %pr\T
+        fa      %k1\T, %h0\T, %mw\T
+        fa      %kk\T, %k1\T, %mr\T
+        .irp    F, 0, 1, 2, 3
+        shufb   %kf\T\F, %kk\T, %kk\T, PAT\F
+        shufb   %rf\T\F, %hr\T, %hr\T, PAT\F
+        fma     %mf\T\F, $68, %rf\T\F, %kf\T\F
+        .endr
+        fcgt    %fr\T, %mf\T\()0, ZERO           # some ray of the group in front
+        fcgt    %ob\T, ZERO, %mf\T\()1           # every ray outside an edge
+        fcgt    %og\T, ZERO, %mf\T\()2
+        fcgt    %oa\T, ZERO, %mf\T\()3
         or      %o1\T, %ob\T, %og\T
         or      %o2\T, %o1\T, %oa\T
         andc    %keep\T, %fr\T, %o2\T           # the groups left to test
