@@ -71,6 +71,29 @@ k_abs:          .long 0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff
         .ifdef  EXT_MULTIHINT
 k_trav_to:      .long first_changed, leaf, .Ltrav_on, 0   # a step's ways (traverse.s)
 numbuf:         .space 128      # the leaf's triangles' n_d - o.n, by triangle & 7 (triangle.s)
+k_grow0:        .float 0.0, 2.0, 4.0, 6.0     # the groups' first rows (triangle.s)
+k_c7:           .float 7.0, 7.0, 7.0, 7.0     # the last column
+k_ctol:         .long 0, 0x3b800000, 0x3b800000, 0x3b800000   # (0, 2^-8 x3): the edges' margin
+# a triangle's verdict and range of groups to test (culled, first, last: byte offsets of
+# groups of 16 rays) by the groups the cull keeps (bit 3 - g: group g), triangle.s
+k_grange:       .long -1, 0, 0, 0
+                .long 0, 192, 192, 0
+                .long 0, 128, 128, 0
+                .long 0, 128, 192, 0
+                .long 0, 64, 64, 0
+                .long 0, 64, 192, 0
+                .long 0, 64, 128, 0
+                .long 0, 64, 192, 0
+                .long 0, 0, 0, 0
+                .long 0, 0, 192, 0
+                .long 0, 0, 128, 0
+                .long 0, 0, 192, 0
+                .long 0, 0, 64, 0
+                .long 0, 0, 192, 0
+                .long 0, 0, 128, 0
+                .long 0, 0, 192, 0
+gforms:         .space 8*48     # per packet context (by tag): its directions' columns
+                                # per axis (raygen.s)
         .endif
 
         .align 7

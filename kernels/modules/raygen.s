@@ -57,6 +57,33 @@ packet_loop:
         stqd    $93, CTX_CORNERS(RAYS)
         stqd    $94, CTX_CORNERS+16(RAYS)
         stqd    $95, CTX_CORNERS+32(RAYS)
+        .ifdef  EXT_MULTIHINT
+        # the packet's directions as columns per axis a: (base_a, du_a, dv_a, 0), so that a
+        # linear function of d is an affine one of (column, row), for the leaf's per-group
+        # cull (triangle.s); in this context's slot of gforms (by its tag)
+        lqd     $100, CTX_TAG(RAYS)
+        lqa     $101, k_entry                 # (a0, b0, 0, 0)
+        lqa     $102, k_pc0                   # (a0, a1, b0, 0)
+        ila     $104, gforms
+        ai      $100, $100, -CONTEXT_TAG0
+        mpyi    $100, $100, 48
+        rotqbyi $105, $76, 4
+        rotqbyi $106, $74, 4
+        rotqbyi $107, $75, 4
+        rotqbyi $108, $76, 8
+        rotqbyi $109, $74, 8
+        rotqbyi $110, $75, 8
+        a       $104, $104, $100
+        shufb   $111, $76, $74, $101
+        shufb   $112, $105, $106, $101
+        shufb   $113, $108, $109, $101
+        shufb   $111, $111, $75, $102
+        shufb   $112, $112, $107, $102
+        shufb   $113, $113, $110, $102
+        stqd    $111, 0($104)
+        stqd    $112, 16($104)
+        stqd    $113, 32($104)
+        .endif
 
         # four vectors (two rows) per pass, scheduled into even/odd pairs
         .align  6                     # the loop starts early in a fetch line (as ray_loop)

@@ -68,7 +68,22 @@ leaf_cull:
         ila     $81, k_kuv
         .ifdef  EXT_MULTIHINT
         ila     $75, numbuf                   # (the test's numerator, kept for tri_loop)
+        lqd     $79, CTX_TAG(RAYS)            # this context's directions' columns
+        ila     $74, gforms
+        ai      $79, $79, -CONTEXT_TAG0
+        mpyi    $79, $79, 48
+        a       $79, $79, $74
+        ila     $74, k_grange
+        lqa     $72, k_ctol
+        lqa     $73, k_c7
+        lqa     $68, k_grow0
+        rotmi   $70, FIRST, -4                # the active groups: FIRST's and after
+        shli    $70, $70, 4
+        ila     $71, k_lanege
+        lqx     $70, $71, $70
+        gb      $70, $70
         .endif
+        .ifndef EXT_MULTIHINT
         .sched  pool=82-127 scratch=66-127
 .Lcull:
         .irp    T, 0, 1
@@ -160,6 +175,139 @@ leaf_cull:
 .Lcull_br:
         bi      %to
         .endsched
+        .else
+# (multihint; needs no extension) the cull per group of 16 rays (two rows), by the four
+# corner rays of each group (lanes: the groups g, raygen.s), with the test loop's own
+# arithmetic and tolerances, so a corner is culled only where the test would miss it: the
+# slot gets the range of groups left to test (k_grange: the last's and the first's
+# offsets; none when every group is culled), which tri_loop and the test loop follow
+        .sched  pool=82-127 scratch=66-127
+.Lcull:
+        lqa     %plo, k_plo                   # (a 4x4 transpose's patterns)
+        lqa     %phi, k_phi
+        lqa     %pa, k_pa
+        lqa     %pb, k_pb
+        .irp    T, 0, 1
+        ai      %tri\T, $76, \T
+        and     %ln\T, %tri\T, TMASK
+        shli    %lt\T, %ln\T, 4
+        lqx     %tag\T, TTAGS, %lt\T
+        shli    %ld\T, %ln\T, 6
+        a       %rec\T, %ld\T, TDATA
+        ceq     %th\T, %tag\T, %tri\T
+        lqd     %q0\T, TRI_N_U(%rec\T)         # (n_u, n_v, n_d, k)
+        lqd     %q1\T, TRI_B_NU(%rec\T)        # (b_nu, b_nv, b_d, -)
+        lqd     %q2\T, TRI_C_NU(%rec\T)        # (c_nu, c_nv, c_d, -)
+        rotqbyi %k\T, %q0\T, 12
+        shli    %k16\T, %k\T, 4
+        lqx     %ax\T, $80, %k16\T             # (k, u, v) array offsets
+        lqx     %kp\T, $81, %k16\T
+        shufb   %okuv\T, ORIG, ORIG, %kp\T     # origin in (k, u, v) order
+        shufb   %nu\T, %q0\T, %q0\T, PAT0
+        shufb   %nv\T, %q0\T, %q0\T, PAT1
+        shufb   %nd\T, %q0\T, %q0\T, PAT2
+        shufb   %bnu\T, %q1\T, %q1\T, PAT0
+        shufb   %bnv\T, %q1\T, %q1\T, PAT1
+        shufb   %bd\T, %q1\T, %q1\T, PAT2
+        shufb   %cnu\T, %q2\T, %q2\T, PAT0
+        shufb   %cnv\T, %q2\T, %q2\T, PAT1
+        shufb   %cd\T, %q2\T, %q2\T, PAT2
+        shufb   %ok\T, %okuv\T, %okuv\T, PAT0
+        shufb   %ou\T, %okuv\T, %okuv\T, PAT1
+        shufb   %ov\T, %okuv\T, %okuv\T, PAT2
+        fs      %nm1\T, %nd\T, %ok\T
+        fnms    %nm2\T, %nu\T, %ou\T, %nm1\T
+        fnms    %num\T, %nv\T, %ov\T, %nm2\T   # n_d - o_k - n_u o_u - n_v o_v
+        rotqbyi %axu\T, %ax\T, 4
+        rotqbyi %axv\T, %ax\T, 8
+        rotmi   %ck\T, %ax\T, -4
+        rotmi   %cu\T, %axu\T, -4
+        rotmi   %cv\T, %axv\T, -4
+        lqx     %xk\T, $79, %ck\T              # (base, du, dv) along k, u, v
+        lqx     %xu\T, $79, %cu\T
+        lqx     %xv\T, $79, %cv\T
+        # n.d, beta n.d and gamma n.d are linear in d, so affine in (column, row):
+        # (value at column 0 row 0, per column, per row)
+        fma     %dn1\T, %nu\T, %xu\T, %xk\T
+        fma     %fd\T, %nv\T, %xv\T, %dn1\T     # n.d
+        fma     %b1\T, %bnu\T, %ou\T, %bd\T
+        fma     %bo\T, %bnv\T, %ov\T, %b1\T     # beta at the origin
+        fma     %c1\T, %cnu\T, %ou\T, %cd\T
+        fma     %co\T, %cnv\T, %ov\T, %c1\T
+        fm      %pb1\T, %bnu\T, %xu\T
+        fma     %pb\T, %bnv\T, %xv\T, %pb1\T
+        fm      %pg1\T, %cnu\T, %xu\T
+        fma     %pg\T, %cnv\T, %xv\T, %pg1\T
+        fm      %fb1\T, %bo\T, %fd\T
+        fma     %fb\T, %num\T, %pb\T, %fb1\T    # beta n.d = beta_o n.d + num (b_nu d_u + b_nv d_v)
+        fm      %fg1\T, %co\T, %fd\T
+        fma     %fg\T, %num\T, %pg\T, %fg1\T
+        fs      %fa1\T, %fd\T, %fb\T
+        fs      %fa\T, %fa1\T, %fg\T            # (1 - beta - gamma) n.d
+        # the four forms' coefficients as columns (lanes: n.d, beta n.d, gamma n.d,
+        # (1 - beta - gamma) n.d), so that what follows is one vector op for the four
+        shufb   %ta\T, %fd\T, %fb\T, %plo
+        shufb   %tb\T, %fg\T, %fa\T, %plo
+        shufb   %tc\T, %fd\T, %fb\T, %phi
+        shufb   %te\T, %fg\T, %fa\T, %phi
+        shufb   %v0\T, %ta\T, %tb\T, %pa       # at column 0 row 0
+        shufb   %vc\T, %ta\T, %tb\T, %pb       # per column
+        shufb   %vr\T, %tc\T, %te\T, %pa       # per row
+        # signs by num's, so that a ray in front has n.d > 0; then each edge's value
+        # plus a margin of 2^-8 of n.d (far beyond the test's 2^-20 and its rounding)
+        and     %sn\T, %num\T, SIGNS
+        xor     %s0\T, %v0\T, %sn\T
+        xor     %sc\T, %vc\T, %sn\T
+        xor     %sr\T, %vr\T, %sn\T
+        shufb   %d0\T, %s0\T, %s0\T, PAT0
+        shufb   %dc\T, %sc\T, %sc\T, PAT0
+        shufb   %dr\T, %sr\T, %sr\T, PAT0
+        fma     %h0\T, $72, %d0\T, %s0\T
+        fma     %hc\T, $72, %dc\T, %sc\T
+        fma     %hr\T, $72, %dr\T, %sr\T
+        # each one's largest over group g (columns 0..7, rows 2g, 2g+1):
+        # v0 + max(0, 7 v_col) + max(0, v_row) + 2g v_row, lanes g
+        fm      %w\T, %hc\T, $73
+        fcgt    %pw\T, %w\T, ZERO
+        and     %mw\T, %w\T, %pw\T
+        fcgt    %pr\T, %hr\T, ZERO
+        and     %mr\T, %hr\T, %pr\T
+        fa      %k1\T, %h0\T, %mw\T
+        fa      %kk\T, %k1\T, %mr\T
+        .irp    F, 0, 1, 2, 3
+        shufb   %kf\T\F, %kk\T, %kk\T, PAT\F
+        shufb   %rf\T\F, %hr\T, %hr\T, PAT\F
+        fma     %mf\T\F, $68, %rf\T\F, %kf\T\F
+        .endr
+        fcgt    %fr\T, %mf\T\()0, ZERO           # some ray of the group in front
+        fcgt    %ob\T, ZERO, %mf\T\()1           # every ray outside an edge
+        fcgt    %og\T, ZERO, %mf\T\()2
+        fcgt    %oa\T, ZERO, %mf\T\()3
+        or      %o1\T, %ob\T, %og\T
+        or      %o2\T, %o1\T, %oa\T
+        andc    %keep\T, %fr\T, %o2\T           # the groups left to test
+        gb      %m\T, %keep\T
+        il      %all\T, 15
+        selb    %mi\T, %all\T, %m\T, %th\T       # another triangle's line: every group
+        and     %ma\T, %mi\T, $70                # of the active ones
+        shli    %mo\T, %ma\T, 4
+        lqx     %rg\T, $74, %mo\T
+        andi    %sl\T, %tri\T, 7
+        shli    %so\T, %sl\T, 4
+      ~ stqx    %rg\T, $78, %so\T
+      ~ stqx    %num\T, $75, %so\T
+        .endr
+        ai      $76, $76, 2
+        ai      $77, $77, -2
+        cgti    %more, $77, 0
+        ila     %back, .Lcull
+        ila     %out, tri_loop
+        selb    %to, %out, %back, %more
+        hbr     .Lcull_br, %to
+.Lcull_br:
+        bi      %to
+        .endsched
+        .endif
 tri_loop:
         ai      S_TLOOK, S_TLOOK, 1
         and     $80, $66, TMASK
@@ -227,8 +375,15 @@ tri_loop:
         ai      S_TRIS, S_TRIS, 1
 
         # the active rays, four vectors (16 rays) per pass, from FIRST's group on
+        .ifdef  EXT_MULTIHINT                 # (from the first active group the cull
+        ila     $115, cullbuf                 # keeps to the last, $112: leaf_cull)
+        lqx     $116, $115, $100
+        rotqbyi $119, $116, 4
+        rotqbyi $112, $116, 8
+        .else
         rotmi   $119, FIRST, -4
         shli    $119, $119, 6                 # byte offset of the first group
+        .endif
         .endsched
 
         # the inside test admits barycentrics down to -2^-20 (and a sum up to 1 + 2^-20),
@@ -241,7 +396,11 @@ tri_loop:
         .align  6                     # early in a fetch line: the loop refills no line while it runs
         .sched  pool=59,65,78-111,113-118 scratch=66-127
 ray_loop:
+        .ifdef  EXT_MULTIHINT
+        ceq     %last, $119, $112             # the last pass: the leaf's next triangle
+        .else
         ceqi    %last, $119, 192              # the last pass: the leaf's next triangle
+        .endif
         il      %one, 1                       # (tri_next's work, branch-free) and the
         and     %inc, %last, %one             # branch hinted to the next triangle's
         a       $66, $66, %inc                # test or, after the leaf's last, to its

@@ -421,9 +421,10 @@ fn the_multihint_kernel_renders_the_same_frame_with_fewer_traversal_misses() {
     // (traversal's branch-miss stall cycles, frame cycles): the step's early exits as one
     // hinted `bi`, the slow path's second search hinted on entry and its skips by masks
     // (docs/extensions.md, Multihint): 2,950 misses of 18 cycles fewer here, at most half
-    // of the baseline's (issue #33), in fewer cycles.
+    // of the baseline's (issue #33), in fewer cycles (with the leaf's cull per group of 16
+    // rays: 2,085,730 against 2,134,000 with the packet's).
     assert_eq!((base.1, base.2), (83_052, 2_197_047));
-    assert_eq!((multi.1, multi.2), (29_952, 2_134_000));
+    assert_eq!((multi.1, multi.2), (29_952, 2_085_730));
     assert_eq!(base.1 - multi.1, 2_950 * 18);
     assert!(2 * multi.1 <= base.1 && multi.2 < base.2);
 }
