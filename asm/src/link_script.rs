@@ -565,6 +565,205 @@ impl Parser<'_> {
     }
 }
 
+impl Script {
+    /// The output section and the statement (1-based, in its section) that take input
+    /// section `section` of file `file`: the first that matches, in the script's order.
+    pub fn assign(&self, file: &str, section: &str) -> Option<(String, u32)> {
+        let base = file.rsplit('/').next().unwrap_or(file);
+        let takes = |o: &OutputSection| {
+            o.items.iter().enumerate().find_map(|(r, item)| match item {
+                Item::Input(spec)
+                    if (glob(&spec.file, file) || glob(&spec.file, base))
+                        && spec.sections.iter().any(|p| glob(p, section)) =>
+                {
+                    Some((o.name.clone(), r as u32 + 1))
+                }
+                _ => None,
+            })
+        };
+        self.statements.iter().find_map(|s| match s {
+            Statement::Output(o) => takes(o),
+            Statement::Overlay(_, members) => members.iter().find_map(takes),
+            Statement::Assign(_) => None,
+        })
+    }
+
+    /// The members of each `OVERLAY` statement, in order.
+    pub fn overlay_regions(&self) -> Vec<Vec<String>> {
+        self.statements
+            .iter()
+            .filter_map(|s| match s {
+                Statement::Overlay(_, m) => Some(m.iter().map(|o| o.name.clone()).collect()),
+                _ => None,
+            })
+            .collect()
+    }
+}
+
+/// An output section as the layout sees it.
+pub(crate) struct Placed {
+    pub name: String,
+    pub size: u64,
+    pub align: u64,
+    /// Its kind for orphan placement: 0 code, 1 read-only data, 2 data, 3 bss; 5 for
+    /// what the caller places after everything (notes, `._ea`).
+    pub class: u8,
+    /// Takes an address but no room (`.tbss`).
+    pub tbss: bool,
+    /// The end of its contents after each of its script statements (by statement).
+    pub item_ends: Vec<u64>,
+}
+
+/// Addresses (VMA and LMA) of the output sections and the script's symbols.
+pub(crate) struct Layout {
+    pub addr: Vec<u64>,
+    pub lma: Vec<u64>,
+    /// (name, value, only if referenced and undefined)
+    pub symbols: Vec<(String, u64, bool)>,
+    /// The location counter at the end.
+    pub end: u64,
+}
+
+enum Step<'a> {
+    Assign(&'a Assignment),
+    Out(Option<usize>, &'a OutputSection),
+    Orphan(usize),
+    Overlay(Option<&'a Expr>, Vec<(Option<usize>, &'a OutputSection)>),
+}
+
+/// Lays `outs` out as GNU ld runs `script`: `.` from 0, each output section at its
+/// address or at `.` aligned to its inputs, an `OVERLAY`'s members all at its start and
+/// loaded one after another (their LMAs consecutive, the sections after them keeping
+/// the last one's LMA offset), sections the script does not name placed as orphans
+/// after the last named section of their kind.
+pub(crate) fn lay_out(script: &Script, outs: &[Placed]) -> Result<Layout, String> {
+    let find = |name: &str| outs.iter().position(|o| o.name == name && o.size > 0);
+    let mut steps: Vec<Step> = Vec::new();
+    let named = script.output_names();
+    for s in &script.statements {
+        steps.push(match s {
+            Statement::Assign(a) => Step::Assign(a),
+            Statement::Output(o) => Step::Out(find(&o.name), o),
+            Statement::Overlay(addr, m) => Step::Overlay(
+                addr.as_ref(),
+                m.iter().map(|o| (find(&o.name), o)).collect(),
+            ),
+        });
+    }
+    for (k, o) in outs.iter().enumerate() {
+        if named.contains(&o.name.as_str()) || o.class == 5 || o.size == 0 {
+            continue;
+        }
+        let class_of = |s: &Step| match s {
+            Step::Out(Some(j), _) | Step::Orphan(j) => Some(outs[*j].class),
+            _ => None,
+        };
+        let at = steps
+            .iter()
+            .rposition(|s| class_of(s).is_some_and(|c| c <= o.class))
+            .map_or(steps.len(), |p| p + 1);
+        steps.insert(at, Step::Orphan(k));
+    }
+    let mut layout = Layout {
+        addr: vec![0; outs.len()],
+        lma: vec![0; outs.len()],
+        symbols: Vec::new(),
+        end: 0,
+    };
+    let mut dot = 0u64;
+    let mut lma_delta = 0u64;
+    let mut known: std::collections::HashMap<String, u64> = Default::default();
+    let assign = |a: &Assignment,
+                  dot: &mut u64,
+                  known: &mut std::collections::HashMap<String, u64>,
+                  layout: &mut Layout,
+                  in_section: bool|
+     -> Result<(), String> {
+        let v = a.expr.eval(*dot, &|n| known.get(n).copied())?;
+        if a.name == "." {
+            if in_section {
+                return Err("`. =' inside an output section is not supported".into());
+            }
+            *dot = v;
+        } else {
+            known.insert(a.name.clone(), v);
+            layout.symbols.push((a.name.clone(), v, a.provide));
+        }
+        Ok(())
+    };
+    let items = |k: Option<usize>,
+                 o: &OutputSection,
+                 start: u64,
+                 known: &mut std::collections::HashMap<String, u64>,
+                 layout: &mut Layout|
+     -> Result<(), String> {
+        for (r, item) in o.items.iter().enumerate() {
+            if let Item::Assign(a) = item {
+                let end = k.map_or(0, |k| outs[k].item_ends.get(r).copied().unwrap_or(0));
+                let mut at = start + end;
+                assign(a, &mut at, known, layout, true)?;
+            }
+        }
+        Ok(())
+    };
+    for step in &steps {
+        match step {
+            Step::Assign(a) => assign(a, &mut dot, &mut known, &mut layout, false)?,
+            Step::Out(k, o) => {
+                let explicit = match &o.addr {
+                    Some(e) => Some(e.eval(dot, &|n| known.get(n).copied())?),
+                    None => None,
+                };
+                let Some(k) = *k else {
+                    items(None, o, explicit.unwrap_or(dot), &mut known, &mut layout)?;
+                    continue;
+                };
+                dot = match explicit {
+                    Some(a) => {
+                        lma_delta = 0;
+                        a
+                    }
+                    None => dot.next_multiple_of(outs[k].align.max(1)),
+                };
+                layout.addr[k] = dot;
+                layout.lma[k] = dot.wrapping_add(lma_delta);
+                items(Some(k), o, dot, &mut known, &mut layout)?;
+                if !outs[k].tbss {
+                    dot += outs[k].size;
+                }
+            }
+            Step::Orphan(k) => {
+                dot = dot.next_multiple_of(outs[*k].align.max(1));
+                layout.addr[*k] = dot;
+                layout.lma[*k] = dot.wrapping_add(lma_delta);
+                if !outs[*k].tbss {
+                    dot += outs[*k].size;
+                }
+            }
+            Step::Overlay(addr, members) => {
+                let base = match addr {
+                    Some(e) => e.eval(dot, &|n| known.get(n).copied())?,
+                    None => dot,
+                };
+                let mut lma = base;
+                let mut end = base;
+                for (k, o) in members {
+                    items(*k, o, base, &mut known, &mut layout)?;
+                    let Some(k) = *k else { continue };
+                    layout.addr[k] = base;
+                    layout.lma[k] = lma;
+                    lma_delta = lma - base;
+                    lma += outs[k].size;
+                    end = end.max(base + outs[k].size);
+                }
+                dot = end;
+            }
+        }
+    }
+    layout.end = dot;
+    Ok(layout)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
