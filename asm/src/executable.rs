@@ -338,6 +338,11 @@ pub fn write_overlaid(
     body.extend(&symtab);
     let strtab_off = image_off + body.len() as u32;
     body.extend(&strtab);
+    // BFD names its own tables first.
+    let tables = |shstr: &mut Vec<u8>| {
+        [".symtab", ".strtab", ".shstrtab"].map(|n| add_name(n, shstr))
+    };
+    let first = gnu_offsets.then(|| tables(&mut shstr));
     let names: Vec<u32> = sections
         .iter()
         .map(|s| add_name(&s.name, &mut shstr))
@@ -346,9 +351,7 @@ pub fn write_overlaid(
         .iter()
         .map(|u| add_name(&u.name, &mut shstr))
         .collect();
-    let symtab_name = add_name(".symtab", &mut shstr);
-    let strtab_name = add_name(".strtab", &mut shstr);
-    let shstrtab_name = add_name(".shstrtab", &mut shstr);
+    let [symtab_name, strtab_name, shstrtab_name] = first.unwrap_or_else(|| tables(&mut shstr));
     let shstr_off = image_off + body.len() as u32;
     body.extend(&shstr);
     align4(&mut body);

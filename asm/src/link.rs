@@ -917,14 +917,40 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             .map(crate::executable::Place::Section)
     };
     let mut out_symbols = Vec::new();
+    // With a script the symbol table is as GNU ld writes it (the default script's
+    // layout keeps today's): each input's locals after a FILE symbol naming it.
+    let gnu_symbols = script_layout.is_some();
     for (o, obj) in objects.iter().enumerate() {
+        let mut named = obj.symbols.iter().any(|s| s.kind == 4) || obj.name == crate::link_overlay::LINKER_OBJECT;
         for s in &obj.symbols {
             if s.global || s.name.starts_with(".L") || s.name.is_empty() {
+                continue;
+            }
+            if gnu_symbols && s.kind == 4 && s.section == SymSection::Absolute {
+                out_symbols.push(crate::executable::Symbol {
+                    name: s.name.clone(),
+                    value: s.value as u32,
+                    size: 0,
+                    kind: 4,
+                    bind: 0,
+                    place: crate::executable::Place::Absolute,
+                });
                 continue;
             }
             if let (SymSection::Section(i), Some(a)) =
                 (s.section, address_of(o, s.section, s.value))
             {
+                if gnu_symbols && !named {
+                    named = true;
+                    out_symbols.push(crate::executable::Symbol {
+                        name: obj.name.clone(),
+                        value: 0,
+                        size: 0,
+                        kind: 4,
+                        bind: 0,
+                        place: crate::executable::Place::Absolute,
+                    });
+                }
                 out_symbols.push(crate::executable::Symbol {
                     name: s.name.clone(),
                     value: a as u32,
@@ -943,6 +969,10 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         .chain(script.keys().copied())
         .collect();
     names.sort();
+    if gnu_symbols {
+        // GNU ld writes the globals as it walks its hash table, bucket by bucket.
+        names.sort_by_key(|n| bfd_hash_bucket(n));
+    }
     for n in names {
         if replaced.contains(n) {
             continue;
