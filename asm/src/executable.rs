@@ -228,7 +228,8 @@ pub fn write_overlaid(
                 .map(|s| s.addr + s.size)
                 .max();
             let Some(file_end) = file_end else {
-                seg_off[j] = 0;
+                // No contents: BFD gives it the offset its address has in a page.
+                seg_off[j] = start & (PAGE - 1);
                 for k in first..=last {
                     sec_off[k] = off.next_multiple_of(sections[k].align.max(1));
                 }
@@ -281,29 +282,62 @@ pub fn write_overlaid(
     };
     // Symbols: null, one per section, locals, globals.
     let mut symtab = vec![0u8; 16];
-    for (k, section) in sections.iter().enumerate() {
+    let note = |u: &Unloaded| u.name == ".note.spu_name";
+    // (header index, address) of each section symbol: the loaded sections', and as
+    // BFD writes them (`gnu_offsets`) every section's, in header order.
+    let mut section_symbols: Vec<(u16, u32)> = sections
+        .iter()
+        .enumerate()
+        .map(|(k, s)| (index[k], s.addr))
+        .collect();
+    if gnu_offsets {
+        for (n, t) in tail.iter().enumerate() {
+            if !t.1 {
+                let a = overlaid.note_addr.filter(|_| note(&unloaded[t.2]));
+                section_symbols.push(((early.len() + n + 1) as u16, a.unwrap_or(0)));
+            }
+        }
+        section_symbols.sort();
+    }
+    for &(index, addr) in &section_symbols {
         symtab.extend(be32(0));
-        symtab.extend(be32(section.addr));
+        symtab.extend(be32(addr));
         symtab.extend(be32(0));
         symtab.push(3); // STB_LOCAL, STT_SECTION
         symtab.push(0);
-        symtab.extend(be16(index[k]));
+        symtab.extend(be16(index));
     }
-    let note = |u: &Unloaded| u.name == ".note.spu_name";
-    let note_symbol = overlaid.note_addr.and_then(|a| {
-        let n = tail.iter().position(|t| !t.1 && note(&unloaded[t.2]))?;
-        symtab.extend(be32(0));
-        symtab.extend(be32(a));
-        symtab.extend(be32(0));
-        symtab.extend([3, 0]);
-        symtab.extend(be16((early.len() + n + 1) as u16));
-        Some(())
-    });
     let mut ordered: Vec<&Symbol> = symbols.iter().filter(|s| s.bind == 0).collect();
-    let first_global = sections.len() + 1 + ordered.len() + note_symbol.is_some() as usize;
+    let first_global = section_symbols.len() + 1 + ordered.len();
     ordered.extend(symbols.iter().filter(|s| s.bind != 0));
+    // BFD's string table keeps a name that ends another once, inside the longer one.
+    let merged: Option<std::collections::HashMap<&str, u32>> = gnu_offsets.then(|| {
+        let names: Vec<&str> = ordered.iter().map(|s| s.name.as_str()).collect();
+        let inside = |n: &str| {
+            names
+                .iter()
+                .find(|m| m.len() > n.len() && m.ends_with(n))
+                .copied()
+        };
+        let mut at = std::collections::HashMap::new();
+        for &n in &names {
+            if inside(n).is_none() && !at.contains_key(n) {
+                at.insert(n, add_name(n, &mut strtab));
+            }
+        }
+        for &n in &names {
+            if let Some(m) = inside(n) {
+                let off = at[m] + (m.len() - n.len()) as u32;
+                at.insert(n, off);
+            }
+        }
+        at
+    });
     for s in ordered {
-        let n = add_name(&s.name, &mut strtab);
+        let n = match &merged {
+            Some(at) => at[s.name.as_str()],
+            None => add_name(&s.name, &mut strtab),
+        };
         symtab.extend(be32(n));
         symtab.extend(be32(s.value));
         symtab.extend(be32(s.size));
@@ -323,7 +357,9 @@ pub fn write_overlaid(
         let end = (image_off as usize + v.len()).next_multiple_of(a.max(1) as usize);
         v.resize(end - image_off as usize, 0);
     };
-    file_align(&mut body, 16);
+    if !gnu_offsets {
+        file_align(&mut body, 16);
+    }
     let align4 = |v: &mut Vec<u8>| file_align(v, 4);
     let mut unloaded_off = Vec::new();
     for u in unloaded {

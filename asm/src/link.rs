@@ -784,18 +784,20 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         for st in &ov.stubs {
             let from = placed[&(ov.object, st.ovl as usize)] + st.offset;
             let (dest, dest_ovl) = match &st.dest {
-                crate::link_overlay::StubDest::Global(n) => {
+                crate::link_overlay::StubDest::Global(n, addend) => {
                     let d = &globals[n.as_str()];
                     let SymSection::Section(t) = d.section else {
                         continue;
                     };
                     (
-                        global_address(n).unwrap_or(0),
+                        global_address(n).unwrap_or(0).wrapping_add(*addend as u64),
                         buffer_of.get(&(d.object, t)).copied().unwrap_or(0),
                     )
                 }
                 crate::link_overlay::StubDest::At(o, t, v) => (
-                    placed.get(&(*o, *t)).map_or(0, |a| *a as u64 + v),
+                    placed
+                        .get(&(*o, *t))
+                        .map_or(0, |a| (*a as u64).wrapping_add(*v as u64)),
                     buffer_of.get(&(*o, *t)).copied().unwrap_or(0),
                 ),
             };
@@ -977,11 +979,23 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         if replaced.contains(n) {
             continue;
         }
-        let Some(a) = global_address(n) else { continue };
+        let Some(mut a) = global_address(n) else {
+            continue;
+        };
+        // spu_elf_output_symbol_hook: a `_SPUEAR_` symbol in an overlay is its stub.
+        let ear = overlays.as_ref().and_then(|ov| {
+            let &(_, st) = ov.ears.iter().find(|e| e.0 == n)?;
+            let st = &ov.stubs[st];
+            Some(placed[&(ov.object, st.ovl as usize)] + st.offset)
+        });
+        if let Some(stub) = ear {
+            a = stub as u64;
+        }
         let (size, kind, bind, place) = match (globals.get(n), common_at.contains_key(n)) {
             (Some(d), _) => {
                 let place = match d.section {
                     SymSection::Absolute => crate::executable::Place::Absolute,
+                    _ if ear.is_some() => place_of(a),
                     SymSection::Section(i) => {
                         section_place(d.object, i).unwrap_or_else(|| place_of(a))
                     }
@@ -1181,7 +1195,7 @@ fn text_rank(name: &str) -> u8 {
 
 /// The bucket of BFD's linker hash table (`bfd_hash_hash` on a 64-bit host, 4051
 /// buckets, its default size) a name falls in: the order GNU ld walks symbols in.
-fn bfd_hash_bucket(name: &str) -> u64 {
+pub(crate) fn bfd_hash_bucket(name: &str) -> u64 {
     let mut hash: u64 = 0;
     for &c in name.as_bytes() {
         hash = hash.wrapping_add(c as u64 + ((c as u64) << 17));

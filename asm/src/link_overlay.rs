@@ -52,8 +52,10 @@ pub struct Stub {
 
 #[derive(Clone, Debug)]
 pub enum StubDest {
-    Global(String),
-    At(usize, usize, u64),
+    /// A global and an addend.
+    Global(String, i64),
+    /// (object, section, offset): a local symbol or section plus the addend.
+    At(usize, usize, i64),
 }
 
 /// The overlays of a link and the stubs they need.
@@ -64,6 +66,8 @@ pub struct Overlays {
     pub stubs: Vec<Stub>,
     /// The stub each relocation (object, section, relocation index) goes through.
     pub redirect: HashMap<(usize, usize, usize), usize>,
+    /// `_SPUEAR_` symbols and their stubs: the output's symbol is the stub.
+    pub ears: Vec<(String, usize)>,
     /// The index of the linker's object among the inputs, and of its `.stub` sections
     /// (by overlay index), `.ovtab` and `.toe` in it.
     pub object: usize,
@@ -149,7 +153,7 @@ pub fn build(
                 let (key, dest, sec, kind) = match &r.target {
                     RelocTarget::Section(t) => (
                         Key::Section(o, *t),
-                        StubDest::At(o, *t, 0),
+                        StubDest::At(o, *t, r.addend),
                         (o, *t),
                         STT_SECTION,
                     ),
@@ -162,7 +166,7 @@ pub fn build(
                                 };
                                 (
                                     Key::Local(o, name.clone()),
-                                    StubDest::At(o, t, x.value),
+                                    StubDest::At(o, t, x.value as i64 + r.addend),
                                     (o, t),
                                     x.kind,
                                 )
@@ -174,7 +178,7 @@ pub fn build(
                                     }
                                     (
                                         Key::Global(name.clone()),
-                                        StubDest::Global(name.clone()),
+                                        StubDest::Global(name.clone(), r.addend),
                                         (d, t),
                                         kind,
                                     )
@@ -221,6 +225,22 @@ pub fn build(
             }
         }
     }
+    // allocate_spuear_stubs: a `_SPUEAR_` global defined in an overlay gets a
+    // non-overlay stub (the PPE side calls it there), after the relocations' stubs, in
+    // the order of GNU ld's symbol hash table.
+    let mut ears: Vec<(&str, usize, usize)> = globals
+        .iter()
+        .filter(|(n, _)| n.starts_with("_SPUEAR_"))
+        .filter_map(|(n, d)| match d.1 {
+            SymSection::Section(t) if ovl_of(d.0, t) != 0 => Some((*n, d.0, t)),
+            _ => None,
+        })
+        .collect();
+    ears.sort_by_key(|e| (crate::link::bfd_hash_bucket(e.0), e.0));
+    for &(name, ..) in &ears {
+        let key = Key::Global(name.to_string());
+        needs.push(((usize::MAX, 0, 0), 0, key, 0, StubDest::Global(name.to_string(), 0)));
+    }
     // count_stub: one stub per symbol and addend per overlay, a non-overlay one
     // replacing the others.
     let mut got: Vec<(Key, i64, u32)> = Vec::new();
@@ -260,7 +280,13 @@ pub fn build(
                 ov.stubs.len() - 1
             }
         };
-        ov.redirect.insert(at, stub);
+        if at.0 == usize::MAX {
+            if let Key::Global(n) = &key {
+                ov.ears.push((n.clone(), stub));
+            }
+        } else {
+            ov.redirect.insert(at, stub);
+        }
     }
     // The linker's object: `.stub` for each overlay index, `.ovtab`, `.toe`.
     let mut sections: Vec<ObjSection> = size
