@@ -375,9 +375,8 @@ pub fn write_overlaid(
     let strtab_off = image_off + body.len() as u32;
     body.extend(&strtab);
     // BFD names its own tables first.
-    let tables = |shstr: &mut Vec<u8>| {
-        [".symtab", ".strtab", ".shstrtab"].map(|n| add_name(n, shstr))
-    };
+    let tables =
+        |shstr: &mut Vec<u8>| [".symtab", ".strtab", ".shstrtab"].map(|n| add_name(n, shstr));
     let first = gnu_offsets.then(|| tables(&mut shstr));
     let names: Vec<u32> = sections
         .iter()

@@ -923,7 +923,8 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
     // layout keeps today's): each input's locals after a FILE symbol naming it.
     let gnu_symbols = script_layout.is_some();
     for (o, obj) in objects.iter().enumerate() {
-        let mut named = obj.symbols.iter().any(|s| s.kind == 4) || obj.name == crate::link_overlay::LINKER_OBJECT;
+        let mut named = obj.symbols.iter().any(|s| s.kind == 4)
+            || obj.name == crate::link_overlay::LINKER_OBJECT;
         for s in &obj.symbols {
             if s.global || s.name.starts_with(".L") || s.name.is_empty() {
                 continue;

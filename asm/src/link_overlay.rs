@@ -239,7 +239,13 @@ pub fn build(
     ears.sort_by_key(|e| (crate::link::bfd_hash_bucket(e.0), e.0));
     for &(name, ..) in &ears {
         let key = Key::Global(name.to_string());
-        needs.push(((usize::MAX, 0, 0), 0, key, 0, StubDest::Global(name.to_string(), 0)));
+        needs.push((
+            (usize::MAX, 0, 0),
+            0,
+            key,
+            0,
+            StubDest::Global(name.to_string(), 0),
+        ));
     }
     // count_stub: one stub per symbol and addend per overlay, a non-overlay one
     // replacing the others.
