@@ -231,19 +231,23 @@ pub fn write_overlaid(
                 // No contents: BFD gives it the offset its address has in a page.
                 seg_off[j] = start & (PAGE - 1);
                 for k in first..=last {
-                    sec_off[k] = off.next_multiple_of(sections[k].align.max(1));
+                    sec_off[k] = off + (sections[k].addr.wrapping_sub(off) & (PAGE - 1));
                 }
                 continue;
             };
             off += start.wrapping_sub(off) & (PAGE - 1);
             seg_off[j] = off;
             loaded.resize((off - image_off) as usize, 0);
+            // A NOBITS section stands where the file's contents have got to.
+            let mut pos = off;
             for k in first..=last {
                 let s = &sections[k];
-                sec_off[k] = off + (s.addr - start);
                 if s.nobits {
+                    sec_off[k] = pos;
                     continue;
                 }
+                sec_off[k] = off + (s.addr - start);
+                pos = sec_off[k] + s.size;
                 let data = match overlay_of(k) {
                     Some(o) => &o.2[..],
                     None => &image[s.addr as usize..(s.addr + s.size) as usize],
