@@ -499,3 +499,51 @@ fn ld_spu_overlay_tests_link_byte_identical() {
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// The project's overlay program (`tests/overlay/`: its script, two overlays in one
+/// region, its own overlay manager), assembled by GNU as and linked by both linkers with
+/// the script: the same file, byte for byte.
+#[test]
+#[cfg_attr(
+    not(has_binutils),
+    ignore = "needs GNU binutils for SPU: scripts/build-spu-binutils.sh"
+)]
+fn the_overlay_program_links_byte_identical() {
+    use spu_asm::link_script::{parse, Script};
+    let (gas, gld) = (Path::new(GNU_AS), sibling("ld"));
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("overlay");
+    let tmp = std::env::temp_dir().join(format!("spu-ld-ovlprog-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let mut objects = Vec::new();
+    for name in ["program", "manager"] {
+        let s = src.join(format!("{name}.s"));
+        let o = format!("{name}.o");
+        run(gas, &[s.to_str().unwrap(), "-o", &o], &tmp);
+        objects.push(Object::from_elf(&o, &std::fs::read(tmp.join(&o)).unwrap()).unwrap());
+    }
+    let script = src.join("overlay.ld");
+    let script = script.to_str().unwrap();
+    run(
+        &gld,
+        &["-T", script, "program.o", "manager.o", "-o", "prog.elf"],
+        &tmp,
+    );
+    let gnu = std::fs::read(tmp.join("prog.elf")).unwrap();
+    let text = std::fs::read_to_string(script).unwrap();
+    let opts = LinkOptions {
+        output: Some("prog.elf".into()),
+        script: Some(
+            Script::combine(vec![(script.into(), parse(script, &text).unwrap())]).unwrap(),
+        ),
+        ..Default::default()
+    };
+    let ours = link(&objects, &opts).unwrap().elf;
+    let _ = std::fs::remove_dir_all(&tmp);
+    let at = ours.iter().zip(&gnu).position(|(a, b)| a != b);
+    assert!(
+        ours == gnu,
+        "differs from GNU ld's at byte {at:?} (sizes {} and {})",
+        ours.len(),
+        gnu.len()
+    );
+}
