@@ -1,7 +1,8 @@
 //! `spu ld`: links relocatable SPU objects into an executable local-store image, as GNU
 //! ld's default SPU script lays it out (code, read-only data, data, bss, commons at the
 //! end of bss), resolving symbols across objects and applying the SPU relocations.
-//! Overlays are not supported (docs/linker.md).
+//! With a script (`-T`, `link_script`) it lays out as the script says and builds SPU
+//! overlays (`link_overlay`); docs/linker.md.
 
 use crate::archive::Archive;
 use crate::object::{
