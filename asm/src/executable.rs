@@ -146,7 +146,7 @@ pub fn write(
     )
 }
 
-/// [`write`] for a program with overlays: each overlay section in a segment of its own
+/// [`write()`] for a program with overlays: each overlay section in a segment of its own
 /// flagged `PF_OVERLAY`, those segments first, and the file laid out as BFD lays it
 /// out (each segment after the last, at an offset congruent to its address modulo the
 /// page), since the overlay table names the overlays' file offsets.

@@ -122,7 +122,7 @@ pub fn build(
             }
         }
     }
-    if globals.get(OVLY_LOAD).is_none() {
+    if !globals.contains_key(OVLY_LOAD) {
         return Err(vec![format!(
             "overlays need an overlay manager: no `{OVLY_LOAD}' is defined (spu ld does \
              not carry GNU ld's built-in one; link one, e.g. tests/overlay/manager.s)"
