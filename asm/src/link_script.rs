@@ -172,6 +172,7 @@ pub fn parse(file: &str, text: &str) -> Result<Script, String> {
         file,
         text: text.as_bytes(),
         at: 0,
+        depth: 0,
     };
     p.script()
 }
@@ -180,7 +181,13 @@ struct Parser<'a> {
     file: &'a str,
     text: &'a [u8],
     at: usize,
+    /// How deep the expression being read nests (bounded: a script cannot exhaust the
+    /// stack).
+    depth: usize,
 }
+
+/// The deepest nesting of parentheses an expression may have.
+const MAX_DEPTH: usize = 64;
 
 /// Characters of a name or pattern (GNU ld's script names allow these).
 fn name_char(c: u8) -> bool {
@@ -510,8 +517,14 @@ impl Parser<'_> {
         let at = self.at;
         match self.peek()? {
             Some(b'(') => {
+                if self.depth >= MAX_DEPTH {
+                    return Err(self.error(at, "expression nested too deeply"));
+                }
                 self.at += 1;
-                let e = self.expr()?;
+                self.depth += 1;
+                let e = self.expr();
+                self.depth -= 1;
+                let e = e?;
                 self.expect(b')')?;
                 return Ok(e);
             }
@@ -683,6 +696,9 @@ pub(crate) fn lay_out(script: &Script, outs: &[Placed]) -> Result<Layout, String
         if a.name == "." {
             if in_section {
                 return Err("`. =' inside an output section is not supported".into());
+            }
+            if v > u32::MAX as u64 {
+                return Err(format!("`. = {v:#x}': outside the 32-bit address space"));
             }
             *dot = v;
         } else {
@@ -862,6 +878,13 @@ mod tests {
         );
         let e = parse("x.ld", "SECTIONS { /* open").unwrap_err();
         assert_eq!(e, "x.ld:1:12: unterminated comment");
+        let deep = format!(
+            "SECTIONS {{ . = {}1{}; }}",
+            "(".repeat(100_000),
+            ")".repeat(100_000)
+        );
+        let e = parse("x.ld", &deep).unwrap_err();
+        assert_eq!(e, "x.ld:1:80: expression nested too deeply");
         let e = parse("x.ld", "SECTIONS { . = SIZEOF(.text); }").unwrap_err();
         assert_eq!(e, "x.ld:1:16: the function `SIZEOF' is not supported");
     }
