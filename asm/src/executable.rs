@@ -69,6 +69,29 @@ pub struct Symbol {
     pub place: Place,
 }
 
+/// What an executable with overlays adds (`spu ld -T` with `OVERLAY`).
+#[derive(Clone, Debug, Default)]
+pub struct Overlaid {
+    /// (section index, overlay index, contents) of each overlay section: its contents
+    /// are its own, not the image's at its address.
+    pub overlays: Vec<(usize, u32, Vec<u8>)>,
+    /// Each section's load address (LMA), for the program headers' `p_paddr`.
+    pub lma: Vec<u32>,
+    /// The address of the overlay table (`.ovtab`, in the image): each overlay's file
+    /// offset goes into its entry, as `spu_elf_modify_headers` writes it.
+    pub table: Option<u32>,
+    /// A section that stands in a segment of its own (`.toe`).
+    pub alone: Option<usize>,
+    /// Where a linker script leaves `.note.spu_name` (an orphan, at the location
+    /// counter's end), which then has an address and a section symbol.
+    pub note_addr: Option<u32>,
+    /// The file laid out as BFD lays it out (see [`write_overlaid`]).
+    pub gnu_offsets: bool,
+}
+
+/// `PF_OVERLAY`: the program header flag of an overlay's segment.
+pub const PF_OVERLAY: u32 = 0x0800_0000;
+
 fn be16(v: u16) -> [u8; 2] {
     v.to_be_bytes()
 }
@@ -78,7 +101,7 @@ fn be32(v: u32) -> [u8; 4] {
 
 /// The program headers: (flags, first section, last section) for each run of allocated
 /// sections (in address order) with the same permissions.
-fn segments(sections: &[Section]) -> Vec<(u32, usize, usize)> {
+fn segments(sections: &[Section], alone: &dyn Fn(usize) -> bool) -> Vec<(u32, usize, usize)> {
     let mut out: Vec<(u32, usize, usize)> = Vec::new();
     for (i, s) in sections.iter().enumerate() {
         if s.flags & SHF_ALLOC == 0 || (s.nobits && s.flags & SHF_TLS != 0) {
@@ -89,7 +112,12 @@ fn segments(sections: &[Section]) -> Vec<(u32, usize, usize)> {
         let write = if s.flags & SHF_WRITE != 0 { 2 } else { 0 };
         let exec = if s.flags & SHF_EXECINSTR != 0 { 1 } else { 0 };
         match out.last_mut() {
-            Some(last) if last.0 & 2 == write && s.late == sections[last.2].late => {
+            Some(last)
+                if last.0 & 2 == write
+                    && s.late == sections[last.2].late
+                    && !alone(i)
+                    && !alone(last.2) =>
+            {
                 last.0 |= exec;
                 last.2 = i;
             }
@@ -108,7 +136,34 @@ pub fn write(
     symbols: &[Symbol],
     entry: u32,
 ) -> Vec<u8> {
-    let segs = segments(sections);
+    write_overlaid(
+        image,
+        sections,
+        unloaded,
+        symbols,
+        entry,
+        &Overlaid::default(),
+    )
+}
+
+/// [`write()`] for a program with overlays: each overlay section in a segment of its own
+/// flagged `PF_OVERLAY`, those segments first, and the file laid out as BFD lays it
+/// out (each segment after the last, at an offset congruent to its address modulo the
+/// page), since the overlay table names the overlays' file offsets.
+pub fn write_overlaid(
+    image: &[u8],
+    sections: &[Section],
+    unloaded: &[Unloaded],
+    symbols: &[Symbol],
+    entry: u32,
+    overlaid: &Overlaid,
+) -> Vec<u8> {
+    let overlay_of = |k: usize| overlaid.overlays.iter().find(|o| o.0 == k);
+    let alone = |k: usize| overlay_of(k).is_some() || overlaid.alone == Some(k);
+    let mut segs = segments(sections, &alone);
+    // spu_elf_modify_segment_map: the overlays' segments first.
+    segs.sort_by_key(|s| overlay_of(s.1).map_or(u32::MAX, |o| o.1));
+    let gnu_offsets = overlaid.gnu_offsets || !overlaid.overlays.is_empty();
     // The section headers' order: the loaded sections, then the unloaded and late ones
     // by the script's order; `index[k]` is loaded section k's header index.
     let mut tail: Vec<(usize, bool, usize)> = unloaded
@@ -147,7 +202,80 @@ pub fn write(
     let ehsize = 52u32;
     let phoff = ehsize;
     // The image at an offset congruent to address 0 modulo the page, after the headers.
-    let image_off = (ehsize + 32 * phnum as u32).div_ceil(PAGE) * PAGE;
+    let image_off = if gnu_offsets {
+        ehsize + 32 * phnum as u32
+    } else {
+        (ehsize + 32 * phnum as u32).div_ceil(PAGE) * PAGE
+    };
+    // Where each segment and section stands in the file (`seg_off`, `sec_off`) and the
+    // loaded contents from `image_off` on (`loaded`).
+    let mut seg_off: Vec<u32> = segs
+        .iter()
+        .map(|s| image_off + sections[s.1].addr)
+        .collect();
+    let mut sec_off: Vec<u32> = sections.iter().map(|s| image_off + s.addr).collect();
+    let mut loaded = image.to_vec();
+    if gnu_offsets {
+        // BFD's assign_file_positions_for_load_sections: each segment with contents
+        // after the last, at an offset congruent to its address modulo the page.
+        loaded.clear();
+        let mut off = image_off;
+        for (j, &(_, first, last)) in segs.iter().enumerate() {
+            let start = sections[first].addr;
+            let file_end = sections[first..=last]
+                .iter()
+                .filter(|s| !s.nobits)
+                .map(|s| s.addr + s.size)
+                .max();
+            let Some(file_end) = file_end else {
+                // No contents: BFD gives it the offset its address has in a page.
+                seg_off[j] = start & (PAGE - 1);
+                for k in first..=last {
+                    sec_off[k] = off + (sections[k].addr.wrapping_sub(off) & (PAGE - 1));
+                }
+                continue;
+            };
+            off += start.wrapping_sub(off) & (PAGE - 1);
+            seg_off[j] = off;
+            loaded.resize((off - image_off) as usize, 0);
+            // A NOBITS section stands where the file's contents have got to.
+            let mut pos = off;
+            for k in first..=last {
+                let s = &sections[k];
+                if s.nobits {
+                    sec_off[k] = pos;
+                    continue;
+                }
+                sec_off[k] = off + (s.addr - start);
+                pos = sec_off[k] + s.size;
+                let data = match overlay_of(k) {
+                    Some(o) => &o.2[..],
+                    None => &image[s.addr as usize..(s.addr + s.size) as usize],
+                };
+                let at = (sec_off[k] - image_off) as usize;
+                loaded.resize(loaded.len().max(at + data.len()), 0);
+                loaded[at..at + data.len()].copy_from_slice(data);
+            }
+            off += file_end - start;
+        }
+        // spu_elf_modify_headers: each overlay's file offset into `_ovly_table`.
+        if let Some(table) = overlaid.table {
+            let k = (0..sections.len())
+                .find(|&k| table >= sections[k].addr && table < sections[k].addr + sections[k].size)
+                .filter(|&k| overlay_of(k).is_none());
+            for (j, seg) in segs.iter().enumerate() {
+                let (Some(k), Some(o)) = (k, overlay_of(seg.1)) else {
+                    continue;
+                };
+                let at = (sec_off[k] - image_off + (table - sections[k].addr)) as usize
+                    + 16 * o.1 as usize
+                    + 8;
+                if at + 4 <= loaded.len() {
+                    loaded[at..at + 4].copy_from_slice(&be32(seg_off[j]));
+                }
+            }
+        }
+    }
     let mut shstr = vec![0u8];
     let mut strtab = vec![0u8];
     let add_name = |s: &str, table: &mut Vec<u8>| {
@@ -158,19 +286,62 @@ pub fn write(
     };
     // Symbols: null, one per section, locals, globals.
     let mut symtab = vec![0u8; 16];
-    for (k, section) in sections.iter().enumerate() {
+    let note = |u: &Unloaded| u.name == ".note.spu_name";
+    // (header index, address) of each section symbol: the loaded sections', and as
+    // BFD writes them (`gnu_offsets`) every section's, in header order.
+    let mut section_symbols: Vec<(u16, u32)> = sections
+        .iter()
+        .enumerate()
+        .map(|(k, s)| (index[k], s.addr))
+        .collect();
+    if gnu_offsets {
+        for (n, t) in tail.iter().enumerate() {
+            if !t.1 {
+                let a = overlaid.note_addr.filter(|_| note(&unloaded[t.2]));
+                section_symbols.push(((early.len() + n + 1) as u16, a.unwrap_or(0)));
+            }
+        }
+        section_symbols.sort();
+    }
+    for &(index, addr) in &section_symbols {
         symtab.extend(be32(0));
-        symtab.extend(be32(section.addr));
+        symtab.extend(be32(addr));
         symtab.extend(be32(0));
         symtab.push(3); // STB_LOCAL, STT_SECTION
         symtab.push(0);
-        symtab.extend(be16(index[k]));
+        symtab.extend(be16(index));
     }
     let mut ordered: Vec<&Symbol> = symbols.iter().filter(|s| s.bind == 0).collect();
-    let first_global = sections.len() + 1 + ordered.len();
+    let first_global = section_symbols.len() + 1 + ordered.len();
     ordered.extend(symbols.iter().filter(|s| s.bind != 0));
+    // BFD's string table keeps a name that ends another once, inside the longer one.
+    let merged: Option<std::collections::HashMap<&str, u32>> = gnu_offsets.then(|| {
+        let names: Vec<&str> = ordered.iter().map(|s| s.name.as_str()).collect();
+        let inside = |n: &str| {
+            names
+                .iter()
+                .find(|m| m.len() > n.len() && m.ends_with(n))
+                .copied()
+        };
+        let mut at = std::collections::HashMap::new();
+        for &n in &names {
+            if inside(n).is_none() && !at.contains_key(n) {
+                at.insert(n, add_name(n, &mut strtab));
+            }
+        }
+        for &n in &names {
+            if let Some(m) = inside(n) {
+                let off = at[m] + (m.len() - n.len()) as u32;
+                at.insert(n, off);
+            }
+        }
+        at
+    });
     for s in ordered {
-        let n = add_name(&s.name, &mut strtab);
+        let n = match &merged {
+            Some(at) => at[s.name.as_str()],
+            None => add_name(&s.name, &mut strtab),
+        };
         symtab.extend(be32(n));
         symtab.extend(be32(s.value));
         symtab.extend(be32(s.size));
@@ -182,14 +353,21 @@ pub fn write(
             Place::Undefined => 0,
         }));
     }
-    let mut body = image.to_vec();
+    let mut body = loaded;
     // Zeros to the next 16 bytes: the LOAD sizes are rounded up to 16 (`round_loads`),
     // and what they load past the last section must be zeros, as in GNU ld's file.
-    body.resize(body.len().next_multiple_of(16), 0);
-    let align4 = |v: &mut Vec<u8>| v.resize(v.len().next_multiple_of(4), 0);
+    // (Alignments are of file offsets: the body starts at `image_off`.)
+    let file_align = |v: &mut Vec<u8>, a: u32| {
+        let end = (image_off as usize + v.len()).next_multiple_of(a.max(1) as usize);
+        v.resize(end - image_off as usize, 0);
+    };
+    if !gnu_offsets {
+        file_align(&mut body, 16);
+    }
+    let align4 = |v: &mut Vec<u8>| file_align(v, 4);
     let mut unloaded_off = Vec::new();
     for u in unloaded {
-        body.resize(body.len().next_multiple_of(u.align.max(1) as usize), 0);
+        file_align(&mut body, u.align);
         unloaded_off.push(image_off + body.len() as u32);
         if u.ty != SHT_NOBITS {
             body.extend(&u.data);
@@ -200,6 +378,10 @@ pub fn write(
     body.extend(&symtab);
     let strtab_off = image_off + body.len() as u32;
     body.extend(&strtab);
+    // BFD names its own tables first.
+    let tables =
+        |shstr: &mut Vec<u8>| [".symtab", ".strtab", ".shstrtab"].map(|n| add_name(n, shstr));
+    let first = gnu_offsets.then(|| tables(&mut shstr));
     let names: Vec<u32> = sections
         .iter()
         .map(|s| add_name(&s.name, &mut shstr))
@@ -208,9 +390,7 @@ pub fn write(
         .iter()
         .map(|u| add_name(&u.name, &mut shstr))
         .collect();
-    let symtab_name = add_name(".symtab", &mut shstr);
-    let strtab_name = add_name(".strtab", &mut shstr);
-    let shstrtab_name = add_name(".shstrtab", &mut shstr);
+    let [symtab_name, strtab_name, shstrtab_name] = first.unwrap_or_else(|| tables(&mut shstr));
     let shstr_off = image_off + body.len() as u32;
     body.extend(&shstr);
     align4(&mut body);
@@ -249,24 +429,29 @@ pub fn write(
                 .map(end)
                 .max()
                 .unwrap_or(start);
-            [
-                image_off + start,
-                start,
-                file_end - start,
-                mem_end - start,
-                flags,
-            ]
+            [start, start, file_end - start, mem_end - start, flags]
         })
         .collect();
+    for (j, l) in loads.iter_mut().enumerate() {
+        l[0] = seg_off[j];
+    }
     round_loads(&mut loads);
-    for [off, addr, filesz, memsz, flags] in loads {
-        for v in [1, off, addr, addr, filesz, memsz, flags, PAGE] {
+    for (j, [off, addr, filesz, memsz, flags]) in loads.into_iter().enumerate() {
+        let first = segs[j].1;
+        let paddr = overlaid.lma.get(first).copied().unwrap_or(addr);
+        let flags = if overlay_of(first).is_some() {
+            flags | PF_OVERLAY
+        } else {
+            flags
+        };
+        for v in [1, off, addr, paddr, filesz, memsz, flags, PAGE] {
             out.extend(be32(v));
         }
     }
     for (u, &off) in unloaded.iter().zip(&unloaded_off) {
         if u.ty == SHT_NOTE {
-            for v in [4, off, 0, 0, u.data.len() as u32, 0, 4, u.align] {
+            let a = overlaid.note_addr.filter(|_| note(u)).unwrap_or(0);
+            for v in [4, off, a, a, u.data.len() as u32, 0, 4, u.align] {
                 out.extend(be32(v));
             }
         }
@@ -279,20 +464,21 @@ pub fn write(
         }
     };
     sh(&mut out, [0; 10]);
-    let loaded_header = |out: &mut Vec<u8>, s: &Section, n: u32| {
+    let loaded_header = |out: &mut Vec<u8>, k: usize, n: u32| {
+        let s = &sections[k];
         let ty = s.ty;
         // GNU ld keeps SHF_STRINGS on an output section and drops SHF_MERGE.
         let flags =
             (s.flags & (SHF_ALLOC | SHF_WRITE | SHF_EXECINSTR | SHF_TLS | SHF_STRINGS)) as u32;
-        let off = image_off + s.addr;
+        let off = sec_off[k];
         sh(out, [n, ty, flags, s.addr, off, s.size, 0, 0, s.align, 0]);
     };
     for &k in &early {
-        loaded_header(&mut out, &sections[k], names[k]);
+        loaded_header(&mut out, k, names[k]);
     }
     for &(_, late, j) in &tail {
         if late {
-            loaded_header(&mut out, &sections[j], names[j]);
+            loaded_header(&mut out, j, names[j]);
             continue;
         }
         let (u, n, off) = (&unloaded[j], unloaded_names[j], unloaded_off[j]);
@@ -304,7 +490,7 @@ pub fn write(
                 n,
                 u.ty,
                 flags,
-                0,
+                overlaid.note_addr.filter(|_| note(u)).unwrap_or(0),
                 off,
                 size,
                 0,

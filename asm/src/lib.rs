@@ -18,6 +18,8 @@ mod gas;
 mod lex;
 pub mod link;
 mod link_debug;
+pub mod link_overlay;
+pub mod link_script;
 pub mod object;
 mod object_write;
 pub mod reloc;

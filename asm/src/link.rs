@@ -1,7 +1,8 @@
 //! `spu ld`: links relocatable SPU objects into an executable local-store image, as GNU
 //! ld's default SPU script lays it out (code, read-only data, data, bss, commons at the
 //! end of bss), resolving symbols across objects and applying the SPU relocations.
-//! Overlays are not supported (docs/linker.md).
+//! With a script (`-T`, `link_script`) it lays out as the script says and builds SPU
+//! overlays (`link_overlay`); docs/linker.md.
 
 use crate::archive::Archive;
 use crate::object::{
@@ -19,6 +20,8 @@ pub struct LinkOptions {
     /// The output file's name as given (`-o`; default `a.out`), which GNU ld's SPU
     /// backend records in the `.note.spu_name` note for the PPE's embedder.
     pub output: Option<String>,
+    /// The linker script (`-T`, combined): its layout replaces the default script's.
+    pub script: Option<crate::link_script::Script>,
 }
 
 /// One input of a link, in command-line order.
@@ -230,6 +233,54 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
     } else {
         objects
     };
+    let script = opts.script.as_ref();
+    // Where a script puts each input section: (output section, its statement, 1-based).
+    let script_place = |objects: &[Object]| -> HashMap<(usize, usize), (String, u32)> {
+        let mut at = HashMap::new();
+        for (o, obj) in objects.iter().enumerate() {
+            for (i, s) in obj.sections.iter().enumerate() {
+                if s.flags & SHF_ALLOC == 0 || s.flags & SHF_EXCLUDE != 0 {
+                    continue;
+                }
+                let place = script
+                    .and_then(|sc| sc.assign(&obj.name, &s.name))
+                    .unwrap_or_else(|| (s.name.clone(), 0));
+                at.insert((o, i), place);
+            }
+        }
+        at
+    };
+    // Overlays: the script's OVERLAY members that receive something, their stubs and
+    // tables (the linker's own object, appended to the inputs).
+    let with_overlays;
+    let mut overlays = None;
+    let objects = match script {
+        Some(sc) if !sc.overlay_regions().is_empty() => {
+            let at = script_place(objects);
+            let filled = |name: &str| {
+                at.iter()
+                    .any(|(&(o, i), p)| p.0 == name && objects[o].sections[i].size > 0)
+            };
+            let regions: Vec<Vec<String>> = sc
+                .overlay_regions()
+                .into_iter()
+                .map(|r| r.into_iter().filter(|m| filled(m)).collect::<Vec<_>>())
+                .filter(|r| !r.is_empty())
+                .collect();
+            let mut all = objects.to_vec();
+            if !regions.is_empty() {
+                let ov = crate::link_overlay::build(&mut all, &regions, &|o, i| {
+                    at.get(&(o, i)).map(|p| p.0.clone())
+                })?;
+                overlays = Some(ov);
+            }
+            with_overlays = all;
+            &with_overlays[..]
+        }
+        _ => objects,
+    };
+    let placement_of = script.map(|_| script_place(objects));
+    let mut rank: HashMap<(usize, usize), u32> = HashMap::new();
     let mut errors = Vec::new();
     // Output sections in GNU ld's order.
     let mut outs: Vec<OutSection> = Vec::new();
@@ -238,7 +289,33 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             if s.flags & SHF_ALLOC == 0 || s.flags & SHF_EXCLUDE != 0 {
                 continue;
             }
-            let name = output_name(&s.name);
+            let name = match (&overlays, &placement_of) {
+                // The linker's sections go where GNU ld's SPU backend puts them
+                // (`spu_place_special_section`): the non-overlay stubs at the end of
+                // `.text`, an overlay's at its start, `.ovtab` at the end of `.data`.
+                (Some(ov), _) if o == ov.object => {
+                    if s.size == 0 {
+                        continue;
+                    }
+                    let (name, r) = if i == 0 {
+                        (".text".to_string(), u32::MAX)
+                    } else if i <= ov.sections.len() {
+                        (ov.sections[i - 1].name.clone(), 0)
+                    } else if i == ov.ovtab {
+                        (".data".to_string(), u32::MAX)
+                    } else {
+                        (".toe".to_string(), u32::MAX)
+                    };
+                    rank.insert((o, i), r);
+                    name
+                }
+                (_, Some(at)) => {
+                    let (name, r) = at[&(o, i)].clone();
+                    rank.insert((o, i), r);
+                    name
+                }
+                _ => output_name(&s.name),
+            };
             let k = match outs.iter().position(|x| x.name == name) {
                 Some(k) => k,
                 None => {
@@ -270,7 +347,10 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
     }
     // The inputs in the script's order (`.text.hot` before `.text`...), then laid out.
     for out in &mut outs {
-        if out.name == ".text" {
+        if script.is_some() {
+            out.inputs
+                .sort_by_key(|&(o, i, _)| rank.get(&(o, i)).copied().unwrap_or(0));
+        } else if out.name == ".text" {
             out.inputs.sort_by_cached_key(|&(o, i, _)| {
                 let name = &objects[o].sections[i].name;
                 let rank = text_rank(name);
@@ -295,6 +375,14 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             let at = out.size.div_ceil(s.align.max(1)) * s.align.max(1);
             input.2 = at;
             out.size = at.saturating_add(s.size);
+        }
+    }
+    // spu_before_allocation: an overlay section is DMAed whole, so it is aligned to
+    // 16 bytes and padded to a multiple of 16.
+    if let Some(ov) = &overlays {
+        for out in outs.iter_mut().filter(|x| ov.index_of(&x.name) != 0) {
+            out.align = out.align.max(16);
+            out.size = out.size.next_multiple_of(16);
         }
     }
     // Global symbols: strong over weak over common; two strong ones are an error.
@@ -470,8 +558,55 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
     // GNU ld's `. = DATA_ADDR` after the read-only sections: the first writable section
     // starts there, and `_edata` and `_end` stand past it even when there is none.
     let mut data_start = None;
+    // A script's layout (`-T`) in place of the default script's.
+    let script_layout = match script {
+        Some(sc) => {
+            let placed: Vec<crate::link_script::Placed> = outs
+                .iter()
+                .map(|x| {
+                    let last = x
+                        .inputs
+                        .iter()
+                        .map(|&(o, i, _)| rank.get(&(o, i)).copied().unwrap_or(0))
+                        .filter(|&r| r != u32::MAX)
+                        .max()
+                        .unwrap_or(0);
+                    let item_ends = (1..=last.max(1) + 8)
+                        .map(|r| {
+                            x.inputs
+                                .iter()
+                                .filter(|&&(o, i, _)| rank.get(&(o, i)).copied().unwrap_or(0) <= r)
+                                .map(|&(o, i, at)| at as u64 + objects[o].sections[i].size as u64)
+                                .max()
+                                .unwrap_or(0)
+                        })
+                        .collect();
+                    crate::link_script::Placed {
+                        name: x.name.clone(),
+                        size: x.size as u64,
+                        align: x.align.max(1) as u64,
+                        class: script_placement(&x.name, x.ty, x.flags).0,
+                        tbss: is_tbss(x),
+                        item_ends,
+                    }
+                })
+                .collect();
+            let file = "the linker script";
+            Some(
+                crate::link_script::lay_out(sc, &placed)
+                    .map_err(|e| vec![format!("{file}: {e}")])?,
+            )
+        }
+        None => None,
+    };
     for (n, &k) in order.iter().enumerate() {
         let class = script_placement(&outs[k].name, outs[k].ty, outs[k].flags).0;
+        if class != 5 {
+            if let Some(l) = &script_layout {
+                outs[k].addr = l.addr[k].min(u32::MAX as u64) as u32;
+                continue;
+            }
+        }
         if class == 5 {
             let a = outs[k].align.max(1) as u64;
             let at = if crate::link_debug::in_script(&outs[k].name) {
@@ -527,9 +662,20 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                 a.name, a.addr, a_end
             ));
         }
+        let buf_of = |x: &OutSection| {
+            overlays
+                .as_ref()
+                .and_then(|ov| ov.sections.iter().find(|s| s.name == x.name).map(|s| s.buf))
+        };
         for b in &outs[i + 1..] {
             let b_end = b.addr as u64 + b.size as u64;
-            if a.size > 0 && b.size > 0 && (a.addr as u64) < b_end && (b.addr as u64) < a_end {
+            let same_region = buf_of(a).is_some() && buf_of(a) == buf_of(b);
+            if a.size > 0
+                && b.size > 0
+                && !same_region
+                && (a.addr as u64) < b_end
+                && (b.addr as u64) < a_end
+            {
                 errors.push(format!("section {} overlaps section {}", a.name, b.name));
             }
         }
@@ -576,7 +722,7 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
     let edata = end_of(&|x| x.ty != SHT_NOBITS)
         .unwrap_or(opts.text_addr as u64)
         .max(data_start);
-    let script: HashMap<&str, u64> = [
+    let defaults = [
         ("_edata", edata),
         ("__bss_start", edata),
         ("_end", end.max(edata).next_multiple_of(16)),
@@ -588,8 +734,20 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         ("__stack", 0x3fff0),
     ]
     .into_iter()
+    .filter(|(n, _)| !PROVIDED.contains(n) || referenced(objects, n));
+    let script: HashMap<&str, u64> = match &script_layout {
+        // A script's own assignments (`PROVIDE`d ones where referenced), and none of
+        // the default script's.
+        Some(l) => l
+            .symbols
+            .iter()
+            .filter(|(n, _, provide)| !provide || referenced(objects, n))
+            .map(|(n, v, _)| (n.as_str(), *v))
+            .collect::<Vec<_>>(),
+        None => defaults.collect(),
+    }
+    .into_iter()
     .filter(|(n, _)| !globals.contains_key(*n) && !common_at.contains_key(*n))
-    .filter(|(n, _)| !PROVIDED.contains(n) || referenced(objects, n))
     .collect();
     let global_address = |name: &str| -> Option<u64> {
         if let Some(d) = globals.get(name) {
@@ -600,14 +758,70 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         }
         script.get(name).copied()
     };
-    let mut image = vec![0u8; image_end as usize];
-    for out in &outs {
+    // Local store from 0, and for each overlay its own copy where its section's
+    // contents are put and relocated (the overlays share their addresses).
+    let ovl_index = |name: &str| overlays.as_ref().map_or(0, |ov| ov.index_of(name)) as usize;
+    let mut buffers = vec![vec![0u8; image_end as usize]];
+    if let Some(ov) = &overlays {
+        buffers.resize(ov.sections.len() + 1, vec![0u8; image_end as usize]);
+    }
+    let mut buffer_of: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut out_of_input: HashMap<(usize, usize), usize> = HashMap::new();
+    for (k, out) in outs.iter().enumerate() {
+        let b = ovl_index(&out.name);
         for &(o, i, at) in &out.inputs {
+            buffer_of.insert((o, i), b);
+            out_of_input.insert((o, i), k);
             let s = &objects[o].sections[i];
             if s.ty != SHT_NOBITS {
                 let start = (out.addr + at) as usize;
                 let n = s.data.len().min(s.size as usize);
-                image[start..start + n].copy_from_slice(&s.data[..n]);
+                buffers[b][start..start + n].copy_from_slice(&s.data[..n]);
+            }
+        }
+    }
+    if let Some(ov) = &overlays {
+        let load = global_address(crate::link_overlay::OVLY_LOAD).unwrap_or(0) as u32;
+        for st in &ov.stubs {
+            let from = placed[&(ov.object, st.ovl as usize)] + st.offset;
+            let (dest, dest_ovl) = match &st.dest {
+                crate::link_overlay::StubDest::Global(n, addend) => {
+                    let d = &globals[n.as_str()];
+                    let SymSection::Section(t) = d.section else {
+                        continue;
+                    };
+                    (
+                        global_address(n).unwrap_or(0).wrapping_add(*addend as u64),
+                        buffer_of.get(&(d.object, t)).copied().unwrap_or(0),
+                    )
+                }
+                crate::link_overlay::StubDest::At(o, t, v) => (
+                    placed
+                        .get(&(*o, *t))
+                        .map_or(0, |a| (*a as u64).wrapping_add(*v as u64)),
+                    buffer_of.get(&(*o, *t)).copied().unwrap_or(0),
+                ),
+            };
+            match crate::link_overlay::stub_words(from, dest as u32, dest_ovl as u32, load) {
+                Ok(words) => {
+                    let b = &mut buffers[st.ovl as usize];
+                    for (n, w) in words.iter().enumerate() {
+                        let at = from as usize + 4 * n;
+                        b[at..at + 4].copy_from_slice(&w.to_be_bytes());
+                    }
+                }
+                Err(e) => errors.push(e),
+            }
+        }
+        let table = placed[&(ov.object, ov.ovtab)] as usize;
+        for s in &ov.sections {
+            let Some(x) = outs.iter().find(|x| x.name == s.name) else {
+                continue;
+            };
+            let entry = crate::link_overlay::table_entry(x.addr, x.size, s.buf);
+            for (n, w) in entry.iter().enumerate() {
+                let at = table + 16 * s.index as usize + 4 * n;
+                buffers[0][at..at + 4].copy_from_slice(&w.to_be_bytes());
             }
         }
     }
@@ -628,8 +842,15 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             let Some(&base) = placed.get(&(o, i)) else {
                 continue;
             };
-            for r in &s.relocs {
+            let b = buffer_of.get(&(o, i)).copied().unwrap_or(0);
+            for (ri, r) in s.relocs.iter().enumerate() {
+                // A reference that goes through an overlay stub.
+                let stub = overlays.as_ref().and_then(|ov| {
+                    let st = &ov.stubs[*ov.redirect.get(&(o, i, ri))?];
+                    Some(placed[&(ov.object, st.ovl as usize)] as u64 + st.offset as u64)
+                });
                 let target = match &r.target {
+                    _ if stub.is_some() => stub,
                     RelocTarget::Section(t) => placed.get(&(o, *t)).map(|a| *a as u64),
                     RelocTarget::Symbol(n) if n.is_empty() => Some(0),
                     RelocTarget::Symbol(n) => match locals.get(n.as_str()) {
@@ -651,8 +872,9 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
                     ));
                     continue;
                 };
-                let value = sv as i64 + r.addend;
-                if let Err(m) = crate::reloc::apply(r.kind, &mut image, base + r.offset, value) {
+                let value = sv as i64 + if stub.is_some() { 0 } else { r.addend };
+                if let Err(m) = crate::reloc::apply(r.kind, &mut buffers[b], base + r.offset, value)
+                {
                     errors.push(format!(
                         "{}: {}+{:#x}: {m} against `{what}'",
                         obj.name, s.name, r.offset
@@ -689,25 +911,57 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             .position(|x| addr >= x.addr as u64 && addr < x.addr as u64 + x.size.max(1) as u64)
             .map_or(Place::Absolute, Place::Section)
     };
+    // The output section of input section `i` of object `o`.
+    let section_place = |o: usize, i: usize| {
+        let k = *out_of_input.get(&(o, i))?;
+        by_addr
+            .iter()
+            .position(|x| std::ptr::eq(*x, &outs[k]))
+            .map(crate::executable::Place::Section)
+    };
     let mut out_symbols = Vec::new();
+    // With a script the symbol table is as GNU ld writes it (the default script's
+    // layout keeps today's): each input's locals after a FILE symbol naming it.
+    let gnu_symbols = script_layout.is_some();
     for (o, obj) in objects.iter().enumerate() {
+        let mut named = obj.symbols.iter().any(|s| s.kind == 4)
+            || obj.name == crate::link_overlay::LINKER_OBJECT;
         for s in &obj.symbols {
             if s.global || s.name.starts_with(".L") || s.name.is_empty() {
+                continue;
+            }
+            if gnu_symbols && s.kind == 4 && s.section == SymSection::Absolute {
+                out_symbols.push(crate::executable::Symbol {
+                    name: s.name.clone(),
+                    value: s.value as u32,
+                    size: 0,
+                    kind: 4,
+                    bind: 0,
+                    place: crate::executable::Place::Absolute,
+                });
                 continue;
             }
             if let (SymSection::Section(i), Some(a)) =
                 (s.section, address_of(o, s.section, s.value))
             {
+                if gnu_symbols && !named {
+                    named = true;
+                    out_symbols.push(crate::executable::Symbol {
+                        name: obj.name.clone(),
+                        value: 0,
+                        size: 0,
+                        kind: 4,
+                        bind: 0,
+                        place: crate::executable::Place::Absolute,
+                    });
+                }
                 out_symbols.push(crate::executable::Symbol {
                     name: s.name.clone(),
                     value: a as u32,
                     size: s.size as u32,
                     kind: s.kind,
                     bind: 0,
-                    place: by_addr
-                        .iter()
-                        .position(|x| x.name == output_name(&obj.sections[i].name))
-                        .map_or_else(|| place_of(a), crate::executable::Place::Section),
+                    place: section_place(o, i).unwrap_or_else(|| place_of(a)),
                 });
             }
         }
@@ -719,15 +973,34 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         .chain(script.keys().copied())
         .collect();
     names.sort();
+    if gnu_symbols {
+        // GNU ld writes the globals as it walks its hash table, bucket by bucket.
+        names.sort_by_key(|n| bfd_hash_bucket(n));
+    }
     for n in names {
         if replaced.contains(n) {
             continue;
         }
-        let Some(a) = global_address(n) else { continue };
+        let Some(mut a) = global_address(n) else {
+            continue;
+        };
+        // spu_elf_output_symbol_hook: a `_SPUEAR_` symbol in an overlay is its stub.
+        let ear = overlays.as_ref().and_then(|ov| {
+            let &(_, st) = ov.ears.iter().find(|e| e.0 == n)?;
+            let st = &ov.stubs[st];
+            Some(placed[&(ov.object, st.ovl as usize)] + st.offset)
+        });
+        if let Some(stub) = ear {
+            a = stub as u64;
+        }
         let (size, kind, bind, place) = match (globals.get(n), common_at.contains_key(n)) {
             (Some(d), _) => {
                 let place = match d.section {
                     SymSection::Absolute => crate::executable::Place::Absolute,
+                    _ if ear.is_some() => place_of(a),
+                    SymSection::Section(i) => {
+                        section_place(d.object, i).unwrap_or_else(|| place_of(a))
+                    }
                     _ => place_of(a),
                 };
                 (d.size, d.kind, if d.weak { 2 } else { 1 }, place)
@@ -757,7 +1030,11 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         v
     };
     let mut warnings = Vec::new();
-    let entry_name = opts.entry.clone().unwrap_or_else(|| "_start".into());
+    let entry_name = opts
+        .entry
+        .clone()
+        .or_else(|| opts.script.as_ref().and_then(|sc| sc.entry.clone()))
+        .unwrap_or_else(|| "_start".into());
     let entry = match global_address(&entry_name).or_else(|| {
         symbols
             .iter()
@@ -822,7 +1099,46 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             .unwrap_or(unloaded.len());
         unloaded.insert(at, note);
     }
-    let elf = crate::executable::write(&image, &out_sections, &unloaded, &out_symbols, entry);
+    let mut image = std::mem::take(&mut buffers[0]);
+    let mut overlaid = crate::executable::Overlaid::default();
+    if let Some(ov) = &overlays {
+        for s in &ov.sections {
+            let Some(k) = out_sections.iter().position(|x| x.name == s.name) else {
+                continue;
+            };
+            let x = &out_sections[k];
+            let data =
+                buffers[s.index as usize][x.addr as usize..(x.addr + x.size) as usize].to_vec();
+            overlaid.overlays.push((k, s.index, data));
+        }
+        overlaid.lma = by_addr
+            .iter()
+            .map(|x| {
+                let k = outs.iter().position(|y| std::ptr::eq(y, *x)).unwrap();
+                script_layout.as_ref().map_or(x.addr, |l| l.lma[k] as u32)
+            })
+            .collect();
+        let table = placed[&(ov.object, ov.ovtab)];
+        overlaid.table = out_sections
+            .iter()
+            .position(|x| table >= x.addr && table < x.addr + x.size && x.name == ".data")
+            .map(|_| table);
+        overlaid.alone = out_sections.iter().position(|x| x.name == ".toe");
+    } else {
+        image.truncate(image_end as usize);
+    }
+    if let Some(l) = &script_layout {
+        overlaid.gnu_offsets = true;
+        overlaid.note_addr = Some(l.end.min(u32::MAX as u64) as u32);
+    }
+    let elf = crate::executable::write_overlaid(
+        &image,
+        &out_sections,
+        &unloaded,
+        &out_symbols,
+        entry,
+        &overlaid,
+    );
     Ok(Linked {
         image,
         elf,
@@ -881,7 +1197,7 @@ fn text_rank(name: &str) -> u8 {
 
 /// The bucket of BFD's linker hash table (`bfd_hash_hash` on a 64-bit host, 4051
 /// buckets, its default size) a name falls in: the order GNU ld walks symbols in.
-fn bfd_hash_bucket(name: &str) -> u64 {
+pub(crate) fn bfd_hash_bucket(name: &str) -> u64 {
     let mut hash: u64 = 0;
     for &c in name.as_bytes() {
         hash = hash.wrapping_add(c as u64 + ((c as u64) << 17));

@@ -419,3 +419,131 @@ fn ld_spu_testsuite_sources_link_as_gnu_ld_without_scripts() {
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// An overlay manager's two entry points, enough for a link: with them defined, GNU ld
+/// does not add its built-in manager (which spu ld does not carry), so the two linkers'
+/// outputs can be compared byte for byte.
+const OVERLAY_MANAGER: &str = "\t.text\n\t.global __ovly_load\n\t.type __ovly_load,@function\n__ovly_load:\tbi $0\n\t.global __ovly_return\n__ovly_return:\tbi $0\n";
+
+/// binutils' overlay tests (`ld-spu` `ovl.s` with `-T ovl1.lnk -T ovl.lnk`, `ovl2.s`
+/// with `-T ovl2.lnk -T ovl.lnk`: an `OVERLAY` statement inserted into a script),
+/// linked by both linkers with a user overlay manager: the executables must be the same
+/// file, byte for byte (stubs, `_ovly_table`, `.toe`, overlay segments and offsets,
+/// symbol table).
+#[test]
+#[cfg_attr(
+    not(all(has_binutils, has_ld_spu_testsuite)),
+    ignore = "needs GNU binutils for SPU and binutils' ld/testsuite/ld-spu sources: scripts/build-spu-binutils.sh installs both (or SPU_LD_TESTSUITE=dir)"
+)]
+fn ld_spu_overlay_tests_link_byte_identical() {
+    use spu_asm::link_script::{parse, Script};
+    let suite = Path::new(LD_SPU_TESTSUITE);
+    let (gas, gld) = (Path::new(GNU_AS), sibling("ld"));
+    let tmp = std::env::temp_dir().join(format!("spu-ld-ovl-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    std::fs::write(tmp.join("mgr.s"), OVERLAY_MANAGER).unwrap();
+    run(gas, &["mgr.s", "-o", "mgr.o"], &tmp);
+    let cases = [
+        ("ovl", ["ovl1.lnk", "ovl.lnk"]),
+        ("ovl2", ["ovl2.lnk", "ovl.lnk"]),
+    ];
+    let (mut identical, mut failures) = (0, Vec::new());
+    for (source, scripts) in cases {
+        let s = suite.join(format!("{source}.s"));
+        let o = format!("{source}.o");
+        run(gas, &[s.to_str().unwrap(), "-o", &o], &tmp);
+        let lnk: Vec<String> = scripts
+            .iter()
+            .map(|l| suite.join(l).display().to_string())
+            .collect();
+        run(
+            &gld,
+            &["-T", &lnk[0], "-T", &lnk[1], &o, "mgr.o", "-o", "out.elf"],
+            &tmp,
+        );
+        let gnu = std::fs::read(tmp.join("out.elf")).unwrap();
+        let parsed = lnk
+            .iter()
+            .map(|l| {
+                (
+                    l.clone(),
+                    parse(l, &std::fs::read_to_string(l).unwrap()).unwrap(),
+                )
+            })
+            .collect();
+        let objects: Vec<Object> = [o.as_str(), "mgr.o"]
+            .iter()
+            .map(|n| Object::from_elf(n, &std::fs::read(tmp.join(n)).unwrap()).unwrap())
+            .collect();
+        let opts = LinkOptions {
+            output: Some("out.elf".into()),
+            script: Some(Script::combine(parsed).unwrap()),
+            ..Default::default()
+        };
+        let ours = link(&objects, &opts).unwrap().elf;
+        if ours == gnu {
+            identical += 1;
+        } else {
+            let at = ours.iter().zip(&gnu).position(|(a, b)| a != b);
+            failures.push(format!(
+                "{source}: differs from GNU ld's at byte {at:?} (sizes {} and {})",
+                ours.len(),
+                gnu.len()
+            ));
+        }
+    }
+    let _ = std::fs::remove_dir_all(&tmp);
+    eprintln!(
+        "{identical} of {} ld-spu overlay links byte-identical",
+        cases.len()
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The project's overlay program (`tests/overlay/`: its script, two overlays in one
+/// region, its own overlay manager), assembled by GNU as and linked by both linkers with
+/// the script: the same file, byte for byte.
+#[test]
+#[cfg_attr(
+    not(has_binutils),
+    ignore = "needs GNU binutils for SPU: scripts/build-spu-binutils.sh"
+)]
+fn the_overlay_program_links_byte_identical() {
+    use spu_asm::link_script::{parse, Script};
+    let (gas, gld) = (Path::new(GNU_AS), sibling("ld"));
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("overlay");
+    let tmp = std::env::temp_dir().join(format!("spu-ld-ovlprog-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let mut objects = Vec::new();
+    for name in ["program", "manager"] {
+        let s = src.join(format!("{name}.s"));
+        let o = format!("{name}.o");
+        run(gas, &[s.to_str().unwrap(), "-o", &o], &tmp);
+        objects.push(Object::from_elf(&o, &std::fs::read(tmp.join(&o)).unwrap()).unwrap());
+    }
+    let script = src.join("overlay.ld");
+    let script = script.to_str().unwrap();
+    run(
+        &gld,
+        &["-T", script, "program.o", "manager.o", "-o", "prog.elf"],
+        &tmp,
+    );
+    let gnu = std::fs::read(tmp.join("prog.elf")).unwrap();
+    let text = std::fs::read_to_string(script).unwrap();
+    let opts = LinkOptions {
+        output: Some("prog.elf".into()),
+        script: Some(
+            Script::combine(vec![(script.into(), parse(script, &text).unwrap())]).unwrap(),
+        ),
+        ..Default::default()
+    };
+    let ours = link(&objects, &opts).unwrap().elf;
+    let _ = std::fs::remove_dir_all(&tmp);
+    let at = ours.iter().zip(&gnu).position(|(a, b)| a != b);
+    assert!(
+        ours == gnu,
+        "differs from GNU ld's at byte {at:?} (sizes {} and {})",
+        ours.len(),
+        gnu.len()
+    );
+}

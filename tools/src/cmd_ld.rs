@@ -27,6 +27,11 @@ pub struct Args {
     /// Address of the code (the first section), as GNU ld's -Ttext.
     #[arg(long = "Ttext", value_parser = parse_address)]
     text: Option<u32>,
+    /// A linker script (GNU ld's language: SECTIONS, OVERLAY, INSERT AFTER/BEFORE,
+    /// KEEP, PROVIDE, ENTRY; docs/linker.md): its layout replaces the default one; a
+    /// script with INSERT goes into the one without.
+    #[arg(short = 'T', value_name = "SCRIPT")]
+    script: Vec<PathBuf>,
     /// Entry symbol (default `_start`).
     #[arg(short = 'e', long = "entry")]
     entry: Option<String>,
@@ -109,7 +114,36 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
     for input in &paths {
         files.input("the input", input);
     }
+    for script in &args.script {
+        files.input("-T", script);
+    }
     files.output("-o", &args.output).check()?;
+    let mut scripts = Vec::new();
+    for path in &args.script {
+        let name = path.display().to_string();
+        let bytes = crate::options::read_input(path, 1 << 20)?;
+        let parsed = String::from_utf8(bytes)
+            .map_err(|_| format!("{name}: not a text file"))
+            .and_then(|text| spu_asm::link_script::parse(&name, &text));
+        match parsed {
+            Ok(s) => scripts.push((name, s)),
+            Err(e) => {
+                eprintln!("spu ld: {e}");
+                return Ok(Status::BadInput.into());
+            }
+        }
+    }
+    let script = if scripts.is_empty() {
+        None
+    } else {
+        match spu_asm::link_script::Script::combine(scripts) {
+            Ok(s) => Some(s),
+            Err(e) => {
+                eprintln!("spu ld: {e}");
+                return Ok(Status::BadInput.into());
+            }
+        }
+    };
     let mut inputs = Vec::new();
     if args.runtime {
         let crt0 = spu_loader::ppe::runtime::start_file().map_err(Error::failure)?;
@@ -146,6 +180,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         text_addr: args.text.unwrap_or(0),
         entry: args.entry.clone(),
         output: Some(args.output.display().to_string()),
+        script,
     };
     match link(&objects, &opts) {
         Ok(linked) => {

@@ -94,6 +94,7 @@ pub fn load(file: &Path) -> Result<Program, String> {
             segments: vec![(0, out.image)],
             entry: out.entry,
             symbols: out.symbols,
+            overlay_image: None,
         });
     }
     Program::from_file(file).map_err(|e| e.to_string())

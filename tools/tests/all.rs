@@ -7,6 +7,7 @@ mod cli;
 mod exit_status;
 mod ext_cli;
 mod ld_archives;
+mod ld_overlays;
 mod paper;
 mod ppe_run;
 mod run_input;

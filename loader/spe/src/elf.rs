@@ -21,7 +21,12 @@ pub struct LoadedElf {
     pub symbol_kinds: Vec<SymbolKind>,
     /// `e_entry`: where the program starts.
     pub entry: u32,
+    /// How many `PF_OVERLAY` segments it has (not among `segments`).
+    pub overlays: usize,
 }
+
+/// The program header flag of an overlay segment (GNU ld's SPU backend).
+pub const PF_OVERLAY: u32 = 0x0800_0000;
 
 /// A symbol with what objdump weighs when it names an address.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -94,6 +99,13 @@ pub fn read_elf(bytes: &[u8]) -> Result<LoadedElf, String> {
             u32_at(p + 16)?,
             u32_at(p + 20)?,
         );
+        if u32_at(p + 24)? & PF_OVERLAY != 0 {
+            // An overlay: not loaded, but DMAed from the image by the program's overlay
+            // manager (libspe2 leaves the image's address in `_EAR_`).
+            slice(off, filesz)?;
+            out.overlays += 1;
+            continue;
+        }
         if memsz > 256 * 1024 || filesz > memsz {
             return Err(format!(
                 "segment at {vaddr:#x} of {memsz} bytes does not fit the local store"

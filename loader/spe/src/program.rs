@@ -32,6 +32,10 @@ pub struct Program {
     pub entry: u32,
     /// Its symbols: `(name, value)` (none for a raw image).
     pub symbols: Vec<(String, u32)>,
+    /// For a program with overlays: the whole ELF file, which the loader puts in main
+    /// memory for the overlay manager to DMA the overlays from (as libspe2 does), and
+    /// where `_EAR_` is, which receives its effective address.
+    pub overlay_image: Option<(Vec<u8>, u32)>,
 }
 
 impl Program {
@@ -80,10 +84,23 @@ impl Program {
                 elf.entry
             )));
         }
+        let overlay_image = match elf.overlays {
+            0 => None,
+            _ => match elf.symbols.iter().find(|s| s.0 == "_EAR_") {
+                Some(&(_, ear)) if ear <= LS_SIZE - 16 => Some((bytes.to_vec(), ear)),
+                _ => {
+                    return Err(LoadError(
+                        "overlay segments, but no `_EAR_' in local store for the overlay                          manager to find the image by (link it with spu ld -T)"
+                            .into(),
+                    ))
+                }
+            },
+        };
         Ok(Program {
             segments: elf.segments,
             entry: elf.entry,
             symbols: elf.symbols,
+            overlay_image,
         })
     }
 
@@ -108,6 +125,7 @@ impl Program {
             segments: vec![(0, bytes.to_vec())],
             entry: 0,
             symbols: Vec::new(),
+            overlay_image: None,
         })
     }
 

@@ -247,6 +247,26 @@ impl System {
             .collect();
         spu.load_segments(&segments, program.entry);
         start::apply(&entry, spu, &mut self.memory);
+        if let Some((image, ear)) = &program.overlay_image {
+            // libspe2: the whole image in main memory (here just below the argv
+            // region, or the top), its effective address in `_EAR_`.
+            let top = entry
+                .argv
+                .as_ref()
+                .map_or(self.memory.len() as u64, |a| a.ea);
+            let ea = top
+                .checked_sub(image.len() as u64)
+                .map(|e| e & !127)
+                .ok_or_else(|| {
+                    LoadError(format!(
+                        "the overlay program's image ({} bytes) does not fit main memory                          ({} bytes)",
+                        image.len(),
+                        self.memory.len()
+                    ))
+                })?;
+            self.memory.bytes_mut()[ea as usize..ea as usize + image.len()].copy_from_slice(image);
+            spu.write_ls(*ear, &ea.to_be_bytes());
+        }
         self.states[id.0] = State::Runnable;
         self.served = true;
         Ok(entry)
