@@ -48,10 +48,7 @@ fn eqv_of_dot_is_the_place_of_each_use_and_of_the_end() {
     let sym = obj.symbols.iter().find(|s| s.name == "sym").unwrap();
     let text = obj.sections.iter().position(|s| s.name == ".text").unwrap();
     // Where the source ends: .text, after its two words.
-    assert_eq!(
-        (sym.section.clone(), sym.value),
-        (SymSection::Section(text), 8)
-    );
+    assert_eq!((sym.section, sym.value), (SymSection::Section(text), 8));
 }
 
 #[test]
