@@ -32,7 +32,28 @@ pub(crate) fn substitute(text: &str, vars: &[(String, String)], counter: Option<
     let mut out = String::new();
     let b = text.as_bytes();
     let mut i = 0;
+    let mut in_string = false;
     while i < b.len() {
+        if in_string && b[i] == b'\\' && matches!(b.get(i + 1), Some(b'"' | b'\\')) {
+            out.push_str(&text[i..i + 2]);
+            i += 2;
+            continue;
+        }
+        if b[i] == b'"' {
+            in_string = !in_string;
+        } else if !in_string && b[i] == b'\'' {
+            // A character constant (`'c`, `'\c'`): gas's input scrubber (app.c) has
+            // turned it into a number before any macro sees it, so nothing in it is a
+            // parameter, and a quote in it opens no string.
+            let len = if b.get(i + 1) == Some(&b'\\') { 3 } else { 2 };
+            let end = (i + len).min(b.len());
+            let end = (end..=b.len())
+                .find(|&e| text.is_char_boundary(e))
+                .unwrap_or(b.len());
+            out.push_str(&text[i..end]);
+            i = end;
+            continue;
+        }
         if b[i] == b'\\' {
             if let Some(c) = counter {
                 if b.get(i + 1) == Some(&b'@') {
@@ -47,9 +68,12 @@ pub(crate) fn substitute(text: &str, vars: &[(String, String)], counter: Option<
                 end += 1;
             }
             let name = &text[start..end];
+            // macro.c's get_apost_token: an apostrophe right after the name ends it and
+            // is dropped, whether or not the name is a parameter.
+            let apostrophe = !name.is_empty() && b.get(end) == Some(&b'\'');
             if let Some((_, v)) = vars.iter().find(|(n, _)| n == name) {
                 out.push_str(v);
-                i = end;
+                i = end + apostrophe as usize;
                 // `\()` separates a parameter from following text (gas's rule); a bare
                 // `()` is taken as well, as the assembler always has.
                 if text[i..].starts_with("\\()") {
@@ -59,9 +83,15 @@ pub(crate) fn substitute(text: &str, vars: &[(String, String)], counter: Option<
                 }
                 continue;
             }
+            if apostrophe {
+                out.push_str(&text[i..end]);
+                i = end + 1;
+                continue;
+            }
         }
-        out.push(b[i] as char);
-        i += 1;
+        let c = text[i..].chars().next().unwrap_or(' ');
+        out.push(c);
+        i += c.len_utf8().max(1);
     }
     out
 }

@@ -43,8 +43,39 @@ pub struct Val {
     /// addend is `v - sym value`).
     pub sym: Option<(Rc<str>, i64)>,
     /// Depends on addresses in a way no relocation can express (a difference across
-    /// sections): fine in an executable, an error in an object.
+    /// sections): fine in an executable, an error in an object, unless `pcrel` says how.
     pub cross: bool,
+    /// For a `cross` value, the pc-relative form a relocation can still carry when it
+    /// sits in the section of the address subtracted (`x - y`, `-y`, `ext - .`).
+    pub pcrel: Option<Rc<PcRel>>,
+}
+
+/// An address minus an address of another section, as write.c's `fixup_segment` keeps
+/// it when the address subtracted is in the fixup's own section: a pc-relative
+/// relocation (`R_SPU_REL32`) to the address added, its addend moved by the distance
+/// from the subtracted address to the place.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PcRel {
+    /// The section (definition index) of the address added, if a local one.
+    pub sect: Option<usize>,
+    /// The symbol a relocation must name for the address added, with its value.
+    pub sym: Option<(Rc<str>, i64)>,
+    /// The section of the address subtracted.
+    pub minus: usize,
+}
+
+impl PcRel {
+    /// `a - b` as a pc-relative relocation could carry it: `a` an address (or constant)
+    /// that is not itself a difference, `b` an address defined in a section.
+    fn of(a: &Val, b: &Val) -> Option<Rc<PcRel>> {
+        let plain = |x: &Val| !x.cross && x.pcrel.is_none();
+        (plain(a) && plain(b) && b.reloc).then_some(())?;
+        Some(Rc::new(PcRel {
+            sect: a.sect,
+            sym: a.sym.clone(),
+            minus: b.sect?,
+        }))
+    }
 }
 
 impl Val {
@@ -323,7 +354,17 @@ impl Eval<'_> {
                         '!' => (a.v == 0) as i64,
                         _ => a.v,
                     };
-                    stack.push(if *op == '+' { a } else { Val::abs(v) });
+                    stack.push(match op {
+                        '+' => a,
+                        // `-x`: `0 - x`, which a relocation carries only pc-relative.
+                        '-' if a.reloc || a.cross => Val {
+                            v,
+                            cross: true,
+                            pcrel: PcRel::of(&Val::abs(0), &a),
+                            ..Default::default()
+                        },
+                        _ => Val::abs(v),
+                    });
                 }
                 Node::Bin(op) => {
                     let b = stack.pop().unwrap_or_default();
@@ -383,7 +424,11 @@ impl Eval<'_> {
             _ => 0,
         };
         let cross = a.cross || b.cross;
+        let constant = |c: &Val| !c.reloc && !c.cross;
         match op {
+            // A pending pc-relative difference plus or minus a constant stays one.
+            "+" | "-" if a.pcrel.is_some() && constant(b) => Val { v, ..a.clone() },
+            "+" if b.pcrel.is_some() && constant(a) => Val { v, ..b.clone() },
             // An address plus or minus a constant stays an address in its section.
             "+" if a.reloc != b.reloc => {
                 let r = if a.reloc { a } else { b };
@@ -407,9 +452,17 @@ impl Eval<'_> {
                 Val {
                     v,
                     cross: cross || !same,
+                    pcrel: if same { None } else { PcRel::of(a, b) },
                     ..Default::default()
                 }
             }
+            // A constant minus an address: as the negation.
+            "-" if constant(a) && b.reloc => Val {
+                v,
+                cross: true,
+                pcrel: PcRel::of(a, b),
+                ..Default::default()
+            },
             // expr.c resolves (in)equality of addresses at once: equal only at the same
             // place of the same section (an undefined symbol equals nothing known).
             "==" | "!=" | "<>"

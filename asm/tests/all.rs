@@ -6,6 +6,8 @@ mod debug_line;
 mod eh_frame;
 mod gnu_compat;
 mod gnu_objects;
+mod gnu_quirks;
 mod never_panics;
 mod objects_and_limits;
+mod pcrel_differences;
 mod sched;

@@ -720,7 +720,16 @@ impl Assembler<'_> {
     /// The `.debug_line` contents and their relocations (offsets in `.debug_line`, against
     /// section definitions), or `None` without rows.
     pub(super) fn debug_line(&self) -> Option<(Vec<u8>, Vec<Reloc>)> {
-        if !self.dwarf.has_rows() || self.defs.iter().any(|d| d.name == ".debug_line") {
+        // dwarf2_finish writes a line table (its header alone, without rows) beside a
+        // source's own non-empty `.debug_info` too, for that unit to point at.
+        let own_info = self.defs.iter().position(|d| d.name == ".debug_info");
+        let info_not_empty = own_info.is_some_and(|d| {
+            (0..self.chunks.len())
+                .any(|c| self.chunks[c].0 == d && self.offsets.get(&c).is_some_and(|&o| o > 0))
+        });
+        if !(self.dwarf.has_rows() || info_not_empty)
+            || self.defs.iter().any(|d| d.name == ".debug_line")
+        {
             return None;
         }
         let state = self.numbered();

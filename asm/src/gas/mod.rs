@@ -151,6 +151,9 @@ struct Assembler<'o> {
     /// `.symver NAME, NAME2@VERSION[, local|hidden|remove]` (final walk): the versioned
     /// names objects give symbols.
     symvers: Vec<(String, String, String)>,
+    /// Names `.eqv NAME, .` made: gas resolves their `.` where each is used, and for the
+    /// symbol table where the source ends (`dot_symbol` resolved late).
+    dot_eqv: std::collections::HashSet<String>,
     /// `.file N`/`.loc` line-table state of this walk (`dwarf2dbg.c`).
     dwarf: dwarf2::LineState,
     /// The ISA extensions on at this point of the walk (the options', then `.spu_ext`).
@@ -230,6 +233,7 @@ impl<'o> Assembler<'o> {
             altmacro: false,
             local_counter: 0,
             symvers: Vec::new(),
+            dot_eqv: Default::default(),
             dwarf: Default::default(),
             chain: Default::default(),
             ended: false,
@@ -323,6 +327,7 @@ impl<'o> Assembler<'o> {
         }
         self.run_pass(lines, 2);
         self.dwarf_finish_checks();
+        self.symver_checks();
     }
 }
 

@@ -534,4 +534,37 @@ impl Assembler<'_> {
         }
         true
     }
+
+    /// End of the final walk (obj-elf.c `elf_frob_symbol`): a symbol `.symver ...,
+    /// remove` would take out stays when a relocation names it, which cannot be when it
+    /// has more than one versioned name.
+    pub(super) fn symver_checks(&mut self) {
+        let mut named: Vec<&str> = Vec::new();
+        for (name, _, vis) in &self.symvers {
+            let versions = self.symvers.iter().filter(|v| v.0 == *name).count();
+            if vis == "remove" && versions > 1 && !named.contains(&name.as_str()) {
+                named.push(name);
+            }
+        }
+        let mut found = Vec::new();
+        for name in named {
+            let target = crate::object::RelocTarget::Symbol(name.to_string());
+            if let Some((_, _, at, text)) = self.relocs.iter().find(|r| r.1.target == target) {
+                let line = Line {
+                    text: text.clone(),
+                    file: at.file.clone(),
+                    line: at.line,
+                };
+                found.push((line, at.column, name.to_string()));
+            }
+        }
+        for (line, column, name) in found {
+            self.diag(
+                Severity::Error,
+                &line,
+                column,
+                format!("symbol '{name}' with multiple versions cannot be used in relocation"),
+            );
+        }
+    }
 }

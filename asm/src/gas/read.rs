@@ -930,6 +930,11 @@ impl Assembler<'_> {
                 }
                 let name = parts[0].trim().to_string();
                 let expr = parts[1..].join(",");
+                if d == ".eqv" && expr.trim() == "." && self.absolute.is_none() {
+                    self.dot_eqv.insert(name.clone());
+                } else {
+                    self.dot_eqv.remove(&name);
+                }
                 self.set_symbol(&name, expr.trim(), line);
             }
             ".include" => {

@@ -83,6 +83,9 @@ pub(super) struct SymAttrs {
 impl Env for Assembler<'_> {
     fn symbol(&self, name: &str) -> Option<Val> {
         self.note_symbol(name);
+        if self.dot_eqv.contains(name) && self.symbols.contains_key(name) {
+            return Some(self.dot());
+        }
         if !self.symbols.contains_key(name) {
             self.forward_refs.borrow_mut().push(name.to_string());
         } else if let Some(deps) = self.set_forward.get(name) {
@@ -173,7 +176,7 @@ impl Assembler<'_> {
                     reloc: true,
                     sect: Some(self.chunks[*s].0),
                     sym: (self.object && named).then(|| (name.into(), v)),
-                    cross: false,
+                    ..Default::default()
                 }
             }
             SymVal::Common(..) => Val {

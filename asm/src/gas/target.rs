@@ -3,7 +3,8 @@
 //! range checks, immediates encoded (or left as relocations in an object), the `nop` pad
 //! words of `tc-spu.c`'s alignment, and the `.sched` block handed to the list scheduler.
 
-use super::{Assembler, SchedKey, Severity};
+use super::read::operand_column;
+use super::{Assembler, SchedKey, Severity, LOCAL_STORE};
 use crate::expr::Val;
 use crate::lex::{split_top, Line};
 use spu_isa::table::{forms_named, FormInfo, Format, OperandKind};
@@ -370,11 +371,30 @@ impl Assembler<'_> {
     pub(super) fn instruction(&mut self, mnemonic: &str, args: &str, line: &Line, col: usize) {
         let pc = self.here();
         if mnemonic == "nop" && !split_top(args, ',').iter().skip(1).any(|_| true) {
-            // GNU as for SPU reads pseudo-ops without their dot, and `nop` is gas's `.nop`:
-            // the target's no-op word whatever the operand (`nop $41` is 0x40200000, as
-            // spu-elf-as 2.40 writes it).
-            self.emit(&0x4020_0000u32.to_be_bytes());
-            return;
+            // GNU as for SPU reads pseudo-ops without their dot, and `nop` is gas's `.nop`
+            // (read.c `s_nop`): its operand is an expression, not a register (`nop $3`
+            // names a symbol `$3`, undefined in an object), and no-op words (0x40200000)
+            // are written until they cover that many bytes, one at least.
+            let mut bytes = 0;
+            let operand = args.trim();
+            if !operand.is_empty() {
+                let c = operand_column(line, operand, col);
+                match self.eval_reported(operand, line, c) {
+                    Ok(v) if !v.reloc && !v.cross => bytes = v.v.clamp(0, LOCAL_STORE as i64),
+                    Ok(_) => {}
+                    Err((at, m)) if self.object => self.diag(Severity::Error, line, c + at, m),
+                    Err(_) => {}
+                }
+            }
+            let start = self.here() as i64;
+            loop {
+                let before = self.here();
+                self.emit(&0x4020_0000u32.to_be_bytes());
+                // Past the local store the place stops moving (the size check reports it).
+                if self.here() as i64 - start >= bytes || self.here() == before {
+                    return;
+                }
+            }
         }
         let forms: Vec<&'static FormInfo> = forms_named(mnemonic).collect();
         if forms.is_empty() {

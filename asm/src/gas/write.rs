@@ -156,6 +156,34 @@ impl Assembler<'_> {
         col: usize,
     ) {
         let def = self.chunks[sect].0;
+        // A difference whose subtracted address is in this section, in a word: write.c
+        // makes it pc-relative (the addend moved by the place's distance from that
+        // address) and tc-spu.c's `md_apply_fix` turns the word into `R_SPU_REL32`.
+        let pcrel = v
+            .pcrel
+            .as_deref()
+            .filter(|p| self.object && p.minus == def && kind == crate::reloc::R_SPU_ADDR32);
+        let (kind, v) = match pcrel {
+            Some(p) => (
+                crate::reloc::R_SPU_REL32,
+                &Val {
+                    v: v.v + offset as i64,
+                    sect: p.sect,
+                    sym: p.sym.clone(),
+                    ..Default::default()
+                },
+            ),
+            None if v.cross => {
+                self.diag(
+                    Severity::Error,
+                    line,
+                    col,
+                    "expression too complex for a relocation",
+                );
+                return;
+            }
+            None => (kind, v),
+        };
         let (target, addend) = if let Some((name, value)) = &v.sym {
             (RelocTarget::Symbol(name.to_string()), v.v - value)
         } else if let Some(s) = v.sect {
@@ -589,6 +617,10 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
             continue;
         };
         let (section, value) = match sym {
+            _ if asm.dot_eqv.contains(&name) => (
+                SymSection::Section(asm.chunks[asm.sect].0),
+                asm.here() as u64,
+            ),
             SymVal::Label(c, off) => (
                 SymSection::Section(asm.chunks[*c].0),
                 (asm.bases[c] + off) as u64,
