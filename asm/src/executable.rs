@@ -52,6 +52,8 @@ pub enum Place {
     /// Index into the sections.
     Section(usize),
     Absolute,
+    /// Index into the unloaded sections: a global GNU ld keeps in a debugging section.
+    Unloaded(usize),
     /// Undefined: the entry symbol GNU ld's `ENTRY(_start)` looked for and did not find.
     Undefined,
 }
@@ -192,9 +194,13 @@ pub fn write_overlaid(
     for (n, &k) in early.iter().enumerate() {
         index[k] = n as u16 + 1;
     }
+    let mut unloaded_index = vec![0u16; unloaded.len()];
     for (n, t) in tail.iter().enumerate() {
+        let at = (early.len() + n) as u16 + 1;
         if t.1 {
-            index[t.2] = (early.len() + n) as u16 + 1;
+            index[t.2] = at;
+        } else {
+            unloaded_index[t.2] = at;
         }
     }
     let notes = unloaded.iter().filter(|u| u.ty == SHT_NOTE).count();
@@ -349,6 +355,7 @@ pub fn write_overlaid(
         symtab.push(0);
         symtab.extend(be16(match s.place {
             Place::Section(k) => index[k],
+            Place::Unloaded(k) => unloaded_index[k],
             Place::Absolute => 0xfff1,
             Place::Undefined => 0,
         }));

@@ -977,11 +977,27 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
         // GNU ld writes the globals as it walks its hash table, bucket by bucket.
         names.sort_by_key(|n| bfd_hash_bucket(n));
     }
+    let mut in_unloaded: Vec<(usize, usize, usize)> = Vec::new();
     for n in names {
         if replaced.contains(n) {
             continue;
         }
         let Some(mut a) = global_address(n) else {
+            // A global in a non-allocated section: GNU ld keeps it at its offset in the
+            // joined section (address 0), set once those are joined below.
+            if let Some(d) = globals.get(n) {
+                if let SymSection::Section(i) = d.section {
+                    in_unloaded.push((out_symbols.len(), d.object, i));
+                    out_symbols.push(crate::executable::Symbol {
+                        name: n.to_string(),
+                        value: d.value as u32,
+                        size: d.size as u32,
+                        kind: d.kind,
+                        bind: if d.weak { 2 } else { 1 },
+                        place: crate::executable::Place::Unloaded(0),
+                    });
+                }
+            }
             continue;
         };
         // spu_elf_output_symbol_hook: a `_SPUEAR_` symbol in an overlay is its stub.
@@ -1024,6 +1040,7 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
     let symbols: Vec<(String, u32)> = {
         let mut v: Vec<(String, u32)> = out_symbols
             .iter()
+            .filter(|s| !matches!(s.place, crate::executable::Place::Unloaded(_)))
             .map(|s| (s.name.clone(), s.value))
             .collect();
         v.sort_by(|a, b| a.1.cmp(&b.1).then(a.0.cmp(&b.0)));
@@ -1086,7 +1103,8 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             None => global_address(n),
         },
     };
-    let mut unloaded = crate::link_debug::sections(objects, &resolve)?;
+    let (mut unloaded, unloaded_at) = crate::link_debug::sections(objects, &resolve)?;
+    let mut note_at = None;
     if !objects
         .iter()
         .any(|o| o.sections.iter().any(|s| s.name == SPU_NAME_NOTE))
@@ -1098,6 +1116,22 @@ pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String
             .position(|u| crate::link_debug::script_rank(&u.name) > rank)
             .unwrap_or(unloaded.len());
         unloaded.insert(at, note);
+        note_at = Some(at);
+    }
+    let mut dropped = Vec::new();
+    for &(sym, o, i) in &in_unloaded {
+        match unloaded_at.get(&(o, i)) {
+            Some(&(k, off)) => {
+                let k = k + usize::from(note_at.is_some_and(|at| k >= at));
+                out_symbols[sym].value += off;
+                out_symbols[sym].place = crate::executable::Place::Unloaded(k);
+            }
+            // Its section was discarded (`.note.GNU-stack`...): so is the symbol.
+            None => dropped.push(sym),
+        }
+    }
+    for sym in dropped.into_iter().rev() {
+        out_symbols.remove(sym);
     }
     let mut image = std::mem::take(&mut buffers[0]);
     let mut overlaid = crate::executable::Overlaid::default();

@@ -105,15 +105,19 @@ pub(crate) fn script_rank(name: &str) -> usize {
 }
 use std::collections::HashMap;
 
-/// The joined and relocated debugging sections. `resolve` gives the address of a
-/// relocation target in the loaded program (object index, target), `None` if undefined.
+/// Where each input section went: (object, section) -> (joined section, offset in it).
+pub(crate) type Joined = HashMap<(usize, usize), (usize, u32)>;
+
+/// The joined and relocated debugging sections, and where each input went. `resolve`
+/// gives the address of a relocation target in the loaded program (object index,
+/// target), `None` if undefined.
 pub(crate) fn sections(
     objects: &[Object],
     resolve: &dyn Fn(usize, &RelocTarget) -> Option<u64>,
-) -> Result<Vec<Unloaded>, Vec<String>> {
+) -> Result<(Vec<Unloaded>, Joined), Vec<String>> {
     let mut out: Vec<Unloaded> = Vec::new();
     // (object, section) -> (output index, offset in it).
-    let mut at: HashMap<(usize, usize), (usize, u32)> = HashMap::new();
+    let mut at: Joined = HashMap::new();
     for (o, obj) in objects.iter().enumerate() {
         for (i, s) in obj.sections.iter().enumerate() {
             if s.flags & SHF_ALLOC != 0
@@ -205,9 +209,21 @@ pub(crate) fn sections(
             }
         }
         // GNU ld drops an output section that received nothing.
-        out.retain(|u| !u.data.is_empty());
-        out.sort_by_key(|u| script_rank(&u.name));
-        Ok(out)
+        let mut kept: Vec<usize> = (0..out.len())
+            .filter(|&k| !out[k].data.is_empty())
+            .collect();
+        kept.sort_by_key(|&k| script_rank(&out[k].name));
+        let mut new_index = vec![None; out.len()];
+        for (n, &k) in kept.iter().enumerate() {
+            new_index[k] = Some(n);
+        }
+        let joined: Joined = at
+            .into_iter()
+            .filter_map(|(key, (k, off))| new_index[k].map(|n| (key, (n, off))))
+            .collect();
+        let mut slots: Vec<Option<Unloaded>> = out.into_iter().map(Some).collect();
+        let out = kept.iter().filter_map(|&k| slots[k].take()).collect();
+        Ok((out, joined))
     } else {
         errors.sort();
         Err(errors)
