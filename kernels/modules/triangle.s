@@ -51,6 +51,46 @@ leaf_probe:                                   # (a suspended leaf resumes here)
         wrch    $MFC_WrTagUpdate, $86
         rdch    $86, $MFC_RdTagStat
 
+# One triangle of the cull pass: its tag check, its plane rows, the origin in its
+# (k, u, v) order, and the corner offsets of its projection axes (%ck, %cu, %cv).
+        .macro  CULL_RECORD T
+        ai      %tri\T, $76, \T
+        and     %ln\T, %tri\T, TMASK
+        shli    %lt\T, %ln\T, 4
+        lqx     %tag\T, TTAGS, %lt\T
+        shli    %ld\T, %ln\T, 6
+        a       %rec\T, %ld\T, TDATA
+        ceq     %th\T, %tag\T, %tri\T
+        lqd     %q0\T, TRI_N_U(%rec\T)         # (n_u, n_v, n_d, k)
+        lqd     %q1\T, TRI_B_NU(%rec\T)        # (b_nu, b_nv, b_d, -)
+        lqd     %q2\T, TRI_C_NU(%rec\T)        # (c_nu, c_nv, c_d, -)
+        rotqbyi %k\T, %q0\T, 12
+        shli    %k16\T, %k\T, 4
+        lqx     %ax\T, $80, %k16\T             # (k, u, v) array offsets
+        lqx     %kp\T, $81, %k16\T
+        shufb   %okuv\T, ORIG, ORIG, %kp\T     # origin in (k, u, v) order
+        shufb   %nu\T, %q0\T, %q0\T, PAT0
+        shufb   %nv\T, %q0\T, %q0\T, PAT1
+        shufb   %nd\T, %q0\T, %q0\T, PAT2
+        shufb   %bnu\T, %q1\T, %q1\T, PAT0
+        shufb   %bnv\T, %q1\T, %q1\T, PAT1
+        shufb   %bd\T, %q1\T, %q1\T, PAT2
+        shufb   %cnu\T, %q2\T, %q2\T, PAT0
+        shufb   %cnv\T, %q2\T, %q2\T, PAT1
+        shufb   %cd\T, %q2\T, %q2\T, PAT2
+        shufb   %ok\T, %okuv\T, %okuv\T, PAT0
+        shufb   %ou\T, %okuv\T, %okuv\T, PAT1
+        shufb   %ov\T, %okuv\T, %okuv\T, PAT2
+        fs      %nm1\T, %nd\T, %ok\T
+        fnms    %nm2\T, %nu\T, %ou\T, %nm1\T
+        fnms    %num\T, %nv\T, %ov\T, %nm2\T   # n_d - o_k - n_u o_u - n_v o_v
+        rotqbyi %axu\T, %ax\T, 4
+        rotqbyi %axv\T, %ax\T, 8
+        rotmi   %ck\T, %ax\T, -4
+        rotmi   %cu\T, %axu\T, -4
+        rotmi   %cv\T, %axv\T, -4
+        .endm
+
 # ---- the leaf's corner-ray frustum cull, two triangles a pass, before any is tested: a
 # triangle every corner ray (0, 7, 56, 63) misses on one side, or that lies behind them
 # all, is culled. One triangle's test is a chain of ~90 cycles of latency (the record,
@@ -87,41 +127,7 @@ leaf_cull:
         .sched  pool=82-127 scratch=66-127
 .Lcull:
         .irp    T, 0, 1
-        ai      %tri\T, $76, \T
-        and     %ln\T, %tri\T, TMASK
-        shli    %lt\T, %ln\T, 4
-        lqx     %tag\T, TTAGS, %lt\T
-        shli    %ld\T, %ln\T, 6
-        a       %rec\T, %ld\T, TDATA
-        ceq     %th\T, %tag\T, %tri\T
-        lqd     %q0\T, TRI_N_U(%rec\T)         # (n_u, n_v, n_d, k)
-        lqd     %q1\T, TRI_B_NU(%rec\T)        # (b_nu, b_nv, b_d, -)
-        lqd     %q2\T, TRI_C_NU(%rec\T)        # (c_nu, c_nv, c_d, -)
-        rotqbyi %k\T, %q0\T, 12
-        shli    %k16\T, %k\T, 4
-        lqx     %ax\T, $80, %k16\T             # (k, u, v) array offsets
-        lqx     %kp\T, $81, %k16\T
-        shufb   %okuv\T, ORIG, ORIG, %kp\T     # origin in (k, u, v) order
-        shufb   %nu\T, %q0\T, %q0\T, PAT0
-        shufb   %nv\T, %q0\T, %q0\T, PAT1
-        shufb   %nd\T, %q0\T, %q0\T, PAT2
-        shufb   %bnu\T, %q1\T, %q1\T, PAT0
-        shufb   %bnv\T, %q1\T, %q1\T, PAT1
-        shufb   %bd\T, %q1\T, %q1\T, PAT2
-        shufb   %cnu\T, %q2\T, %q2\T, PAT0
-        shufb   %cnv\T, %q2\T, %q2\T, PAT1
-        shufb   %cd\T, %q2\T, %q2\T, PAT2
-        shufb   %ok\T, %okuv\T, %okuv\T, PAT0
-        shufb   %ou\T, %okuv\T, %okuv\T, PAT1
-        shufb   %ov\T, %okuv\T, %okuv\T, PAT2
-        fs      %nm1\T, %nd\T, %ok\T
-        fnms    %nm2\T, %nu\T, %ou\T, %nm1\T
-        fnms    %num\T, %nv\T, %ov\T, %nm2\T   # n_d - o_k - n_u o_u - n_v o_v
-        rotqbyi %axu\T, %ax\T, 4
-        rotqbyi %axv\T, %ax\T, 8
-        rotmi   %ck\T, %ax\T, -4
-        rotmi   %cu\T, %axu\T, -4
-        rotmi   %cv\T, %axv\T, -4
+        CULL_RECORD \T
         lqx     %dk\T, $79, %ck\T              # corner d_k, d_u, d_v
         lqx     %du\T, $79, %cu\T
         lqx     %dv\T, $79, %cv\T
@@ -188,41 +194,7 @@ leaf_cull:
         lqa     %pa, k_pa
         lqa     %pb, k_pb
         .irp    T, 0, 1
-        ai      %tri\T, $76, \T
-        and     %ln\T, %tri\T, TMASK
-        shli    %lt\T, %ln\T, 4
-        lqx     %tag\T, TTAGS, %lt\T
-        shli    %ld\T, %ln\T, 6
-        a       %rec\T, %ld\T, TDATA
-        ceq     %th\T, %tag\T, %tri\T
-        lqd     %q0\T, TRI_N_U(%rec\T)         # (n_u, n_v, n_d, k)
-        lqd     %q1\T, TRI_B_NU(%rec\T)        # (b_nu, b_nv, b_d, -)
-        lqd     %q2\T, TRI_C_NU(%rec\T)        # (c_nu, c_nv, c_d, -)
-        rotqbyi %k\T, %q0\T, 12
-        shli    %k16\T, %k\T, 4
-        lqx     %ax\T, $80, %k16\T             # (k, u, v) array offsets
-        lqx     %kp\T, $81, %k16\T
-        shufb   %okuv\T, ORIG, ORIG, %kp\T     # origin in (k, u, v) order
-        shufb   %nu\T, %q0\T, %q0\T, PAT0
-        shufb   %nv\T, %q0\T, %q0\T, PAT1
-        shufb   %nd\T, %q0\T, %q0\T, PAT2
-        shufb   %bnu\T, %q1\T, %q1\T, PAT0
-        shufb   %bnv\T, %q1\T, %q1\T, PAT1
-        shufb   %bd\T, %q1\T, %q1\T, PAT2
-        shufb   %cnu\T, %q2\T, %q2\T, PAT0
-        shufb   %cnv\T, %q2\T, %q2\T, PAT1
-        shufb   %cd\T, %q2\T, %q2\T, PAT2
-        shufb   %ok\T, %okuv\T, %okuv\T, PAT0
-        shufb   %ou\T, %okuv\T, %okuv\T, PAT1
-        shufb   %ov\T, %okuv\T, %okuv\T, PAT2
-        fs      %nm1\T, %nd\T, %ok\T
-        fnms    %nm2\T, %nu\T, %ou\T, %nm1\T
-        fnms    %num\T, %nv\T, %ov\T, %nm2\T   # n_d - o_k - n_u o_u - n_v o_v
-        rotqbyi %axu\T, %ax\T, 4
-        rotqbyi %axv\T, %ax\T, 8
-        rotmi   %ck\T, %ax\T, -4
-        rotmi   %cu\T, %axu\T, -4
-        rotmi   %cv\T, %axv\T, -4
+        CULL_RECORD \T
         lqx     %xk\T, $79, %ck\T              # (base, du, dv) along k, u, v
         lqx     %xu\T, $79, %cu\T
         lqx     %xv\T, $79, %cv\T
