@@ -585,6 +585,9 @@ sh_gather_lanes:                              # the lanes' 64-byte strides
         .long   0, 64, 128, 192
         .long   -1, -1, -1, 0                 # +16: words 0-2
         .long   0, 16, 32, 48                 # +32: the lanes' 16-byte strides
+sh_gsel:                                      # shufb: a's bytes; b's (.Lsh_shade_gx)
+        .long   0x00010203, 0x04050607, 0x08090a0b, 0x0c0d0e0f
+        .long   0x10111213, 0x14151617, 0x18191a1b, 0x1c1d1e1f
 sh_gn:  .long   0, 0, 0, 0                    # the steps noted * 16
 sh_gcand:                                     # the fast step's groups to fetch at once
         .long   0, 0, 0, 0
