@@ -210,8 +210,13 @@
         # which keeps the odd pipe from loading ahead until the pool is full and the
         # even pipe stalls. A group's two selects by its shader's rays are one pattern
         # (selb) and two shufb (the odd pipe idles here: lighting is even-pipe bound).
+        # A grey light (r = g = b, bitwise) adding to no sums yet (the first light) gives
+        # a grey irradiance: its run computes and adds one channel and stores it as all
+        # three (the same bits: cs * l + 0 per channel), 4 even-pipe instructions a group
+        # fewer; any other light takes the three channels.
+        .macro  SH_LIGHT_RUN label, grey
         .sched  pool=67,69,76-82,84,90-105,107-114,116-120,127 scratch=66-127
-.Lsh_shade_gx:
+\label:
         il      %none, -1
         lqa     %pkeep, sh_gsel               # bytes of a, of b (shufb)
         lqa     %ptake, sh_gsel+16
@@ -246,23 +251,33 @@
         selb    %cs2\A\()_\B, %cs1\A\()_\B, $125, %big\A\()_\B
         and     %cs\B, %cs2\A\()_\B, %lit\A\()_\B
         lqd     %ir\A\()_\B, \A+\B($85) @after %cs\B
+        fma     %or\A\()_\B, %cs\B, $73, %ir\A\()_\B
+      ~ stqd    %or\A\()_\B, SH_IRR_R+\A+\B($66)
+        .if     \grey                        # r = g = b: one channel
+      ~ stqd    %or\A\()_\B, SH_IRR_G+\A+\B($66)
+      ~ stqd    %or\A\()_\B, SH_IRR_B+\A+\B($66)
+        .else
         lqd     %ig\A\()_\B, 256+\A+\B($85) @after %cs\B
         lqd     %ib\A\()_\B, 512+\A+\B($85) @after %cs\B
-        fma     %or\A\()_\B, %cs\B, $73, %ir\A\()_\B
         fma     %og\A\()_\B, %cs\B, $74, %ig\A\()_\B
         fma     %ob\A\()_\B, %cs\B, $75, %ib\A\()_\B
-      ~ stqd    %or\A\()_\B, SH_IRR_R+\A+\B($66)
       ~ stqd    %og\A\()_\B, SH_IRR_G+\A+\B($66)
       ~ stqd    %ob\A\()_\B, SH_IRR_B+\A+\B($66)
+        .endif
         lqd     %m\A\()_\B, SH_MAT+\A+\B($66) @after %cs\B
         ceq     %sel\A\()_\B, %m\A\()_\B, $87
         selb    %pat\A\()_\B, %pkeep, %ptake, %sel\A\()_\B
         fa      %ra\A\()_\B, %or\A\()_\B, $124
+        fm      %rk\A\()_\B, %ra\A\()_\B, $121
+        .if     \grey
+        fm      %gk\A\()_\B, %ra\A\()_\B, $122
+        fm      %bk\A\()_\B, %ra\A\()_\B, $123
+        .else
         fa      %ga\A\()_\B, %og\A\()_\B, $124
         fa      %ba\A\()_\B, %ob\A\()_\B, $124
-        fm      %rk\A\()_\B, %ra\A\()_\B, $121
         fm      %gk\A\()_\B, %ga\A\()_\B, $122
         fm      %bk\A\()_\B, %ba\A\()_\B, $123
+        .endif
         fma     %rs\A\()_\B, %rk\A\()_\B, $106, $126
         cfltu   %ru\A\()_\B, %rs\A\()_\B, 24
         fma     %gs\A\()_\B, %gk\A\()_\B, $106, $126
@@ -279,7 +294,24 @@
         and     $86, $86, %mn\A\()_\B
         .endr
         .endr
+        .if     \grey
+        hbrr    \label\()_br, .Lsh_shade_end
+\label\()_br:
+        br      .Lsh_shade_end
+        .endif
         .endsched
+        .endm
+        .sched  pool=67,69,76-82,84,90-105,107-114,116-120,127 scratch=66-127
+        ceq     %rg, $73, $74
+        ceq     %rb, $73, $75
+        ila     %zero, sh_zero
+        ceq     %first, $85, %zero
+        and     %grey1, %rg, %rb
+        and     %grey, %grey1, %first
+        brz     %grey, .Lsh_shade_gx          # a coloured light or sums: three channels
+        .endsched
+        SH_LIGHT_RUN .Lsh_shade_gw, 1
+        SH_LIGHT_RUN .Lsh_shade_gx, 0
         .else
         .sched  pool=69,76-82,84,90-105,107-114,116-120 scratch=66-127
 .Lsh_shade_g:
