@@ -141,12 +141,19 @@ fn the_gather_kernel_shades_coloured_lights_as_the_baseline() {
     let render = |ext: &str, lights: &[&str]| {
         let png = d.join(format!("{ext}.png"));
         let stats = d.join(format!("{ext}.json"));
-        let mut args = vec!["render", "--scene", "room", "--width", "64", "--height", "64"];
+        let mut args = vec![
+            "render", "--scene", "room", "--width", "64", "--height", "64",
+        ];
         args.extend(["--shade", "shadows", "--ext", ext]);
         for light in lights {
             args.extend(["--light", light]);
         }
-        args.extend(["-o", png.to_str().unwrap(), "--stats", stats.to_str().unwrap()]);
+        args.extend([
+            "-o",
+            png.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ]);
         let (status, _, stderr) = spu(&args);
         assert_eq!(status, 0, "--ext {ext} {lights:?}: {stderr}");
         let stats = std::fs::read_to_string(&stats).unwrap();
