@@ -15,7 +15,9 @@
 # number, $124 = the fast path's counts (groups, same, triangle lookups); calls
 # shadow_rays (modules/shadow.s), which keeps $66, $91..$93, $97, $101..$103, $105; a
 # material cache miss goes out of line to .Lsh_mmiss (modules/shade_cache.s) and comes
-# back to .Lsh_mhit with the line at $73. Returns to $0.
+# back to .Lsh_mhit with the line at $73. Returns to $0. With EXT_GATHER a run is one
+# block of all 16 groups (SH_LIGHT_RUN; one channel for a grey first light) and a later
+# pass is .Lsh_later_g (modules/shade_gather.s): the same values, other schedules.
 
         # the fast groups' counters (groups, same, triangle lookups) to SH_STATS
 .Lsh_iset_done:
