@@ -532,52 +532,51 @@
         # A later pass of the lighting (modules/shade_light.s, .Lsh_run with no light
         # left: a black light) shades from the stored sums without computing the
         # irradiance it would add 0 to: the same colours and stores as .Lsh_shade_g's
-        # (or, og, ob are the sums: cs * 0 + s = s, the SPU having no NaN), in 64 even-
-        # pipe instructions per 4 groups instead of 174. It needs no gather.
-        .sched  pool=69,76-82,84,90-105,107-114,116-120 scratch=66-127
+        # (or, og, ob are the sums: cs * 0 + s = s, the SPU having no NaN), in 15 even-
+        # pipe instructions a group instead of 43. It needs no gather. All 16 groups in
+        # one block, as .Lsh_shade_gx: a group's loads wait for the group two before it
+        # (%ra\B), and its two selects are one pattern and two shufb.
+        .sched  pool=67,69,76-82,84,90-105,107-114,116-120,127 scratch=66-127
 .Lsh_later_g:
-        a       %gp, $66, $67
-        a       %pp, $85, $67
-        a       %op, $115, $67
+        hbrr    .Lsh_later_br, .Lsh_shade_end
         il      %none, -1
-        .irp    H, 0, 16, 32, 48
-        lqd     %or\H, \H(%pp)                # the sums
-        lqd     %og\H, 256+\H(%pp)
-        lqd     %ob\H, 512+\H(%pp)
-      ~ stqd    %or\H, SH_IRR_R+\H(%gp)
-      ~ stqd    %og\H, SH_IRR_G+\H(%gp)
-      ~ stqd    %ob\H, SH_IRR_B+\H(%gp)
-        lqd     %m\H, SH_MAT+\H(%gp)
-        ceq     %sel\H, %m\H, $87            # this shader's rays
-        fa      %ra\H, %or\H, $124
-        fa      %ga\H, %og\H, $124
-        fa      %ba\H, %ob\H, $124
-        fm      %rk\H, %ra\H, $121
-        fm      %gk\H, %ga\H, $122
-        fm      %bk\H, %ba\H, $123
-        fma     %rs\H, %rk\H, $106, $126
-        cfltu   %ru\H, %rs\H, 24
-        fma     %gs\H, %gk\H, $106, $126
-        cfltu   %gu\H, %gs\H, 24
-        fma     %bs\H, %bk\H, $106, $126
-        cfltu   %bu\H, %bs\H, 24
-        shufb   %rg\H, %ru\H, %gu\H, $88
-        shufb   %col\H, %rg\H, %bu\H, $89
-        lqd     %o\H, \H(%op)
-        selb    %o2\H, %o\H, %col\H, %sel\H
-      ~ stqd    %o2\H, \H(%op)
-        selb    %mn\H, %m\H, %none, %sel\H
-      ~ stqd    %mn\H, SH_MAT+\H(%gp)
-        and     $86, $86, %mn\H
+        lqa     %pkeep, sh_gsel               # bytes of a, of b (shufb)
+        lqa     %ptake, sh_gsel+16
+        .irp    A, 0, 32, 64, 96, 128, 160, 192, 224
+        .irp    B, 0, 16
+        lqd     %or\A\()_\B, \A+\B($85) @after %ra\B      # the sums
+        lqd     %og\A\()_\B, 256+\A+\B($85) @after %ra\B
+        lqd     %ob\A\()_\B, 512+\A+\B($85) @after %ra\B
+      ~ stqd    %or\A\()_\B, SH_IRR_R+\A+\B($66)
+      ~ stqd    %og\A\()_\B, SH_IRR_G+\A+\B($66)
+      ~ stqd    %ob\A\()_\B, SH_IRR_B+\A+\B($66)
+        lqd     %m\A\()_\B, SH_MAT+\A+\B($66) @after %ra\B
+        ceq     %sel\A\()_\B, %m\A\()_\B, $87            # this shader's rays
+        selb    %pat\A\()_\B, %pkeep, %ptake, %sel\A\()_\B
+        fa      %ra\B, %or\A\()_\B, $124
+        fa      %ga\A\()_\B, %og\A\()_\B, $124
+        fa      %ba\A\()_\B, %ob\A\()_\B, $124
+        fm      %rk\A\()_\B, %ra\B, $121
+        fm      %gk\A\()_\B, %ga\A\()_\B, $122
+        fm      %bk\A\()_\B, %ba\A\()_\B, $123
+        fma     %rs\A\()_\B, %rk\A\()_\B, $106, $126
+        cfltu   %ru\A\()_\B, %rs\A\()_\B, 24
+        fma     %gs\A\()_\B, %gk\A\()_\B, $106, $126
+        cfltu   %gu\A\()_\B, %gs\A\()_\B, 24
+        fma     %bs\A\()_\B, %bk\A\()_\B, $106, $126
+        cfltu   %bu\A\()_\B, %bs\A\()_\B, 24
+        shufb   %rg\A\()_\B, %ru\A\()_\B, %gu\A\()_\B, $88
+        shufb   %col\A\()_\B, %rg\A\()_\B, %bu\A\()_\B, $89
+        lqd     %o\A\()_\B, \A+\B($115) @after %ra\B
+        shufb   %o2\A\()_\B, %o\A\()_\B, %col\A\()_\B, %pat\A\()_\B
+      ~ stqd    %o2\A\()_\B, \A+\B($115)
+        shufb   %mn\A\()_\B, %m\A\()_\B, %none, %pat\A\()_\B
+      ~ stqd    %mn\A\()_\B, SH_MAT+\A+\B($66)
+        and     $86, $86, %mn\A\()_\B
         .endr
-        ai      $67, $67, 64
-        ceqi    %end, $67, 256
-        ila     %loop, .Lsh_later_g
-        ila     %exit, .Lsh_shade_end
-        selb    %to, %loop, %exit, %end
-        hbr     .Lsh_later_br, %to
+        .endr
 .Lsh_later_br:
-        bi      %to
+        br      .Lsh_shade_end
         .endsched
 
         .align  4
@@ -585,6 +584,9 @@ sh_gather_lanes:                              # the lanes' 64-byte strides
         .long   0, 64, 128, 192
         .long   -1, -1, -1, 0                 # +16: words 0-2
         .long   0, 16, 32, 48                 # +32: the lanes' 16-byte strides
+sh_gsel:                                      # shufb: a's bytes; b's (.Lsh_shade_gx)
+        .long   0x00010203, 0x04050607, 0x08090a0b, 0x0c0d0e0f
+        .long   0x10111213, 0x14151617, 0x18191a1b, 0x1c1d1e1f
 sh_gn:  .long   0, 0, 0, 0                    # the steps noted * 16
 sh_gcand:                                     # the fast step's groups to fetch at once
         .long   0, 0, 0, 0

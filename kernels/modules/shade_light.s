@@ -15,7 +15,9 @@
 # number, $124 = the fast path's counts (groups, same, triangle lookups); calls
 # shadow_rays (modules/shadow.s), which keeps $66, $91..$93, $97, $101..$103, $105; a
 # material cache miss goes out of line to .Lsh_mmiss (modules/shade_cache.s) and comes
-# back to .Lsh_mhit with the line at $73. Returns to $0.
+# back to .Lsh_mhit with the line at $73. Returns to $0. With EXT_GATHER a run is one
+# block of all 16 groups (SH_LIGHT_RUN; one channel for a grey first light) and a later
+# pass is .Lsh_later_g (modules/shade_gather.s): the same values, other schedules.
 
         # the fast groups' counters (groups, same, triangle lookups) to SH_STATS
 .Lsh_iset_done:
@@ -203,7 +205,116 @@
         .endsched
         .ifdef  EXT_GATHER                    # a later pass: from the stored sums
         brz     $84, .Lsh_later_g             # (modules/shade_gather.s)
+        # The gather variant's run: the same values as .Lsh_shade_g's below, all 16
+        # groups in one block (no loop: no pointer, counter or exit per 4 groups, and
+        # the groups' chains overlap across the whole run). A group's loads wait for the
+        # cosine of the group two before it (%cs\B: the groups of one parity share it),
+        # which keeps the odd pipe from loading ahead until the pool is full and the
+        # even pipe stalls. A group's two selects by its shader's rays are one pattern
+        # (selb) and two shufb (the odd pipe idles here: lighting is even-pipe bound).
+        # A grey light (r = g = b, bitwise) adding to no sums yet (the first light) gives
+        # a grey irradiance: its run computes and adds one channel and stores it as all
+        # three (the same bits: cs * l + 0 per channel), 4 even-pipe instructions a group
+        # fewer; any other light takes the three channels.
+        .macro  SH_LIGHT_RUN label, grey
+        .sched  pool=67,69,76-82,84,90-105,107-114,116-120,127 scratch=66-127
+\label:
+        il      %none, -1
+        lqa     %pkeep, sh_gsel               # bytes of a, of b (shufb)
+        lqa     %ptake, sh_gsel+16
+        .irp    A, 0, 32, 64, 96, 128, 160, 192, 224
+        .irp    B, 0, 16
+        lqd     %nx\A\()_\B, SH_NX+\A+\B($66) @after %cs\B
+        lqd     %ny\A\()_\B, SH_NY+\A+\B($66) @after %cs\B
+        lqd     %nz\A\()_\B, SH_NZ+\A+\B($66) @after %cs\B
+        lqd     %px\A\()_\B, SH_PX+\A+\B($66) @after %cs\B
+        lqd     %py\A\()_\B, SH_PY+\A+\B($66) @after %cs\B
+        lqd     %pz\A\()_\B, SH_PZ+\A+\B($66) @after %cs\B
+        lqd     %vis\A\()_\B, \A+\B($83) @after %cs\B
+        fm      %nn1\A\()_\B, %nx\A\()_\B, %nx\A\()_\B
+        fma     %nn2\A\()_\B, %ny\A\()_\B, %ny\A\()_\B, %nn1\A\()_\B
+        fma     %nn\A\()_\B, %nz\A\()_\B, %nz\A\()_\B, %nn2\A\()_\B
+        fs      %lx\A\()_\B, $70, %px\A\()_\B
+        fs      %ly\A\()_\B, $71, %py\A\()_\B
+        fs      %lz\A\()_\B, $72, %pz\A\()_\B
+        fm      %c1\A\()_\B, %nx\A\()_\B, %lx\A\()_\B
+        fma     %c2\A\()_\B, %ny\A\()_\B, %ly\A\()_\B, %c1\A\()_\B
+        fma     %c\A\()_\B, %nz\A\()_\B, %lz\A\()_\B, %c2\A\()_\B
+        fm      %l1\A\()_\B, %lx\A\()_\B, %lx\A\()_\B
+        fma     %l2\A\()_\B, %ly\A\()_\B, %ly\A\()_\B, %l1\A\()_\B
+        fma     %ll\A\()_\B, %lz\A\()_\B, %lz\A\()_\B, %l2\A\()_\B
+        fcgt    %lt1\A\()_\B, %c\A\()_\B, ZERO
+        and     %lit\A\()_\B, %lt1\A\()_\B, %vis\A\()_\B
+        fm      %x\A\()_\B, %nn\A\()_\B, %ll\A\()_\B
+        frsqest %y0\A\()_\B, %x\A\()_\B
+        fi      %y\A\()_\B, %x\A\()_\B, %y0\A\()_\B
+        fm      %cs1\A\()_\B, %c\A\()_\B, %y\A\()_\B
+        fcgt    %big\A\()_\B, %cs1\A\()_\B, $125
+        selb    %cs2\A\()_\B, %cs1\A\()_\B, $125, %big\A\()_\B
+        and     %cs\B, %cs2\A\()_\B, %lit\A\()_\B
+        lqd     %ir\A\()_\B, \A+\B($85) @after %cs\B
+        fma     %or\A\()_\B, %cs\B, $73, %ir\A\()_\B
+      ~ stqd    %or\A\()_\B, SH_IRR_R+\A+\B($66)
+        .if     \grey                        # r = g = b: one channel
+      ~ stqd    %or\A\()_\B, SH_IRR_G+\A+\B($66)
+      ~ stqd    %or\A\()_\B, SH_IRR_B+\A+\B($66)
+        .else
+        lqd     %ig\A\()_\B, 256+\A+\B($85) @after %cs\B
+        lqd     %ib\A\()_\B, 512+\A+\B($85) @after %cs\B
+        fma     %og\A\()_\B, %cs\B, $74, %ig\A\()_\B
+        fma     %ob\A\()_\B, %cs\B, $75, %ib\A\()_\B
+      ~ stqd    %og\A\()_\B, SH_IRR_G+\A+\B($66)
+      ~ stqd    %ob\A\()_\B, SH_IRR_B+\A+\B($66)
         .endif
+        lqd     %m\A\()_\B, SH_MAT+\A+\B($66) @after %cs\B
+        ceq     %sel\A\()_\B, %m\A\()_\B, $87
+        selb    %pat\A\()_\B, %pkeep, %ptake, %sel\A\()_\B
+        fa      %ra\A\()_\B, %or\A\()_\B, $124
+        fm      %rk\A\()_\B, %ra\A\()_\B, $121
+        .if     \grey
+        fm      %gk\A\()_\B, %ra\A\()_\B, $122
+        fm      %bk\A\()_\B, %ra\A\()_\B, $123
+        .else
+        fa      %ga\A\()_\B, %og\A\()_\B, $124
+        fa      %ba\A\()_\B, %ob\A\()_\B, $124
+        fm      %gk\A\()_\B, %ga\A\()_\B, $122
+        fm      %bk\A\()_\B, %ba\A\()_\B, $123
+        .endif
+        fma     %rs\A\()_\B, %rk\A\()_\B, $106, $126
+        cfltu   %ru\A\()_\B, %rs\A\()_\B, 24
+        fma     %gs\A\()_\B, %gk\A\()_\B, $106, $126
+        cfltu   %gu\A\()_\B, %gs\A\()_\B, 24
+        fma     %bs\A\()_\B, %bk\A\()_\B, $106, $126
+        cfltu   %bu\A\()_\B, %bs\A\()_\B, 24
+        shufb   %rg\A\()_\B, %ru\A\()_\B, %gu\A\()_\B, $88
+        shufb   %col\A\()_\B, %rg\A\()_\B, %bu\A\()_\B, $89
+        lqd     %o\A\()_\B, \A+\B($115) @after %cs\B
+        shufb   %o2\A\()_\B, %o\A\()_\B, %col\A\()_\B, %pat\A\()_\B
+      ~ stqd    %o2\A\()_\B, \A+\B($115)
+        shufb   %mn\A\()_\B, %m\A\()_\B, %none, %pat\A\()_\B
+      ~ stqd    %mn\A\()_\B, SH_MAT+\A+\B($66)
+        and     $86, $86, %mn\A\()_\B
+        .endr
+        .endr
+        .if     \grey
+        hbrr    \label\()_br, .Lsh_shade_end
+\label\()_br:
+        br      .Lsh_shade_end
+        .endif
+        .endsched
+        .endm
+        .sched  pool=67,69,76-82,84,90-105,107-114,116-120,127 scratch=66-127
+        ceq     %rg, $73, $74
+        ceq     %rb, $73, $75
+        ila     %zero, sh_zero
+        ceq     %first, $85, %zero
+        and     %grey1, %rg, %rb
+        and     %grey, %grey1, %first
+        brz     %grey, .Lsh_shade_gx          # a coloured light or sums: three channels
+        .endsched
+        SH_LIGHT_RUN .Lsh_shade_gw, 1
+        SH_LIGHT_RUN .Lsh_shade_gx, 0
+        .else
         .sched  pool=69,76-82,84,90-105,107-114,116-120 scratch=66-127
 .Lsh_shade_g:
         a       %gp, $66, $67
@@ -281,6 +392,7 @@
 .Lsh_shade_br:
         bi      %to
         .endsched
+        .endif
 .Lsh_shade_end:
         lqd     $84, SH_RUN+16($66)
         ceqi    $77, $86, -1                  # no material left: done

@@ -478,8 +478,8 @@ fn the_gather_kernel_shades_the_same_frame_in_fewer_cycles() {
     assert_eq!(
         shaded,
         [
-            ("room", 1_243_345, 1_068_734),
-            ("conference", 3_614_585, 1_761_713)
+            ("room", 1_243_345, 1_035_714),
+            ("conference", 3_614_585, 1_716_310)
         ]
     );
     let refused = RenderConfig {
