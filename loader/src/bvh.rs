@@ -731,7 +731,7 @@ fn partition(order: &mut [u32], in_left: impl Fn(u32) -> bool) -> usize {
 /// the `k-1`th of those was, one lower (the first at `n - 1`); every other back element going
 /// right moves one down; and the back's untouched tail below the last of them (all going
 /// right) rotates by one, its first element to its end. Each position's source is found
-/// from these alone, so the moves are one parallel gather.
+/// from these, so the moves are one parallel gather.
 fn partition_in_parallel(order: &mut [u32], in_left: impl Fn(u32) -> bool + Sync) -> usize {
     use rayon::prelude::*;
     let n = order.len();
@@ -752,43 +752,43 @@ fn partition_in_parallel(order: &mut [u32], in_left: impl Fn(u32) -> bool + Sync
     debug_assert_eq!(front_right.len(), back_left.len());
     // Where the back's candidates stopped: below it, the untouched tail.
     let tail_end = back_left.last().map_or(n, |&j| j as usize);
-    let source = |d: usize| -> usize {
-        if d < l {
-            if left[d] {
-                return d;
+    // Each chunk of destinations finds its first ranks among the moved by a search, then
+    // counts on.
+    let gather = |(c, chunk): (usize, &mut [u32])| {
+        let first = c * PARALLEL_CHUNK;
+        // front elements going right before `d`; back elements going left above `d + 1`
+        let mut front = front_right.partition_point(|&p| (p as usize) < first);
+        let mut back = back_left.partition_point(|&j| j as usize > first + 1);
+        for (i, slot) in chunk.iter_mut().enumerate() {
+            let d = first + i;
+            let s = d + 1;
+            let from = if d < l {
+                if left[d] {
+                    d
+                } else {
+                    front += 1;
+                    back_left[front - 1] as usize
+                }
+            } else if s == tail_end && tail_end > l {
+                l
+            } else if s == n {
+                front_right[0] as usize
+            } else if left[s] {
+                front_right[back + 1] as usize
+            } else {
+                s
+            };
+            if s + 1 < n && s + 1 >= l && left[s + 1] {
+                back -= 1;
             }
-            let k = front_right
-                .binary_search(&(d as u32))
-                .expect("a front element going right");
-            return back_left[k] as usize;
+            *slot = order[from];
         }
-        if d + 1 == tail_end && tail_end > l {
-            return l;
-        }
-        let s = d + 1;
-        if s == n {
-            return front_right[0] as usize;
-        }
-        if left[s] {
-            let k = back_left
-                .binary_search_by(|&j| (s as u32).cmp(&j))
-                .expect("a back element going left");
-            return front_right[k + 1] as usize;
-        }
-        s
     };
     let mut moved = vec![0u32; n];
-    {
-        let order: &[u32] = order;
-        moved
-            .par_chunks_mut(PARALLEL_CHUNK)
-            .enumerate()
-            .for_each(|(c, chunk)| {
-                for (i, slot) in chunk.iter_mut().enumerate() {
-                    *slot = order[source(c * PARALLEL_CHUNK + i)];
-                }
-            });
-    }
+    moved
+        .par_chunks_mut(PARALLEL_CHUNK)
+        .enumerate()
+        .for_each(gather);
     order
         .par_chunks_mut(PARALLEL_CHUNK)
         .zip(moved.par_chunks(PARALLEL_CHUNK))
