@@ -556,7 +556,10 @@ fn build_recursive(
             let scale = BIN_COUNT as f32 / extent[axis];
             let in_left =
                 |t: u32| bin_index(primitives.centroid[t as usize][axis], cmin[axis], scale) < bin;
-            let mid = if data_parallel {
+            // Below the top levels the subtrees already keep every thread busy, and the
+            // parallel passes cost more instructions than the one sequential pass.
+            let top_level = depth < 32 && 1 << depth < config.threads;
+            let mid = if data_parallel && top_level {
                 partition_in_parallel(order, in_left)
             } else {
                 partition(order, in_left)
@@ -962,7 +965,18 @@ pub(crate) mod tests {
             state ^= state << 17;
             state
         };
-        let sizes = [0, 1, 2, 3, 5, 17, 100, 1000, PARALLEL_CHUNK + 3, 3 * PARALLEL_CHUNK];
+        let sizes = [
+            0,
+            1,
+            2,
+            3,
+            5,
+            17,
+            100,
+            1000,
+            PARALLEL_CHUNK + 3,
+            3 * PARALLEL_CHUNK,
+        ];
         for n in sizes {
             for share in 0..=8 {
                 let mut order: Vec<u32> = (0..n as u32).collect();
