@@ -556,7 +556,15 @@ fn build_recursive(
             let scale = BIN_COUNT as f32 / extent[axis];
             let in_left =
                 |t: u32| bin_index(primitives.centroid[t as usize][axis], cmin[axis], scale) < bin;
-            (axis, partition(order, in_left))
+            // Below the top levels the subtrees already keep every thread busy, and the
+            // parallel passes cost more instructions than the one sequential pass.
+            let top_level = depth < 32 && 1 << depth < config.threads;
+            let mid = if data_parallel && top_level {
+                partition_in_parallel(order, in_left)
+            } else {
+                partition(order, in_left)
+            };
+            (axis, mid)
         }
         None if count <= config.max_leaf_size => return leaf(),
         None => {
@@ -715,6 +723,82 @@ fn partition(order: &mut [u32], in_left: impl Fn(u32) -> bool) -> usize {
     i
 }
 
+/// [`partition`]'s exact result (the same order, not only the same two sets: the leaves'
+/// triangle order, and so the kernels' layout and cycles, follow it), in parallel passes.
+///
+/// The sequential pass takes candidates from the front while they go left; one that goes
+/// right is put at the back, and the next candidate is the back's next. With `l` elements
+/// going left, the front's candidates are exactly positions `0..l` and the back's `l..n`
+/// (as many go right in `0..l` as go left in `l..n`), so: the `k`th front element going right
+/// (ascending) is replaced by the `k`th back element going left (descending) and lands where
+/// the `k-1`th of those was, one lower (the first at `n - 1`); every other back element going
+/// right moves one down; and the back's untouched tail below the last of them (all going
+/// right) rotates by one, its first element to its end. Each position's source is found
+/// from these, so the moves are one parallel gather.
+fn partition_in_parallel(order: &mut [u32], in_left: impl Fn(u32) -> bool + Sync) -> usize {
+    use rayon::prelude::*;
+    let n = order.len();
+    let left: Vec<bool> = order.par_iter().map(|&t| in_left(t)).collect();
+    let l = left.par_iter().filter(|&&x| x).count();
+    // (rayon's collect keeps the order)
+    let front_right: Vec<u32> = (0..l)
+        .into_par_iter()
+        .filter(|&i| !left[i])
+        .map(|i| i as u32)
+        .collect();
+    let back_left: Vec<u32> = (l..n)
+        .into_par_iter()
+        .rev()
+        .filter(|&i| left[i])
+        .map(|i| i as u32)
+        .collect();
+    debug_assert_eq!(front_right.len(), back_left.len());
+    // Where the back's candidates stopped: below it, the untouched tail.
+    let tail_end = back_left.last().map_or(n, |&j| j as usize);
+    // Each chunk of destinations finds its first ranks among the moved by a search, then
+    // counts on.
+    let gather = |(c, chunk): (usize, &mut [u32])| {
+        let first = c * PARALLEL_CHUNK;
+        // front elements going right before `d`; back elements going left above `d + 1`
+        let mut front = front_right.partition_point(|&p| (p as usize) < first);
+        let mut back = back_left.partition_point(|&j| j as usize > first + 1);
+        for (i, slot) in chunk.iter_mut().enumerate() {
+            let d = first + i;
+            let s = d + 1;
+            let from = if d < l {
+                if left[d] {
+                    d
+                } else {
+                    front += 1;
+                    back_left[front - 1] as usize
+                }
+            } else if s == tail_end && tail_end > l {
+                l
+            } else if s == n {
+                front_right[0] as usize
+            } else if left[s] {
+                front_right[back + 1] as usize
+            } else {
+                s
+            };
+            if s + 1 < n && s + 1 >= l && left[s + 1] {
+                back -= 1;
+            }
+            *slot = order[from];
+        }
+    };
+    let mut moved = vec![0u32; n];
+    moved
+        .par_chunks_mut(PARALLEL_CHUNK)
+        .enumerate()
+        .for_each(gather);
+    order
+        .par_chunks_mut(PARALLEL_CHUNK)
+        .zip(moved.par_chunks(PARALLEL_CHUNK))
+        .for_each(|(to, from)| to.copy_from_slice(from));
+    l
+}
+
 fn flatten(node: &BuildNode, index: usize, nodes: &mut Vec<BvhNode>) {
     match node {
         BuildNode::Leaf {
@@ -862,6 +946,52 @@ pub(crate) mod tests {
                 "{threads} threads"
             );
             assert_eq!(one.sah_cost.to_bits(), other.sah_cost.to_bits());
+        }
+    }
+
+    /// The parallel partition leaves every element where the sequential one does: random
+    /// orders and sides, every share going left from none to all (the tail's rotation
+    /// included), sizes around the parallel chunk's.
+    #[test]
+    fn the_parallel_partition_gives_the_sequential_order() {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let sizes = [
+            0,
+            1,
+            2,
+            3,
+            5,
+            17,
+            100,
+            1000,
+            PARALLEL_CHUNK + 3,
+            3 * PARALLEL_CHUNK,
+        ];
+        for n in sizes {
+            for share in 0..=8 {
+                let mut order: Vec<u32> = (0..n as u32).collect();
+                for i in (1..n).rev() {
+                    order.swap(i, next() as usize % (i + 1));
+                }
+                let sides: Vec<bool> = (0..n).map(|_| next() % 8 < share).collect();
+                let in_left = |t: u32| sides[t as usize];
+                let mut sequential = order.clone();
+                let l = partition(&mut sequential, in_left);
+                let mut parallel = order.clone();
+                let m = pool.install(|| partition_in_parallel(&mut parallel, in_left));
+                assert_eq!(l, m, "{n} elements, {share}/8 left");
+                assert!(sequential == parallel, "{n} elements, {share}/8 left");
+            }
         }
     }
 
