@@ -187,7 +187,9 @@ impl Assembler<'_> {
                 self.expand_macro(&m, &args, line);
             } else if args.starts_with('=') && !args.starts_with("==") {
                 let v = args[1..].trim().to_string();
-                self.set_symbol(&word, &v, line);
+                if self.may_assign(&word, true, line, col) {
+                    self.set_symbol(&word, &v, line);
+                }
             } else if lw.starts_with('.') {
                 self.directive(&lw, &args, line, col);
             } else if !args.starts_with('=')
@@ -200,14 +202,18 @@ impl Assembler<'_> {
                 self.directive(&format!(".{lw}"), &args, line, col);
             } else if let Some(v) = args.strip_prefix('=') {
                 let v = v.trim().to_string();
-                self.set_symbol(&word, &v, line);
+                if self.may_assign(&word, true, line, col) {
+                    self.set_symbol(&word, &v, line);
+                }
             } else if let Some((name, value)) = word
                 .split_once('=')
                 .filter(|(n, _)| !n.is_empty() && !n.contains(|c: char| c.is_whitespace()))
             {
                 // `name=value` written without spaces, as gas accepts it.
                 let v = format!("{value}{}{args}", if args.is_empty() { "" } else { " " });
-                self.set_symbol(name, v.trim(), line);
+                if self.may_assign(name, true, line, col) {
+                    self.set_symbol(name, v.trim(), line);
+                }
             } else {
                 let at = (
                     self.sect,
@@ -854,14 +860,28 @@ impl Assembler<'_> {
                     }
                 }
             }
-            ".ascii" | ".asciz" | ".string" => {
+            ".ascii" | ".asciz" | ".string" | ".string8" | ".string16" | ".string32"
+            | ".string64" => {
+                // read.c stringer: each character a unit of 1, 2, 4 or 8 bytes (big-endian).
+                let unit = d
+                    .strip_prefix(".string")
+                    .and_then(|bits| bits.parse::<usize>().ok())
+                    .map_or(1, |bits| bits / 8);
                 for part in split_top(args, ',') {
-                    match unquote(part.trim()) {
+                    match adjacent_strings(part.trim()) {
                         Some(mut bytes) => {
                             if d != ".ascii" {
                                 bytes.push(0);
                             }
-                            self.emit(&bytes);
+                            let units: Vec<u8> = bytes
+                                .iter()
+                                .flat_map(|&b| {
+                                    let mut u = vec![0u8; unit];
+                                    u[unit - 1] = b;
+                                    u
+                                })
+                                .collect();
+                            self.emit(&units);
                         }
                         None => self.diag(Severity::Error, line, col, "expected a string"),
                     }
@@ -930,6 +950,11 @@ impl Assembler<'_> {
                 }
                 let name = parts[0].trim().to_string();
                 let expr = parts[1..].join(",");
+                let volatile = d == ".set" || d == ".equ";
+                let name_col = line.text.find(&name).map_or(col, |c| c + 1);
+                if !self.may_assign(&name, volatile, line, name_col) {
+                    return;
+                }
                 if d == ".eqv" && expr.trim() == "." && self.absolute.is_none() {
                     self.dot_eqv.insert(name.clone());
                 } else {
@@ -958,18 +983,28 @@ impl Assembler<'_> {
                 col,
                 format!("{d} without a matching start"),
             ),
-            ".err" | ".error" => self.diag(
-                Severity::Error,
-                line,
-                col,
-                args.trim().trim_matches('"').to_string(),
-            ),
-            ".warning" => self.diag(
-                Severity::Warning,
-                line,
-                col,
-                args.trim().trim_matches('"').to_string(),
-            ),
+            // read.c s_nop: `nop` without its dot, as the instruction reads it.
+            ".nop" => self.instruction("nop", args, line, col),
+            ".err" => self.diag(Severity::Error, line, col, ".err encountered"),
+            ".error" | ".warning" => {
+                // read.c s_errwarn: a string, or nothing for gas's own words.
+                let severity = if d == ".error" {
+                    Severity::Error
+                } else {
+                    Severity::Warning
+                };
+                let text = args.trim();
+                let message = if text.is_empty() {
+                    format!("{d} directive invoked in source file")
+                } else if let Some(bytes) = text.starts_with('"').then(|| adjacent_strings(text)).flatten() {
+                    String::from_utf8_lossy(&bytes).into_owned()
+                } else {
+                    let m = format!("{d} argument must be a string");
+                    self.diag(Severity::Error, line, col, m);
+                    return;
+                };
+                self.diag(severity, line, col, message);
+            }
             _ => {
                 if !self.elf_directive(d, args, line, col) {
                     self.diag(
@@ -1042,6 +1077,11 @@ const DIRECTIVES: &[&str] = &[
     ".align",
     ".ascii",
     ".asciz",
+    ".nop",
+    ".string8",
+    ".string16",
+    ".string32",
+    ".string64",
     ".balign",
     ".balignl",
     ".balignw",
@@ -1196,4 +1236,34 @@ pub(super) fn block_word(word: &str, macros: &HashMap<String, Macro>) -> String 
     } else {
         lw
     }
+}
+
+/// A string operand of `.ascii` and its kin: one or more quoted strings side by side
+/// (`"a" "b"`), joined as read.c's stringer joins them.
+fn adjacent_strings(text: &str) -> Option<Vec<u8>> {
+    let mut out = Vec::new();
+    let mut rest = text.trim_start();
+    if rest.is_empty() {
+        return None;
+    }
+    while !rest.is_empty() {
+        let body = rest.strip_prefix('"')?;
+        let mut end = None;
+        let mut escaped = false;
+        for (k, c) in body.char_indices() {
+            match c {
+                _ if escaped => escaped = false,
+                '\\' => escaped = true,
+                '"' => {
+                    end = Some(k);
+                    break;
+                }
+                _ => {}
+            }
+        }
+        let end = end?;
+        out.extend(unquote(&rest[..end + 2])?);
+        rest = body[end + 1..].trim_start();
+    }
+    Some(out)
 }

@@ -277,6 +277,30 @@ impl Assembler<'_> {
             .insert(name.to_string(), SymVal::Label(self.sect, off));
     }
 
+    /// read.c `assign_symbol`: a symbol defined already (a label, a common block, an
+    /// equate) takes a value again only by `.set`/`.equ`/`=` (`volatile`) over an equate
+    /// made by one of them; otherwise "symbol `x' is already defined" and the statement
+    /// is dropped (false).
+    pub(super) fn may_assign(&mut self, name: &str, volatile: bool, line: &Line, col: usize) -> bool {
+        let equated = self.equated.get(name).copied();
+        let defined = self.defined.contains(name)
+            || matches!(self.symbols.get(name), Some(SymVal::Common(..)))
+            || equated.is_some();
+        if name != "." && defined && !(volatile && equated == Some(true)) {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("symbol `{name}` is already defined"),
+            );
+            return false;
+        }
+        if name != "." {
+            self.equated.insert(name.to_string(), volatile);
+        }
+        true
+    }
+
     pub(super) fn set_symbol(&mut self, name: &str, expr: &str, line: &Line) {
         if name == "." {
             let col = line.text.find('=').map_or(1, |c| c + 2);
