@@ -153,9 +153,12 @@ struct Assembler<'o> {
     /// `.symver NAME, NAME2@VERSION[, local|hidden|remove]` (final walk): the versioned
     /// names objects give symbols.
     symvers: Vec<(String, String, String)>,
-    /// Names `.eqv NAME, .` made: gas resolves their `.` where each is used, and for the
-    /// symbol table where the source ends (`dot_symbol` resolved late).
-    dot_eqv: std::collections::HashSet<String>,
+    /// Names `.eqv NAME, EXPR` (`NAME == EXPR`) made with `.` in EXPR, and EXPR: gas
+    /// resolves their `.` where each is used, and for the symbol table where the source
+    /// ends (`dot_symbol` resolved late).
+    dot_eqv: HashMap<String, String>,
+    /// `.eqv` expressions being evaluated inside one another (a bound on loops).
+    eqv_depth: std::cell::Cell<usize>,
     /// Names given a value in this walk, each with whether it may be given another: by
     /// `.set`/`.equ`/`=` yes (gas's volatile symbols), by `.equiv`/`.eqv` no.
     equated: HashMap<String, bool>,
@@ -239,6 +242,7 @@ impl<'o> Assembler<'o> {
             local_counter: 0,
             symvers: Vec::new(),
             dot_eqv: Default::default(),
+            eqv_depth: Default::default(),
             equated: HashMap::new(),
             dwarf: Default::default(),
             chain: Default::default(),

@@ -183,9 +183,13 @@ impl Assembler<'_> {
                 self.sect,
                 self.offsets.get(&self.sect).copied().unwrap_or(0),
             );
-            if let Some(m) = self.macros.get(&lw).cloned() {
+            let macro_named = self.macros.get(&lw).filter(|_| !names_pseudo_op(&lw)).cloned();
+            if let Some(m) = macro_named {
                 self.expand_macro(&m, &args, line);
-            } else if args.starts_with('=') && !args.starts_with("==") {
+            } else if let Some(v) = args.strip_prefix("==") {
+                // `NAME == EXPR` is `.eqv NAME, EXPR` (read.c, `==` after a name).
+                self.directive(".eqv", &format!("{word},{v}"), line, col);
+            } else if args.starts_with('=') {
                 let v = args[1..].trim().to_string();
                 if self.may_assign(&word, true, line, col) {
                     self.set_symbol(&word, &v, line);
@@ -209,9 +213,12 @@ impl Assembler<'_> {
                 .split_once('=')
                 .filter(|(n, _)| !n.is_empty() && !n.contains(|c: char| c.is_whitespace()))
             {
-                // `name=value` written without spaces, as gas accepts it.
+                // `name=value` written without spaces, as gas accepts it (`name==value`:
+                // `.eqv`).
                 let v = format!("{value}{}{args}", if args.is_empty() { "" } else { " " });
-                if self.may_assign(name, true, line, col) {
+                if let Some(v) = v.strip_prefix('=') {
+                    self.directive(".eqv", &format!("{name},{v}"), line, col);
+                } else if self.may_assign(name, true, line, col) {
                     self.set_symbol(name, v.trim(), line);
                 }
             } else {
@@ -711,7 +718,25 @@ impl Assembler<'_> {
             ".print" => {}
             // read.c s_end: nothing after it is read.
             ".end" => self.ended = true,
-            ".extern" | ".brinfo" | ".nolist" | ".list" | ".eject" | ".psize" | ".title"
+            // listing.c listing_psize: the page's lines, then (after a comma) its width.
+            ".psize" => {
+                let parts = split_top(args, ',');
+                if let Some(lines) = parts.first().filter(|p| !p.trim().is_empty()) {
+                    if !matches!(self.eval_val(lines), Ok((v, false, _)) if !v.reloc) {
+                        self.diag(Severity::Error, line, col, "bad or irreducible absolute expression");
+                    }
+                }
+                if let Some(width) = parts.get(1) {
+                    match self.eval_val(width) {
+                        Ok((v, false, _)) if !v.reloc && v.v <= 7 => {
+                            self.diag(Severity::Error, line, col, "new paper width is too small")
+                        }
+                        Ok((v, false, _)) if !v.reloc => {}
+                        _ => self.diag(Severity::Error, line, col, "bad or irreducible absolute expression"),
+                    }
+                }
+            }
+            ".extern" | ".brinfo" | ".nolist" | ".list" | ".eject" | ".title"
             | ".sbttl" | ".version" | ".gnu_attribute" | ".lflags" => {}
             // read.c's s_ignore entries (COFF debugging and MRI listing control), and
             // `.func`/`.endfunc`, which emit nothing without stabs debugging.
@@ -955,8 +980,8 @@ impl Assembler<'_> {
                 if !self.may_assign(&name, volatile, line, name_col) {
                     return;
                 }
-                if d == ".eqv" && expr.trim() == "." && self.absolute.is_none() {
-                    self.dot_eqv.insert(name.clone());
+                if d == ".eqv" && mentions_dot(&expr) && self.absolute.is_none() {
+                    self.dot_eqv.insert(name.clone(), expr.trim().to_string());
                 } else {
                     self.dot_eqv.remove(&name);
                 }
@@ -1159,6 +1184,16 @@ const DIRECTIVES: &[&str] = &[
     ".lflags",
 ];
 
+/// Whether a statement's first word names a pseudo-op, with its dot or without (tc-spu.h's
+/// `NO_PSEUDO_DOT`): read.c reads it as the pseudo-op before looking for a macro.
+pub(super) fn names_pseudo_op(word: &str) -> bool {
+    let lw = word.to_ascii_lowercase();
+    match lw.strip_prefix('.') {
+        Some(_) => is_directive(&lw),
+        None => lw != "set" && forms_named(&lw).next().is_none() && is_directive(&format!(".{lw}")),
+    }
+}
+
 fn is_directive(name: &str) -> bool {
     DIRECTIVES.contains(&name)
         || super::cond::CONDITIONALS.contains(&name)
@@ -1174,6 +1209,7 @@ fn is_directive(name: &str) -> bool {
                 | ".elseif"
                 | ".else"
                 | ".endif"
+                | ".endc"
                 | ".exitm"
         )
 }
@@ -1266,4 +1302,16 @@ fn adjacent_strings(text: &str) -> Option<Vec<u8>> {
         rest = body[end + 1..].trim_start();
     }
     Some(out)
+}
+
+/// Whether an expression names the location counter `.` (not a `.`-led symbol such as
+/// `.L1`, nor a `.` inside a name).
+fn mentions_dot(expr: &str) -> bool {
+    let b = expr.as_bytes();
+    let name_byte = |c: u8| c.is_ascii_alphanumeric() || c == b'_' || c == b'.' || c == b'$';
+    (0..b.len()).any(|k| {
+        b[k] == b'.'
+            && (k == 0 || !name_byte(b[k - 1]))
+            && b.get(k + 1).is_none_or(|&c| !name_byte(c))
+    })
 }
