@@ -118,7 +118,17 @@ impl Assembler<'_> {
                 let mut params: Vec<(String, Option<String>)> = Vec::new();
                 let mut required = Vec::new();
                 let mut vararg = false;
-                let words: Vec<&str> = list
+                // `name : qual` and `name = default` may have blanks around `:` and `=`.
+                let mut joined = String::new();
+                for c in list.chars() {
+                    if matches!(c, ':' | '=') {
+                        joined.truncate(joined.trim_end().len());
+                    } else if c.is_whitespace() && joined.ends_with([':', '=']) {
+                        continue;
+                    }
+                    joined.push(c);
+                }
+                let words: Vec<&str> = joined
                     .split(|c: char| c == ',' || c.is_whitespace())
                     .filter(|s| !s.is_empty())
                     .collect();

@@ -834,6 +834,32 @@ impl Assembler<'_> {
                             (Val::abs(0), col)
                         }
                     };
+                    // An equate not yet defined here: gas leaves a fixup, and write.c's
+                    // fixup_segment refuses a value the field cannot hold.
+                    let fixup = !self.forward_refs.borrow().is_empty();
+                    if fixup && !v.reloc && !v.cross && size < 8 {
+                        let mask = !0u64 << (8 * size);
+                        let (high, negated_high) =
+                            (v.v as u64 & mask, (v.v as u64).wrapping_neg() & mask);
+                        if high != 0 && negated_high != 0 {
+                            let at = self.offsets.get(&self.sect).copied().unwrap_or(0);
+                            let value = if v.v as u64 > 1000 {
+                                format!("{:08x}", v.v as u32)
+                            } else {
+                                v.v.to_string()
+                            };
+                            let s = if size == 1 { "" } else { "s" };
+                            self.diag(
+                                Severity::Error,
+                                line,
+                                c,
+                                format!("value of {value} too large for field of {size} byte{s} at {at:08x}"),
+                            );
+                        }
+                        let b = v.v.to_be_bytes();
+                        self.emit(&b[8 - size..]);
+                        continue;
+                    }
                     if self.object && self.pass == 2 && (v.reloc || v.cross) {
                         // In an object an address is left to the linker: R_SPU_ADDR32 (or
                         // R_SPU_REL32 for `sym - .`); other sizes have no SPU relocation.
