@@ -68,6 +68,21 @@ pub(crate) fn substitute(text: &str, vars: &[(String, String)], counter: Option<
             i = end;
             continue;
         }
+        if b[i] == b'&' {
+            // macro.c macro_expand_body: `&name` or `&name&` is the parameter too, in a
+            // string as well; `&` before anything else stays.
+            let start = i + 1;
+            let mut end = start;
+            while end < b.len() && is_ident(b[end] as char) && b[end] != b'.' && b[end] != b'$' {
+                end += 1;
+            }
+            let found = vars.iter().find(|(n, _)| end > start && n == &text[start..end]);
+            if let Some((_, v)) = found {
+                out.push_str(v);
+                i = end + (b.get(end) == Some(&b'&')) as usize;
+                continue;
+            }
+        }
         if b[i] == b'\\' {
             if let Some(c) = counter {
                 if b.get(i + 1) == Some(&b'@') {
