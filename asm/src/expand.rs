@@ -76,7 +76,9 @@ pub(crate) fn substitute(text: &str, vars: &[(String, String)], counter: Option<
             while end < b.len() && is_ident(b[end] as char) && b[end] != b'.' && b[end] != b'$' {
                 end += 1;
             }
-            let found = vars.iter().find(|(n, _)| end > start && n == &text[start..end]);
+            let found = vars
+                .iter()
+                .find(|(n, _)| end > start && n == &text[start..end]);
             if let Some((_, v)) = found {
                 out.push_str(v);
                 i = end + (b.get(end) == Some(&b'&')) as usize;

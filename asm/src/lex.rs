@@ -243,7 +243,10 @@ pub(crate) fn to_lines(text: &str, file: &str) -> Vec<Line> {
 fn line_marker(text: &str) -> Option<(usize, String)> {
     let rest = text.strip_prefix("# ")?;
     let digits = rest.len() - rest.trim_start_matches(|c: char| c.is_ascii_digit()).len();
-    let number: i32 = rest[..digits].parse().ok().filter(|_| !rest.starts_with('0'))?;
+    let number: i32 = rest[..digits]
+        .parse()
+        .ok()
+        .filter(|_| !rest.starts_with('0'))?;
     let name = rest[digits..].trim_start().strip_prefix('"')?;
     let name = &name[..name.find('"')?];
     Some((number as usize, name.to_string()))

@@ -1242,7 +1242,11 @@ pub(crate) fn gas_suite_sources() -> (Vec<PathBuf>, String) {
     let mut files = Vec::new();
     for n in &names {
         let dir = Path::new(root).join(n);
-        assert!(dir.is_dir(), "{}: no such testsuite directory", dir.display());
+        assert!(
+            dir.is_dir(),
+            "{}: no such testsuite directory",
+            dir.display()
+        );
         files.extend(sources_under(&dir));
     }
     let note = format!(

@@ -163,7 +163,9 @@ impl Assembler<'_> {
                             Severity::Error,
                             line,
                             1,
-                            format!("A parameter named `{pname}' already exists for macro `{name}'"),
+                            format!(
+                                "A parameter named `{pname}' already exists for macro `{name}'"
+                            ),
                         );
                         return;
                     }

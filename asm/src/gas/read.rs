@@ -183,7 +183,11 @@ impl Assembler<'_> {
                 self.sect,
                 self.offsets.get(&self.sect).copied().unwrap_or(0),
             );
-            let macro_named = self.macros.get(&lw).filter(|_| !names_pseudo_op(&lw)).cloned();
+            let macro_named = self
+                .macros
+                .get(&lw)
+                .filter(|_| !names_pseudo_op(&lw))
+                .cloned();
             if let Some(m) = macro_named {
                 self.expand_macro(&m, &args, line);
             } else if let Some(v) = args.strip_prefix("==") {
@@ -723,7 +727,12 @@ impl Assembler<'_> {
                 let parts = split_top(args, ',');
                 if let Some(lines) = parts.first().filter(|p| !p.trim().is_empty()) {
                     if !matches!(self.eval_val(lines), Ok((v, false, _)) if !v.reloc) {
-                        self.diag(Severity::Error, line, col, "bad or irreducible absolute expression");
+                        self.diag(
+                            Severity::Error,
+                            line,
+                            col,
+                            "bad or irreducible absolute expression",
+                        );
                     }
                 }
                 if let Some(width) = parts.get(1) {
@@ -732,12 +741,17 @@ impl Assembler<'_> {
                             self.diag(Severity::Error, line, col, "new paper width is too small")
                         }
                         Ok((v, false, _)) if !v.reloc => {}
-                        _ => self.diag(Severity::Error, line, col, "bad or irreducible absolute expression"),
+                        _ => self.diag(
+                            Severity::Error,
+                            line,
+                            col,
+                            "bad or irreducible absolute expression",
+                        ),
                     }
                 }
             }
-            ".extern" | ".brinfo" | ".nolist" | ".list" | ".eject" | ".title"
-            | ".sbttl" | ".version" | ".gnu_attribute" | ".lflags" => {}
+            ".extern" | ".brinfo" | ".nolist" | ".list" | ".eject" | ".title" | ".sbttl"
+            | ".version" | ".gnu_attribute" | ".lflags" => {}
             // read.c's s_ignore entries (COFF debugging and MRI listing control), and
             // `.func`/`.endfunc`, which emit nothing without stabs debugging.
             ".debug" | ".dim" | ".endef" | ".scl" | ".tag" | ".val" | ".ln" | ".func"
@@ -1047,7 +1061,11 @@ impl Assembler<'_> {
                 let text = args.trim();
                 let message = if text.is_empty() {
                     format!("{d} directive invoked in source file")
-                } else if let Some(bytes) = text.starts_with('"').then(|| adjacent_strings(text)).flatten() {
+                } else if let Some(bytes) = text
+                    .starts_with('"')
+                    .then(|| adjacent_strings(text))
+                    .flatten()
+                {
                     String::from_utf8_lossy(&bytes).into_owned()
                 } else {
                     let m = format!("{d} argument must be a string");

@@ -313,7 +313,13 @@ impl Assembler<'_> {
     /// equate) takes a value again only by `.set`/`.equ`/`=` (`volatile`) over an equate
     /// made by one of them; otherwise "symbol `x' is already defined" and the statement
     /// is dropped (false).
-    pub(super) fn may_assign(&mut self, name: &str, volatile: bool, line: &Line, col: usize) -> bool {
+    pub(super) fn may_assign(
+        &mut self,
+        name: &str,
+        volatile: bool,
+        line: &Line,
+        col: usize,
+    ) -> bool {
         let equated = self.equated.get(name).copied();
         let defined = self.defined.contains(name)
             || matches!(self.symbols.get(name), Some(SymVal::Common(..)))
