@@ -183,7 +183,9 @@ pub(crate) fn alt_arguments(args: &str) -> Vec<String> {
     let mut chars = args.chars();
     while let Some(c) = chars.next() {
         match c {
-            '!' if angle > 0 => {
+            // macro.c getstring: `!` takes the next character as it is, in `<...>`
+            // and in a quoted string alike.
+            '!' if angle > 0 || quote => {
                 if let Some(n) = chars.next() {
                     cur.push(n);
                 }

@@ -205,6 +205,9 @@ fn macro_arguments_as_gas_takes_them() {
     };
     let source = ".macro\tm1 str\n\t.ascii\t\"&str\"\n.endm\n\t.data\nm1\t<!>!<!!>\n";
     assert_eq!(accepted(source, &opts, ".data").0, b"><!".to_vec());
+    // all/altmacro: `!` escapes in a quoted argument too; `&str` outside quotes.
+    let source = ".macro\tm3 str\n\t.ascii\t&str\n.endm\n\t.data\nm3\t\"!!<>'\"\n";
+    assert_eq!(accepted(source, &opts, ".data").0, b"!<>'".to_vec());
 }
 
 #[test]
