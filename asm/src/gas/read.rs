@@ -193,26 +193,20 @@ impl Assembler<'_> {
             } else if let Some(v) = args.strip_prefix("==") {
                 // `NAME == EXPR` is `.eqv NAME, EXPR` (read.c, `==` after a name).
                 self.directive(".eqv", &format!("{word},{v}"), line, col);
-            } else if args.starts_with('=') {
-                let v = args[1..].trim().to_string();
+            } else if let Some(v) = args.strip_prefix('=') {
+                let v = v.trim().to_string();
                 if self.may_assign(&word, true, line, col) {
                     self.set_symbol(&word, &v, line);
                 }
             } else if lw.starts_with('.') {
                 self.directive(&lw, &args, line, col);
-            } else if !args.starts_with('=')
-                && lw != "set"
+            } else if lw != "set"
                 && forms_named(&lw).next().is_none()
                 && is_directive(&format!(".{lw}"))
             {
                 // A pseudo-op written without its dot (`GLOBL`), as gas's NO_PSEUDO_DOT
                 // targets and MRI mode read it.
                 self.directive(&format!(".{lw}"), &args, line, col);
-            } else if let Some(v) = args.strip_prefix('=') {
-                let v = v.trim().to_string();
-                if self.may_assign(&word, true, line, col) {
-                    self.set_symbol(&word, &v, line);
-                }
             } else if let Some((name, value)) = word
                 .split_once('=')
                 .filter(|(n, _)| !n.is_empty() && !n.contains(|c: char| c.is_whitespace()))
