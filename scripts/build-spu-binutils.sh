@@ -4,6 +4,12 @@
 # without it.
 #
 #   scripts/build-spu-binutils.sh [TARBALL|debian] [PREFIX]   (PREFIX: $HOME/.local/spu-binutils)
+#   scripts/build-spu-binutils.sh --testsuite-only SOURCE_DIR [PREFIX]
+#
+# Besides the programs it installs binutils' own test sources under
+# $PREFIX/share/spu-binutils-testsuite: ld's ld-spu (tests/gnu_ld_differential.rs) and gas's
+# gas/{all,elf,macros} (tests/gnu_differential.rs). --testsuite-only installs just those
+# from an unpacked binutils 2.40 source tree, for a prefix built before they were.
 #
 # TARBALL: binutils-2.40.tar.xz from ftp.gnu.org/gnu/binutils, or Debian's
 # binutils_2.40.orig.tar.*. `debian` (the default) takes the tarball from Debian's
@@ -15,6 +21,28 @@
 # make, flex and bison (the build regenerates binutils' lexers); about 1.5 minutes on two
 # quiet cores (2026-11-27, this project's 2-core machine).
 set -eu
+
+# Copies the test sources the differential tests read from source tree $1 to prefix $2.
+install_testsuite() {
+    dest="$2/share/spu-binutils-testsuite"
+    mkdir -p "$dest/gas"
+    rm -rf "$dest/ld-spu" "$dest/gas/all" "$dest/gas/elf" "$dest/gas/macros"
+    cp -R "$1/ld/testsuite/ld-spu" "$dest/"
+    for dir in all elf macros; do
+        cp -R "$1/gas/testsuite/gas/$dir" "$dest/gas/"
+    done
+    echo "installed: $dest/ld-spu (binutils' ld-spu test sources),"
+    echo "           $dest/gas/{all,elf,macros} (gas's generic test sources)"
+}
+
+if [ "${1:-}" = --testsuite-only ]; then
+    if [ ! -f "${2:-}/gas/testsuite/gas/all/gas.exp" ]; then
+        echo "usage: $0 --testsuite-only BINUTILS-2.40-SOURCE-DIR [PREFIX]" >&2
+        exit 2
+    fi
+    install_testsuite "$2" "${3:-$HOME/.local/spu-binutils}"
+    exit 0
+fi
 source=${1:-debian}
 prefix=${2:-$HOME/.local/spu-binutils}
 for tool in cc make flex bison; do
@@ -57,10 +85,8 @@ cd build
     --without-zstd >/dev/null
 make -j"$(nproc 2>/dev/null || echo 2)" MAKEINFO=true all-gas all-ld all-binutils >/dev/null
 make MAKEINFO=true install-gas install-ld install-binutils >/dev/null
-# ld's own SPU test sources (overlays, icache, pic...), which the linker comparison links
-# when present (tests/build.rs looks for them here); on this machine only, never committed.
-mkdir -p "$prefix/share/spu-binutils-testsuite"
-rm -rf "$prefix/share/spu-binutils-testsuite/ld-spu"
-cp -R "../$src/ld/testsuite/ld-spu" "$prefix/share/spu-binutils-testsuite/"
-echo "installed: $prefix/bin/spu-elf-as (and spu-elf-ld, spu-elf-objdump, spu-elf-readelf),"
-echo "           $prefix/share/spu-binutils-testsuite/ld-spu (binutils' ld-spu test sources)"
+echo "installed: $prefix/bin/spu-elf-as (and spu-elf-ld, spu-elf-objdump, spu-elf-readelf)"
+# ld's own SPU test sources (overlays, icache, pic...) and gas's generic ones, which the
+# comparisons read when present (tests/build.rs looks for them here); on this machine
+# only, never committed.
+install_testsuite "../$src" "$prefix"

@@ -9,9 +9,8 @@ use crate::lex::split_top;
 /// A macro or `.irp` argument as gas's `get_any_string` takes it: a double-quoted
 /// argument is its text without the quotes (so it may hold commas and spaces).
 pub(crate) fn macro_argument(arg: &str) -> String {
-    let quoted = arg.len() >= 2 && arg.starts_with('"') && arg.ends_with('"');
-    if quoted && !arg[1..arg.len() - 1].contains('"') {
-        return arg[1..arg.len() - 1].to_string();
+    if let Some(inner) = one_string(arg) {
+        return inner.to_string();
     }
     // `name="value"` for a keyword argument.
     if let Some((name, value)) = arg.split_once('=') {
@@ -25,6 +24,21 @@ pub(crate) fn macro_argument(arg: &str) -> String {
         }
     }
     arg.to_string()
+}
+
+/// The inside of `arg` when it is one quoted string, its escapes kept (macro.c
+/// `getstring`: a `"` after an odd run of backslashes does not end it).
+fn one_string(arg: &str) -> Option<&str> {
+    let body = arg.strip_prefix('"')?;
+    let mut backslashes = 0;
+    for (k, c) in body.char_indices() {
+        match c {
+            '\\' => backslashes += 1,
+            '"' if backslashes % 2 == 0 => return (k + 1 == body.len()).then(|| &body[..k]),
+            _ => backslashes = 0,
+        }
+    }
+    None
 }
 
 /// Replaces `\name` (and `\@` with the macro counter) in a macro or repetition body.
@@ -53,6 +67,23 @@ pub(crate) fn substitute(text: &str, vars: &[(String, String)], counter: Option<
             out.push_str(&text[i..end]);
             i = end;
             continue;
+        }
+        if b[i] == b'&' {
+            // macro.c macro_expand_body: `&name` or `&name&` is the parameter too, in a
+            // string as well; `&` before anything else stays.
+            let start = i + 1;
+            let mut end = start;
+            while end < b.len() && is_ident(b[end] as char) && b[end] != b'.' && b[end] != b'$' {
+                end += 1;
+            }
+            let found = vars
+                .iter()
+                .find(|(n, _)| end > start && n == &text[start..end]);
+            if let Some((_, v)) = found {
+                out.push_str(v);
+                i = end + (b.get(end) == Some(&b'&')) as usize;
+                continue;
+            }
         }
         if b[i] == b'\\' {
             if let Some(c) = counter {
@@ -152,7 +183,9 @@ pub(crate) fn alt_arguments(args: &str) -> Vec<String> {
     let mut chars = args.chars();
     while let Some(c) = chars.next() {
         match c {
-            '!' if angle > 0 => {
+            // macro.c getstring: `!` takes the next character as it is, in `<...>`
+            // and in a quoted string alike.
+            '!' if angle > 0 || quote => {
                 if let Some(n) = chars.next() {
                     cur.push(n);
                 }

@@ -220,14 +220,36 @@ pub(crate) fn blank_block_comments(text: &str) -> String {
 /// A source's lines, `/* */` comments blanked (line and column numbers unchanged).
 pub(crate) fn to_lines(text: &str, file: &str) -> Vec<Line> {
     let text = blank_block_comments(text);
-    text.lines()
-        .enumerate()
-        .map(|(i, l)| Line {
+    let (mut file, mut next) = (file.to_string(), 1);
+    let mut lines = Vec::new();
+    for l in text.lines() {
+        lines.push(Line {
             text: l.to_string(),
-            file: file.to_string(),
-            line: i + 1,
-        })
-        .collect()
+            file: file.clone(),
+            line: next,
+        });
+        next += 1;
+        if let Some((number, name)) = line_marker(l) {
+            (file, next) = (name, number);
+        }
+    }
+    lines
+}
+
+/// A C preprocessor line marker, `# N "FILE" [FLAGS]` from the first column: the number
+/// and name the next line has (app.c hands it to read.c's `s_linefile`). As gas 2.40
+/// does, a number with a leading zero or past `INT_MAX`, or one without a file name, is
+/// an ordinary comment.
+fn line_marker(text: &str) -> Option<(usize, String)> {
+    let rest = text.strip_prefix("# ")?;
+    let digits = rest.len() - rest.trim_start_matches(|c: char| c.is_ascii_digit()).len();
+    let number: i32 = rest[..digits]
+        .parse()
+        .ok()
+        .filter(|_| !rest.starts_with('0'))?;
+    let name = rest[digits..].trim_start().strip_prefix('"')?;
+    let name = &name[..name.find('"')?];
+    Some((number as usize, name.to_string()))
 }
 
 /// Source text as gas reads it: bytes, each one character (so Latin-1 and UTF-8 text in

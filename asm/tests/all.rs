@@ -5,6 +5,7 @@
 mod debug_line;
 mod eh_frame;
 mod gnu_compat;
+mod gnu_generic;
 mod gnu_objects;
 mod gnu_quirks;
 mod never_panics;

@@ -38,6 +38,9 @@ pub struct Args {
     /// unless the source has `.file N`/`.loc` of its own.
     #[arg(short = 'g')]
     debug_lines: bool,
+    /// GNU as `--alternate`: the alternate macro syntax from the first line (`.altmacro`).
+    #[arg(long)]
+    alternate: bool,
     #[command(flatten)]
     ext: crate::options::ExtOption,
 }
@@ -54,6 +57,7 @@ pub fn run(args: Args) -> exit::Result<ExitCode> {
         include_dirs: args.include.clone(),
         extensions: args.ext.ext,
         debug_lines: args.debug_lines,
+        alternate: args.alternate,
         ..Default::default()
     };
     for d in &args.defsym {

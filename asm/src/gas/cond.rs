@@ -121,7 +121,8 @@ impl Assembler<'_> {
                 Some(top) => *top = (!top.1 && outer, true),
                 None => self.diag(Severity::Error, line, 1, ".else without .if"),
             },
-            ".endif" => {
+            // `.endc`: read.c's other name for `.endif`.
+            ".endif" | ".endc" => {
                 if cond.pop().is_none() {
                     self.diag(Severity::Error, line, 1, ".endif without .if");
                 }

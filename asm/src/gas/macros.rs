@@ -67,14 +67,68 @@ impl Assembler<'_> {
             }
             _ => {
                 // .macro NAME params
-                let mut it = args.splitn(2, |c: char| c.is_whitespace() || c == ',');
-                let name = it.next().unwrap_or("").to_string();
-                let mut params = Vec::new();
+                let args = args.trim_start();
+                let end = args
+                    .find(|c: char| c.is_whitespace() || c == ',')
+                    .unwrap_or(args.len());
+                let (name, list) = (args[..end].to_string(), &args[end..]);
+                if name.is_empty() {
+                    self.diag(Severity::Error, line, 1, "Missing macro name");
+                    return;
+                }
+                // macro.c do_formals: parameters apart by commas (or blanks), one comma
+                // after the name; an empty one is a bad list.
+                let list = list.trim_start();
+                let list = list.strip_prefix(',').unwrap_or(list);
+                let bad_list = (list.len() != args[end..].trim_start().len()
+                    && list.trim().is_empty())
+                    || (!list.trim().is_empty()
+                        && list.split(',').any(|piece| piece.trim().is_empty()));
+                if bad_list {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        1,
+                        format!("Bad parameter list for macro `{name}'"),
+                    );
+                    return;
+                }
+                if self.macros.contains_key(&name.to_ascii_lowercase()) {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        1,
+                        format!("Macro `{name}' was already defined"),
+                    );
+                    return;
+                }
+                if super::read::names_pseudo_op(&name) {
+                    // read.c s_macro: the pseudo-op keeps the name when read (the macro
+                    // is defined all the same).
+                    self.diag(
+                        Severity::Warning,
+                        line,
+                        1,
+                        format!(
+                            "attempt to redefine pseudo-op `{}' ignored",
+                            name.to_ascii_lowercase()
+                        ),
+                    );
+                }
+                let mut params: Vec<(String, Option<String>)> = Vec::new();
                 let mut required = Vec::new();
                 let mut vararg = false;
-                let words: Vec<&str> = it
-                    .next()
-                    .unwrap_or("")
+                // `name : qual` and `name = default` may have blanks around `:` and `=`.
+                let mut joined = String::new();
+                for c in list.chars() {
+                    if matches!(c, ':' | '=') {
+                        joined.truncate(joined.trim_end().len());
+                    } else if c.is_whitespace() && joined.ends_with([':', '=']) {
+                        continue;
+                    }
+                    joined.push(c);
+                }
+                let words: Vec<&str> = joined
                     .split(|c: char| c == ',' || c.is_whitespace())
                     .filter(|s| !s.is_empty())
                     .collect();
@@ -103,6 +157,17 @@ impl Assembler<'_> {
                             1,
                             format!("`{q}' is not a valid parameter qualifier for `{pname}'"),
                         ),
+                    }
+                    if params.iter().any(|(p, _)| p == pname) {
+                        self.diag(
+                            Severity::Error,
+                            line,
+                            1,
+                            format!(
+                                "A parameter named `{pname}' already exists for macro `{name}'"
+                            ),
+                        );
+                        return;
                     }
                     params.push((pname.to_string(), default));
                 }
@@ -237,6 +302,18 @@ impl Assembler<'_> {
                 let t = t.trim();
                 if t.len() > 6 && t.get(..6).is_some_and(|w| w.eq_ignore_ascii_case("local ")) {
                     for name in t[6..].split(',').map(str::trim).filter(|n| !n.is_empty()) {
+                        if subst.iter().any(|(s, _)| s == name) {
+                            // macro.c: a LOCAL name must be new to the expansion.
+                            self.diag(
+                                Severity::Error,
+                                l,
+                                1,
+                                format!(
+                                    "`{name}' was already used as parameter (or another local) name"
+                                ),
+                            );
+                            continue;
+                        }
                         self.local_counter += 1;
                         subst.push((name.to_string(), format!(".LL{:04x}", self.local_counter)));
                     }

@@ -55,6 +55,8 @@ pub struct Options {
     /// instruction, until a `.file N` says the source brings its own (gas's
     /// `DEBUG_DWARF2`).
     pub debug_lines: bool,
+    /// `--alternate`: gas's alternate macro syntax from the first line, as `.altmacro`.
+    pub alternate: bool,
 }
 
 /// The assembled program.
@@ -151,9 +153,15 @@ struct Assembler<'o> {
     /// `.symver NAME, NAME2@VERSION[, local|hidden|remove]` (final walk): the versioned
     /// names objects give symbols.
     symvers: Vec<(String, String, String)>,
-    /// Names `.eqv NAME, .` made: gas resolves their `.` where each is used, and for the
-    /// symbol table where the source ends (`dot_symbol` resolved late).
-    dot_eqv: std::collections::HashSet<String>,
+    /// Names `.eqv NAME, EXPR` (`NAME == EXPR`) made with `.` in EXPR, and EXPR: gas
+    /// resolves their `.` where each is used, and for the symbol table where the source
+    /// ends (`dot_symbol` resolved late).
+    dot_eqv: HashMap<String, String>,
+    /// `.eqv` expressions being evaluated inside one another (a bound on loops).
+    eqv_depth: std::cell::Cell<usize>,
+    /// Names given a value in this walk, each with whether it may be given another: by
+    /// `.set`/`.equ`/`=` yes (gas's volatile symbols), by `.equiv`/`.eqv` no.
+    equated: HashMap<String, bool>,
     /// `.file N`/`.loc` line-table state of this walk (`dwarf2dbg.c`).
     dwarf: dwarf2::LineState,
     /// The ISA extensions on at this point of the walk (the options', then `.spu_ext`).
@@ -234,6 +242,8 @@ impl<'o> Assembler<'o> {
             local_counter: 0,
             symvers: Vec::new(),
             dot_eqv: Default::default(),
+            eqv_depth: Default::default(),
+            equated: HashMap::new(),
             dwarf: Default::default(),
             chain: Default::default(),
             ended: false,
@@ -259,9 +269,10 @@ impl<'o> Assembler<'o> {
         self.expanded = 0;
         self.exitm = false;
         self.defined.clear();
+        self.equated.clear();
         self.set_forward.clear();
         self.absolute = None;
-        self.altmacro = false;
+        self.altmacro = self.opts.alternate;
         self.local_counter = 0;
         self.dwarf = Default::default();
         self.ended = false;

@@ -183,31 +183,42 @@ impl Assembler<'_> {
                 self.sect,
                 self.offsets.get(&self.sect).copied().unwrap_or(0),
             );
-            if let Some(m) = self.macros.get(&lw).cloned() {
+            let macro_named = self
+                .macros
+                .get(&lw)
+                .filter(|_| !names_pseudo_op(&lw))
+                .cloned();
+            if let Some(m) = macro_named {
                 self.expand_macro(&m, &args, line);
-            } else if args.starts_with('=') && !args.starts_with("==") {
-                let v = args[1..].trim().to_string();
-                self.set_symbol(&word, &v, line);
+            } else if let Some(v) = args.strip_prefix("==") {
+                // `NAME == EXPR` is `.eqv NAME, EXPR` (read.c, `==` after a name).
+                self.directive(".eqv", &format!("{word},{v}"), line, col);
+            } else if let Some(v) = args.strip_prefix('=') {
+                let v = v.trim().to_string();
+                if self.may_assign(&word, true, line, col) {
+                    self.set_symbol(&word, &v, line);
+                }
             } else if lw.starts_with('.') {
                 self.directive(&lw, &args, line, col);
-            } else if !args.starts_with('=')
-                && lw != "set"
+            } else if lw != "set"
                 && forms_named(&lw).next().is_none()
                 && is_directive(&format!(".{lw}"))
             {
                 // A pseudo-op written without its dot (`GLOBL`), as gas's NO_PSEUDO_DOT
                 // targets and MRI mode read it.
                 self.directive(&format!(".{lw}"), &args, line, col);
-            } else if let Some(v) = args.strip_prefix('=') {
-                let v = v.trim().to_string();
-                self.set_symbol(&word, &v, line);
             } else if let Some((name, value)) = word
                 .split_once('=')
                 .filter(|(n, _)| !n.is_empty() && !n.contains(|c: char| c.is_whitespace()))
             {
-                // `name=value` written without spaces, as gas accepts it.
+                // `name=value` written without spaces, as gas accepts it (`name==value`:
+                // `.eqv`).
                 let v = format!("{value}{}{args}", if args.is_empty() { "" } else { " " });
-                self.set_symbol(name, v.trim(), line);
+                if let Some(v) = v.strip_prefix('=') {
+                    self.directive(".eqv", &format!("{name},{v}"), line, col);
+                } else if self.may_assign(name, true, line, col) {
+                    self.set_symbol(name, v.trim(), line);
+                }
             } else {
                 let at = (
                     self.sect,
@@ -705,8 +716,36 @@ impl Assembler<'_> {
             ".print" => {}
             // read.c s_end: nothing after it is read.
             ".end" => self.ended = true,
-            ".extern" | ".brinfo" | ".nolist" | ".list" | ".eject" | ".psize" | ".title"
-            | ".sbttl" | ".version" | ".gnu_attribute" | ".lflags" => {}
+            // listing.c listing_psize: the page's lines, then (after a comma) its width.
+            ".psize" => {
+                let parts = split_top(args, ',');
+                if let Some(lines) = parts.first().filter(|p| !p.trim().is_empty()) {
+                    if !matches!(self.eval_val(lines), Ok((v, false, _)) if !v.reloc) {
+                        self.diag(
+                            Severity::Error,
+                            line,
+                            col,
+                            "bad or irreducible absolute expression",
+                        );
+                    }
+                }
+                if let Some(width) = parts.get(1) {
+                    match self.eval_val(width) {
+                        Ok((v, false, _)) if !v.reloc && v.v <= 7 => {
+                            self.diag(Severity::Error, line, col, "new paper width is too small")
+                        }
+                        Ok((v, false, _)) if !v.reloc => {}
+                        _ => self.diag(
+                            Severity::Error,
+                            line,
+                            col,
+                            "bad or irreducible absolute expression",
+                        ),
+                    }
+                }
+            }
+            ".extern" | ".brinfo" | ".nolist" | ".list" | ".eject" | ".title" | ".sbttl"
+            | ".version" | ".gnu_attribute" | ".lflags" => {}
             // read.c's s_ignore entries (COFF debugging and MRI listing control), and
             // `.func`/`.endfunc`, which emit nothing without stabs debugging.
             ".debug" | ".dim" | ".endef" | ".scl" | ".tag" | ".val" | ".ln" | ".func"
@@ -803,6 +842,32 @@ impl Assembler<'_> {
                             (Val::abs(0), col)
                         }
                     };
+                    // An equate not yet defined here: gas leaves a fixup, and write.c's
+                    // fixup_segment refuses a value the field cannot hold.
+                    let fixup = !self.forward_refs.borrow().is_empty();
+                    if fixup && !v.reloc && !v.cross && size < 8 {
+                        let mask = !0u64 << (8 * size);
+                        let (high, negated_high) =
+                            (v.v as u64 & mask, (v.v as u64).wrapping_neg() & mask);
+                        if high != 0 && negated_high != 0 {
+                            let at = self.offsets.get(&self.sect).copied().unwrap_or(0);
+                            let value = if v.v as u64 > 1000 {
+                                format!("{:08x}", v.v as u32)
+                            } else {
+                                v.v.to_string()
+                            };
+                            let s = if size == 1 { "" } else { "s" };
+                            self.diag(
+                                Severity::Error,
+                                line,
+                                c,
+                                format!("value of {value} too large for field of {size} byte{s} at {at:08x}"),
+                            );
+                        }
+                        let b = v.v.to_be_bytes();
+                        self.emit(&b[8 - size..]);
+                        continue;
+                    }
                     if self.object && self.pass == 2 && (v.reloc || v.cross) {
                         // In an object an address is left to the linker: R_SPU_ADDR32 (or
                         // R_SPU_REL32 for `sym - .`); other sizes have no SPU relocation.
@@ -854,14 +919,28 @@ impl Assembler<'_> {
                     }
                 }
             }
-            ".ascii" | ".asciz" | ".string" => {
+            ".ascii" | ".asciz" | ".string" | ".string8" | ".string16" | ".string32"
+            | ".string64" => {
+                // read.c stringer: each character a unit of 1, 2, 4 or 8 bytes (big-endian).
+                let unit = d
+                    .strip_prefix(".string")
+                    .and_then(|bits| bits.parse::<usize>().ok())
+                    .map_or(1, |bits| bits / 8);
                 for part in split_top(args, ',') {
-                    match unquote(part.trim()) {
+                    match adjacent_strings(part.trim()) {
                         Some(mut bytes) => {
                             if d != ".ascii" {
                                 bytes.push(0);
                             }
-                            self.emit(&bytes);
+                            let units: Vec<u8> = bytes
+                                .iter()
+                                .flat_map(|&b| {
+                                    let mut u = vec![0u8; unit];
+                                    u[unit - 1] = b;
+                                    u
+                                })
+                                .collect();
+                            self.emit(&units);
                         }
                         None => self.diag(Severity::Error, line, col, "expected a string"),
                     }
@@ -930,8 +1009,13 @@ impl Assembler<'_> {
                 }
                 let name = parts[0].trim().to_string();
                 let expr = parts[1..].join(",");
-                if d == ".eqv" && expr.trim() == "." && self.absolute.is_none() {
-                    self.dot_eqv.insert(name.clone());
+                let volatile = d == ".set" || d == ".equ";
+                let name_col = line.text.find(&name).map_or(col, |c| c + 1);
+                if !self.may_assign(&name, volatile, line, name_col) {
+                    return;
+                }
+                if d == ".eqv" && mentions_dot(&expr) && self.absolute.is_none() {
+                    self.dot_eqv.insert(name.clone(), expr.trim().to_string());
                 } else {
                     self.dot_eqv.remove(&name);
                 }
@@ -958,18 +1042,32 @@ impl Assembler<'_> {
                 col,
                 format!("{d} without a matching start"),
             ),
-            ".err" | ".error" => self.diag(
-                Severity::Error,
-                line,
-                col,
-                args.trim().trim_matches('"').to_string(),
-            ),
-            ".warning" => self.diag(
-                Severity::Warning,
-                line,
-                col,
-                args.trim().trim_matches('"').to_string(),
-            ),
+            // read.c s_nop: `nop` without its dot, as the instruction reads it.
+            ".nop" => self.instruction("nop", args, line, col),
+            ".err" => self.diag(Severity::Error, line, col, ".err encountered"),
+            ".error" | ".warning" => {
+                // read.c s_errwarn: a string, or nothing for gas's own words.
+                let severity = if d == ".error" {
+                    Severity::Error
+                } else {
+                    Severity::Warning
+                };
+                let text = args.trim();
+                let message = if text.is_empty() {
+                    format!("{d} directive invoked in source file")
+                } else if let Some(bytes) = text
+                    .starts_with('"')
+                    .then(|| adjacent_strings(text))
+                    .flatten()
+                {
+                    String::from_utf8_lossy(&bytes).into_owned()
+                } else {
+                    let m = format!("{d} argument must be a string");
+                    self.diag(Severity::Error, line, col, m);
+                    return;
+                };
+                self.diag(severity, line, col, message);
+            }
             _ => {
                 if !self.elf_directive(d, args, line, col) {
                     self.diag(
@@ -1042,6 +1140,11 @@ const DIRECTIVES: &[&str] = &[
     ".align",
     ".ascii",
     ".asciz",
+    ".nop",
+    ".string8",
+    ".string16",
+    ".string32",
+    ".string64",
     ".balign",
     ".balignl",
     ".balignw",
@@ -1119,6 +1222,16 @@ const DIRECTIVES: &[&str] = &[
     ".lflags",
 ];
 
+/// Whether a statement's first word names a pseudo-op, with its dot or without (tc-spu.h's
+/// `NO_PSEUDO_DOT`): read.c reads it as the pseudo-op before looking for a macro.
+pub(super) fn names_pseudo_op(word: &str) -> bool {
+    let lw = word.to_ascii_lowercase();
+    match lw.strip_prefix('.') {
+        Some(_) => is_directive(&lw),
+        None => lw != "set" && forms_named(&lw).next().is_none() && is_directive(&format!(".{lw}")),
+    }
+}
+
 fn is_directive(name: &str) -> bool {
     DIRECTIVES.contains(&name)
         || super::cond::CONDITIONALS.contains(&name)
@@ -1134,6 +1247,7 @@ fn is_directive(name: &str) -> bool {
                 | ".elseif"
                 | ".else"
                 | ".endif"
+                | ".endc"
                 | ".exitm"
         )
 }
@@ -1196,4 +1310,46 @@ pub(super) fn block_word(word: &str, macros: &HashMap<String, Macro>) -> String 
     } else {
         lw
     }
+}
+
+/// A string operand of `.ascii` and its kin: one or more quoted strings side by side
+/// (`"a" "b"`), joined as read.c's stringer joins them.
+fn adjacent_strings(text: &str) -> Option<Vec<u8>> {
+    let mut out = Vec::new();
+    let mut rest = text.trim_start();
+    if rest.is_empty() {
+        return None;
+    }
+    while !rest.is_empty() {
+        let body = rest.strip_prefix('"')?;
+        let mut end = None;
+        let mut escaped = false;
+        for (k, c) in body.char_indices() {
+            match c {
+                _ if escaped => escaped = false,
+                '\\' => escaped = true,
+                '"' => {
+                    end = Some(k);
+                    break;
+                }
+                _ => {}
+            }
+        }
+        let end = end?;
+        out.extend(unquote(&rest[..end + 2])?);
+        rest = body[end + 1..].trim_start();
+    }
+    Some(out)
+}
+
+/// Whether an expression names the location counter `.` (not a `.`-led symbol such as
+/// `.L1`, nor a `.` inside a name).
+fn mentions_dot(expr: &str) -> bool {
+    let b = expr.as_bytes();
+    let name_byte = |c: u8| c.is_ascii_alphanumeric() || c == b'_' || c == b'.' || c == b'$';
+    (0..b.len()).any(|k| {
+        b[k] == b'.'
+            && (k == 0 || !name_byte(b[k - 1]))
+            && b.get(k + 1).is_none_or(|&c| !name_byte(c))
+    })
 }

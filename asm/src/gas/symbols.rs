@@ -83,8 +83,8 @@ pub(super) struct SymAttrs {
 impl Env for Assembler<'_> {
     fn symbol(&self, name: &str) -> Option<Val> {
         self.note_symbol(name);
-        if self.dot_eqv.contains(name) && self.symbols.contains_key(name) {
-            return Some(self.dot());
+        if self.dot_eqv.contains_key(name) && self.symbols.contains_key(name) {
+            return self.eqv_here(name);
         }
         if !self.symbols.contains_key(name) {
             self.forward_refs.borrow_mut().push(name.to_string());
@@ -131,6 +131,28 @@ impl Env for Assembler<'_> {
 }
 
 impl Assembler<'_> {
+    /// The value of a `.eqv` symbol whose expression holds `.`, evaluated here.
+    pub(super) fn eqv_here(&self, name: &str) -> Option<Val> {
+        let text = self.dot_eqv.get(name)?;
+        if text == "." {
+            return Some(self.dot());
+        }
+        if self.eqv_depth.get() > 32 {
+            return None;
+        }
+        let (ast, _) = crate::expr::parse(text)?;
+        self.eqv_depth.set(self.eqv_depth.get() + 1);
+        let v = Eval {
+            env: self,
+            warnings: Vec::new(),
+            undefined: false,
+        }
+        .eval(&ast)
+        .ok();
+        self.eqv_depth.set(self.eqv_depth.get() - 1);
+        v
+    }
+
     /// A name mentioned in the final walk: it joins the symbol chain if it is new.
     pub(super) fn note_symbol(&self, name: &str) {
         // Numeric local labels (`1:`) are gas's own internal names, never in the table.
@@ -254,6 +276,16 @@ impl Assembler<'_> {
             return;
         }
         let off = self.offsets.get(&self.sect).copied().unwrap_or(0);
+        if name.bytes().all(|b| b.is_ascii_digit()) && name.parse::<u32>().is_err() {
+            // read.c: a local label's number must fit gas's `long`-sized counter.
+            self.diag(
+                Severity::Error,
+                line,
+                1,
+                format!("local label too large near {name}:"),
+            );
+            return;
+        }
         if let Ok(n) = name.parse::<u32>() {
             if self.pass == 1 {
                 self.numeric_next
@@ -275,6 +307,36 @@ impl Assembler<'_> {
         }
         self.symbols
             .insert(name.to_string(), SymVal::Label(self.sect, off));
+    }
+
+    /// read.c `assign_symbol`: a symbol defined already (a label, a common block, an
+    /// equate) takes a value again only by `.set`/`.equ`/`=` (`volatile`) over an equate
+    /// made by one of them; otherwise "symbol `x' is already defined" and the statement
+    /// is dropped (false).
+    pub(super) fn may_assign(
+        &mut self,
+        name: &str,
+        volatile: bool,
+        line: &Line,
+        col: usize,
+    ) -> bool {
+        let equated = self.equated.get(name).copied();
+        let defined = self.defined.contains(name)
+            || matches!(self.symbols.get(name), Some(SymVal::Common(..)))
+            || equated.is_some();
+        if name != "." && defined && !(volatile && equated == Some(true)) {
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("symbol `{name}` is already defined"),
+            );
+            return false;
+        }
+        if name != "." {
+            self.equated.insert(name.to_string(), volatile);
+        }
+        true
     }
 
     pub(super) fn set_symbol(&mut self, name: &str, expr: &str, line: &Line) {

@@ -617,10 +617,13 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
             continue;
         };
         let (section, value) = match sym {
-            _ if asm.dot_eqv.contains(&name) => (
-                SymSection::Section(asm.chunks[asm.sect].0),
-                asm.here() as u64,
-            ),
+            _ if asm.dot_eqv.contains_key(&name) => match asm.eqv_here(&name) {
+                Some(v) if v.sect.is_some() => {
+                    (SymSection::Section(v.sect.unwrap_or(0)), v.v as u64)
+                }
+                Some(v) if !v.reloc && !v.cross => (SymSection::Absolute, v.v as u64),
+                _ => continue,
+            },
             SymVal::Label(c, off) => (
                 SymSection::Section(asm.chunks[*c].0),
                 (asm.bases[c] + off) as u64,
