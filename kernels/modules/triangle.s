@@ -107,21 +107,32 @@ leaf_cull:
         ila     $80, k_axoff
         ila     $81, k_kuv
         .ifdef  EXT_MULTIHINT
+        # (the four triangles' cull below: its constants, scheduled as one block)
+        .sched  scratch=66-127
         ila     $75, numbuf                   # (the test's numerator, kept for tri_loop)
-        lqd     $79, CTX_TAG(RAYS)            # this context's directions' columns
-        ila     $74, gforms
+        lqd     $79, CTX_TAG(RAYS)            # this context's directions, per axis
+        ila     $74, gforms                   # (raygen.s: (x, y, z) of base, du, dv)
         ai      $79, $79, -CONTEXT_TAG0
         mpyi    $79, $79, 48
         a       $79, $79, $74
         ila     $74, k_grange
+        lqd     $80, 16($79)                  # per column
+        lqd     $81, 32($79)                  # per row
+        lqd     $79, 0($79)                   # at column 0 row 0
         lqa     $72, k_ctol
         lqa     $73, k_c7
         lqa     $68, k_grow0
+        shufb   $72, $72, $72, PAT1           # the edges' margin, 2^-8
+        shufb   $69, $68, $68, PAT2           # 4.0 (group 2's first row)
         rotmi   $70, FIRST, -4                # the active groups: FIRST's and after
         shli    $70, $70, 4
         ila     $71, k_lanege
         lqx     $70, $71, $70
         gb      $70, $70
+        shufb   $70, $70, $70, PAT0
+        shufb   $71, $68, $68, PAT3           # 6.0 (group 3's)
+        shufb   $68, $68, $68, PAT1           # 2.0 (group 1's)
+        .endsched
         .endif
         .ifndef EXT_MULTIHINT
         .sched  pool=82-127 scratch=66-127
@@ -182,95 +193,148 @@ leaf_cull:
         bi      %to
         .endsched
         .else
-# (multihint; needs no extension) the cull per group of 16 rays (two rows), by the four
-# corner rays of each group (lanes: the groups g, raygen.s), with the test loop's own
-# arithmetic and tolerances, so a corner is culled only where the test would miss it: the
-# slot gets the range of groups left to test (k_grange: the last's and the first's
-# offsets; none when every group is culled), which tri_loop and the test loop follow
+# (multihint; needs no extension) the cull per group of 16 rays (two rows), four triangles
+# a pass, one per lane: for rays from one origin, n.d, beta n.d and gamma n.d are linear in
+# d, so affine in (column, row); with the test loop's arithmetic and a margin, a group is
+# culled only where the test would miss every ray of it: the slot gets the range of groups
+# left to test (k_grange: the first's and the last's offsets; none when every group is
+# culled), which tri_loop and the test loop follow. Each lane's arithmetic is, op for op,
+# that of one triangle done alone, so the verdicts do not depend on the lanes. A pass past
+# the leaf's end fills the slots of triangles after it (no slot of the leaf's: at most 8)
         .sched  pool=82-127 scratch=66-127
 .Lcull:
         lqa     %plo, k_plo                   # (a 4x4 transpose's patterns)
         lqa     %phi, k_phi
         lqa     %pa, k_pa
         lqa     %pb, k_pb
-        .irp    T, 0, 1
-        CULL_RECORD \T
-        lqx     %xk\T, $79, %ck\T              # (base, du, dv) along k, u, v
-        lqx     %xu\T, $79, %cu\T
-        lqx     %xv\T, $79, %cv\T
-        # n.d, beta n.d and gamma n.d are linear in d, so affine in (column, row):
-        # (value at column 0 row 0, per column, per row)
-        fma     %dn1\T, %nu\T, %xu\T, %xk\T
-        fma     %fd\T, %nv\T, %xv\T, %dn1\T     # n.d
-        fma     %b1\T, %bnu\T, %ou\T, %bd\T
-        fma     %bo\T, %bnv\T, %ov\T, %b1\T     # beta at the origin
-        fma     %c1\T, %cnu\T, %ou\T, %cd\T
-        fma     %co\T, %cnv\T, %ov\T, %c1\T
-        fm      %pb1\T, %bnu\T, %xu\T
-        fma     %pb\T, %bnv\T, %xv\T, %pb1\T
-        fm      %pg1\T, %cnu\T, %xu\T
-        fma     %pg\T, %cnv\T, %xv\T, %pg1\T
-        fm      %fb1\T, %bo\T, %fd\T
-        fma     %fb\T, %num\T, %pb\T, %fb1\T    # beta n.d = beta_o n.d + num (b_nu d_u + b_nv d_v)
-        fm      %fg1\T, %co\T, %fd\T
-        fma     %fg\T, %num\T, %pg\T, %fg1\T
-        fs      %fa1\T, %fd\T, %fb\T
-        fs      %fa\T, %fa1\T, %fg\T            # (1 - beta - gamma) n.d
-        # the four forms' coefficients as columns (lanes: n.d, beta n.d, gamma n.d,
-        # (1 - beta - gamma) n.d), so that what follows is one vector op for the four
-        shufb   %ta\T, %fd\T, %fb\T, %plo
-        shufb   %tb\T, %fg\T, %fa\T, %plo
-        shufb   %tc\T, %fd\T, %fb\T, %phi
-        shufb   %te\T, %fg\T, %fa\T, %phi
-        shufb   %v0\T, %ta\T, %tb\T, %pa       # at column 0 row 0
-        shufb   %vc\T, %ta\T, %tb\T, %pb       # per column
-        shufb   %vr\T, %tc\T, %te\T, %pa       # per row
-        # signs by num's, so that a ray in front has n.d > 0; then each edge's value
-        # plus a margin of 2^-8 of n.d (far beyond the test's 2^-20 and its rounding)
-        and     %sn\T, %num\T, SIGNS
-        xor     %s0\T, %v0\T, %sn\T
-        xor     %sc\T, %vc\T, %sn\T
-        xor     %sr\T, %vr\T, %sn\T
-        shufb   %d0\T, %s0\T, %s0\T, PAT0
-        shufb   %dc\T, %sc\T, %sc\T, PAT0
-        shufb   %dr\T, %sr\T, %sr\T, PAT0
-        fma     %h0\T, $72, %d0\T, %s0\T
-        fma     %hc\T, $72, %dc\T, %sc\T
-        fma     %hr\T, $72, %dr\T, %sr\T
+        lqa     %idx, k_idx
+        lqa     %rep, k_rep
+        .irp    T, 0, 1, 2, 3
+        ai      %tri\T, $76, \T
+        and     %ln\T, %tri\T, TMASK
+        shli    %lt\T, %ln\T, 4
+        lqx     %tag\T, TTAGS, %lt\T
+        shli    %ld\T, %ln\T, 6
+        a       %rec\T, %ld\T, TDATA
+        lqd     %q0\T, TRI_N_U(%rec\T)         # (n_u, n_v, n_d, k)
+        lqd     %q1\T, TRI_B_NU(%rec\T)        # (b_nu, b_nv, b_d, -)
+        lqd     %q2\T, TRI_C_NU(%rec\T)        # (c_nu, c_nv, c_d, -)
+        .endr
+        # lanes: the triangles
+        shufb   %tg01, %tag0, %tag1, %plo
+        shufb   %tg23, %tag2, %tag3, %plo
+        shufb   %tags, %tg01, %tg23, %pa
+        shufb   %t76, $76, $76, PAT0
+        a       %triv, %t76, %idx
+        ceq     %th, %tags, %triv              # not another triangle's line
+        .irp    Q, 0, 1, 2
+        shufb   %a01\Q, %q\Q\()0, %q\Q\()1, %plo
+        shufb   %a23\Q, %q\Q\()2, %q\Q\()3, %plo
+        shufb   %b01\Q, %q\Q\()0, %q\Q\()1, %phi
+        shufb   %b23\Q, %q\Q\()2, %q\Q\()3, %phi
+        shufb   %w0\Q, %a01\Q, %a23\Q, %pa
+        shufb   %w1\Q, %a01\Q, %a23\Q, %pb
+        shufb   %w2\Q, %b01\Q, %b23\Q, %pa
+        .endr
+        shufb   %kv, %b010, %b230, %pb         # k
+        # each lane's axes k, u = k+1, v = k+2 (mod 3) as word-select patterns
+        shli    %k4, %kv, 2
+        ai      %u4a, %k4, 4
+        ceqi    %uw, %u4a, 12
+        andc    %u4, %u4a, %uw
+        ai      %v4a, %u4, 4
+        ceqi    %vw, %v4a, 12
+        andc    %v4, %v4a, %vw
+        shufb   %kr, %k4, %k4, %rep
+        shufb   %ur, %u4, %u4, %rep
+        shufb   %vr, %v4, %v4, %rep
+        a       %pk, %kr, PAT0
+        a       %pu, %ur, PAT0
+        a       %pv, %vr, PAT0
+        shufb   %ok, ORIG, ORIG, %pk           # origin in (k, u, v) order
+        shufb   %ou, ORIG, ORIG, %pu
+        shufb   %ov, ORIG, ORIG, %pv
+        fs      %nn1, %w20, %ok
+        fnms    %nn2, %w00, %ou, %nn1
+        fnms    %num, %w10, %ov, %nn2          # n_d - o_k - n_u o_u - n_v o_v
+        fma     %b1, %w01, %ou, %w21
+        fma     %bo, %w11, %ov, %b1            # beta at the origin
+        fma     %c1, %w02, %ou, %w22
+        fma     %co, %w12, %ov, %c1
+        and     %sn, %num, SIGNS
+        # per coefficient C (0: at column 0 row 0, 1: per column, 2: per row) of
+        # n.d (d), beta n.d (b), gamma n.d (g), (1 - beta - gamma) n.d (a); signs by
+        # num's, so that a ray in front has n.d > 0; each edge's plus a margin of 2^-8
+        # of n.d (far beyond the test's 2^-20 and its rounding)
+        .irp    C, 0, 1, 2
+        shufb   %xk\C, (\C+79), (\C+79), %pk
+        shufb   %xu\C, (\C+79), (\C+79), %pu
+        shufb   %xv\C, (\C+79), (\C+79), %pv
+        fma     %dn\C, %w00, %xu\C, %xk\C
+        fma     %fd\C, %w10, %xv\C, %dn\C      # n.d
+        fm      %pb1\C, %w01, %xu\C
+        fma     %pb\C, %w11, %xv\C, %pb1\C
+        fm      %pg1\C, %w02, %xu\C
+        fma     %pg\C, %w12, %xv\C, %pg1\C
+        fm      %fb1\C, %bo, %fd\C
+        fma     %fb\C, %num, %pb\C, %fb1\C     # beta n.d = beta_o n.d + num (b_nu d_u + b_nv d_v)
+        fm      %fg1\C, %co, %fd\C
+        fma     %fg\C, %num, %pg\C, %fg1\C
+        fs      %fa1\C, %fd\C, %fb\C
+        fs      %fa\C, %fa1\C, %fg\C
+        xor     %hd\C, %fd\C, %sn
+        xor     %sb\C, %fb\C, %sn
+        xor     %sg\C, %fg\C, %sn
+        xor     %sa\C, %fa\C, %sn
+        fma     %hb\C, $72, %hd\C, %sb\C
+        fma     %hg\C, $72, %hd\C, %sg\C
+        fma     %ha\C, $72, %hd\C, %sa\C
+        .endr
         # each one's largest over group g (columns 0..7, rows 2g, 2g+1):
-        # v0 + max(0, 7 v_col) + max(0, v_row) + 2g v_row, lanes g
-        fm      %w\T, %hc\T, $73
-        fcgt    %pw\T, %w\T, ZERO
-        and     %mw\T, %w\T, %pw\T
-        fcgt    %pr\T, %hr\T, ZERO
-        and     %mr\T, %hr\T, %pr\T
-        fa      %k1\T, %h0\T, %mw\T
-        fa      %kk\T, %k1\T, %mr\T
-        .irp    F, 0, 1, 2, 3
-        shufb   %kf\T\F, %kk\T, %kk\T, PAT\F
-        shufb   %rf\T\F, %hr\T, %hr\T, PAT\F
-        fma     %mf\T\F, $68, %rf\T\F, %kf\T\F
+        # v0 + max(0, 7 v_col) + max(0, v_row) + 2g v_row
+        .irp    F, d, b, g, a
+        fm      %w\F, %h\F\()1, $73
+        fcgt    %pw\F, %w\F, ZERO
+        and     %mw\F, %w\F, %pw\F
+        fcgt    %pr\F, %h\F\()2, ZERO
+        and     %mr\F, %h\F\()2, %pr\F
+        fa      %k1\F, %h\F\()0, %mw\F
+        fa      %m\F\()0, %k1\F, %mr\F
+        fma     %m\F\()1, $68, %h\F\()2, %m\F\()0
+        fma     %m\F\()2, $69, %h\F\()2, %m\F\()0
+        fma     %m\F\()3, $71, %h\F\()2, %m\F\()0
         .endr
-        fcgt    %fr\T, %mf\T\()0, ZERO           # some ray of the group in front
-        fcgt    %ob\T, ZERO, %mf\T\()1           # every ray outside an edge
-        fcgt    %og\T, ZERO, %mf\T\()2
-        fcgt    %oa\T, ZERO, %mf\T\()3
-        or      %o1\T, %ob\T, %og\T
-        or      %o2\T, %o1\T, %oa\T
-        andc    %keep\T, %fr\T, %o2\T           # the groups left to test
-        gb      %m\T, %keep\T
-        il      %all\T, 15
-        selb    %mi\T, %all\T, %m\T, %th\T       # another triangle's line: every group
-        and     %ma\T, %mi\T, $70                # of the active ones
-        shli    %mo\T, %ma\T, 4
+        # group g is kept (bit 3 - g) where some ray is in front and not every ray is
+        # outside one edge
+        .irp    G, 0, 1, 2, 3
+        fcgt    %fr\G, %md\G, ZERO
+        fcgt    %ob\G, ZERO, %mb\G
+        fcgt    %og\G, ZERO, %mg\G
+        fcgt    %oa\G, ZERO, %ma\G
+        or      %o1\G, %ob\G, %og\G
+        or      %o2\G, %o1\G, %oa\G
+        andc    %kp\G, %fr\G, %o2\G
+        andi    %bit\G, %kp\G, 8 >> \G
+        .endr
+        or      %m01, %bit0, %bit1
+        or      %m23, %bit2, %bit3
+        or      %m, %m01, %m23
+        il      %all, 15
+        selb    %mi, %all, %m, %th             # another triangle's line: every group
+        and     %mact, %mi, $70                # of the active ones
+        shli    %mo, %mact, 4
+        andi    %sl, %triv, 7
+        shli    %so, %sl, 4
+        .irp    T, 0, 1, 2, 3
+        rotqbyi %mo\T, %mo, 4*\T
+        rotqbyi %so\T, %so, 4*\T
         lqx     %rg\T, $74, %mo\T
-        andi    %sl\T, %tri\T, 7
-        shli    %so\T, %sl\T, 4
+        shufb   %nm\T, %num, %num, PAT\T
       ~ stqx    %rg\T, $78, %so\T
-      ~ stqx    %num\T, $75, %so\T
+      ~ stqx    %nm\T, $75, %so\T
         .endr
-        ai      $76, $76, 2
-        ai      $77, $77, -2
+        ai      $76, $76, 4
+        ai      $77, $77, -4
         cgti    %more, $77, 0
         ila     %back, .Lcull
         ila     %out, tri_loop
