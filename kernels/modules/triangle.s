@@ -262,6 +262,7 @@ leaf_cull:
         fma     %c1, %w02, %ou, %w22
         fma     %co, %w12, %ov, %c1
         and     %sn, %num, SIGNS
+        xor     %anum, %num, %sn               # |num|: the forms below come out times its sign
         # per coefficient C (0: at column 0 row 0, 1: per column, 2: per row) of
         # n.d (d), beta n.d (b), gamma n.d (g), (1 - beta - gamma) n.d (a); signs by
         # num's, so that a ray in front has n.d > 0; each edge's plus a margin of 2^-8
@@ -271,24 +272,21 @@ leaf_cull:
         shufb   %xu\C, (\C+79), (\C+79), %pu
         shufb   %xv\C, (\C+79), (\C+79), %pv
         fma     %dn\C, %w00, %xu\C, %xk\C
-        fma     %fd\C, %w10, %xv\C, %dn\C      # n.d
+        fma     %fdn\C, %w10, %xv\C, %dn\C     # n.d
+        xor     %hd\C, %fdn\C, %sn              # (times num's sign, exactly)
         fm      %pb1\C, %w01, %xu\C
         fma     %pb\C, %w11, %xv\C, %pb1\C
         fm      %pg1\C, %w02, %xu\C
         fma     %pg\C, %w12, %xv\C, %pg1\C
-        fm      %fb1\C, %bo, %fd\C
-        fma     %fb\C, %num, %pb\C, %fb1\C     # beta n.d = beta_o n.d + num (b_nu d_u + b_nv d_v)
-        fm      %fg1\C, %co, %fd\C
-        fma     %fg\C, %num, %pg\C, %fg1\C
-        fs      %fa1\C, %fd\C, %fb\C
+        fm      %fb1\C, %bo, %hd\C
+        fma     %fb\C, %anum, %pb\C, %fb1\C     # beta n.d = beta_o n.d + num (b_nu d_u + b_nv d_v)
+        fm      %fg1\C, %co, %hd\C
+        fma     %fg\C, %anum, %pg\C, %fg1\C
+        fs      %fa1\C, %hd\C, %fb\C
         fs      %fa\C, %fa1\C, %fg\C
-        xor     %hd\C, %fd\C, %sn
-        xor     %sb\C, %fb\C, %sn
-        xor     %sg\C, %fg\C, %sn
-        xor     %sa\C, %fa\C, %sn
-        fma     %hb\C, $72, %hd\C, %sb\C
-        fma     %hg\C, $72, %hd\C, %sg\C
-        fma     %ha\C, $72, %hd\C, %sa\C
+        fma     %hb\C, $72, %hd\C, %fb\C
+        fma     %hg\C, $72, %hd\C, %fg\C
+        fma     %ha\C, $72, %hd\C, %fa\C
         .endr
         # each one's largest over group g (columns 0..7, rows 2g, 2g+1):
         # v0 + max(0, 7 v_col) + max(0, v_row) + 2g v_row
@@ -343,6 +341,10 @@ leaf_cull:
 .Lcull_br:
         bi      %to
         .endsched
+        .align  6                             # (not run: tri_loop where its block ends
+        .rept   6                             # on ray_loop's line, whose .align 6 then
+        nop                                   # pads nothing)
+        .endr
         .endif
 tri_loop:
         ai      S_TLOOK, S_TLOOK, 1
