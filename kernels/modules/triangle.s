@@ -108,7 +108,7 @@ leaf_cull:
         ila     $81, k_kuv
         .ifdef  EXT_MULTIHINT
         # (the four triangles' cull below: its constants, scheduled as one block)
-        .sched  scratch=66-127
+        .sched  pool=82-127 scratch=66-127
         ila     $75, numbuf                   # (the test's numerator, kept for tri_loop)
         lqd     $79, CTX_TAG(RAYS)            # this context's directions, per axis
         ila     $74, gforms                   # (raygen.s: (x, y, z) of base, du, dv)
@@ -132,6 +132,13 @@ leaf_cull:
         shufb   $70, $70, $70, PAT0
         shufb   $71, $68, $68, PAT3           # 6.0 (group 3's)
         shufb   $68, $68, $68, PAT1           # 2.0 (group 1's)
+        cgti    %gt4, $67, 4                  # (more than four triangles: one pass of
+        ila     %a4, cull_pass                   # eight)
+        ila     %a8, cull_pass8
+        selb    %to, %a4, %a8, %gt4
+        hbr     .Lcull_in, %to
+.Lcull_in:
+        bi      %to
         .endsched
         .endif
         .ifndef EXT_MULTIHINT
@@ -193,6 +200,137 @@ leaf_cull:
         bi      %to
         .endsched
         .else
+# Four triangles of the cull below, from the pass's first + O, one per lane (names end in S)
+        .macro  CULL_QUAD S, O
+        .irp    T, 0, 1, 2, 3
+        ai      %tri\T\()\S, $76, \T+\O
+        and     %ln\T\()\S, %tri\T\()\S, TMASK
+        shli    %lt\T\()\S, %ln\T\()\S, 4
+        lqx     %tag\T\()\S, TTAGS, %lt\T\()\S
+        shli    %ld\T\()\S, %ln\T\()\S, 6
+        a       %rec\T\()\S, %ld\T\()\S, TDATA
+        lqd     %q0\T\()\S, TRI_N_U(%rec\T\()\S)         # (n_u, n_v, n_d, k)
+        lqd     %q1\T\()\S, TRI_B_NU(%rec\T\()\S)        # (b_nu, b_nv, b_d, -)
+        lqd     %q2\T\()\S, TRI_C_NU(%rec\T\()\S)        # (c_nu, c_nv, c_d, -)
+        .endr
+        # lanes: the triangles
+        shufb   %tg01\S, %tag0\S, %tag1\S, %plo
+        shufb   %tg23\S, %tag2\S, %tag3\S, %plo
+        shufb   %tags\S, %tg01\S, %tg23\S, %pa
+        shufb   %t76\S, $76, $76, PAT0
+        .if     \O
+        a       %triv0\S, %t76\S, %idx
+        ai      %triv\S, %triv0\S, \O
+        .else
+        a       %triv\S, %t76\S, %idx
+        .endif
+        ceq     %th\S, %tags\S, %triv\S              # not another triangle's line
+        .irp    Q, 0, 1, 2
+        shufb   %a01\Q\()\S, %q\Q\()0\S, %q\Q\()1\S, %plo
+        shufb   %a23\Q\()\S, %q\Q\()2\S, %q\Q\()3\S, %plo
+        shufb   %b01\Q\()\S, %q\Q\()0\S, %q\Q\()1\S, %phi
+        shufb   %b23\Q\()\S, %q\Q\()2\S, %q\Q\()3\S, %phi
+        shufb   %w0\Q\()\S, %a01\Q\()\S, %a23\Q\()\S, %pa
+        shufb   %w1\Q\()\S, %a01\Q\()\S, %a23\Q\()\S, %pb
+        shufb   %w2\Q\()\S, %b01\Q\()\S, %b23\Q\()\S, %pa
+        .endr
+        shufb   %kv\S, %b010\S, %b230\S, %pb         # k
+        # each lane's axes k, u = k+1, v = k+2 (mod 3) as word-select patterns
+        shli    %k4\S, %kv\S, 2
+        ai      %u4a\S, %k4\S, 4
+        ceqi    %uw\S, %u4a\S, 12
+        andc    %u4\S, %u4a\S, %uw\S
+        ai      %v4a\S, %u4\S, 4
+        ceqi    %vw\S, %v4a\S, 12
+        andc    %v4\S, %v4a\S, %vw\S
+        shufb   %kr\S, %k4\S, %k4\S, %rep
+        shufb   %ur\S, %u4\S, %u4\S, %rep
+        shufb   %vr\S, %v4\S, %v4\S, %rep
+        a       %pk\S, %kr\S, PAT0
+        a       %pu\S, %ur\S, PAT0
+        a       %pv\S, %vr\S, PAT0
+        shufb   %ok\S, ORIG, ORIG, %pk\S           # origin in (k, u, v) order
+        shufb   %ou\S, ORIG, ORIG, %pu\S
+        shufb   %ov\S, ORIG, ORIG, %pv\S
+        fs      %nn1\S, %w20\S, %ok\S
+        fnms    %nn2\S, %w00\S, %ou\S, %nn1\S
+        fnms    %num\S, %w10\S, %ov\S, %nn2\S          # n_d - o_k - n_u o_u - n_v o_v
+        fma     %b1\S, %w01\S, %ou\S, %w21\S
+        fma     %bo\S, %w11\S, %ov\S, %b1\S            # beta at the origin
+        fma     %c1\S, %w02\S, %ou\S, %w22\S
+        fma     %co\S, %w12\S, %ov\S, %c1\S
+        and     %sn\S, %num\S, SIGNS
+        xor     %anum\S, %num\S, %sn\S               # |num|: the forms below come out times its sign
+        # per coefficient C (0: at column 0 row 0, 1: per column, 2: per row) of
+        # n.d (d), beta n.d (b), gamma n.d (g), (1 - beta - gamma) n.d (a); signs by
+        # num's, so that a ray in front has n.d > 0; each edge's plus a margin of 2^-8
+        # of n.d (far beyond the test's 2^-20 and its rounding)
+        .irp    C, 0, 1, 2
+        shufb   %xk\C\()\S, (\C+79), (\C+79), %pk\S
+        shufb   %xu\C\()\S, (\C+79), (\C+79), %pu\S
+        shufb   %xv\C\()\S, (\C+79), (\C+79), %pv\S
+        fma     %dn\C\()\S, %w00\S, %xu\C\()\S, %xk\C\()\S
+        fma     %fdn\C\()\S, %w10\S, %xv\C\()\S, %dn\C\()\S     # n.d
+        xor     %hd\C\()\S, %fdn\C\()\S, %sn\S              # (times num's sign, exactly)
+        fm      %pb1\C\()\S, %w01\S, %xu\C\()\S
+        fma     %pb\C\()\S, %w11\S, %xv\C\()\S, %pb1\C\()\S
+        fm      %pg1\C\()\S, %w02\S, %xu\C\()\S
+        fma     %pg\C\()\S, %w12\S, %xv\C\()\S, %pg1\C\()\S
+        fm      %fb1\C\()\S, %bo\S, %hd\C\()\S
+        fma     %fb\C\()\S, %anum\S, %pb\C\()\S, %fb1\C\()\S     # beta n.d = beta_o n.d + num (b_nu d_u + b_nv d_v)
+        fm      %fg1\C\()\S, %co\S, %hd\C\()\S
+        fma     %fg\C\()\S, %anum\S, %pg\C\()\S, %fg1\C\()\S
+        fs      %fa1\C\()\S, %hd\C\()\S, %fb\C\()\S
+        fs      %fa\C\()\S, %fa1\C\()\S, %fg\C\()\S
+        fma     %hb\C\()\S, $72, %hd\C\()\S, %fb\C\()\S
+        fma     %hg\C\()\S, $72, %hd\C\()\S, %fg\C\()\S
+        fma     %ha\C\()\S, $72, %hd\C\()\S, %fa\C\()\S
+        .endr
+        # each one's largest over group g (columns 0..7, rows 2g, 2g+1):
+        # v0 + max(0, 7 v_col) + max(0, v_row) + 2g v_row
+        .irp    F, d, b, g, a
+        fm      %w\F\()\S, %h\F\()1\S, $73
+        fcgt    %pw\F\()\S, %w\F\()\S, ZERO
+        and     %mw\F\()\S, %w\F\()\S, %pw\F\()\S
+        fcgt    %pr\F\()\S, %h\F\()2\S, ZERO
+        and     %mr\F\()\S, %h\F\()2\S, %pr\F\()\S
+        fa      %k1\F\()\S, %h\F\()0\S, %mw\F\()\S
+        fa      %m\F\()0\S, %k1\F\()\S, %mr\F\()\S
+        fma     %m\F\()1\S, $68, %h\F\()2\S, %m\F\()0\S
+        fma     %m\F\()2\S, $69, %h\F\()2\S, %m\F\()0\S
+        fma     %m\F\()3\S, $71, %h\F\()2\S, %m\F\()0\S
+        .endr
+        # group g is kept (bit 3 - g) where some ray is in front and not every ray is
+        # outside one edge
+        .irp    G, 0, 1, 2, 3
+        fcgt    %fr\G\()\S, %md\G\()\S, ZERO
+        fcgt    %ob\G\()\S, ZERO, %mb\G\()\S
+        fcgt    %og\G\()\S, ZERO, %mg\G\()\S
+        fcgt    %oa\G\()\S, ZERO, %ma\G\()\S
+        or      %o1\G\()\S, %ob\G\()\S, %og\G\()\S
+        or      %o2\G\()\S, %o1\G\()\S, %oa\G\()\S
+        andc    %kp\G\()\S, %fr\G\()\S, %o2\G\()\S
+        andi    %bit\G\()\S, %kp\G\()\S, 8 >> \G
+        .endr
+        or      %m01\S, %bit0\S, %bit1\S
+        or      %m23\S, %bit2\S, %bit3\S
+        or      %m\S, %m01\S, %m23\S
+        il      %all\S, 15
+        selb    %mi\S, %all\S, %m\S, %th\S             # another triangle's line: every group
+        and     %mact\S, %mi\S, $70                # of the active ones
+        shli    %mo\S, %mact\S, 4
+        andi    %sl\S, %triv\S, 7
+        shli    %so\S, %sl\S, 4
+        .irp    T, 0, 1, 2, 3
+        rotqbyi %mo\T\()\S, %mo\S, 4*\T
+        rotqbyi %so\T\()\S, %so\S, 4*\T
+        lqx     %rg\T\()\S, $74, %mo\T\()\S
+        shufb   %nm\T\()\S, %num\S, %num\S, PAT\T
+      ~ stqx    %rg\T\()\S, $78, %so\T\()\S
+      ~ stqx    %nm\T\()\S, $75, %so\T\()\S
+        .endr
+        .endm
+
 # (multihint; needs no extension) the cull per group of 16 rays (two rows), four triangles
 # a pass, one per lane: for rays from one origin, n.d, beta n.d and gamma n.d are linear in
 # d, so affine in (column, row); with the test loop's arithmetic and a margin, a group is
@@ -202,144 +340,38 @@ leaf_cull:
 # that of one triangle done alone, so the verdicts do not depend on the lanes. A pass past
 # the leaf's end fills the slots of triangles after it (no slot of the leaf's: at most 8)
         .sched  pool=82-127 scratch=66-127
-.Lcull:
+cull_pass:
         lqa     %plo, k_plo                   # (a 4x4 transpose's patterns)
         lqa     %phi, k_phi
         lqa     %pa, k_pa
         lqa     %pb, k_pb
         lqa     %idx, k_idx
         lqa     %rep, k_rep
-        .irp    T, 0, 1, 2, 3
-        ai      %tri\T, $76, \T
-        and     %ln\T, %tri\T, TMASK
-        shli    %lt\T, %ln\T, 4
-        lqx     %tag\T, TTAGS, %lt\T
-        shli    %ld\T, %ln\T, 6
-        a       %rec\T, %ld\T, TDATA
-        lqd     %q0\T, TRI_N_U(%rec\T)         # (n_u, n_v, n_d, k)
-        lqd     %q1\T, TRI_B_NU(%rec\T)        # (b_nu, b_nv, b_d, -)
-        lqd     %q2\T, TRI_C_NU(%rec\T)        # (c_nu, c_nv, c_d, -)
-        .endr
-        # lanes: the triangles
-        shufb   %tg01, %tag0, %tag1, %plo
-        shufb   %tg23, %tag2, %tag3, %plo
-        shufb   %tags, %tg01, %tg23, %pa
-        shufb   %t76, $76, $76, PAT0
-        a       %triv, %t76, %idx
-        ceq     %th, %tags, %triv              # not another triangle's line
-        .irp    Q, 0, 1, 2
-        shufb   %a01\Q, %q\Q\()0, %q\Q\()1, %plo
-        shufb   %a23\Q, %q\Q\()2, %q\Q\()3, %plo
-        shufb   %b01\Q, %q\Q\()0, %q\Q\()1, %phi
-        shufb   %b23\Q, %q\Q\()2, %q\Q\()3, %phi
-        shufb   %w0\Q, %a01\Q, %a23\Q, %pa
-        shufb   %w1\Q, %a01\Q, %a23\Q, %pb
-        shufb   %w2\Q, %b01\Q, %b23\Q, %pa
-        .endr
-        shufb   %kv, %b010, %b230, %pb         # k
-        # each lane's axes k, u = k+1, v = k+2 (mod 3) as word-select patterns
-        shli    %k4, %kv, 2
-        ai      %u4a, %k4, 4
-        ceqi    %uw, %u4a, 12
-        andc    %u4, %u4a, %uw
-        ai      %v4a, %u4, 4
-        ceqi    %vw, %v4a, 12
-        andc    %v4, %v4a, %vw
-        shufb   %kr, %k4, %k4, %rep
-        shufb   %ur, %u4, %u4, %rep
-        shufb   %vr, %v4, %v4, %rep
-        a       %pk, %kr, PAT0
-        a       %pu, %ur, PAT0
-        a       %pv, %vr, PAT0
-        shufb   %ok, ORIG, ORIG, %pk           # origin in (k, u, v) order
-        shufb   %ou, ORIG, ORIG, %pu
-        shufb   %ov, ORIG, ORIG, %pv
-        fs      %nn1, %w20, %ok
-        fnms    %nn2, %w00, %ou, %nn1
-        fnms    %num, %w10, %ov, %nn2          # n_d - o_k - n_u o_u - n_v o_v
-        fma     %b1, %w01, %ou, %w21
-        fma     %bo, %w11, %ov, %b1            # beta at the origin
-        fma     %c1, %w02, %ou, %w22
-        fma     %co, %w12, %ov, %c1
-        and     %sn, %num, SIGNS
-        xor     %anum, %num, %sn               # |num|: the forms below come out times its sign
-        # per coefficient C (0: at column 0 row 0, 1: per column, 2: per row) of
-        # n.d (d), beta n.d (b), gamma n.d (g), (1 - beta - gamma) n.d (a); signs by
-        # num's, so that a ray in front has n.d > 0; each edge's plus a margin of 2^-8
-        # of n.d (far beyond the test's 2^-20 and its rounding)
-        .irp    C, 0, 1, 2
-        shufb   %xk\C, (\C+79), (\C+79), %pk
-        shufb   %xu\C, (\C+79), (\C+79), %pu
-        shufb   %xv\C, (\C+79), (\C+79), %pv
-        fma     %dn\C, %w00, %xu\C, %xk\C
-        fma     %fdn\C, %w10, %xv\C, %dn\C     # n.d
-        xor     %hd\C, %fdn\C, %sn              # (times num's sign, exactly)
-        fm      %pb1\C, %w01, %xu\C
-        fma     %pb\C, %w11, %xv\C, %pb1\C
-        fm      %pg1\C, %w02, %xu\C
-        fma     %pg\C, %w12, %xv\C, %pg1\C
-        fm      %fb1\C, %bo, %hd\C
-        fma     %fb\C, %anum, %pb\C, %fb1\C     # beta n.d = beta_o n.d + num (b_nu d_u + b_nv d_v)
-        fm      %fg1\C, %co, %hd\C
-        fma     %fg\C, %anum, %pg\C, %fg1\C
-        fs      %fa1\C, %hd\C, %fb\C
-        fs      %fa\C, %fa1\C, %fg\C
-        fma     %hb\C, $72, %hd\C, %fb\C
-        fma     %hg\C, $72, %hd\C, %fg\C
-        fma     %ha\C, $72, %hd\C, %fa\C
-        .endr
-        # each one's largest over group g (columns 0..7, rows 2g, 2g+1):
-        # v0 + max(0, 7 v_col) + max(0, v_row) + 2g v_row
-        .irp    F, d, b, g, a
-        fm      %w\F, %h\F\()1, $73
-        fcgt    %pw\F, %w\F, ZERO
-        and     %mw\F, %w\F, %pw\F
-        fcgt    %pr\F, %h\F\()2, ZERO
-        and     %mr\F, %h\F\()2, %pr\F
-        fa      %k1\F, %h\F\()0, %mw\F
-        fa      %m\F\()0, %k1\F, %mr\F
-        fma     %m\F\()1, $68, %h\F\()2, %m\F\()0
-        fma     %m\F\()2, $69, %h\F\()2, %m\F\()0
-        fma     %m\F\()3, $71, %h\F\()2, %m\F\()0
-        .endr
-        # group g is kept (bit 3 - g) where some ray is in front and not every ray is
-        # outside one edge
-        .irp    G, 0, 1, 2, 3
-        fcgt    %fr\G, %md\G, ZERO
-        fcgt    %ob\G, ZERO, %mb\G
-        fcgt    %og\G, ZERO, %mg\G
-        fcgt    %oa\G, ZERO, %ma\G
-        or      %o1\G, %ob\G, %og\G
-        or      %o2\G, %o1\G, %oa\G
-        andc    %kp\G, %fr\G, %o2\G
-        andi    %bit\G, %kp\G, 8 >> \G
-        .endr
-        or      %m01, %bit0, %bit1
-        or      %m23, %bit2, %bit3
-        or      %m, %m01, %m23
-        il      %all, 15
-        selb    %mi, %all, %m, %th             # another triangle's line: every group
-        and     %mact, %mi, $70                # of the active ones
-        shli    %mo, %mact, 4
-        andi    %sl, %triv, 7
-        shli    %so, %sl, 4
-        .irp    T, 0, 1, 2, 3
-        rotqbyi %mo\T, %mo, 4*\T
-        rotqbyi %so\T, %so, 4*\T
-        lqx     %rg\T, $74, %mo\T
-        shufb   %nm\T, %num, %num, PAT\T
-      ~ stqx    %rg\T, $78, %so\T
-      ~ stqx    %nm\T, $75, %so\T
-        .endr
+        CULL_QUAD a, 0
         ai      $76, $76, 4
         ai      $77, $77, -4
         cgti    %more, $77, 0
-        ila     %back, .Lcull
+        ila     %back, cull_pass
         ila     %out, tri_loop
         selb    %to, %out, %back, %more
         hbr     .Lcull_br, %to
 .Lcull_br:
         bi      %to
+        .endsched
+# a leaf of more than four triangles: all of them in one pass, two quads side by side
+        .sched  pool=82-127 scratch=66-127
+cull_pass8:
+        lqa     %plo, k_plo
+        lqa     %phi, k_phi
+        lqa     %pa, k_pa
+        lqa     %pb, k_pb
+        lqa     %idx, k_idx
+        lqa     %rep, k_rep
+        CULL_QUAD a, 0
+        CULL_QUAD b, 4
+        hbrr    .Lcull_br8, tri_loop
+.Lcull_br8:
+        br      tri_loop
         .endsched
         .align  6                             # (not run: tri_loop where its block ends
         .rept   6                             # on ray_loop's line, whose .align 6 then
