@@ -69,6 +69,7 @@ k_ff:           .long 0x000000ff, 0x000000ff, 0x000000ff, 0x000000ff
 k_c255:         .long 255, 255, 255, 255
 k_abs:          .long 0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff
         .ifdef  EXT_MULTIHINT
+pfpass:         .long leaf_probe, 0, 0, 0     # the next leaf's prefetch pass (triangle.s)
 k_trav_to:      .long first_changed, leaf, .Ltrav_on, 0   # a step's ways (traverse.s)
 numbuf:         .space 128      # the leaf's triangles' n_d - o.n, by triangle & 7 (triangle.s)
 k_grow0:        .float 0.0, 2.0, 4.0, 6.0     # the groups' first rows (triangle.s)

@@ -98,7 +98,9 @@
         .sched  scratch=66-127
 .Lpf_stage:
         ai      $95, $77, -1
-        ila     $96, .Lpf
+        ila     $96, .Lpf_m                   # (the pass with the miss hinted taken; the
+        ila     $99, leaf_probe_m             # next leaf's pass too: pfpass)
+        stqa    $99, pfpass
         ila     $97, suspend
         ceqi    $95, $95, 0
         selb    $96, $96, $97, $95

@@ -10,14 +10,24 @@
         .text
 # ---- leaf: test the active rays against each triangle of the leaf
 leaf:
+        .ifdef  EXT_MULTIHINT                 # (multihint) the prefetch pass as the last
+        lqa     $74, pfpass                   # leaf's ended (pfpass, leaf_probe_m)
+        .endif
         lqa     $80, vars+V_LEAVES
         ai      $80, $80, 1
         stqa    $80, vars+V_LEAVES
         # a new visit: what the staging slots hold is from an older leaf
         il      $86, -1
+        .ifdef  EXT_MULTIHINT
+        hbr     .Lleaf_pass, $74
+        .endif
         .irp    J, 0, 1, 2, 3, 4, 5, 6, 7
         stqd    $86, CTX_STAGE_TAGS+\J*16(RAYS)
         .endr
+        .ifdef  EXT_MULTIHINT
+.Lleaf_pass:
+        bi      $74                           # (leaf_probe, the next, or leaf_probe_m)
+        .endif
 leaf_probe:                                   # (a suspended leaf resumes here)
         ori     $66, CUR, 0                   # first triangle
         rotqbyi $67, CUR, 4
@@ -41,6 +51,10 @@ leaf_probe:                                   # (a suspended leaf resumes here)
 .Lpf_br:
         brnz    $77, .Lpf
 .Lpf_done:
+        .ifdef  EXT_MULTIHINT                 # (the last triangle was in the cache: the
+        ila     $86, leaf_probe               # next leaf's pass predicts hits)
+        stqa    $86, pfpass
+        .endif
         brz     $78, leaf_cull
         lqa     $86, vars+V_NCTX1
         brz     $86, .Lpf_suspend
@@ -373,6 +387,35 @@ cull_pass8:
 .Lcull_br8:
         br      tri_loop
         .endsched
+# (multihint; needs the extension) the prefetch pass of a leaf after one whose last
+# triangle missed the cache: its tag check's branch to the miss handler is hinted taken,
+# in an entry of its own beside the loop's and the handler's (a hit then costs the miss
+# the fall-through costs in leaf_probe's pass). The handler comes back to .Lpf_m; with
+# one context (.Lpf_one, .Lpf_ways) to leaf_probe's .Lpf_next, the same pass
+leaf_probe_m:
+        lqa     $75, vars+V_PFMISS            # the miss handler for the configuration
+        ori     $66, CUR, 0                   # first triangle
+        rotqbyi $67, CUR, 4
+        rotmi   $67, $67, -6                  # count
+        ori     $76, $66, 0
+        hbr     .Lpf_m_miss, $75
+        ori     $77, $67, 0
+        il      $78, 0                        # any miss
+        il      $79, 64
+        hbrr    .Lpf_m_br, .Lpf_m
+        hbrr    .Lpf_m_out, .Lpf_done
+.Lpf_m: and     $80, $76, TMASK
+        shli    $81, $80, 4
+        lqx     $82, TTAGS, $81
+        ceq     $83, $82, $76
+.Lpf_m_miss:
+        biz     $83, $75
+        ai      $76, $76, 1
+        ai      $77, $77, -1
+.Lpf_m_br:
+        brnz    $77, .Lpf_m
+.Lpf_m_out:
+        br      .Lpf_done
         .align  6                             # (not run: tri_loop where its block ends
         .rept   6                             # on ray_loop's line, whose .align 6 then
         nop                                   # pads nothing)
