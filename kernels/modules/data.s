@@ -69,9 +69,12 @@ k_ff:           .long 0x000000ff, 0x000000ff, 0x000000ff, 0x000000ff
 k_c255:         .long 255, 255, 255, 255
 k_abs:          .long 0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff
         .ifdef  EXT_MULTIHINT
+pfpass:         .long leaf_probe, 0, 0, 0     # the next leaf's prefetch pass (triangle.s)
 k_trav_to:      .long first_changed, leaf, .Ltrav_on, 0   # a step's ways (traverse.s)
 numbuf:         .space 128      # the leaf's triangles' n_d - o.n, by triangle & 7 (triangle.s)
 k_grow0:        .float 0.0, 2.0, 4.0, 6.0     # the groups' first rows (triangle.s)
+k_rep:          .long 0x03030303, 0x07070707, 0x0b0b0b0b, 0x0f0f0f0f   # each word's low byte x4
+k_pc2:          .long 0x00010203, 0x04050607, 0x18191a1b, 0x80808080   # (a0, a1, b2, 0)
 k_c7:           .float 7.0, 7.0, 7.0, 7.0     # the last column
 k_ctol:         .long 0, 0x3b800000, 0x3b800000, 0x3b800000   # (0, 2^-8 x3): the edges' margin
 # a triangle's verdict and range of groups to test (culled, first, last: byte offsets of
@@ -92,8 +95,8 @@ k_grange:       .long -1, 0, 0, 0
                 .long 0, 0, 192, 0
                 .long 0, 0, 128, 0
                 .long 0, 0, 192, 0
-gforms:         .space 8*48     # per packet context (by tag): its directions' columns
-                                # per axis (raygen.s)
+gforms:         .space 8*48     # per packet context (by tag): its directions' (x, y, z)
+                                # at column 0 row 0, per column, per row (raygen.s)
         .endif
 
         .align 7

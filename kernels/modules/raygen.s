@@ -58,7 +58,7 @@ packet_loop:
         stqd    $94, CTX_CORNERS+16(RAYS)
         stqd    $95, CTX_CORNERS+32(RAYS)
         .ifdef  EXT_MULTIHINT
-        # the packet's directions as columns per axis a: (base_a, du_a, dv_a, 0), so that a
+        # the packet's directions as (x, y, z, 0) of base, du and dv, so that a
         # linear function of d is an affine one of (column, row), for the leaf's per-group
         # cull (triangle.s); in this context's slot of gforms (by its tag)
         lqd     $100, CTX_TAG(RAYS)
@@ -80,6 +80,15 @@ packet_loop:
         shufb   $111, $111, $75, $102
         shufb   $112, $112, $107, $102
         shufb   $113, $113, $110, $102
+        lqa     $105, k_plo                   # as (x, y, z) of each (the cull's lanes
+        lqa     $106, k_phi                   # are triangles, each with its own axes)
+        lqa     $107, k_pc1
+        lqa     $108, k_pc2
+        shufb   $109, $111, $112, $105        # (base_x, base_y, du_x, du_y)
+        shufb   $110, $111, $112, $106        # (dv_x, dv_y, 0, 0)
+        shufb   $111, $109, $113, $102        # base
+        shufb   $112, $109, $113, $107        # du
+        shufb   $113, $110, $113, $108        # dv
         stqd    $111, 0($104)
         stqd    $112, 16($104)
         stqd    $113, 32($104)

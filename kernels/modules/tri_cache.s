@@ -98,12 +98,19 @@
         .sched  scratch=66-127
 .Lpf_stage:
         ai      $95, $77, -1
-        ila     $96, .Lpf
+        ila     $96, .Lpf_m_miss              # (the pass with the miss hinted taken, at
+        ila     $99, leaf_probe_m             # its branch: the next triangle's tag check
+        stqa    $99, pfpass                   # is done here; the next leaf's pass too)
         ila     $97, suspend
         ceqi    $95, $95, 0
         selb    $96, $96, $97, $95
       ! hbr     .Lpf_stage_br, $96
         PF_SLOT
+        ai      $99, $76, 1
+        and     $100, $99, TMASK
+        shli    $100, $100, 4
+        lqx     $103, TTAGS, $100
+        ceq     $83, $103, $99
         lqd     $86, CTX_TAG(RAYS)
         il      $87, 0x40
         shli    $85, $76, 6

@@ -10,14 +10,24 @@
         .text
 # ---- leaf: test the active rays against each triangle of the leaf
 leaf:
+        .ifdef  EXT_MULTIHINT                 # (multihint) the prefetch pass as the last
+        lqa     $74, pfpass                   # leaf's ended (pfpass, leaf_probe_m)
+        .endif
         lqa     $80, vars+V_LEAVES
         ai      $80, $80, 1
         stqa    $80, vars+V_LEAVES
         # a new visit: what the staging slots hold is from an older leaf
         il      $86, -1
+        .ifdef  EXT_MULTIHINT
+        hbr     .Lleaf_pass, $74
+        .endif
         .irp    J, 0, 1, 2, 3, 4, 5, 6, 7
         stqd    $86, CTX_STAGE_TAGS+\J*16(RAYS)
         .endr
+        .ifdef  EXT_MULTIHINT
+.Lleaf_pass:
+        bi      $74                           # (leaf_probe, the next, or leaf_probe_m)
+        .endif
 leaf_probe:                                   # (a suspended leaf resumes here)
         ori     $66, CUR, 0                   # first triangle
         rotqbyi $67, CUR, 4
@@ -41,6 +51,10 @@ leaf_probe:                                   # (a suspended leaf resumes here)
 .Lpf_br:
         brnz    $77, .Lpf
 .Lpf_done:
+        .ifdef  EXT_MULTIHINT                 # (the last triangle was in the cache: the
+        ila     $86, leaf_probe               # next leaf's pass predicts hits)
+        stqa    $86, pfpass
+        .endif
         brz     $78, leaf_cull
         lqa     $86, vars+V_NCTX1
         brz     $86, .Lpf_suspend
@@ -107,21 +121,39 @@ leaf_cull:
         ila     $80, k_axoff
         ila     $81, k_kuv
         .ifdef  EXT_MULTIHINT
+        # (the four triangles' cull below: its constants, scheduled as one block)
+        .sched  pool=82-127 scratch=66-127
         ila     $75, numbuf                   # (the test's numerator, kept for tri_loop)
-        lqd     $79, CTX_TAG(RAYS)            # this context's directions' columns
-        ila     $74, gforms
+        lqd     $79, CTX_TAG(RAYS)            # this context's directions, per axis
+        ila     $74, gforms                   # (raygen.s: (x, y, z) of base, du, dv)
         ai      $79, $79, -CONTEXT_TAG0
         mpyi    $79, $79, 48
         a       $79, $79, $74
         ila     $74, k_grange
+        lqd     $80, 16($79)                  # per column
+        lqd     $81, 32($79)                  # per row
+        lqd     $79, 0($79)                   # at column 0 row 0
         lqa     $72, k_ctol
         lqa     $73, k_c7
         lqa     $68, k_grow0
+        shufb   $72, $72, $72, PAT1           # the edges' margin, 2^-8
+        shufb   $69, $68, $68, PAT2           # 4.0 (group 2's first row)
         rotmi   $70, FIRST, -4                # the active groups: FIRST's and after
         shli    $70, $70, 4
         ila     $71, k_lanege
         lqx     $70, $71, $70
         gb      $70, $70
+        shufb   $70, $70, $70, PAT0
+        shufb   $71, $68, $68, PAT3           # 6.0 (group 3's)
+        shufb   $68, $68, $68, PAT1           # 2.0 (group 1's)
+        cgti    %gt4, $67, 4                  # (more than four triangles: one pass of
+        ila     %a4, cull_pass                   # eight)
+        ila     %a8, cull_pass8
+        selb    %to, %a4, %a8, %gt4
+        hbr     .Lcull_in, %to
+.Lcull_in:
+        bi      %to
+        .endsched
         .endif
         .ifndef EXT_MULTIHINT
         .sched  pool=82-127 scratch=66-127
@@ -182,103 +214,212 @@ leaf_cull:
         bi      %to
         .endsched
         .else
-# (multihint; needs no extension) the cull per group of 16 rays (two rows), by the four
-# corner rays of each group (lanes: the groups g, raygen.s), with the test loop's own
-# arithmetic and tolerances, so a corner is culled only where the test would miss it: the
-# slot gets the range of groups left to test (k_grange: the last's and the first's
-# offsets; none when every group is culled), which tri_loop and the test loop follow
+# Four triangles of the cull below, from the pass's first + O, one per lane (names end in S)
+        .macro  CULL_QUAD S, O
+        .irp    T, 0, 1, 2, 3
+        ai      %tri\T\()\S, $76, \T+\O
+        and     %ln\T\()\S, %tri\T\()\S, TMASK
+        shli    %lt\T\()\S, %ln\T\()\S, 4
+        lqx     %tag\T\()\S, TTAGS, %lt\T\()\S
+        shli    %ld\T\()\S, %ln\T\()\S, 6
+        a       %rec\T\()\S, %ld\T\()\S, TDATA
+        lqd     %q0\T\()\S, TRI_N_U(%rec\T\()\S)         # (n_u, n_v, n_d, k)
+        lqd     %q1\T\()\S, TRI_B_NU(%rec\T\()\S)        # (b_nu, b_nv, b_d, -)
+        lqd     %q2\T\()\S, TRI_C_NU(%rec\T\()\S)        # (c_nu, c_nv, c_d, -)
+        .endr
+        # lanes: the triangles
+        shufb   %tg01\S, %tag0\S, %tag1\S, %plo
+        shufb   %tg23\S, %tag2\S, %tag3\S, %plo
+        shufb   %tags\S, %tg01\S, %tg23\S, %pa
+        shufb   %t76\S, $76, $76, PAT0
+        .if     \O
+        a       %triv0\S, %t76\S, %idx
+        ai      %triv\S, %triv0\S, \O
+        .else
+        a       %triv\S, %t76\S, %idx
+        .endif
+        ceq     %th\S, %tags\S, %triv\S              # not another triangle's line
+        .irp    Q, 0, 1, 2
+        shufb   %a01\Q\()\S, %q\Q\()0\S, %q\Q\()1\S, %plo
+        shufb   %a23\Q\()\S, %q\Q\()2\S, %q\Q\()3\S, %plo
+        shufb   %b01\Q\()\S, %q\Q\()0\S, %q\Q\()1\S, %phi
+        shufb   %b23\Q\()\S, %q\Q\()2\S, %q\Q\()3\S, %phi
+        shufb   %w0\Q\()\S, %a01\Q\()\S, %a23\Q\()\S, %pa
+        shufb   %w1\Q\()\S, %a01\Q\()\S, %a23\Q\()\S, %pb
+        shufb   %w2\Q\()\S, %b01\Q\()\S, %b23\Q\()\S, %pa
+        .endr
+        shufb   %kv\S, %b010\S, %b230\S, %pb         # k
+        # each lane's axes k, u = k+1, v = k+2 (mod 3) as word-select patterns
+        shli    %k4\S, %kv\S, 2
+        ai      %u4a\S, %k4\S, 4
+        ceqi    %uw\S, %u4a\S, 12
+        andc    %u4\S, %u4a\S, %uw\S
+        ai      %v4a\S, %u4\S, 4
+        ceqi    %vw\S, %v4a\S, 12
+        andc    %v4\S, %v4a\S, %vw\S
+        shufb   %kr\S, %k4\S, %k4\S, %rep
+        shufb   %ur\S, %u4\S, %u4\S, %rep
+        shufb   %vr\S, %v4\S, %v4\S, %rep
+        a       %pk\S, %kr\S, PAT0
+        a       %pu\S, %ur\S, PAT0
+        a       %pv\S, %vr\S, PAT0
+        shufb   %ok\S, ORIG, ORIG, %pk\S           # origin in (k, u, v) order
+        shufb   %ou\S, ORIG, ORIG, %pu\S
+        shufb   %ov\S, ORIG, ORIG, %pv\S
+        fs      %nn1\S, %w20\S, %ok\S
+        fnms    %nn2\S, %w00\S, %ou\S, %nn1\S
+        fnms    %num\S, %w10\S, %ov\S, %nn2\S          # n_d - o_k - n_u o_u - n_v o_v
+        fma     %b1\S, %w01\S, %ou\S, %w21\S
+        fma     %bo\S, %w11\S, %ov\S, %b1\S            # beta at the origin
+        fma     %c1\S, %w02\S, %ou\S, %w22\S
+        fma     %co\S, %w12\S, %ov\S, %c1\S
+        and     %sn\S, %num\S, SIGNS
+        xor     %anum\S, %num\S, %sn\S               # |num|: the forms below come out times its sign
+        # per coefficient C (0: at column 0 row 0, 1: per column, 2: per row) of
+        # n.d (d), beta n.d (b), gamma n.d (g), (1 - beta - gamma) n.d (a); signs by
+        # num's, so that a ray in front has n.d > 0; each edge's plus a margin of 2^-8
+        # of n.d (far beyond the test's 2^-20 and its rounding)
+        .irp    C, 0, 1, 2
+        shufb   %xk\C\()\S, (\C+79), (\C+79), %pk\S
+        shufb   %xu\C\()\S, (\C+79), (\C+79), %pu\S
+        shufb   %xv\C\()\S, (\C+79), (\C+79), %pv\S
+        fma     %dn\C\()\S, %w00\S, %xu\C\()\S, %xk\C\()\S
+        fma     %fdn\C\()\S, %w10\S, %xv\C\()\S, %dn\C\()\S     # n.d
+        xor     %hd\C\()\S, %fdn\C\()\S, %sn\S              # (times num's sign, exactly)
+        fm      %pb1\C\()\S, %w01\S, %xu\C\()\S
+        fma     %pb\C\()\S, %w11\S, %xv\C\()\S, %pb1\C\()\S
+        fm      %pg1\C\()\S, %w02\S, %xu\C\()\S
+        fma     %pg\C\()\S, %w12\S, %xv\C\()\S, %pg1\C\()\S
+        fm      %fb1\C\()\S, %bo\S, %hd\C\()\S
+        fma     %fb\C\()\S, %anum\S, %pb\C\()\S, %fb1\C\()\S     # beta n.d = beta_o n.d + num (b_nu d_u + b_nv d_v)
+        fm      %fg1\C\()\S, %co\S, %hd\C\()\S
+        fma     %fg\C\()\S, %anum\S, %pg\C\()\S, %fg1\C\()\S
+        fs      %fa1\C\()\S, %hd\C\()\S, %fb\C\()\S
+        fs      %fa\C\()\S, %fa1\C\()\S, %fg\C\()\S
+        fma     %hb\C\()\S, $72, %hd\C\()\S, %fb\C\()\S
+        fma     %hg\C\()\S, $72, %hd\C\()\S, %fg\C\()\S
+        fma     %ha\C\()\S, $72, %hd\C\()\S, %fa\C\()\S
+        .endr
+        # each one's largest over group g (columns 0..7, rows 2g, 2g+1):
+        # v0 + max(0, 7 v_col) + max(0, v_row) + 2g v_row
+        .irp    F, d, b, g, a
+        fm      %w\F\()\S, %h\F\()1\S, $73
+        fcgt    %pw\F\()\S, %w\F\()\S, ZERO
+        and     %mw\F\()\S, %w\F\()\S, %pw\F\()\S
+        fcgt    %pr\F\()\S, %h\F\()2\S, ZERO
+        and     %mr\F\()\S, %h\F\()2\S, %pr\F\()\S
+        fa      %k1\F\()\S, %h\F\()0\S, %mw\F\()\S
+        fa      %m\F\()0\S, %k1\F\()\S, %mr\F\()\S
+        fma     %m\F\()1\S, $68, %h\F\()2\S, %m\F\()0\S
+        fma     %m\F\()2\S, $69, %h\F\()2\S, %m\F\()0\S
+        fma     %m\F\()3\S, $71, %h\F\()2\S, %m\F\()0\S
+        .endr
+        # group g is kept (bit 3 - g) where some ray is in front and not every ray is
+        # outside one edge
+        .irp    G, 0, 1, 2, 3
+        fcgt    %fr\G\()\S, %md\G\()\S, ZERO
+        fcgt    %ob\G\()\S, ZERO, %mb\G\()\S
+        fcgt    %og\G\()\S, ZERO, %mg\G\()\S
+        fcgt    %oa\G\()\S, ZERO, %ma\G\()\S
+        or      %o1\G\()\S, %ob\G\()\S, %og\G\()\S
+        or      %o2\G\()\S, %o1\G\()\S, %oa\G\()\S
+        andc    %kp\G\()\S, %fr\G\()\S, %o2\G\()\S
+        andi    %bit\G\()\S, %kp\G\()\S, 8 >> \G
+        .endr
+        or      %m01\S, %bit0\S, %bit1\S
+        or      %m23\S, %bit2\S, %bit3\S
+        or      %m\S, %m01\S, %m23\S
+        il      %all\S, 15
+        selb    %mi\S, %all\S, %m\S, %th\S             # another triangle's line: every group
+        and     %mact\S, %mi\S, $70                # of the active ones
+        shli    %mo\S, %mact\S, 4
+        andi    %sl\S, %triv\S, 7
+        shli    %so\S, %sl\S, 4
+        .irp    T, 0, 1, 2, 3
+        rotqbyi %mo\T\()\S, %mo\S, 4*\T
+        rotqbyi %so\T\()\S, %so\S, 4*\T
+        lqx     %rg\T\()\S, $74, %mo\T\()\S
+        shufb   %nm\T\()\S, %num\S, %num\S, PAT\T
+      ~ stqx    %rg\T\()\S, $78, %so\T\()\S
+      ~ stqx    %nm\T\()\S, $75, %so\T\()\S
+        .endr
+        .endm
+
+# (multihint; needs no extension) the cull per group of 16 rays (two rows), four triangles
+# a pass, one per lane: for rays from one origin, n.d, beta n.d and gamma n.d are linear in
+# d, so affine in (column, row); with the test loop's arithmetic and a margin, a group is
+# culled only where the test would miss every ray of it: the slot gets the range of groups
+# left to test (k_grange: the first's and the last's offsets; none when every group is
+# culled), which tri_loop and the test loop follow. Each lane's arithmetic is, op for op,
+# that of one triangle done alone, so the verdicts do not depend on the lanes. A pass past
+# the leaf's end fills the slots of triangles after it (no slot of the leaf's: at most 8)
         .sched  pool=82-127 scratch=66-127
-.Lcull:
+cull_pass:
         lqa     %plo, k_plo                   # (a 4x4 transpose's patterns)
         lqa     %phi, k_phi
         lqa     %pa, k_pa
         lqa     %pb, k_pb
-        .irp    T, 0, 1
-        CULL_RECORD \T
-        lqx     %xk\T, $79, %ck\T              # (base, du, dv) along k, u, v
-        lqx     %xu\T, $79, %cu\T
-        lqx     %xv\T, $79, %cv\T
-        # n.d, beta n.d and gamma n.d are linear in d, so affine in (column, row):
-        # (value at column 0 row 0, per column, per row)
-        fma     %dn1\T, %nu\T, %xu\T, %xk\T
-        fma     %fd\T, %nv\T, %xv\T, %dn1\T     # n.d
-        fma     %b1\T, %bnu\T, %ou\T, %bd\T
-        fma     %bo\T, %bnv\T, %ov\T, %b1\T     # beta at the origin
-        fma     %c1\T, %cnu\T, %ou\T, %cd\T
-        fma     %co\T, %cnv\T, %ov\T, %c1\T
-        fm      %pb1\T, %bnu\T, %xu\T
-        fma     %pb\T, %bnv\T, %xv\T, %pb1\T
-        fm      %pg1\T, %cnu\T, %xu\T
-        fma     %pg\T, %cnv\T, %xv\T, %pg1\T
-        fm      %fb1\T, %bo\T, %fd\T
-        fma     %fb\T, %num\T, %pb\T, %fb1\T    # beta n.d = beta_o n.d + num (b_nu d_u + b_nv d_v)
-        fm      %fg1\T, %co\T, %fd\T
-        fma     %fg\T, %num\T, %pg\T, %fg1\T
-        fs      %fa1\T, %fd\T, %fb\T
-        fs      %fa\T, %fa1\T, %fg\T            # (1 - beta - gamma) n.d
-        # the four forms' coefficients as columns (lanes: n.d, beta n.d, gamma n.d,
-        # (1 - beta - gamma) n.d), so that what follows is one vector op for the four
-        shufb   %ta\T, %fd\T, %fb\T, %plo
-        shufb   %tb\T, %fg\T, %fa\T, %plo
-        shufb   %tc\T, %fd\T, %fb\T, %phi
-        shufb   %te\T, %fg\T, %fa\T, %phi
-        shufb   %v0\T, %ta\T, %tb\T, %pa       # at column 0 row 0
-        shufb   %vc\T, %ta\T, %tb\T, %pb       # per column
-        shufb   %vr\T, %tc\T, %te\T, %pa       # per row
-        # signs by num's, so that a ray in front has n.d > 0; then each edge's value
-        # plus a margin of 2^-8 of n.d (far beyond the test's 2^-20 and its rounding)
-        and     %sn\T, %num\T, SIGNS
-        xor     %s0\T, %v0\T, %sn\T
-        xor     %sc\T, %vc\T, %sn\T
-        xor     %sr\T, %vr\T, %sn\T
-        shufb   %d0\T, %s0\T, %s0\T, PAT0
-        shufb   %dc\T, %sc\T, %sc\T, PAT0
-        shufb   %dr\T, %sr\T, %sr\T, PAT0
-        fma     %h0\T, $72, %d0\T, %s0\T
-        fma     %hc\T, $72, %dc\T, %sc\T
-        fma     %hr\T, $72, %dr\T, %sr\T
-        # each one's largest over group g (columns 0..7, rows 2g, 2g+1):
-        # v0 + max(0, 7 v_col) + max(0, v_row) + 2g v_row, lanes g
-        fm      %w\T, %hc\T, $73
-        fcgt    %pw\T, %w\T, ZERO
-        and     %mw\T, %w\T, %pw\T
-        fcgt    %pr\T, %hr\T, ZERO
-        and     %mr\T, %hr\T, %pr\T
-        fa      %k1\T, %h0\T, %mw\T
-        fa      %kk\T, %k1\T, %mr\T
-        .irp    F, 0, 1, 2, 3
-        shufb   %kf\T\F, %kk\T, %kk\T, PAT\F
-        shufb   %rf\T\F, %hr\T, %hr\T, PAT\F
-        fma     %mf\T\F, $68, %rf\T\F, %kf\T\F
-        .endr
-        fcgt    %fr\T, %mf\T\()0, ZERO           # some ray of the group in front
-        fcgt    %ob\T, ZERO, %mf\T\()1           # every ray outside an edge
-        fcgt    %og\T, ZERO, %mf\T\()2
-        fcgt    %oa\T, ZERO, %mf\T\()3
-        or      %o1\T, %ob\T, %og\T
-        or      %o2\T, %o1\T, %oa\T
-        andc    %keep\T, %fr\T, %o2\T           # the groups left to test
-        gb      %m\T, %keep\T
-        il      %all\T, 15
-        selb    %mi\T, %all\T, %m\T, %th\T       # another triangle's line: every group
-        and     %ma\T, %mi\T, $70                # of the active ones
-        shli    %mo\T, %ma\T, 4
-        lqx     %rg\T, $74, %mo\T
-        andi    %sl\T, %tri\T, 7
-        shli    %so\T, %sl\T, 4
-      ~ stqx    %rg\T, $78, %so\T
-      ~ stqx    %num\T, $75, %so\T
-        .endr
-        ai      $76, $76, 2
-        ai      $77, $77, -2
+        lqa     %idx, k_idx
+        lqa     %rep, k_rep
+        CULL_QUAD a, 0
+        ai      $76, $76, 4
+        ai      $77, $77, -4
         cgti    %more, $77, 0
-        ila     %back, .Lcull
+        ila     %back, cull_pass
         ila     %out, tri_loop
         selb    %to, %out, %back, %more
         hbr     .Lcull_br, %to
 .Lcull_br:
         bi      %to
         .endsched
+# a leaf of more than four triangles: all of them in one pass, two quads side by side
+        .sched  pool=82-127 scratch=66-127
+cull_pass8:
+        lqa     %plo, k_plo
+        lqa     %phi, k_phi
+        lqa     %pa, k_pa
+        lqa     %pb, k_pb
+        lqa     %idx, k_idx
+        lqa     %rep, k_rep
+        CULL_QUAD a, 0
+        CULL_QUAD b, 4
+        hbrr    .Lcull_br8, tri_loop
+.Lcull_br8:
+        br      tri_loop
+        .endsched
+# (multihint; needs the extension) the prefetch pass of a leaf after one whose last
+# triangle missed the cache: its tag check's branch to the miss handler is hinted taken,
+# in an entry of its own beside the loop's and the handler's (a hit then costs the miss
+# the fall-through costs in leaf_probe's pass). The handler comes back to .Lpf_m; with
+# one context (.Lpf_one, .Lpf_ways) to leaf_probe's .Lpf_next, the same pass
+leaf_probe_m:
+        lqa     $75, vars+V_PFMISS            # the miss handler for the configuration
+        ori     $66, CUR, 0                   # first triangle
+        rotqbyi $67, CUR, 4
+        rotmi   $67, $67, -6                  # count
+        ori     $76, $66, 0
+        hbr     .Lpf_m_miss, $75
+        ori     $77, $67, 0
+        il      $78, 0                        # any miss
+        il      $79, 64
+        hbrr    .Lpf_m_br, .Lpf_m
+        hbrr    .Lpf_m_out, .Lpf_done
+.Lpf_m: and     $80, $76, TMASK
+        shli    $81, $80, 4
+        lqx     $82, TTAGS, $81
+        ceq     $83, $82, $76
+.Lpf_m_miss:
+        biz     $83, $75
+        ai      $76, $76, 1
+        ai      $77, $77, -1
+.Lpf_m_br:
+        brnz    $77, .Lpf_m
+.Lpf_m_out:
+        br      .Lpf_done
+        .align  6                             # (not run: tri_loop where its block ends
+        .rept   6                             # on ray_loop's line, whose .align 6 then
+        nop                                   # pads nothing)
+        .endr
         .endif
 tri_loop:
         ai      S_TLOOK, S_TLOOK, 1
