@@ -106,14 +106,18 @@ impl Assembler<'_> {
         }
     }
 
-    /// `.section NAME[, "FLAGS"[, @TYPE[, ENTSIZE]]]` (also `%type`), or `NAME, SUBSECTION`.
+    /// `.section NAME[, "FLAGS"[, @TYPE[, ENTSIZE]]]` (also `%type` and a quoted type),
+    /// or `NAME, SUBSECTION`; `.pushsection NAME, SUBSECTION, "FLAGS", ...` (`push`).
+    /// The checks of obj-elf.c's `obj_elf_change_section` on a special section's type
+    /// and attributes, and on a section named again with others.
     pub(super) fn section_args(
         &mut self,
         args: &str,
         line: &Line,
         col: usize,
+        push: bool,
     ) -> Option<(SectionDef, i64)> {
-        let parts = split_top(args, ',');
+        let mut parts = split_top(args, ',');
         let name = parts[0].trim().trim_matches('"').to_string();
         if name.is_empty() {
             self.diag(Severity::Error, line, col, "missing name");
@@ -121,12 +125,25 @@ impl Assembler<'_> {
         }
         let mut def = SectionDef::named(&name);
         let mut sub = 0;
+        // obj_elf_section: `.pushsection` takes a subsection right after the name.
+        if push && parts.len() > 1 && parts[1].trim().starts_with(|c: char| c.is_ascii_digit()) {
+            sub = self.subsection(&parts[1], line, col);
+            parts.remove(1);
+        }
+        // Whether gas made the section before this directive (`old_sec`), known in the
+        // final walk only; errors that depend on it are given there.
+        let fresh = self.first_in_walk(&name);
+        let old = self.pass == 2 && !fresh;
+        let special = SectionDef::special(&name);
+        let mut attr = 0u64;
         if let Some(flags) = parts.get(1).map(|f| f.trim()) {
             if let Some(letters) = flags.strip_prefix('"').and_then(|f| f.strip_suffix('"')) {
                 let mut f = 0;
+                let mut mbind = false;
                 // obj-elf.c's compatibility spellings: "am" is "aM", "ams" is "aMS".
                 let letters = letters.replacen("ams", "aMS", 1).replacen("am", "aM", 1);
-                for c in letters.chars() {
+                let mut chars = letters.char_indices().peekable();
+                while let Some((at, c)) = chars.next() {
                     match c {
                         'e' => f |= 0x8000_0000,
                         'a' => f |= SHF_ALLOC,
@@ -137,7 +154,23 @@ impl Assembler<'_> {
                         'G' => f |= 0x200,
                         'T' => f |= 0x400,
                         'o' => f |= 0x80,
-                        'R' | 'd' | '?' => {}
+                        'd' => mbind = true,
+                        'R' | '?' => {}
+                        '0'..='9' => {
+                            // A number among the letters (strtoul, base 0) adds its bits.
+                            let rest = &letters[at..];
+                            let (digits, radix) = match rest.strip_prefix("0x").or(rest.strip_prefix("0X")) {
+                                Some(hex) => (hex, 16),
+                                None if rest.starts_with('0') => (rest, 8),
+                                None => (rest, 10),
+                            };
+                            let len = digits.find(|c: char| !c.is_digit(radix)).unwrap_or(digits.len());
+                            f |= u64::from_str_radix(&digits[..len], radix).unwrap_or(0) & 0xffff_ffff;
+                            let end = at + (rest.len() - digits.len()) + len;
+                            while chars.peek().is_some_and(|(i, _)| *i < end) {
+                                chars.next();
+                            }
+                        }
                         other => {
                             self.diag(
                                 Severity::Error,
@@ -148,6 +181,15 @@ impl Assembler<'_> {
                             return None;
                         }
                     }
+                }
+                if mbind && f & SHF_ALLOC == 0 {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("SHF_ALLOC isn't set for GNU_MBIND section: {name}"),
+                    );
+                    return None;
                 }
                 if f & 0x10 != 0 && parts.len() < 4 {
                     f &= !0x10; // obj-elf.c drops SHF_MERGE without an entity size
@@ -167,22 +209,30 @@ impl Assembler<'_> {
                         "group name for SHF_GROUP not specified",
                     );
                 }
+                attr = f;
                 // A special section named with attributes it lacks takes them as given,
-                // with a warning; otherwise it keeps its own as well (obj-elf.c).
-                let known = self.first_in_walk(&name);
-                let special = SectionDef::special(&name);
-                match special {
-                    Some(sp) if f & !sp.flags & 0xfff != 0 => {
+                // with a warning (none in a group); a .note may be allocated or code,
+                // and `.rodata.str1.1` and the like may merge strings; otherwise it
+                // keeps its own as well (obj-elf.c).
+                const LINK_ORDER_OS_PROC: u64 = 0x80 | 0x0ff0_0000 | 0xf000_0000;
+                match &special {
+                    Some(sp) if !old && f & !LINK_ORDER_OS_PROC & !sp.flags != 0 => {
+                        let extra = f & !LINK_ORDER_OS_PROC & !sp.flags;
                         let note_alloc = sp.ty == 7 && (f == SHF_ALLOC || f == SHF_EXECINSTR);
-                        if known && !note_alloc {
-                            self.diag(
-                                Severity::Warning,
-                                line,
-                                col,
-                                format!("setting incorrect section attributes for {name}"),
-                            );
+                        let merge = name[1..].contains('.') && extra & !0x30 == 0;
+                        if note_alloc || merge {
+                            def.flags = f | sp.flags;
+                        } else {
+                            if fresh && f & 0x200 == 0 {
+                                self.diag(
+                                    Severity::Warning,
+                                    line,
+                                    col,
+                                    format!("setting incorrect section attributes for {name}"),
+                                );
+                            }
+                            def.flags = f;
                         }
-                        def.flags = f;
                     }
                     Some(sp) => def.flags = f | sp.flags,
                     None => def.flags = f,
@@ -192,8 +242,9 @@ impl Assembler<'_> {
                 sub = self.subsection(flags, line, col);
             }
         }
+        let mut ty_given = None;
         if let Some(ty) = parts.get(2).map(|t| t.trim()) {
-            match ty.trim_start_matches(['@', '%']) {
+            match ty.trim_matches('"').trim_start_matches(['@', '%']) {
                 "progbits" => def.ty = SHT_PROGBITS,
                 "nobits" => def.ty = SHT_NOBITS,
                 "note" => def.ty = 7,
@@ -211,21 +262,75 @@ impl Assembler<'_> {
                     return None;
                 }
             }
+            ty_given = Some(def.ty);
+        }
+        if let (Some(sp), Some(ty)) = (&special, ty_given) {
+            if ty != sp.ty {
+                let array = matches!(sp.ty, 14..=16);
+                if !old && !array {
+                    if sp.ty != 7 {
+                        self.diag(
+                            Severity::Warning,
+                            line,
+                            col,
+                            format!("setting incorrect section type for {name}"),
+                        );
+                    }
+                } else {
+                    self.diag(
+                        Severity::Warning,
+                        line,
+                        col,
+                        format!("ignoring incorrect section type for {name}"),
+                    );
+                    ty_given = Some(sp.ty);
+                }
+            }
         }
         if let Some(e) = parts.get(3) {
             if def.flags & 0x10 != 0 {
                 def.entsize = self.eval(e.trim()).map(|v| v.0 as u64).unwrap_or(0);
             }
         }
+        if self.pass == 2 && !old && self.defined.contains(&name) {
+            // gas's section symbol is named as the section (obj-elf.c).
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("section name '{name}' already defined as another symbol"),
+            );
+        }
         if let Some(existing) = self.defs.iter().find(|d| d.name == name).cloned() {
-            // Re-entering a section keeps what it was declared with.
-            if parts.len() > 1 && existing != def && !self.first_in_walk(&name) {
-                self.diag(
-                    Severity::Warning,
-                    line,
-                    col,
-                    format!("ignoring changed section attributes for {name}"),
-                );
+            // Re-entering a section keeps what it was declared with; a different type
+            // or different attributes are an error, a warning for a special section.
+            if old {
+                if ty_given.is_some_and(|t| t != existing.ty) {
+                    let m = format!("changed section type for {name}");
+                    match special {
+                        Some(_) => self.diag(Severity::Warning, line, col, format!("ignoring {m}")),
+                        None => self.diag(Severity::Error, line, col, m),
+                    }
+                }
+                // The BFD flags gas compares: alloc, load, read-only, code, exclude,
+                // merge, strings, TLS.
+                let bfd = |f: u64, ty: u32| {
+                    let alloc = f & SHF_ALLOC != 0;
+                    (
+                        alloc,
+                        alloc && ty != SHT_NOBITS,
+                        f & SHF_WRITE == 0,
+                        f & (SHF_EXECINSTR | 0x8000_0000 | 0x10 | 0x20 | 0x400),
+                    )
+                };
+                let ty = ty_given.or(special.as_ref().map(|s| s.ty)).unwrap_or(0);
+                if attr != 0 && bfd(attr, ty) != bfd(existing.flags, existing.ty) {
+                    let m = format!("changed section attributes for {name}");
+                    match special {
+                        Some(_) => self.diag(Severity::Warning, line, col, format!("ignoring {m}")),
+                        None => self.diag(Severity::Error, line, col, m),
+                    }
+                }
             }
             def = existing;
         }
@@ -323,6 +428,9 @@ impl Assembler<'_> {
                     return;
                 }
             }
+            if self.object && self.pass == 2 {
+                self.common_conflicts(&name, line, col);
+            }
             if self.object {
                 if matches!(self.symbols.get(&name), Some(SymVal::Label(..))) {
                     self.diag(
@@ -395,7 +503,7 @@ impl Assembler<'_> {
                 self.switch_to(c);
             }
             ".section" | ".pushsection" => {
-                let Some((def, sub)) = self.section_args(args, line, col) else {
+                let Some((def, sub)) = self.section_args(args, line, col, d == ".pushsection") else {
                     return true;
                 };
                 if d == ".pushsection" {
@@ -450,6 +558,14 @@ impl Assembler<'_> {
                         format!("unknown visibility `{vis}' for .symver (local, hidden or remove)"),
                     );
                 } else if self.pass == 2 {
+                    if matches!(self.symbols.get(name), Some(SymVal::Common(..))) {
+                        self.diag(
+                            Severity::Error,
+                            line,
+                            col,
+                            format!("`{alias}' can't be versioned to common symbol '{name}'"),
+                        );
+                    }
                     self.symvers
                         .push((name.to_string(), alias.to_string(), vis.to_string()));
                 }
@@ -533,6 +649,41 @@ impl Assembler<'_> {
             _ => return false,
         }
         true
+    }
+
+    /// What gas refuses of a common symbol `name` (obj-elf.c `elf_frob_symbol`,
+    /// symbols.c `resolve_symbol_value`, write.c): being weak too, having an equate, or
+    /// a versioned name; checked at its `.comm` in the final walk, where the directives
+    /// before and after it are both known.
+    fn common_conflicts(&mut self, name: &str, line: &Line, col: usize) {
+        if self.attrs.get(name).is_some_and(|a| a.weak) {
+            let m = format!("symbol `{name}' can not be both weak and common");
+            self.diag(Severity::Error, line, col, m);
+        }
+        let equated = |m: &std::collections::HashMap<String, SymVal>| {
+            m.iter()
+                .filter(|(_, v)| {
+                    matches!(v, SymVal::Abs(v) if v.sym.as_ref().is_some_and(|s| &*s.0 == name))
+                })
+                .map(|(k, _)| k.clone())
+                .collect::<Vec<_>>()
+        };
+        let mut names = equated(&self.symbols);
+        names.extend(equated(&self.pass1_symbols));
+        names.sort();
+        names.dedup();
+        for e in names {
+            let m = format!("`{e}' can't be equated to common symbol `{name}'");
+            self.diag(Severity::Error, line, col, m);
+        }
+        let versioned: Vec<String> = (self.symvers.iter())
+            .filter(|v| v.0 == name)
+            .map(|v| v.1.clone())
+            .collect();
+        for alias in versioned {
+            let m = format!("`{alias}' can't be versioned to common symbol '{name}'");
+            self.diag(Severity::Error, line, col, m);
+        }
     }
 
     /// End of the final walk (obj-elf.c `elf_frob_symbol`): a symbol `.symver ...,

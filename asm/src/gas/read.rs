@@ -177,7 +177,12 @@ impl Assembler<'_> {
                 Some(p) => (rest[..p].to_string(), rest[p..].trim().to_string()),
                 None => (rest.clone(), String::new()),
             };
-            let lw = word.to_ascii_lowercase();
+            let mut lw = word.to_ascii_lowercase();
+            if lw == ".nop" {
+                // read.c s_nop assembles `nop` (on SPU that is the same s_nop again,
+                // pseudo-ops being read without their dot): one path for both spellings.
+                lw = "nop".into();
+            }
             let col = line.text.find(&word).map(|c| c + 1).unwrap_or(1);
             let before = (
                 self.sect,

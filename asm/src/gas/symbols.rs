@@ -264,6 +264,12 @@ impl Assembler<'_> {
             return;
         }
         let first = self.defined.insert(name.to_string());
+        let section = self.defs.iter().position(|d| d.name == name);
+        if self.pass == 2 && section.is_some_and(|d| self.chain.borrow().has_section(d)) {
+            // A section's symbol bears its name (obj-elf.c), so the label is a second one.
+            let m = format!("symbol `{name}' is already defined");
+            self.diag(Severity::Error, line, 1, m);
+        }
         if self.pass == 1 && (!first || matches!(self.symbols.get(name), Some(SymVal::Common(..))))
         {
             self.diag(
