@@ -16,78 +16,83 @@ pub(super) struct SectionDef {
     pub(super) entsize: u64,
 }
 
+/// BFD's special sections (elf.c `special_sections_*`, those of a type gas writes;
+/// elf32-spu.c's `._ea` and `.toe` first): prefix, suffix rule (0: the name exactly;
+/// -1: any name starting so; -2: the name or the name, a dot and more), type, flags.
+const SPECIAL_SECTIONS: &[(&str, i8, u32, u64)] = &[
+    ("._ea", 0, SHT_PROGBITS, SHF_WRITE),
+    (".toe", 0, SHT_NOBITS, SHF_ALLOC),
+    (".bss", -2, SHT_NOBITS, SHF_ALLOC | SHF_WRITE),
+    (".comment", 0, SHT_PROGBITS, 0),
+    (".ctf", 0, SHT_PROGBITS, 0),
+    (".data", -2, SHT_PROGBITS, SHF_ALLOC | SHF_WRITE),
+    (".data1", 0, SHT_PROGBITS, SHF_ALLOC | SHF_WRITE),
+    (".debug", 0, SHT_PROGBITS, 0),
+    (".debug_line", 0, SHT_PROGBITS, 0),
+    (".debug_info", 0, SHT_PROGBITS, 0),
+    (".debug_abbrev", 0, SHT_PROGBITS, 0),
+    (".debug_aranges", 0, SHT_PROGBITS, 0),
+    (".fini", 0, SHT_PROGBITS, SHF_ALLOC | SHF_EXECINSTR),
+    (".fini_array", -2, 15, SHF_ALLOC | SHF_WRITE),
+    (".gnu.linkonce.b", -2, SHT_NOBITS, SHF_ALLOC | SHF_WRITE),
+    (".gnu.linkonce.n", -2, SHT_NOBITS, SHF_ALLOC | SHF_WRITE),
+    (".gnu.linkonce.p", -2, SHT_PROGBITS, SHF_ALLOC | SHF_WRITE),
+    (".gnu.lto_", -1, SHT_PROGBITS, 0x8000_0000),
+    (".got", 0, SHT_PROGBITS, SHF_ALLOC | SHF_WRITE),
+    (".init", 0, SHT_PROGBITS, SHF_ALLOC | SHF_EXECINSTR),
+    (".init_array", -2, 14, SHF_ALLOC | SHF_WRITE),
+    (".interp", 0, SHT_PROGBITS, 0),
+    (".line", 0, SHT_PROGBITS, 0),
+    (".noinit", -2, SHT_NOBITS, SHF_ALLOC | SHF_WRITE),
+    (".note.GNU-stack", 0, SHT_PROGBITS, 0),
+    (".note", -1, 7, 0),
+    (".persistent.bss", 0, SHT_NOBITS, SHF_ALLOC | SHF_WRITE),
+    (".persistent", -2, SHT_PROGBITS, SHF_ALLOC | SHF_WRITE),
+    (".preinit_array", -2, 16, SHF_ALLOC | SHF_WRITE),
+    (".plt", 0, SHT_PROGBITS, SHF_ALLOC | SHF_EXECINSTR),
+    (".rodata", -2, SHT_PROGBITS, SHF_ALLOC),
+    (".rodata1", 0, SHT_PROGBITS, SHF_ALLOC),
+    (".text", -2, SHT_PROGBITS, SHF_ALLOC | SHF_EXECINSTR),
+    (".tbss", -2, SHT_NOBITS, SHF_ALLOC | SHF_WRITE | 0x400),
+    (".tdata", -2, SHT_PROGBITS, SHF_ALLOC | SHF_WRITE | 0x400),
+    (".zdebug_line", 0, SHT_PROGBITS, 0),
+    (".zdebug_info", 0, SHT_PROGBITS, 0),
+    (".zdebug_abbrev", 0, SHT_PROGBITS, 0),
+    (".zdebug_aranges", 0, SHT_PROGBITS, 0),
+];
+
 impl SectionDef {
-    /// A section BFD knows by name (`elf.c`'s special sections, `elf32-spu.c`'s `._ea`
-    /// and `.toe`): its type and flags, if `name` is one.
+    /// A section BFD knows by name (`_bfd_elf_get_special_section`, the first entry of
+    /// `SPECIAL_SECTIONS` that matches): its type and flags, if `name` is one.
     pub(super) fn special(name: &str) -> Option<SectionDef> {
-        let def = SectionDef::named(name);
-        let has = |p: &str| name == p || name.starts_with(&format!("{p}."));
-        let known = [
-            ".text",
-            ".init",
-            ".fini",
-            ".bss",
-            ".tbss",
-            ".data",
-            ".tdata",
-            ".rodata",
-            ".note",
-            ".init_array",
-            ".fini_array",
-            ".preinit_array",
-            "._ea",
-            ".toe",
-            ".comment",
-        ]
-        .iter()
-        .any(|p| has(p))
-            || name.starts_with(".debug");
-        known.then_some(def)
+        let (_, _, ty, flags) = SPECIAL_SECTIONS.iter().find(|(prefix, suffix, _, _)| {
+            let Some(rest) = name.strip_prefix(prefix) else {
+                return false;
+            };
+            match suffix {
+                0 => rest.is_empty(),
+                -2 => rest.is_empty() || rest.starts_with('.'),
+                _ => true,
+            }
+        })?;
+        Some(SectionDef {
+            name: name.to_string(),
+            ty: *ty,
+            flags: *flags,
+            // BFD gives the array sections their entries' size.
+            entsize: if matches!(ty, 14..=16) { 4 } else { 0 },
+        })
     }
 
-    /// GNU as's defaults for a section named without flags (`obj-elf.c` special sections).
+    /// GNU as's defaults for a section named without flags: a special section's, else
+    /// data of no attributes.
     pub(super) fn named(name: &str) -> SectionDef {
-        let has = |p: &str| name == p || name.starts_with(&format!("{p}."));
-        let array = [
-            (".init_array", 14),
-            (".fini_array", 15),
-            (".preinit_array", 16),
-        ];
-        if let Some((_, ty)) = array.iter().find(|(p, _)| has(p)) {
-            return SectionDef {
-                name: name.to_string(),
-                ty: *ty,
-                flags: SHF_ALLOC | SHF_WRITE,
-                entsize: 4,
-            };
-        }
-        let (ty, flags) = if name == ".toe" {
-            (SHT_NOBITS, SHF_ALLOC)
-        } else if has(".tbss") {
-            (SHT_NOBITS, SHF_ALLOC | SHF_WRITE | 0x400)
-        } else if has(".tdata") {
-            (SHT_PROGBITS, SHF_ALLOC | SHF_WRITE | 0x400)
-        } else if has(".note") {
-            (7, 0)
-        } else if name == "._ea" {
-            (SHT_PROGBITS, SHF_WRITE)
-        } else if has(".text") || has(".init") || has(".fini") {
-            (SHT_PROGBITS, SHF_ALLOC | SHF_EXECINSTR)
-        } else if has(".bss") {
-            (SHT_NOBITS, SHF_ALLOC | SHF_WRITE)
-        } else if has(".data") {
-            (SHT_PROGBITS, SHF_ALLOC | SHF_WRITE)
-        } else if has(".rodata") {
-            (SHT_PROGBITS, SHF_ALLOC)
-        } else {
-            (SHT_PROGBITS, 0)
-        };
-        SectionDef {
+        SectionDef::special(name).unwrap_or(SectionDef {
             name: name.to_string(),
-            ty,
-            flags,
+            ty: SHT_PROGBITS,
+            flags: 0,
             entsize: 0,
-        }
+        })
     }
 }
 
