@@ -2,7 +2,7 @@
 //! its flags and type, subsections, `.pushsection`/`.popsection`/`.previous`, `.comm` and
 //! `.lcomm`, and `.global`, `.weak`, `.hidden`, `.type`, `.size`.
 
-use super::symbols::SymVal;
+use super::symbols::{SymVal, STT_GNU_IFUNC};
 use super::{Assembler, Severity, LOCAL_STORE};
 use crate::lex::{split_top, Line};
 use crate::object::{SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE, SHT_NOBITS, SHT_PROGBITS};
@@ -601,13 +601,16 @@ impl Assembler<'_> {
                         .trim_start_matches(['@', '%', '#'])
                         .to_ascii_lowercase()
                 });
-                let kind = match kind.as_deref() {
-                    Some("function" | "stt_func") => 2,
-                    Some("object" | "stt_object") => 1,
-                    Some("notype" | "stt_notype") => 0,
-                    Some("tls_object" | "stt_tls") => 6,
+                // BFD's flags for each type: function, object, indirect, thread-local.
+                let (f, o, i, t) = (1u8, 2u8, 4u8, 8u8);
+                let bits = match kind.as_deref() {
+                    Some("function" | "stt_func" | "2") => f,
+                    Some("object" | "stt_object" | "1") => o,
+                    Some("notype" | "stt_notype" | "0") => 0,
+                    Some("tls_object" | "stt_tls" | "6") => o | t,
+                    Some("gnu_indirect_function" | "stt_gnu_ifunc" | "10") => f | i,
                     // obj-elf.c: a common-typed symbol is a global object.
-                    Some("common" | "stt_common") => {
+                    Some("common" | "stt_common" | "5") => {
                         self.note_symbol(&name);
                         let a = self.attrs.entry(name).or_default();
                         a.kind = 1;
@@ -628,7 +631,39 @@ impl Assembler<'_> {
                     }
                 };
                 self.note_symbol(&name);
-                self.attrs.entry(name).or_default().kind = kind;
+                let pass = self.pass;
+                let a = self.attrs.entry(name.clone()).or_default();
+                // obj-elf.c obj_elf_type: a new type clears the flags of the others but
+                // keeps an indirect function's under `function` and thread-local under
+                // `object`; a change other than to notype warns.
+                let old = if a.type_pass == pass { a.type_bits } else { 0 };
+                let mut mask = f | o;
+                if bits != f {
+                    mask |= i;
+                }
+                if bits != o {
+                    mask |= t;
+                }
+                let new = (old & !mask) | bits;
+                let warn = bits != 0 && new != old | bits;
+                a.type_bits = new;
+                a.type_pass = pass;
+                a.gnu_osabi |= bits & i != 0;
+                a.kind = if new & t != 0 {
+                    6
+                } else if new & i != 0 {
+                    STT_GNU_IFUNC
+                } else if new & f != 0 {
+                    2
+                } else if new & o != 0 {
+                    1
+                } else {
+                    0
+                };
+                if warn {
+                    let m = format!("symbol '{name}' already has its type set");
+                    self.diag(Severity::Warning, line, col, m);
+                }
             }
             ".size" => {
                 let parts = split_top(args, ',');
@@ -644,6 +679,12 @@ impl Assembler<'_> {
                 let name = parts[0].trim().to_string();
                 self.note_symbol(&name);
                 match self.eval_val(parts[1..].join(",").trim()) {
+                    Ok((v, _, _)) if v.cross && self.object && self.pass == 2 => {
+                        // obj-elf.c elf_frob_symbol: a size across sections stays an
+                        // expression, which the object cannot hold.
+                        let m = format!(".size expression for {name} does not evaluate to a constant");
+                        self.diag(Severity::Error, line, col, m);
+                    }
                     Ok((v, _, _)) if !v.reloc || self.pass == 1 => {
                         self.attrs.entry(name).or_default().size = Some(v.v)
                     }

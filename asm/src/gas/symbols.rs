@@ -68,6 +68,9 @@ impl Chain {
 /// `.type NAME, @function`: an ELF `STT_FUNC` symbol.
 pub(super) const STT_FUNC: u8 = 2;
 
+/// `.type NAME, %gnu_indirect_function`: an ELF `STT_GNU_IFUNC` symbol.
+pub(super) const STT_GNU_IFUNC: u8 = 10;
+
 /// Symbol attributes set by directives.
 #[derive(Clone, Debug, Default)]
 pub(super) struct SymAttrs {
@@ -78,6 +81,11 @@ pub(super) struct SymAttrs {
     /// STT_* from `.type` (1 object, 2 function).
     pub(super) kind: u8,
     pub(super) size: Option<i64>,
+    /// `.type`'s BFD flags (obj-elf.c `obj_elf_type`) and the walk that set them.
+    pub(super) type_bits: u8,
+    pub(super) type_pass: u8,
+    /// A `.type` that only GNU's ELF has (`%gnu_indirect_function`) was given.
+    pub(super) gnu_osabi: bool,
 }
 
 impl Env for Assembler<'_> {
