@@ -171,3 +171,54 @@ fn dot_nop_is_nop() {
     assert_eq!(obj.sections.iter().find(|s| s.name == ".alloc0").unwrap().data, words(4));
     assert_eq!(obj.sections.iter().find(|s| s.name == ".text").unwrap().data, words(3));
 }
+
+#[test]
+fn a_section_symbol_is_not_made_global() {
+    let src = "\t.section AAA\n\t.global AAA\n\t.byte 49\n";
+    assert_eq!(messages(src), ["2: warning: can't make section symbol global"]);
+    assert!(object(src).symbols.iter().all(|s| s.name != "AAA"));
+}
+
+#[test]
+fn types_as_obj_elf_sets_them() {
+    // gas's type-2.s, in part: which flags a later type keeps, and when it warns.
+    let src = concat!(
+        "\t.text\n",
+        "\t.type test1,%function\n\t.type test1,%object\ntest1: .byte 0\n",
+        "\t.type test6,%gnu_indirect_function\n\t.type test6,%notype\ntest6: .byte 0\n",
+        "\t.type test8,%object\n\t.type test8,%tls_object\n\t.type test8,%object\ntest8: .byte 0\n",
+        "\t.type test9,%function\n\t.type test9,%gnu_indirect_function\n\t.type test9,%function\ntest9: .byte 0\n",
+        "\t.type test10,2\ntest10: .byte 0\n",
+    );
+    assert_eq!(messages(src), ["3: warning: symbol 'test1' already has its type set"]);
+    let obj = object(src);
+    let kind = |n: &str| obj.symbols.iter().find(|s| s.name == n).unwrap().kind;
+    assert_eq!(
+        ["test1", "test6", "test8", "test9", "test10"].map(kind),
+        [1, 0, 6, 10, 2]
+    );
+    // An indirect function, even one typed again since, makes the object GNU's.
+    assert_eq!(obj.osabi, 3);
+    assert_eq!(obj.to_elf().unwrap()[7], 3);
+    assert_eq!(object("\t.type f,%function\nf: nop\n").osabi, 0);
+}
+
+#[test]
+fn sizes_of_equates_and_across_sections() {
+    // gas's size.s: an explicit size stays; a later equate's size replaces an earlier's.
+    let obj = object(concat!(
+        ".text\n.size foo1, 1\nfoo1:\n",
+        ".size bar2, 2\n.set bar2, foo1\n",
+        ".set bar6, foo2\n",
+        ".size foo2, 3\nfoo2:\n",
+        ".set bar7, foo1\n.set bar7, foo2\n",
+    ));
+    let size = |n: &str| obj.symbols.iter().find(|s| s.name == n).unwrap().size;
+    assert_eq!(["bar2", "bar6", "bar7"].map(size), [2, 3, 3]);
+    // gas's bad-size.s: a size across sections cannot be written.
+    let src = "\t.text\nt:\n\t.byte 0\n\t.section .text.b, \"xa\"\n\t.byte 0\n\t.size t, .-t\n";
+    assert_eq!(
+        messages(src),
+        ["6: error: .size expression for t does not evaluate to a constant"]
+    );
+}

@@ -581,6 +581,11 @@ impl Assembler<'_> {
                     if n.is_empty() {
                         continue;
                     }
+                    if matches!(d, ".global" | ".globl") && self.defs.iter().any(|s| s.name == n) {
+                        // symbols.c S_SET_EXTERNAL: the name is the section's own symbol.
+                        self.diag(Severity::Warning, line, col, "can't make section symbol global");
+                        continue;
+                    }
                     self.note_symbol(n);
                     let a = self.attrs.entry(n.to_string()).or_default();
                     match d {
@@ -686,7 +691,9 @@ impl Assembler<'_> {
                         self.diag(Severity::Error, line, col, m);
                     }
                     Ok((v, _, _)) if !v.reloc || self.pass == 1 => {
-                        self.attrs.entry(name).or_default().size = Some(v.v)
+                        let a = self.attrs.entry(name).or_default();
+                        a.size = Some(v.v);
+                        a.size_copied = false;
                     }
                     Ok(_) => {} // a size that depends on an address: gas keeps an expression; we drop it
                     Err((c, m)) => self.diag(Severity::Error, line, col + c, m),

@@ -81,6 +81,8 @@ pub(super) struct SymAttrs {
     /// STT_* from `.type` (1 object, 2 function).
     pub(super) kind: u8,
     pub(super) size: Option<i64>,
+    /// The size is an equated symbol's (a later equate replaces it, `.size` does not).
+    pub(super) size_copied: bool,
     /// `.type`'s BFD flags (obj-elf.c `obj_elf_type`) and the walk that set them.
     pub(super) type_bits: u8,
     pub(super) type_pass: u8,
@@ -316,8 +318,9 @@ impl Assembler<'_> {
                         if a.kind == 0 {
                             a.kind = t.kind;
                         }
-                        if a.size.is_none() {
+                        if a.size.is_none() || a.size_copied {
                             a.size = t.size;
+                            a.size_copied = true;
                         }
                     }
                 }
