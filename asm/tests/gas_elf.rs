@@ -222,3 +222,16 @@ fn sizes_of_equates_and_across_sections() {
         ["6: error: .size expression for t does not evaluate to a constant"]
     );
 }
+
+#[test]
+fn previous_after_struct_returns_to_the_section_it_left() {
+    // gas's struct.s: s_struct is a section change for `.previous`.
+    let obj = object(concat!(
+        "\t.globl l1, l2\n\t.data\nl1:\t.long 0\n",
+        "\t.struct 2\nw1:\t.short 0\n\t.previous\nl2:\t.long 0\n",
+    ));
+    let data = obj.sections.iter().position(|s| s.name == ".data").unwrap();
+    let l2 = obj.symbols.iter().find(|s| s.name == "l2").unwrap();
+    assert_eq!((l2.section, l2.value), (spu_asm::object::SymSection::Section(data), 4));
+    assert!(obj.sections.iter().find(|s| s.name == ".text").unwrap().data.is_empty());
+}

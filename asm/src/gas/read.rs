@@ -686,7 +686,11 @@ impl Assembler<'_> {
             ".incbin" => self.incbin(args, line, col),
             ".popsection" | ".previous" if self.absolute.is_some() => {
                 self.absolute = None;
-                self.elf_directive(d, args, line, col);
+                // s_struct calls obj_elf_section_change_hook: the previous section is
+                // the one `.struct` was entered from, where `.previous` returns.
+                if d == ".popsection" {
+                    self.elf_directive(d, args, line, col);
+                }
             }
             // `.file "name"` alone is the ELF file symbol; anything else is `.file N`.
             ".file" if !args.trim_start().starts_with('"') => self.dwarf_file(args, line, col),
