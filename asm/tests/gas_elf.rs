@@ -93,7 +93,9 @@ fn special_sections_are_bfds_by_exact_name_or_dotted_suffix() {
         Vec::<String>::new()
     );
     assert_eq!(
-        messages("\t.section .debug_info, \"G\", %progbits, foo, comdat\n\t.section .rodata, \"aw\"\n"),
+        messages(
+            "\t.section .debug_info, \"G\", %progbits, foo, comdat\n\t.section .rodata, \"aw\"\n"
+        ),
         ["2: warning: setting incorrect section attributes for .rodata"]
     );
 }
@@ -168,14 +170,31 @@ fn a_section_and_a_label_share_one_name_space() {
 fn dot_nop_is_nop() {
     let obj = object("\t.section .alloc0,\"a\"\n\t.nop 16\n\t.text\n\t.nop\n\t.nop 5\n");
     let words = |n: usize| [0x40, 0x20, 0, 0].repeat(n);
-    assert_eq!(obj.sections.iter().find(|s| s.name == ".alloc0").unwrap().data, words(4));
-    assert_eq!(obj.sections.iter().find(|s| s.name == ".text").unwrap().data, words(3));
+    assert_eq!(
+        obj.sections
+            .iter()
+            .find(|s| s.name == ".alloc0")
+            .unwrap()
+            .data,
+        words(4)
+    );
+    assert_eq!(
+        obj.sections
+            .iter()
+            .find(|s| s.name == ".text")
+            .unwrap()
+            .data,
+        words(3)
+    );
 }
 
 #[test]
 fn a_section_symbol_is_not_made_global() {
     let src = "\t.section AAA\n\t.global AAA\n\t.byte 49\n";
-    assert_eq!(messages(src), ["2: warning: can't make section symbol global"]);
+    assert_eq!(
+        messages(src),
+        ["2: warning: can't make section symbol global"]
+    );
     assert!(object(src).symbols.iter().all(|s| s.name != "AAA"));
 }
 
@@ -190,7 +209,10 @@ fn types_as_obj_elf_sets_them() {
         "\t.type test9,%function\n\t.type test9,%gnu_indirect_function\n\t.type test9,%function\ntest9: .byte 0\n",
         "\t.type test10,2\ntest10: .byte 0\n",
     );
-    assert_eq!(messages(src), ["3: warning: symbol 'test1' already has its type set"]);
+    assert_eq!(
+        messages(src),
+        ["3: warning: symbol 'test1' already has its type set"]
+    );
     let obj = object(src);
     let kind = |n: &str| obj.symbols.iter().find(|s| s.name == n).unwrap().kind;
     assert_eq!(
@@ -232,6 +254,15 @@ fn previous_after_struct_returns_to_the_section_it_left() {
     ));
     let data = obj.sections.iter().position(|s| s.name == ".data").unwrap();
     let l2 = obj.symbols.iter().find(|s| s.name == "l2").unwrap();
-    assert_eq!((l2.section, l2.value), (spu_asm::object::SymSection::Section(data), 4));
-    assert!(obj.sections.iter().find(|s| s.name == ".text").unwrap().data.is_empty());
+    assert_eq!(
+        (l2.section, l2.value),
+        (spu_asm::object::SymSection::Section(data), 4)
+    );
+    assert!(obj
+        .sections
+        .iter()
+        .find(|s| s.name == ".text")
+        .unwrap()
+        .data
+        .is_empty());
 }

@@ -164,13 +164,17 @@ impl Assembler<'_> {
                         '0'..='9' => {
                             // A number among the letters (strtoul, base 0) adds its bits.
                             let rest = &letters[at..];
-                            let (digits, radix) = match rest.strip_prefix("0x").or(rest.strip_prefix("0X")) {
-                                Some(hex) => (hex, 16),
-                                None if rest.starts_with('0') => (rest, 8),
-                                None => (rest, 10),
-                            };
-                            let len = digits.find(|c: char| !c.is_digit(radix)).unwrap_or(digits.len());
-                            f |= u64::from_str_radix(&digits[..len], radix).unwrap_or(0) & 0xffff_ffff;
+                            let (digits, radix) =
+                                match rest.strip_prefix("0x").or(rest.strip_prefix("0X")) {
+                                    Some(hex) => (hex, 16),
+                                    None if rest.starts_with('0') => (rest, 8),
+                                    None => (rest, 10),
+                                };
+                            let len = digits
+                                .find(|c: char| !c.is_digit(radix))
+                                .unwrap_or(digits.len());
+                            f |= u64::from_str_radix(&digits[..len], radix).unwrap_or(0)
+                                & 0xffff_ffff;
                             let end = at + (rest.len() - digits.len()) + len;
                             while chars.peek().is_some_and(|(i, _)| *i < end) {
                                 chars.next();
@@ -508,7 +512,8 @@ impl Assembler<'_> {
                 self.switch_to(c);
             }
             ".section" | ".pushsection" => {
-                let Some((def, sub)) = self.section_args(args, line, col, d == ".pushsection") else {
+                let Some((def, sub)) = self.section_args(args, line, col, d == ".pushsection")
+                else {
                     return true;
                 };
                 if d == ".pushsection" {
@@ -583,7 +588,12 @@ impl Assembler<'_> {
                     }
                     if matches!(d, ".global" | ".globl") && self.defs.iter().any(|s| s.name == n) {
                         // symbols.c S_SET_EXTERNAL: the name is the section's own symbol.
-                        self.diag(Severity::Warning, line, col, "can't make section symbol global");
+                        self.diag(
+                            Severity::Warning,
+                            line,
+                            col,
+                            "can't make section symbol global",
+                        );
                         continue;
                     }
                     self.note_symbol(n);
@@ -687,7 +697,8 @@ impl Assembler<'_> {
                     Ok((v, _, _)) if v.cross && self.object && self.pass == 2 => {
                         // obj-elf.c elf_frob_symbol: a size across sections stays an
                         // expression, which the object cannot hold.
-                        let m = format!(".size expression for {name} does not evaluate to a constant");
+                        let m =
+                            format!(".size expression for {name} does not evaluate to a constant");
                         self.diag(Severity::Error, line, col, m);
                     }
                     Ok((v, _, _)) if !v.reloc || self.pass == 1 => {
