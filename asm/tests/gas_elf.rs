@@ -266,3 +266,14 @@ fn previous_after_struct_returns_to_the_section_it_left() {
         .data
         .is_empty());
 }
+
+#[test]
+fn tls_common_is_a_thread_local_common_symbol() {
+    // gas's common4.s.
+    let obj = object("\t.tls_common foobar,30,4\n");
+    let s = obj.symbols.iter().find(|s| s.name == "foobar").unwrap();
+    assert_eq!(
+        (s.section, s.value, s.size, s.kind, s.global),
+        (spu_asm::object::SymSection::Common, 4, 30, 6, true)
+    );
+}

@@ -539,6 +539,14 @@ impl Assembler<'_> {
                 std::mem::swap(&mut self.sect, &mut self.prev_sect);
             }
             ".lcomm" | ".comm" => self.common(d, args, line, col),
+            ".tls_common" => {
+                // obj-elf.c obj_elf_tls_common: `.comm` of a thread-local object.
+                self.common(".comm", args, line, col);
+                let name = split_top(args, ',')[0].trim().to_string();
+                if matches!(self.symbols.get(&name), Some(SymVal::Common(..))) {
+                    self.attrs.entry(name).or_default().kind = 6;
+                }
+            }
             ".symver" => {
                 // obj-elf.c obj_elf_symver: `NAME, ALIAS@VERSION` (or `@@`, `@@@`), then
                 // an optional visibility for the alias.

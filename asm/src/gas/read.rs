@@ -1057,6 +1057,7 @@ const DIRECTIVES: &[&str] = &[
     ".bss",
     ".byte",
     ".comm",
+    ".tls_common",
     ".data",
     ".dfloat",
     ".double",

@@ -640,7 +640,8 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
                     global: true,
                     weak: false,
                     visibility: attrs.visibility,
-                    kind: 1,
+                    // An object, or thread-local from `.tls_common`.
+                    kind: if attrs.kind == 6 { 6 } else { 1 },
                 });
                 continue;
             }
