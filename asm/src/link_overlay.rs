@@ -363,6 +363,7 @@ pub fn build(
         sections,
         symbols,
         included: Vec::new(),
+        osabi: 0,
     });
     Ok(ov)
 }

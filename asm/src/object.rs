@@ -118,6 +118,9 @@ pub struct Object {
     /// For an object assembled here, the files its source's `.include` and `.incbin`
     /// read from disk (inputs of the command that assembles it); empty for one read.
     pub included: Vec<std::path::PathBuf>,
+    /// The header's OS ABI (`e_ident[EI_OSABI]`): 0, or 3 (GNU) where the object uses a
+    /// GNU extension of ELF (an `STT_GNU_IFUNC` symbol), as BFD marks it.
+    pub osabi: u8,
 }
 
 impl Object {
@@ -156,6 +159,7 @@ impl Object {
         let sections = header.sections(endian, data).map_err(err)?;
         let mut obj = Object {
             name: name.to_string(),
+            osabi: header.e_ident().os_abi.0,
             ..Default::default()
         };
         // Content sections keep their ELF index -> our index.

@@ -301,6 +301,7 @@ pub(crate) fn write(obj: &Object) -> Result<Vec<u8>, String> {
     let shoff = align_to(at, 4);
     let mut out = vec![0u8; shoff as usize + 40 * headers.len()];
     out[..16].copy_from_slice(&[0x7f, b'E', b'L', b'F', 1, 2, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+    out[7] = obj.osabi;
     let put16 =
         |out: &mut Vec<u8>, at: usize, v: u16| out[at..at + 2].copy_from_slice(&v.to_be_bytes());
     let put32 =

@@ -4,6 +4,7 @@
 
 mod debug_line;
 mod eh_frame;
+mod gas_elf;
 mod gnu_compat;
 mod gnu_generic;
 mod gnu_objects;

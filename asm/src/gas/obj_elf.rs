@@ -2,7 +2,7 @@
 //! its flags and type, subsections, `.pushsection`/`.popsection`/`.previous`, `.comm` and
 //! `.lcomm`, and `.global`, `.weak`, `.hidden`, `.type`, `.size`.
 
-use super::symbols::SymVal;
+use super::symbols::{SymVal, STT_GNU_IFUNC};
 use super::{Assembler, Severity, LOCAL_STORE};
 use crate::lex::{split_top, Line};
 use crate::object::{SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE, SHT_NOBITS, SHT_PROGBITS};
@@ -16,78 +16,83 @@ pub(super) struct SectionDef {
     pub(super) entsize: u64,
 }
 
+/// BFD's special sections (elf.c `special_sections_*`, those of a type gas writes;
+/// elf32-spu.c's `._ea` and `.toe` first): prefix, suffix rule (0: the name exactly;
+/// -1: any name starting so; -2: the name or the name, a dot and more), type, flags.
+const SPECIAL_SECTIONS: &[(&str, i8, u32, u64)] = &[
+    ("._ea", 0, SHT_PROGBITS, SHF_WRITE),
+    (".toe", 0, SHT_NOBITS, SHF_ALLOC),
+    (".bss", -2, SHT_NOBITS, SHF_ALLOC | SHF_WRITE),
+    (".comment", 0, SHT_PROGBITS, 0),
+    (".ctf", 0, SHT_PROGBITS, 0),
+    (".data", -2, SHT_PROGBITS, SHF_ALLOC | SHF_WRITE),
+    (".data1", 0, SHT_PROGBITS, SHF_ALLOC | SHF_WRITE),
+    (".debug", 0, SHT_PROGBITS, 0),
+    (".debug_line", 0, SHT_PROGBITS, 0),
+    (".debug_info", 0, SHT_PROGBITS, 0),
+    (".debug_abbrev", 0, SHT_PROGBITS, 0),
+    (".debug_aranges", 0, SHT_PROGBITS, 0),
+    (".fini", 0, SHT_PROGBITS, SHF_ALLOC | SHF_EXECINSTR),
+    (".fini_array", -2, 15, SHF_ALLOC | SHF_WRITE),
+    (".gnu.linkonce.b", -2, SHT_NOBITS, SHF_ALLOC | SHF_WRITE),
+    (".gnu.linkonce.n", -2, SHT_NOBITS, SHF_ALLOC | SHF_WRITE),
+    (".gnu.linkonce.p", -2, SHT_PROGBITS, SHF_ALLOC | SHF_WRITE),
+    (".gnu.lto_", -1, SHT_PROGBITS, 0x8000_0000),
+    (".got", 0, SHT_PROGBITS, SHF_ALLOC | SHF_WRITE),
+    (".init", 0, SHT_PROGBITS, SHF_ALLOC | SHF_EXECINSTR),
+    (".init_array", -2, 14, SHF_ALLOC | SHF_WRITE),
+    (".interp", 0, SHT_PROGBITS, 0),
+    (".line", 0, SHT_PROGBITS, 0),
+    (".noinit", -2, SHT_NOBITS, SHF_ALLOC | SHF_WRITE),
+    (".note.GNU-stack", 0, SHT_PROGBITS, 0),
+    (".note", -1, 7, 0),
+    (".persistent.bss", 0, SHT_NOBITS, SHF_ALLOC | SHF_WRITE),
+    (".persistent", -2, SHT_PROGBITS, SHF_ALLOC | SHF_WRITE),
+    (".preinit_array", -2, 16, SHF_ALLOC | SHF_WRITE),
+    (".plt", 0, SHT_PROGBITS, SHF_ALLOC | SHF_EXECINSTR),
+    (".rodata", -2, SHT_PROGBITS, SHF_ALLOC),
+    (".rodata1", 0, SHT_PROGBITS, SHF_ALLOC),
+    (".text", -2, SHT_PROGBITS, SHF_ALLOC | SHF_EXECINSTR),
+    (".tbss", -2, SHT_NOBITS, SHF_ALLOC | SHF_WRITE | 0x400),
+    (".tdata", -2, SHT_PROGBITS, SHF_ALLOC | SHF_WRITE | 0x400),
+    (".zdebug_line", 0, SHT_PROGBITS, 0),
+    (".zdebug_info", 0, SHT_PROGBITS, 0),
+    (".zdebug_abbrev", 0, SHT_PROGBITS, 0),
+    (".zdebug_aranges", 0, SHT_PROGBITS, 0),
+];
+
 impl SectionDef {
-    /// A section BFD knows by name (`elf.c`'s special sections, `elf32-spu.c`'s `._ea`
-    /// and `.toe`): its type and flags, if `name` is one.
+    /// A section BFD knows by name (`_bfd_elf_get_special_section`, the first entry of
+    /// `SPECIAL_SECTIONS` that matches): its type and flags, if `name` is one.
     pub(super) fn special(name: &str) -> Option<SectionDef> {
-        let def = SectionDef::named(name);
-        let has = |p: &str| name == p || name.starts_with(&format!("{p}."));
-        let known = [
-            ".text",
-            ".init",
-            ".fini",
-            ".bss",
-            ".tbss",
-            ".data",
-            ".tdata",
-            ".rodata",
-            ".note",
-            ".init_array",
-            ".fini_array",
-            ".preinit_array",
-            "._ea",
-            ".toe",
-            ".comment",
-        ]
-        .iter()
-        .any(|p| has(p))
-            || name.starts_with(".debug");
-        known.then_some(def)
+        let (_, _, ty, flags) = SPECIAL_SECTIONS.iter().find(|(prefix, suffix, _, _)| {
+            let Some(rest) = name.strip_prefix(prefix) else {
+                return false;
+            };
+            match suffix {
+                0 => rest.is_empty(),
+                -2 => rest.is_empty() || rest.starts_with('.'),
+                _ => true,
+            }
+        })?;
+        Some(SectionDef {
+            name: name.to_string(),
+            ty: *ty,
+            flags: *flags,
+            // BFD gives the array sections their entries' size.
+            entsize: if matches!(ty, 14..=16) { 4 } else { 0 },
+        })
     }
 
-    /// GNU as's defaults for a section named without flags (`obj-elf.c` special sections).
+    /// GNU as's defaults for a section named without flags: a special section's, else
+    /// data of no attributes.
     pub(super) fn named(name: &str) -> SectionDef {
-        let has = |p: &str| name == p || name.starts_with(&format!("{p}."));
-        let array = [
-            (".init_array", 14),
-            (".fini_array", 15),
-            (".preinit_array", 16),
-        ];
-        if let Some((_, ty)) = array.iter().find(|(p, _)| has(p)) {
-            return SectionDef {
-                name: name.to_string(),
-                ty: *ty,
-                flags: SHF_ALLOC | SHF_WRITE,
-                entsize: 4,
-            };
-        }
-        let (ty, flags) = if name == ".toe" {
-            (SHT_NOBITS, SHF_ALLOC)
-        } else if has(".tbss") {
-            (SHT_NOBITS, SHF_ALLOC | SHF_WRITE | 0x400)
-        } else if has(".tdata") {
-            (SHT_PROGBITS, SHF_ALLOC | SHF_WRITE | 0x400)
-        } else if has(".note") {
-            (7, 0)
-        } else if name == "._ea" {
-            (SHT_PROGBITS, SHF_WRITE)
-        } else if has(".text") || has(".init") || has(".fini") {
-            (SHT_PROGBITS, SHF_ALLOC | SHF_EXECINSTR)
-        } else if has(".bss") {
-            (SHT_NOBITS, SHF_ALLOC | SHF_WRITE)
-        } else if has(".data") {
-            (SHT_PROGBITS, SHF_ALLOC | SHF_WRITE)
-        } else if has(".rodata") {
-            (SHT_PROGBITS, SHF_ALLOC)
-        } else {
-            (SHT_PROGBITS, 0)
-        };
-        SectionDef {
+        SectionDef::special(name).unwrap_or(SectionDef {
             name: name.to_string(),
-            ty,
-            flags,
+            ty: SHT_PROGBITS,
+            flags: 0,
             entsize: 0,
-        }
+        })
     }
 }
 
@@ -106,14 +111,18 @@ impl Assembler<'_> {
         }
     }
 
-    /// `.section NAME[, "FLAGS"[, @TYPE[, ENTSIZE]]]` (also `%type`), or `NAME, SUBSECTION`.
+    /// `.section NAME[, "FLAGS"[, @TYPE[, ENTSIZE]]]` (also `%type` and a quoted type),
+    /// or `NAME, SUBSECTION`; `.pushsection NAME, SUBSECTION, "FLAGS", ...` (`push`).
+    /// The checks of obj-elf.c's `obj_elf_change_section` on a special section's type
+    /// and attributes, and on a section named again with others.
     pub(super) fn section_args(
         &mut self,
         args: &str,
         line: &Line,
         col: usize,
+        push: bool,
     ) -> Option<(SectionDef, i64)> {
-        let parts = split_top(args, ',');
+        let mut parts = split_top(args, ',');
         let name = parts[0].trim().trim_matches('"').to_string();
         if name.is_empty() {
             self.diag(Severity::Error, line, col, "missing name");
@@ -121,12 +130,25 @@ impl Assembler<'_> {
         }
         let mut def = SectionDef::named(&name);
         let mut sub = 0;
+        // obj_elf_section: `.pushsection` takes a subsection right after the name.
+        if push && parts.len() > 1 && parts[1].trim().starts_with(|c: char| c.is_ascii_digit()) {
+            sub = self.subsection(&parts[1], line, col);
+            parts.remove(1);
+        }
+        // Whether gas made the section before this directive (`old_sec`), known in the
+        // final walk only; errors that depend on it are given there.
+        let fresh = self.first_in_walk(&name);
+        let old = self.pass == 2 && !fresh;
+        let special = SectionDef::special(&name);
+        let mut attr = 0u64;
         if let Some(flags) = parts.get(1).map(|f| f.trim()) {
             if let Some(letters) = flags.strip_prefix('"').and_then(|f| f.strip_suffix('"')) {
                 let mut f = 0;
+                let mut mbind = false;
                 // obj-elf.c's compatibility spellings: "am" is "aM", "ams" is "aMS".
                 let letters = letters.replacen("ams", "aMS", 1).replacen("am", "aM", 1);
-                for c in letters.chars() {
+                let mut chars = letters.char_indices().peekable();
+                while let Some((at, c)) = chars.next() {
                     match c {
                         'e' => f |= 0x8000_0000,
                         'a' => f |= SHF_ALLOC,
@@ -137,7 +159,27 @@ impl Assembler<'_> {
                         'G' => f |= 0x200,
                         'T' => f |= 0x400,
                         'o' => f |= 0x80,
-                        'R' | 'd' | '?' => {}
+                        'd' => mbind = true,
+                        'R' | '?' => {}
+                        '0'..='9' => {
+                            // A number among the letters (strtoul, base 0) adds its bits.
+                            let rest = &letters[at..];
+                            let (digits, radix) =
+                                match rest.strip_prefix("0x").or(rest.strip_prefix("0X")) {
+                                    Some(hex) => (hex, 16),
+                                    None if rest.starts_with('0') => (rest, 8),
+                                    None => (rest, 10),
+                                };
+                            let len = digits
+                                .find(|c: char| !c.is_digit(radix))
+                                .unwrap_or(digits.len());
+                            f |= u64::from_str_radix(&digits[..len], radix).unwrap_or(0)
+                                & 0xffff_ffff;
+                            let end = at + (rest.len() - digits.len()) + len;
+                            while chars.peek().is_some_and(|(i, _)| *i < end) {
+                                chars.next();
+                            }
+                        }
                         other => {
                             self.diag(
                                 Severity::Error,
@@ -148,6 +190,15 @@ impl Assembler<'_> {
                             return None;
                         }
                     }
+                }
+                if mbind && f & SHF_ALLOC == 0 {
+                    self.diag(
+                        Severity::Error,
+                        line,
+                        col,
+                        format!("SHF_ALLOC isn't set for GNU_MBIND section: {name}"),
+                    );
+                    return None;
                 }
                 if f & 0x10 != 0 && parts.len() < 4 {
                     f &= !0x10; // obj-elf.c drops SHF_MERGE without an entity size
@@ -167,22 +218,30 @@ impl Assembler<'_> {
                         "group name for SHF_GROUP not specified",
                     );
                 }
+                attr = f;
                 // A special section named with attributes it lacks takes them as given,
-                // with a warning; otherwise it keeps its own as well (obj-elf.c).
-                let known = self.first_in_walk(&name);
-                let special = SectionDef::special(&name);
-                match special {
-                    Some(sp) if f & !sp.flags & 0xfff != 0 => {
+                // with a warning (none in a group); a .note may be allocated or code,
+                // and `.rodata.str1.1` and the like may merge strings; otherwise it
+                // keeps its own as well (obj-elf.c).
+                const LINK_ORDER_OS_PROC: u64 = 0x80 | 0x0ff0_0000 | 0xf000_0000;
+                match &special {
+                    Some(sp) if !old && f & !LINK_ORDER_OS_PROC & !sp.flags != 0 => {
+                        let extra = f & !LINK_ORDER_OS_PROC & !sp.flags;
                         let note_alloc = sp.ty == 7 && (f == SHF_ALLOC || f == SHF_EXECINSTR);
-                        if known && !note_alloc {
-                            self.diag(
-                                Severity::Warning,
-                                line,
-                                col,
-                                format!("setting incorrect section attributes for {name}"),
-                            );
+                        let merge = name[1..].contains('.') && extra & !0x30 == 0;
+                        if note_alloc || merge {
+                            def.flags = f | sp.flags;
+                        } else {
+                            if fresh && f & 0x200 == 0 {
+                                self.diag(
+                                    Severity::Warning,
+                                    line,
+                                    col,
+                                    format!("setting incorrect section attributes for {name}"),
+                                );
+                            }
+                            def.flags = f;
                         }
-                        def.flags = f;
                     }
                     Some(sp) => def.flags = f | sp.flags,
                     None => def.flags = f,
@@ -192,8 +251,9 @@ impl Assembler<'_> {
                 sub = self.subsection(flags, line, col);
             }
         }
+        let mut ty_given = None;
         if let Some(ty) = parts.get(2).map(|t| t.trim()) {
-            match ty.trim_start_matches(['@', '%']) {
+            match ty.trim_matches('"').trim_start_matches(['@', '%']) {
                 "progbits" => def.ty = SHT_PROGBITS,
                 "nobits" => def.ty = SHT_NOBITS,
                 "note" => def.ty = 7,
@@ -211,21 +271,75 @@ impl Assembler<'_> {
                     return None;
                 }
             }
+            ty_given = Some(def.ty);
+        }
+        if let (Some(sp), Some(ty)) = (&special, ty_given) {
+            if ty != sp.ty {
+                let array = matches!(sp.ty, 14..=16);
+                if !old && !array {
+                    if sp.ty != 7 {
+                        self.diag(
+                            Severity::Warning,
+                            line,
+                            col,
+                            format!("setting incorrect section type for {name}"),
+                        );
+                    }
+                } else {
+                    self.diag(
+                        Severity::Warning,
+                        line,
+                        col,
+                        format!("ignoring incorrect section type for {name}"),
+                    );
+                    ty_given = Some(sp.ty);
+                }
+            }
         }
         if let Some(e) = parts.get(3) {
             if def.flags & 0x10 != 0 {
                 def.entsize = self.eval(e.trim()).map(|v| v.0 as u64).unwrap_or(0);
             }
         }
+        if self.pass == 2 && !old && self.defined.contains(&name) {
+            // gas's section symbol is named as the section (obj-elf.c).
+            self.diag(
+                Severity::Error,
+                line,
+                col,
+                format!("section name '{name}' already defined as another symbol"),
+            );
+        }
         if let Some(existing) = self.defs.iter().find(|d| d.name == name).cloned() {
-            // Re-entering a section keeps what it was declared with.
-            if parts.len() > 1 && existing != def && !self.first_in_walk(&name) {
-                self.diag(
-                    Severity::Warning,
-                    line,
-                    col,
-                    format!("ignoring changed section attributes for {name}"),
-                );
+            // Re-entering a section keeps what it was declared with; a different type
+            // or different attributes are an error, a warning for a special section.
+            if old {
+                if ty_given.is_some_and(|t| t != existing.ty) {
+                    let m = format!("changed section type for {name}");
+                    match special {
+                        Some(_) => self.diag(Severity::Warning, line, col, format!("ignoring {m}")),
+                        None => self.diag(Severity::Error, line, col, m),
+                    }
+                }
+                // The BFD flags gas compares: alloc, load, read-only, code, exclude,
+                // merge, strings, TLS.
+                let bfd = |f: u64, ty: u32| {
+                    let alloc = f & SHF_ALLOC != 0;
+                    (
+                        alloc,
+                        alloc && ty != SHT_NOBITS,
+                        f & SHF_WRITE == 0,
+                        f & (SHF_EXECINSTR | 0x8000_0000 | 0x10 | 0x20 | 0x400),
+                    )
+                };
+                let ty = ty_given.or(special.as_ref().map(|s| s.ty)).unwrap_or(0);
+                if attr != 0 && bfd(attr, ty) != bfd(existing.flags, existing.ty) {
+                    let m = format!("changed section attributes for {name}");
+                    match special {
+                        Some(_) => self.diag(Severity::Warning, line, col, format!("ignoring {m}")),
+                        None => self.diag(Severity::Error, line, col, m),
+                    }
+                }
             }
             def = existing;
         }
@@ -323,6 +437,9 @@ impl Assembler<'_> {
                     return;
                 }
             }
+            if self.object && self.pass == 2 {
+                self.common_conflicts(&name, line, col);
+            }
             if self.object {
                 if matches!(self.symbols.get(&name), Some(SymVal::Label(..))) {
                     self.diag(
@@ -395,7 +512,8 @@ impl Assembler<'_> {
                 self.switch_to(c);
             }
             ".section" | ".pushsection" => {
-                let Some((def, sub)) = self.section_args(args, line, col) else {
+                let Some((def, sub)) = self.section_args(args, line, col, d == ".pushsection")
+                else {
                     return true;
                 };
                 if d == ".pushsection" {
@@ -421,6 +539,14 @@ impl Assembler<'_> {
                 std::mem::swap(&mut self.sect, &mut self.prev_sect);
             }
             ".lcomm" | ".comm" => self.common(d, args, line, col),
+            ".tls_common" => {
+                // obj-elf.c obj_elf_tls_common: `.comm` of a thread-local object.
+                self.common(".comm", args, line, col);
+                let name = split_top(args, ',')[0].trim().to_string();
+                if matches!(self.symbols.get(&name), Some(SymVal::Common(..))) {
+                    self.attrs.entry(name).or_default().kind = 6;
+                }
+            }
             ".symver" => {
                 // obj-elf.c obj_elf_symver: `NAME, ALIAS@VERSION` (or `@@`, `@@@`), then
                 // an optional visibility for the alias.
@@ -450,6 +576,14 @@ impl Assembler<'_> {
                         format!("unknown visibility `{vis}' for .symver (local, hidden or remove)"),
                     );
                 } else if self.pass == 2 {
+                    if matches!(self.symbols.get(name), Some(SymVal::Common(..))) {
+                        self.diag(
+                            Severity::Error,
+                            line,
+                            col,
+                            format!("`{alias}' can't be versioned to common symbol '{name}'"),
+                        );
+                    }
                     self.symvers
                         .push((name.to_string(), alias.to_string(), vis.to_string()));
                 }
@@ -458,6 +592,16 @@ impl Assembler<'_> {
                 for n in split_top(args, ',') {
                     let n = n.trim();
                     if n.is_empty() {
+                        continue;
+                    }
+                    if matches!(d, ".global" | ".globl") && self.defs.iter().any(|s| s.name == n) {
+                        // symbols.c S_SET_EXTERNAL: the name is the section's own symbol.
+                        self.diag(
+                            Severity::Warning,
+                            line,
+                            col,
+                            "can't make section symbol global",
+                        );
                         continue;
                     }
                     self.note_symbol(n);
@@ -480,13 +624,16 @@ impl Assembler<'_> {
                         .trim_start_matches(['@', '%', '#'])
                         .to_ascii_lowercase()
                 });
-                let kind = match kind.as_deref() {
-                    Some("function" | "stt_func") => 2,
-                    Some("object" | "stt_object") => 1,
-                    Some("notype" | "stt_notype") => 0,
-                    Some("tls_object" | "stt_tls") => 6,
+                // BFD's flags for each type: function, object, indirect, thread-local.
+                let (f, o, i, t) = (1u8, 2u8, 4u8, 8u8);
+                let bits = match kind.as_deref() {
+                    Some("function" | "stt_func" | "2") => f,
+                    Some("object" | "stt_object" | "1") => o,
+                    Some("notype" | "stt_notype" | "0") => 0,
+                    Some("tls_object" | "stt_tls" | "6") => o | t,
+                    Some("gnu_indirect_function" | "stt_gnu_ifunc" | "10") => f | i,
                     // obj-elf.c: a common-typed symbol is a global object.
-                    Some("common" | "stt_common") => {
+                    Some("common" | "stt_common" | "5") => {
                         self.note_symbol(&name);
                         let a = self.attrs.entry(name).or_default();
                         a.kind = 1;
@@ -507,7 +654,39 @@ impl Assembler<'_> {
                     }
                 };
                 self.note_symbol(&name);
-                self.attrs.entry(name).or_default().kind = kind;
+                let pass = self.pass;
+                let a = self.attrs.entry(name.clone()).or_default();
+                // obj-elf.c obj_elf_type: a new type clears the flags of the others but
+                // keeps an indirect function's under `function` and thread-local under
+                // `object`; a change other than to notype warns.
+                let old = if a.type_pass == pass { a.type_bits } else { 0 };
+                let mut mask = f | o;
+                if bits != f {
+                    mask |= i;
+                }
+                if bits != o {
+                    mask |= t;
+                }
+                let new = (old & !mask) | bits;
+                let warn = bits != 0 && new != old | bits;
+                a.type_bits = new;
+                a.type_pass = pass;
+                a.gnu_osabi |= bits & i != 0;
+                a.kind = if new & t != 0 {
+                    6
+                } else if new & i != 0 {
+                    STT_GNU_IFUNC
+                } else if new & f != 0 {
+                    2
+                } else if new & o != 0 {
+                    1
+                } else {
+                    0
+                };
+                if warn {
+                    let m = format!("symbol '{name}' already has its type set");
+                    self.diag(Severity::Warning, line, col, m);
+                }
             }
             ".size" => {
                 let parts = split_top(args, ',');
@@ -523,8 +702,17 @@ impl Assembler<'_> {
                 let name = parts[0].trim().to_string();
                 self.note_symbol(&name);
                 match self.eval_val(parts[1..].join(",").trim()) {
+                    Ok((v, _, _)) if v.cross && self.object && self.pass == 2 => {
+                        // obj-elf.c elf_frob_symbol: a size across sections stays an
+                        // expression, which the object cannot hold.
+                        let m =
+                            format!(".size expression for {name} does not evaluate to a constant");
+                        self.diag(Severity::Error, line, col, m);
+                    }
                     Ok((v, _, _)) if !v.reloc || self.pass == 1 => {
-                        self.attrs.entry(name).or_default().size = Some(v.v)
+                        let a = self.attrs.entry(name).or_default();
+                        a.size = Some(v.v);
+                        a.size_copied = false;
                     }
                     Ok(_) => {} // a size that depends on an address: gas keeps an expression; we drop it
                     Err((c, m)) => self.diag(Severity::Error, line, col + c, m),
@@ -533,6 +721,41 @@ impl Assembler<'_> {
             _ => return false,
         }
         true
+    }
+
+    /// What gas refuses of a common symbol `name` (obj-elf.c `elf_frob_symbol`,
+    /// symbols.c `resolve_symbol_value`, write.c): being weak too, having an equate, or
+    /// a versioned name; checked at its `.comm` in the final walk, where the directives
+    /// before and after it are both known.
+    fn common_conflicts(&mut self, name: &str, line: &Line, col: usize) {
+        if self.attrs.get(name).is_some_and(|a| a.weak) {
+            let m = format!("symbol `{name}' can not be both weak and common");
+            self.diag(Severity::Error, line, col, m);
+        }
+        let equated = |m: &std::collections::HashMap<String, SymVal>| {
+            m.iter()
+                .filter(|(_, v)| {
+                    matches!(v, SymVal::Abs(v) if v.sym.as_ref().is_some_and(|s| &*s.0 == name))
+                })
+                .map(|(k, _)| k.clone())
+                .collect::<Vec<_>>()
+        };
+        let mut names = equated(&self.symbols);
+        names.extend(equated(&self.pass1_symbols));
+        names.sort();
+        names.dedup();
+        for e in names {
+            let m = format!("`{e}' can't be equated to common symbol `{name}'");
+            self.diag(Severity::Error, line, col, m);
+        }
+        let versioned: Vec<String> = (self.symvers.iter())
+            .filter(|v| v.0 == name)
+            .map(|v| v.1.clone())
+            .collect();
+        for alias in versioned {
+            let m = format!("`{alias}' can't be versioned to common symbol '{name}'");
+            self.diag(Severity::Error, line, col, m);
+        }
     }
 
     /// End of the final walk (obj-elf.c `elf_frob_symbol`): a symbol `.symver ...,

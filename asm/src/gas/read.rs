@@ -177,7 +177,12 @@ impl Assembler<'_> {
                 Some(p) => (rest[..p].to_string(), rest[p..].trim().to_string()),
                 None => (rest.clone(), String::new()),
             };
-            let lw = word.to_ascii_lowercase();
+            let mut lw = word.to_ascii_lowercase();
+            if lw == ".nop" {
+                // read.c s_nop assembles `nop` (on SPU that is the same s_nop again,
+                // pseudo-ops being read without their dot): one path for both spellings.
+                lw = "nop".into();
+            }
             let col = line.text.find(&word).map(|c| c + 1).unwrap_or(1);
             let before = (
                 self.sect,
@@ -692,7 +697,11 @@ impl Assembler<'_> {
             ".incbin" => self.incbin(args, line, col),
             ".popsection" | ".previous" if self.absolute.is_some() => {
                 self.absolute = None;
-                self.elf_directive(d, args, line, col);
+                // s_struct calls obj_elf_section_change_hook: the previous section is
+                // the one `.struct` was entered from, where `.previous` returns.
+                if d == ".popsection" {
+                    self.elf_directive(d, args, line, col);
+                }
             }
             // `.file "name"` alone is the ELF file symbol; anything else is `.file N`.
             ".file" if !args.trim_start().starts_with('"') => self.dwarf_file(args, line, col),
@@ -1151,6 +1160,7 @@ const DIRECTIVES: &[&str] = &[
     ".bss",
     ".byte",
     ".comm",
+    ".tls_common",
     ".data",
     ".dfloat",
     ".double",

@@ -68,6 +68,9 @@ impl Chain {
 /// `.type NAME, @function`: an ELF `STT_FUNC` symbol.
 pub(super) const STT_FUNC: u8 = 2;
 
+/// `.type NAME, %gnu_indirect_function`: an ELF `STT_GNU_IFUNC` symbol.
+pub(super) const STT_GNU_IFUNC: u8 = 10;
+
 /// Symbol attributes set by directives.
 #[derive(Clone, Debug, Default)]
 pub(super) struct SymAttrs {
@@ -78,6 +81,13 @@ pub(super) struct SymAttrs {
     /// STT_* from `.type` (1 object, 2 function).
     pub(super) kind: u8,
     pub(super) size: Option<i64>,
+    /// The size is an equated symbol's (a later equate replaces it, `.size` does not).
+    pub(super) size_copied: bool,
+    /// `.type`'s BFD flags (obj-elf.c `obj_elf_type`) and the walk that set them.
+    pub(super) type_bits: u8,
+    pub(super) type_pass: u8,
+    /// A `.type` that only GNU's ELF has (`%gnu_indirect_function`) was given.
+    pub(super) gnu_osabi: bool,
 }
 
 impl Env for Assembler<'_> {
@@ -296,6 +306,12 @@ impl Assembler<'_> {
             return;
         }
         let first = self.defined.insert(name.to_string());
+        let section = self.defs.iter().position(|d| d.name == name);
+        if self.pass == 2 && section.is_some_and(|d| self.chain.borrow().has_section(d)) {
+            // A section's symbol bears its name (obj-elf.c), so the label is a second one.
+            let m = format!("symbol `{name}' is already defined");
+            self.diag(Severity::Error, line, 1, m);
+        }
         if self.pass == 1 && (!first || matches!(self.symbols.get(name), Some(SymVal::Common(..))))
         {
             self.diag(
@@ -364,8 +380,9 @@ impl Assembler<'_> {
                         if a.kind == 0 {
                             a.kind = t.kind;
                         }
-                        if a.size.is_none() {
+                        if a.size.is_none() || a.size_copied {
                             a.size = t.size;
+                            a.size_copied = true;
                         }
                     }
                 }

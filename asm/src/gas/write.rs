@@ -469,6 +469,12 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
     let mut obj = Object {
         name: file_name.to_string(),
         included: asm.included.clone(),
+        // obj-elf.c `obj_elf_type`: an indirect function marks the object GNU's.
+        osabi: if asm.attrs.values().any(|a| a.gnu_osabi) {
+            3
+        } else {
+            0
+        },
         ..Default::default()
     };
     for (d, def) in asm.defs.iter().enumerate() {
@@ -637,7 +643,8 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
                     global: true,
                     weak: false,
                     visibility: attrs.visibility,
-                    kind: 1,
+                    // An object, or thread-local from `.tls_common`.
+                    kind: if attrs.kind == 6 { 6 } else { 1 },
                 });
                 continue;
             }
