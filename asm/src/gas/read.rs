@@ -1051,8 +1051,6 @@ impl Assembler<'_> {
                 col,
                 format!("{d} without a matching start"),
             ),
-            // read.c s_nop: `nop` without its dot, as the instruction reads it.
-            ".nop" => self.instruction("nop", args, line, col),
             ".err" => self.diag(Severity::Error, line, col, ".err encountered"),
             ".error" | ".warning" => {
                 // read.c s_errwarn: a string, or nothing for gas's own words.
