@@ -559,20 +559,7 @@
         fm      %rk\A\()_\B, %ra\B, $121
         fm      %gk\A\()_\B, %ga\A\()_\B, $122
         fm      %bk\A\()_\B, %ba\A\()_\B, $123
-        fma     %rs\A\()_\B, %rk\A\()_\B, $106, $126
-        cfltu   %ru\A\()_\B, %rs\A\()_\B, 24
-        fma     %gs\A\()_\B, %gk\A\()_\B, $106, $126
-        cfltu   %gu\A\()_\B, %gs\A\()_\B, 24
-        fma     %bs\A\()_\B, %bk\A\()_\B, $106, $126
-        cfltu   %bu\A\()_\B, %bs\A\()_\B, 24
-        shufb   %rg\A\()_\B, %ru\A\()_\B, %gu\A\()_\B, $88
-        shufb   %col\A\()_\B, %rg\A\()_\B, %bu\A\()_\B, $89
-        lqd     %o\A\()_\B, \A+\B($115) @after %ra\B
-        shufb   %o2\A\()_\B, %o\A\()_\B, %col\A\()_\B, %pat\A\()_\B
-      ~ stqd    %o2\A\()_\B, \A+\B($115)
-        shufb   %mn\A\()_\B, %m\A\()_\B, %none, %pat\A\()_\B
-      ~ stqd    %mn\A\()_\B, SH_MAT+\A+\B($66)
-        and     $86, $86, %mn\A\()_\B
+        SH_COLOUR_OUT \A\()_\B, \A+\B, %ra\B
         .endr
         .endr
 .Lsh_later_br:

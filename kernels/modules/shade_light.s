@@ -216,6 +216,26 @@
         # a grey irradiance: its run computes and adds one channel and stores it as all
         # three (the same bits: cs * l + 0 per channel), 4 even-pipe instructions a group
         # fewer; any other light takes the three channels.
+        # One group's colour from its scaled channels (%rk\g, %gk\g, %bk\g; \g the
+        # group's register suffix, \off its offset): converted, packed and written under
+        # its shader's pattern, its rays marked shaded; the frame buffer's load waits on
+        # \gate. The gather variant's runs and its later pass (shade_gather.s) share it.
+        .macro  SH_COLOUR_OUT g, off, gate
+        fma     %rs\g, %rk\g, $106, $126
+        cfltu   %ru\g, %rs\g, 24
+        fma     %gs\g, %gk\g, $106, $126
+        cfltu   %gu\g, %gs\g, 24
+        fma     %bs\g, %bk\g, $106, $126
+        cfltu   %bu\g, %bs\g, 24
+        shufb   %rg\g, %ru\g, %gu\g, $88
+        shufb   %col\g, %rg\g, %bu\g, $89
+        lqd     %o\g, \off($115) @after \gate
+        shufb   %o2\g, %o\g, %col\g, %pat\g
+      ~ stqd    %o2\g, \off($115)
+        shufb   %mn\g, %m\g, %none, %pat\g
+      ~ stqd    %mn\g, SH_MAT+\off($66)
+        and     $86, $86, %mn\g
+        .endm
         .macro  SH_LIGHT_RUN label, grey
         .sched  pool=67,69,76-82,84,90-105,107-114,116-120,127 scratch=66-127
 \label:
@@ -280,20 +300,7 @@
         fm      %gk\A\()_\B, %ga\A\()_\B, $122
         fm      %bk\A\()_\B, %ba\A\()_\B, $123
         .endif
-        fma     %rs\A\()_\B, %rk\A\()_\B, $106, $126
-        cfltu   %ru\A\()_\B, %rs\A\()_\B, 24
-        fma     %gs\A\()_\B, %gk\A\()_\B, $106, $126
-        cfltu   %gu\A\()_\B, %gs\A\()_\B, 24
-        fma     %bs\A\()_\B, %bk\A\()_\B, $106, $126
-        cfltu   %bu\A\()_\B, %bs\A\()_\B, 24
-        shufb   %rg\A\()_\B, %ru\A\()_\B, %gu\A\()_\B, $88
-        shufb   %col\A\()_\B, %rg\A\()_\B, %bu\A\()_\B, $89
-        lqd     %o\A\()_\B, \A+\B($115) @after %cs\B
-        shufb   %o2\A\()_\B, %o\A\()_\B, %col\A\()_\B, %pat\A\()_\B
-      ~ stqd    %o2\A\()_\B, \A+\B($115)
-        shufb   %mn\A\()_\B, %m\A\()_\B, %none, %pat\A\()_\B
-      ~ stqd    %mn\A\()_\B, SH_MAT+\A+\B($66)
-        and     $86, $86, %mn\A\()_\B
+        SH_COLOUR_OUT \A\()_\B, \A+\B, %cs\B
         .endr
         .endr
         .if     \grey
