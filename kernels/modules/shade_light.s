@@ -205,17 +205,6 @@
         .endsched
         .ifdef  EXT_GATHER                    # a later pass: from the stored sums
         brz     $84, .Lsh_later_g             # (modules/shade_gather.s)
-        # The gather variant's run: the same values as .Lsh_shade_g's below, all 16
-        # groups in one block (no loop: no pointer, counter or exit per 4 groups, and
-        # the groups' chains overlap across the whole run). A group's loads wait for the
-        # cosine of the group two before it (%cs\B: the groups of one parity share it),
-        # which keeps the odd pipe from loading ahead until the pool is full and the
-        # even pipe stalls. A group's two selects by its shader's rays are one pattern
-        # (selb) and two shufb (the odd pipe idles here: lighting is even-pipe bound).
-        # A grey light (r = g = b, bitwise) adding to no sums yet (the first light) gives
-        # a grey irradiance: its run computes and adds one channel and stores it as all
-        # three (the same bits: cs * l + 0 per channel), 4 even-pipe instructions a group
-        # fewer; any other light takes the three channels.
         # One group's colour from its scaled channels (%rk\g, %gk\g, %bk\g; \g the
         # group's register suffix, \off its offset): converted, packed and written under
         # its shader's pattern, its rays marked shaded; the frame buffer's load waits on
@@ -236,6 +225,17 @@
       ~ stqd    %mn\g, SH_MAT+\off($66)
         and     $86, $86, %mn\g
         .endm
+        # The gather variant's run: the same values as .Lsh_shade_g's below, all 16
+        # groups in one block (no loop: no pointer, counter or exit per 4 groups, and
+        # the groups' chains overlap across the whole run). A group's loads wait for the
+        # cosine of the group two before it (%cs\B: the groups of one parity share it),
+        # which keeps the odd pipe from loading ahead until the pool is full and the
+        # even pipe stalls. A group's two selects by its shader's rays are one pattern
+        # (selb) and two shufb (the odd pipe idles here: lighting is even-pipe bound).
+        # A grey light (r = g = b, bitwise) adding to no sums yet (the first light) gives
+        # a grey irradiance: its run computes and adds one channel and stores it as all
+        # three (the same bits: cs * l + 0 per channel), 4 even-pipe instructions a group
+        # fewer; any other light takes the three channels.
         .macro  SH_LIGHT_RUN label, grey
         .sched  pool=67,69,76-82,84,90-105,107-114,116-120,127 scratch=66-127
 \label:
