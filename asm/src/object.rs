@@ -18,6 +18,10 @@ pub const SHF_WRITE: u64 = 1;
 pub const SHF_ALLOC: u64 = 2;
 pub const SHF_EXECINSTR: u64 = 4;
 pub const SHF_TLS: u64 = 0x400;
+pub const SHF_GROUP: u64 = 0x200;
+/// A section group's type, and the flag word of a COMDAT group (one copy kept per link).
+pub const SHT_GROUP: u32 = 17;
+pub const GRP_COMDAT: u32 = 1;
 
 /// A relocation the assembler leaves for the linker (objects only), or applies itself
 /// (`.reloc` in an executable).
@@ -109,6 +113,16 @@ pub struct ObjSection {
     pub relocs: Vec<Reloc>,
 }
 
+/// A section group (`SHT_GROUP`): sections that stay or go together, named by a
+/// signature symbol; GNU ld keeps the first COMDAT group of a signature in a link.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Group {
+    pub signature: String,
+    pub comdat: bool,
+    /// Indices into `Object::sections` (their relocations belong to the group too).
+    pub members: Vec<usize>,
+}
+
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Object {
     /// Where it came from (for messages).
@@ -121,6 +135,8 @@ pub struct Object {
     /// The header's OS ABI (`e_ident[EI_OSABI]`): 0, or 3 (GNU) where the object uses a
     /// GNU extension of ELF (an `STT_GNU_IFUNC` symbol), as BFD marks it.
     pub osabi: u8,
+    /// Section groups, in the order gas makes them (first member's section order).
+    pub groups: Vec<Group>,
 }
 
 impl Object {
