@@ -580,6 +580,23 @@ impl Assembler<'_> {
                 self.note_section(self.chunks[c].0);
                 self.switch_to(c);
             }
+            ".attach_to_group" => {
+                let name = args.trim().trim_matches('"').to_string();
+                let d = self.chunks[self.sect].0;
+                if name.is_empty() {
+                    self.diag(Severity::Warning, line, col, "group name not parseable");
+                } else if let Some(group) = &self.defs[d].group {
+                    let m = format!(
+                        "section {} already has a group ({group})",
+                        self.defs[d].name
+                    );
+                    self.diag(Severity::Warning, line, col, m);
+                } else {
+                    self.attached.push((d, self.defs[d].flags));
+                    self.defs[d].group = Some(name);
+                    self.defs[d].flags |= 0x200;
+                }
+            }
             ".popsection" => match self.sect_stack.pop() {
                 Some((s, p)) => {
                     self.sect = s;

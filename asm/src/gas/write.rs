@@ -591,6 +591,19 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
         ".debug_str",
         ".debug_aranges",
     ] {
+        if debug == ".debug_ranges" {
+            // A section of a name another has (in a group) gets its symbol when the
+            // line table's fixups first name it.
+            for d in 0..asm.defs.len() {
+                let named = obj
+                    .sections
+                    .iter()
+                    .any(|s| s.relocs.iter().any(|r| r.target == RelocTarget::Section(d)));
+                if named && !links.contains(&Link::Section(d)) {
+                    links.push(Link::Section(d));
+                }
+            }
+        }
         if let Some(k) = obj.sections.iter().position(|s| s.name == debug) {
             if asm.defs.iter().all(|d| d.name != debug) {
                 links.push(Link::Section(k));
