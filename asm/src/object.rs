@@ -215,6 +215,34 @@ impl Object {
             .symbols(endian, data, elf::SHT_SYMTAB)
             .map_err(err)?;
         let strings = symtab.strings();
+        // Section groups: a flag word, then the members' ELF indices (relocation
+        // sections among them follow their sections).
+        for s in sections.iter() {
+            if s.sh_type(endian).0 != SHT_GROUP {
+                continue;
+            }
+            let words = s.data(endian, data).map_err(err)?;
+            if words.len() < 4 || words.len() % 4 != 0 {
+                return Err(format!("{name}: a section group of {} bytes", words.len()));
+            }
+            let word = |i: usize| u32::from_be_bytes(words[i..i + 4].try_into().unwrap_or([0; 4]));
+            let sym = s.sh_info(endian) as usize;
+            let signature = symtab
+                .symbol(object::SymbolIndex(sym))
+                .and_then(|sym| sym.name(endian, strings))
+                .map_err(|_| {
+                    format!("{name}: a section group's signature symbol {sym} is not there")
+                })?;
+            let members = (4..words.len())
+                .step_by(4)
+                .filter_map(|i| ours.get(word(i) as usize).copied().flatten())
+                .collect();
+            obj.groups.push(Group {
+                signature: String::from_utf8_lossy(signature).into_owned(),
+                comdat: word(0) & GRP_COMDAT != 0,
+                members,
+            });
+        }
         // ELF symbol index -> relocation target.
         let mut targets: Vec<RelocTarget> = Vec::with_capacity(symtab.len());
         for (i, sym) in symtab.symbols().iter().enumerate() {
