@@ -18,6 +18,7 @@ mod gas;
 mod lex;
 pub mod link;
 mod link_debug;
+mod link_groups;
 pub mod link_overlay;
 pub mod link_script;
 pub mod object;

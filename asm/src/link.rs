@@ -223,6 +223,13 @@ struct Definition {
 
 /// Links `objects`; errors name the object and symbol concerned.
 pub fn link(objects: &[Object], opts: &LinkOptions) -> Result<Linked, Vec<String>> {
+    let deduplicated;
+    let objects = if objects.iter().any(|o| o.groups.iter().any(|g| g.comdat)) {
+        deduplicated = crate::link_groups::discard_duplicate_groups(objects)?;
+        &deduplicated[..]
+    } else {
+        objects
+    };
     let reversed;
     let objects = if objects
         .iter()

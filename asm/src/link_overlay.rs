@@ -364,6 +364,7 @@ pub fn build(
         symbols,
         included: Vec::new(),
         osabi: 0,
+        groups: Vec::new(),
     });
     Ok(ov)
 }

@@ -18,6 +18,10 @@ pub const SHF_WRITE: u64 = 1;
 pub const SHF_ALLOC: u64 = 2;
 pub const SHF_EXECINSTR: u64 = 4;
 pub const SHF_TLS: u64 = 0x400;
+pub const SHF_GROUP: u64 = 0x200;
+/// A section group's type, and the flag word of a COMDAT group (one copy kept per link).
+pub const SHT_GROUP: u32 = 17;
+pub const GRP_COMDAT: u32 = 1;
 
 /// A relocation the assembler leaves for the linker (objects only), or applies itself
 /// (`.reloc` in an executable).
@@ -109,6 +113,16 @@ pub struct ObjSection {
     pub relocs: Vec<Reloc>,
 }
 
+/// A section group (`SHT_GROUP`): sections that stay or go together, named by a
+/// signature symbol; GNU ld keeps the first COMDAT group of a signature in a link.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Group {
+    pub signature: String,
+    pub comdat: bool,
+    /// Indices into `Object::sections` (their relocations belong to the group too).
+    pub members: Vec<usize>,
+}
+
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Object {
     /// Where it came from (for messages).
@@ -121,6 +135,8 @@ pub struct Object {
     /// The header's OS ABI (`e_ident[EI_OSABI]`): 0, or 3 (GNU) where the object uses a
     /// GNU extension of ELF (an `STT_GNU_IFUNC` symbol), as BFD marks it.
     pub osabi: u8,
+    /// Section groups, in the order gas makes them (first member's section order).
+    pub groups: Vec<Group>,
 }
 
 impl Object {
@@ -199,6 +215,34 @@ impl Object {
             .symbols(endian, data, elf::SHT_SYMTAB)
             .map_err(err)?;
         let strings = symtab.strings();
+        // Section groups: a flag word, then the members' ELF indices (relocation
+        // sections among them follow their sections).
+        for s in sections.iter() {
+            if s.sh_type(endian).0 != SHT_GROUP {
+                continue;
+            }
+            let words = s.data(endian, data).map_err(err)?;
+            if words.len() < 4 || words.len() % 4 != 0 {
+                return Err(format!("{name}: a section group of {} bytes", words.len()));
+            }
+            let word = |i: usize| u32::from_be_bytes(words[i..i + 4].try_into().unwrap_or([0; 4]));
+            let sym = s.sh_info(endian) as usize;
+            let signature = symtab
+                .symbol(object::SymbolIndex(sym))
+                .and_then(|sym| sym.name(endian, strings))
+                .map_err(|_| {
+                    format!("{name}: a section group's signature symbol {sym} is not there")
+                })?;
+            let members = (4..words.len())
+                .step_by(4)
+                .filter_map(|i| ours.get(word(i) as usize).copied().flatten())
+                .collect();
+            obj.groups.push(Group {
+                signature: String::from_utf8_lossy(signature).into_owned(),
+                comdat: word(0) & GRP_COMDAT != 0,
+                members,
+            });
+        }
         // ELF symbol index -> relocation target.
         let mut targets: Vec<RelocTarget> = Vec::with_capacity(symtab.len());
         for (i, sym) in symtab.symbols().iter().enumerate() {

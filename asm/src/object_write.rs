@@ -5,9 +5,13 @@
 //! headers; string tables in first-use order with names that end another name stored
 //! only inside it. The symbol table is the object's own order (gas's symbol chain, locals
 //! first); a section without a section symbol gets one after the locals, as BFD's
-//! `elf_map_symbols` adds them.
+//! `elf_map_symbols` adds them. Section groups' `SHT_GROUP` sections come first (BFD's
+//! `assign_section_numbers` numbers them before the rest), each with a section symbol
+//! after the others' and a local signature symbol where the source named none.
 
-use crate::object::{Object, RelocTarget, SymSection, SHT_NOBITS};
+use crate::object::{
+    Object, RelocTarget, SymSection, GRP_COMDAT, SHF_GROUP, SHT_GROUP, SHT_NOBITS,
+};
 
 const SHT_SYMTAB: u32 = 2;
 const SHT_STRTAB: u32 = 3;
@@ -99,6 +103,23 @@ fn align_to(n: u64, a: u64) -> u64 {
 pub(crate) fn write(obj: &Object) -> Result<Vec<u8>, String> {
     // Section header indices: each content section, then its relocations'.
     let mut headers = vec![Header::default()];
+    for g in &obj.groups {
+        headers.push(Header {
+            name: b".group".to_vec(),
+            ty: SHT_GROUP,
+            align: 4,
+            entsize: 4,
+            ..Default::default()
+        });
+        for &m in &g.members {
+            if m >= obj.sections.len() {
+                return Err(format!(
+                    "group `{}' names section {m}, which is not there",
+                    g.signature
+                ));
+            }
+        }
+    }
     let mut index = Vec::new();
     let mut rela_of = Vec::new();
     for s in &obj.sections {
@@ -119,7 +140,7 @@ pub(crate) fn write(obj: &Object) -> Result<Vec<u8>, String> {
             headers.push(Header {
                 name: format!(".rela{}", s.name).into_bytes(),
                 ty: SHT_RELA,
-                flags: SHF_INFO_LINK,
+                flags: SHF_INFO_LINK | (s.flags & SHF_GROUP),
                 size: 12 * s.relocs.len() as u64,
                 info: headers.len() as u32 - 1,
                 align: 4,
@@ -138,16 +159,33 @@ pub(crate) fn write(obj: &Object) -> Result<Vec<u8>, String> {
             .any(|s| s.kind == STT_SECTION && s.section == SymSection::Section(k))
     };
     // (symbol, or the section whose symbol it is)
+    // (symbol, or the section whose symbol it is; sections past the object's are
+    // groups, and a group's signature where the object has no symbol of that name)
     let mut order: Vec<(Option<usize>, usize)> = Vec::new();
     for (i, s) in obj.symbols.iter().enumerate() {
         if !s.global {
             order.push((Some(i), 0));
         }
     }
-    for k in 0..obj.sections.len() {
+    let n_sections = obj.sections.len();
+    let n_groups = obj.groups.len();
+    let named = |n: &str| {
+        obj.symbols
+            .iter()
+            .any(|s| s.kind != STT_SECTION && s.name == n)
+    };
+    for (g, group) in obj.groups.iter().enumerate() {
+        if !named(&group.signature) {
+            order.push((None, n_sections + n_groups + g));
+        }
+    }
+    for k in 0..n_sections {
         if !has_section_symbol(k) {
             order.push((None, k));
         }
+    }
+    for g in 0..n_groups {
+        order.push((None, n_sections + g));
     }
     let num_local = order.len() + 1;
     for (i, s) in obj.symbols.iter().enumerate() {
@@ -156,11 +194,15 @@ pub(crate) fn write(obj: &Object) -> Result<Vec<u8>, String> {
         }
     }
     let mut strings = StringTable::default();
-    for (i, _) in &order {
-        if let Some(i) = i {
-            if obj.symbols[*i].kind != STT_SECTION {
+    for (i, k) in &order {
+        match i {
+            Some(i) if obj.symbols[*i].kind != STT_SECTION => {
                 strings.add(obj.symbols[*i].name.as_bytes());
             }
+            None if *k >= n_sections + n_groups => {
+                strings.add(obj.groups[k - n_sections - n_groups].signature.as_bytes());
+            }
+            _ => {}
         }
     }
     let (str_bytes, str_at) = strings.finish();
@@ -182,13 +224,29 @@ pub(crate) fn write(obj: &Object) -> Result<Vec<u8>, String> {
                     by_name.entry(s.name.as_str()).or_insert(n as u32 + 1);
                 }
             }
-            None => section_symbol[*k] = n as u32 + 1,
+            None if *k < n_sections => section_symbol[*k] = n as u32 + 1,
+            None if *k >= n_sections + n_groups => {
+                let g = &obj.groups[k - n_sections - n_groups];
+                by_name.entry(g.signature.as_str()).or_insert(n as u32 + 1);
+            }
+            None => {}
         }
     }
     let mut sym_bytes = vec![0u8; 16];
     for (i, k) in &order {
         let (name, value, size, info, other, shndx) = match i {
-            None => (0, 0, 0, STT_SECTION, 0, index[*k] as u16),
+            None if *k < n_sections => (0, 0, 0, STT_SECTION, 0, index[*k] as u16),
+            None if *k < n_sections + n_groups => {
+                (0, 0, 0, STT_SECTION, 0, (k - n_sections + 1) as u16)
+            }
+            None => {
+                let g = k - n_sections - n_groups;
+                let name = str_at
+                    .get(obj.groups[g].signature.as_bytes())
+                    .copied()
+                    .unwrap_or(0);
+                (name, 0, 0, 0, 0, (g + 1) as u16)
+            }
             Some(i) => {
                 let s = &obj.symbols[*i];
                 let bind = if s.weak {
@@ -254,12 +312,29 @@ pub(crate) fn write(obj: &Object) -> Result<Vec<u8>, String> {
     for n in [&b".symtab"[..], b".strtab", b".shstrtab"] {
         names.add(n);
     }
-    for h in &headers[1..symtab] {
+    // The group sections' names last: they are last in BFD's list of sections.
+    for h in headers[1 + n_groups..symtab]
+        .iter()
+        .chain(&headers[1..1 + n_groups])
+    {
         names.add(&h.name);
     }
     let (name_bytes, name_at) = names.finish();
     headers[shstrtab].size = name_bytes.len() as u64;
     // The relocations' bytes, per section.
+    for (g, group) in obj.groups.iter().enumerate() {
+        let signature = by_name.get(group.signature.as_str()).copied().unwrap_or(0);
+        let h = &mut headers[g + 1];
+        h.link = symtab as u32;
+        h.info = signature;
+        h.size = 4
+            * (1 + group.members.len() as u64
+                + group
+                    .members
+                    .iter()
+                    .filter(|&&m| rela_of[m].is_some())
+                    .count() as u64);
+    }
     let mut rela_bytes = Vec::new();
     for s in &obj.sections {
         let mut b = Vec::new();
@@ -332,6 +407,17 @@ pub(crate) fn write(obj: &Object) -> Result<Vec<u8>, String> {
         if let Some(r) = rela_of[k] {
             place(&mut out, &headers[r], &rela_bytes[k]);
         }
+    }
+    for (g, group) in obj.groups.iter().enumerate() {
+        let mut b = Vec::new();
+        b.extend_from_slice(&(if group.comdat { GRP_COMDAT } else { 0 }).to_be_bytes());
+        for &m in &group.members {
+            b.extend_from_slice(&(index[m] as u32).to_be_bytes());
+            if let Some(r) = rela_of[m] {
+                b.extend_from_slice(&(r as u32).to_be_bytes());
+            }
+        }
+        place(&mut out, &headers[g + 1], &b);
     }
     place(&mut out, &headers[symtab], &sym_bytes);
     place(&mut out, &headers[strtab], &str_bytes);

@@ -277,3 +277,125 @@ fn tls_common_is_a_thread_local_common_symbol() {
         (spu_asm::object::SymSection::Common, 4, 30, 6, true)
     );
 }
+
+/// Section header `k` of an ELF32 big-endian object: (name offset aside) type, flags,
+/// offset, size, link, info, align, entsize.
+fn header(elf: &[u8], k: usize) -> [u32; 8] {
+    let word = |at: usize| u32::from_be_bytes(elf[at..at + 4].try_into().unwrap());
+    let at = word(32) as usize + 40 * k;
+    [4, 8, 16, 20, 24, 28, 32, 36].map(|f| word(at + f))
+}
+
+/// Symbol `n`: (value, info, shndx).
+fn symbol(elf: &[u8], symtab: usize, n: usize) -> (u32, u8, u16) {
+    let h = header(elf, symtab);
+    let at = h[2] as usize + 16 * n;
+    let shndx = u16::from_be_bytes([elf[at + 14], elf[at + 15]]);
+    (
+        u32::from_be_bytes(elf[at + 4..at + 8].try_into().unwrap()),
+        elf[at + 12],
+        shndx,
+    )
+}
+
+const GROUPS: &str = concat!(
+    "\t.text\n\tnop\n",
+    "\t.section .text.foo,\"axG\",@progbits,foo,comdat\n",
+    "\t.globl foo\nfoo:\tnop\n",
+    "\t.section .data,\"awG\",@progbits,foo,comdat\n\t.word foo\n",
+    "\t.section .text.bar,\"axG\",@progbits,bar\n\tnop\n",
+);
+
+#[test]
+fn section_groups_as_spu_elf_as_writes_them() {
+    // spu-elf-as 2.40 on these lines: `spu-elf-readelf -SgsW` shows the two `.group`
+    // sections first, a second `.data` in group foo, and `bar` a local signature symbol
+    // in its own group section; the file is 888 bytes.
+    let elf = object(GROUPS).to_elf().unwrap();
+    assert_eq!(elf.len(), 888);
+    let word = |at: usize| u32::from_be_bytes(elf[at..at + 4].try_into().unwrap());
+    // type, flags, offset, size, link, info, align, entsize
+    assert_eq!(header(&elf, 1), [17, 0, 0x34, 0x10, 10, 10, 4, 4]);
+    assert_eq!(header(&elf, 2), [17, 0, 0x44, 8, 10, 6, 4, 4]);
+    assert_eq!(
+        [word(0x34), word(0x38), word(0x3c), word(0x40)],
+        [1, 6, 7, 8]
+    );
+    assert_eq!([word(0x44), word(0x48)], [0, 9]);
+    assert_eq!(header(&elf, 4)[..2], [1, 3]); // the first .data, in no group
+    assert_eq!(header(&elf, 6), [1, 0x206, 0x50, 4, 0, 0, 1, 0]);
+    assert_eq!(header(&elf, 7), [1, 0x203, 0x54, 4, 0, 0, 1, 0]);
+    assert_eq!(header(&elf, 8), [4, 0x240, 0x118, 12, 10, 7, 4, 12]);
+    assert_eq!(header(&elf, 9), [1, 0x206, 0x58, 4, 0, 0, 1, 0]);
+    assert_eq!(header(&elf, 10), [2, 0, 0x5c, 0xb0, 11, 10, 4, 16]);
+    // bar (local, in group 2), the grouped .data's and the groups' section symbols,
+    // then foo (global, in .text.foo).
+    assert_eq!(symbol(&elf, 10, 6), (0, 0x00, 2));
+    assert_eq!(symbol(&elf, 10, 7), (0, 0x03, 7));
+    assert_eq!(symbol(&elf, 10, 8), (0, 0x03, 1));
+    assert_eq!(symbol(&elf, 10, 9), (0, 0x03, 2));
+    assert_eq!(symbol(&elf, 10, 10), (0, 0x10, 6));
+    // Read back: the groups name their content sections.
+    let back = Object::from_elf("g.o", &elf).unwrap();
+    let groups: Vec<_> = (back.groups.iter())
+        .map(|g| (g.signature.as_str(), g.comdat, g.members.clone()))
+        .collect();
+    assert_eq!(groups, [("foo", true, vec![3, 4]), ("bar", false, vec![5])]);
+}
+
+#[test]
+fn attach_to_group_and_the_clone_flag() {
+    // gas's attach-2.s: `bar` joins foo.group, so naming `bar` again makes a second,
+    // ungrouped one; `?` takes the current section's group.
+    let src = concat!(
+        "\t.section bar\n\tnop\n\t.attach_to_group foo.group\n",
+        "\t.section foo, \"G\", %note , foo.group\n\t.word 0\n",
+        "\t.section bar\n\tnop\n",
+        "\t.section foo, \"G\", %note , foo.group\n",
+        "\t.section baz, \"a?\"\n\t.word 1\n",
+    );
+    let obj = object(src);
+    let names: Vec<_> = (obj.sections.iter())
+        .map(|s| (s.name.as_str(), s.flags))
+        .collect();
+    assert_eq!(
+        &names[3..],
+        [("bar", 0x200), ("foo", 0x200), ("bar", 0), ("baz", 0x202)]
+    );
+    assert_eq!(obj.groups.len(), 1);
+    assert_eq!(obj.groups[0].members, [3, 4, 6]);
+    assert_eq!(
+        messages("\t.section x,\"G\",%progbits,g\n\t.attach_to_group h\n"),
+        ["2: warning: section x already has a group (g)"]
+    );
+}
+
+#[test]
+fn spu_ld_keeps_the_first_comdat_group_of_a_signature() {
+    // Two objects with COMDAT group `f` each defining `f`: the second copy is
+    // discarded and its caller's branch reaches the first (GNU ld's rule).
+    let one = concat!(
+        "\t.text\n\t.globl _start\n_start:\tbrsl $0, f\n\tstop\n",
+        "\t.section .text.f,\"axG\",@progbits,f,comdat\n\t.globl f\nf:\til $3, 1\n\tbi $0\n",
+    );
+    let two = concat!(
+        "\t.text\n\t.globl g\ng:\tbrsl $0, f\n",
+        "\t.section .text.f,\"axG\",@progbits,f,comdat\n\t.globl f\nf:\til $3, 2\n\tbi $0\n",
+    );
+    let objects = [object(one), object(two)];
+    let objects: Vec<Object> = (objects.iter())
+        .map(|o| Object::from_elf("x.o", &o.to_elf().unwrap()).unwrap())
+        .collect();
+    let linked = spu_asm::link::link(&objects, &Default::default()).unwrap();
+    let at = |n: &str| linked.symbols.iter().find(|s| s.0 == n).unwrap().1;
+    let f = at("f") as usize;
+    // il $3, 1 (0x40800083), then bi $0; the second copy's il $3, 2 is nowhere.
+    assert_eq!(linked.image[f..f + 4], [0x40, 0x80, 0x00, 0x83]);
+    let second = [0x40, 0x80, 0x01, 0x03];
+    assert!(!linked.image.windows(4).any(|w| w == second));
+    // g's brsl reaches the kept f.
+    let g = at("g") as usize;
+    let word = u32::from_be_bytes(linked.image[g..g + 4].try_into().unwrap());
+    let offset = ((word >> 7) & 0xffff) as i16 as i32 * 4;
+    assert_eq!(g as i32 + offset, f as i32);
+}

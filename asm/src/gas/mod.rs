@@ -93,6 +93,9 @@ struct Assembler<'o> {
     prev_sect: Sect,
     sect_stack: Vec<(Sect, Sect)>,
     defs: Vec<SectionDef>,
+    /// Sections `.attach_to_group` put in a group, with the flags they had before: each
+    /// walk starts from those, so both walks meet the same sections.
+    attached: Vec<(usize, u64)>,
     /// Each chunk's section definition and subsection number.
     chunks: Vec<(usize, i64)>,
     /// Writing a relocatable object: addresses are section offsets and references that
@@ -206,6 +209,7 @@ impl<'o> Assembler<'o> {
             prev_sect: 0,
             sect_stack: Vec::new(),
             defs: Vec::new(),
+            attached: Vec::new(),
             chunks: Vec::new(),
             object,
             relocs: Vec::new(),
@@ -262,6 +266,9 @@ impl<'o> Assembler<'o> {
         self.sect = 0;
         self.prev_sect = 0;
         self.sect_stack.clear();
+        for (d, flags) in std::mem::take(&mut self.attached) {
+            (self.defs[d].group, self.defs[d].flags) = (None, flags);
+        }
         self.offsets.clear();
         self.stmt = 0;
         self.macros.clear();

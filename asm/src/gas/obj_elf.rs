@@ -14,6 +14,11 @@ pub(super) struct SectionDef {
     pub(super) ty: u32,
     pub(super) flags: u64,
     pub(super) entsize: u64,
+    /// The section group it belongs to (`G` or `?`, or `.attach_to_group`): a section
+    /// is known by its name and group together.
+    pub(super) group: Option<String>,
+    /// Whether that group is COMDAT (`comdat`, or a `.gnu.linkonce` name).
+    pub(super) comdat: bool,
 }
 
 /// BFD's special sections (elf.c `special_sections_*`, those of a type gas writes;
@@ -81,6 +86,8 @@ impl SectionDef {
             flags: *flags,
             // BFD gives the array sections their entries' size.
             entsize: if matches!(ty, 14..=16) { 4 } else { 0 },
+            group: None,
+            comdat: false,
         })
     }
 
@@ -92,6 +99,8 @@ impl SectionDef {
             ty: SHT_PROGBITS,
             flags: 0,
             entsize: 0,
+            group: None,
+            comdat: false,
         })
     }
 }
@@ -135,9 +144,10 @@ impl Assembler<'_> {
             sub = self.subsection(&parts[1], line, col);
             parts.remove(1);
         }
+        (def.group, def.comdat) = self.group_of(&parts, &name);
         // Whether gas made the section before this directive (`old_sec`), known in the
         // final walk only; errors that depend on it are given there.
-        let fresh = self.first_in_walk(&name);
+        let fresh = self.first_in_walk(&name, &def.group);
         let old = self.pass == 2 && !fresh;
         let special = SectionDef::special(&name);
         let mut attr = 0u64;
@@ -209,7 +219,9 @@ impl Assembler<'_> {
                         "entity size for SHF_MERGE not specified",
                     );
                 }
-                if f & 0x200 != 0 && parts.len() < 5 {
+                if def.group.is_some() {
+                    f |= 0x200;
+                } else if f & 0x200 != 0 {
                     f &= !0x200; // and SHF_GROUP without a group
                     self.diag(
                         Severity::Warning,
@@ -310,7 +322,10 @@ impl Assembler<'_> {
                 format!("section name '{name}' already defined as another symbol"),
             );
         }
-        if let Some(existing) = self.defs.iter().find(|d| d.name == name).cloned() {
+        if let Some(existing) = (self.defs.iter())
+            .find(|d| d.name == name && d.group == def.group)
+            .cloned()
+        {
             // Re-entering a section keeps what it was declared with; a different type
             // or different attributes are an error, a warning for a special section.
             if old {
@@ -346,14 +361,54 @@ impl Assembler<'_> {
         Some((def, sub))
     }
 
+    /// The group a `.section` names (obj-elf.c `obj_elf_section`): after `G`, the
+    /// argument past the type, entity size (`M`) and linked-to section (`o`), then
+    /// `comdat`; with `?`, the current section's group.
+    fn group_of(&self, parts: &[String], name: &str) -> (Option<String>, bool) {
+        let Some(letters) = parts.get(1).and_then(|f| {
+            let f = f.trim();
+            f.strip_prefix('"').and_then(|f| f.strip_suffix('"'))
+        }) else {
+            return (None, false);
+        };
+        if letters.contains('G') {
+            let typed = parts
+                .get(2)
+                .is_some_and(|t| t.trim().starts_with(['"', '@', '%']));
+            let at = 2
+                + typed as usize
+                + letters.contains('M') as usize
+                + letters.contains('o') as usize;
+            let Some(group) = parts
+                .get(at)
+                .map(|g| g.trim().trim_matches('"').to_string())
+            else {
+                return (None, false);
+            };
+            if group.is_empty() {
+                return (None, false);
+            }
+            let comdat = parts
+                .get(at + 1)
+                .is_some_and(|c| c.trim().starts_with("comdat"))
+                || (parts.len() == at + 1 && name.starts_with(".gnu.linkonce"));
+            return (Some(group), comdat);
+        }
+        if letters.contains('?') {
+            let now = &self.defs[self.chunks[self.sect].0];
+            return (now.group.clone(), now.comdat);
+        }
+        (None, false)
+    }
+
     /// Whether the final walk meets section `name` here for the first time (gas makes it
     /// now; .text, .data and .bss are made before): where gas warns of attributes.
-    fn first_in_walk(&self, name: &str) -> bool {
+    fn first_in_walk(&self, name: &str, group: &Option<String>) -> bool {
         self.pass == 2
             && self
                 .defs
                 .iter()
-                .position(|d| d.name == name)
+                .position(|d| d.name == name && d.group == *group)
                 .is_none_or(|d| !self.chain.borrow().has_section(d))
     }
 
@@ -480,6 +535,8 @@ impl Assembler<'_> {
             ty: crate::object::SHT_PROGBITS,
             flags: 0x30, // SHF_MERGE | SHF_STRINGS
             entsize: 1,
+            group: None,
+            comdat: false,
         };
         let (here, absolute) = (self.sect, self.absolute.take());
         let c = self.chunk(def, 0);
@@ -522,6 +579,23 @@ impl Assembler<'_> {
                 let c = self.chunk(def, sub);
                 self.note_section(self.chunks[c].0);
                 self.switch_to(c);
+            }
+            ".attach_to_group" => {
+                let name = args.trim().trim_matches('"').to_string();
+                let d = self.chunks[self.sect].0;
+                if name.is_empty() {
+                    self.diag(Severity::Warning, line, col, "group name not parseable");
+                } else if let Some(group) = &self.defs[d].group {
+                    let m = format!(
+                        "section {} already has a group ({group})",
+                        self.defs[d].name
+                    );
+                    self.diag(Severity::Warning, line, col, m);
+                } else {
+                    self.attached.push((d, self.defs[d].flags));
+                    self.defs[d].group = Some(name);
+                    self.defs[d].flags |= 0x200;
+                }
             }
             ".popsection" => match self.sect_stack.pop() {
                 Some((s, p)) => {

@@ -48,6 +48,11 @@ impl Chain {
         self.sections.contains(&d)
     }
 
+    /// A section made without a symbol on the chain.
+    pub(super) fn section_unlinked(&mut self, d: usize) {
+        self.sections.insert(d);
+    }
+
     pub(super) fn section(&mut self, d: usize) {
         if self.sections.insert(d) {
             self.links.push(Link::Section(d));
@@ -174,7 +179,16 @@ impl Assembler<'_> {
     /// A section made (or first entered) by a section directive in the final walk.
     pub(super) fn note_section(&self, d: usize) {
         if self.pass == 2 {
-            self.chain.borrow_mut().section(d);
+            // A section's symbol bears its name: a second section of that name (in a
+            // group) finds the first's and gets its own only from BFD, after the chain.
+            let mut chain = self.chain.borrow_mut();
+            let named = (0..self.defs.len())
+                .any(|o| o != d && self.defs[o].name == self.defs[d].name && chain.has_section(o));
+            if named {
+                chain.section_unlinked(d);
+            } else {
+                chain.section(d);
+            }
         }
     }
 

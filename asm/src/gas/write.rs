@@ -17,7 +17,7 @@ use crate::object::{
 impl Assembler<'_> {
     /// The chunk for a section and subsection, created on first use.
     pub(super) fn chunk(&mut self, def: SectionDef, sub: i64) -> Sect {
-        let d = match self.defs.iter().position(|x| x.name == def.name) {
+        let d = match (self.defs.iter()).position(|x| x.name == def.name && x.group == def.group) {
             Some(d) => d,
             None => {
                 self.defs.push(def);
@@ -513,6 +513,22 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
             relocs: Vec::new(),
         });
     }
+    // obj-elf.c elf_adjust_symtab: a group per name, in its first section's order; COMDAT
+    // where any member is.
+    for (d, def) in asm.defs.iter().enumerate() {
+        let Some(name) = &def.group else { continue };
+        match obj.groups.iter_mut().find(|g| g.signature == *name) {
+            Some(g) => {
+                g.members.push(d);
+                g.comdat |= def.comdat;
+            }
+            None => obj.groups.push(crate::object::Group {
+                signature: name.clone(),
+                comdat: def.comdat,
+                members: vec![d],
+            }),
+        }
+    }
     // gas writes `.debug_line` after every section the source made (`dwarf2_finish`).
     if let Some((data, relocs)) = asm.debug_line() {
         obj.sections.push(ObjSection {
@@ -575,6 +591,19 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
         ".debug_str",
         ".debug_aranges",
     ] {
+        if debug == ".debug_ranges" {
+            // A section of a name another has (in a group) gets its symbol when the
+            // line table's fixups first name it.
+            for d in 0..asm.defs.len() {
+                let named = obj
+                    .sections
+                    .iter()
+                    .any(|s| s.relocs.iter().any(|r| r.target == RelocTarget::Section(d)));
+                if named && !links.contains(&Link::Section(d)) {
+                    links.push(Link::Section(d));
+                }
+            }
+        }
         if let Some(k) = obj.sections.iter().position(|s| s.name == debug) {
             if asm.defs.iter().all(|d| d.name != debug) {
                 links.push(Link::Section(k));
