@@ -4,7 +4,7 @@
 //! `.set`, `.include`, `.reloc`, messages.
 
 use super::macros::collect_block;
-use super::symbols::SymVal;
+use super::symbols::{quoted_name, SymVal};
 use super::{Assembler, Macro, Severity, LOCAL_STORE, MAX_EXPANDED, MAX_NESTING};
 use crate::expr::{is_ident, Val};
 use crate::lex::{bytes_as_text, read_source, split_top, strip_comment, to_lines, unquote, Line};
@@ -161,6 +161,18 @@ impl Assembler<'_> {
             let mut rest = piece.trim().to_string();
             // Labels.
             while let Some(colon) = rest.find(':') {
+                if let Some((name, after)) = quoted_name(&rest) {
+                    // A quoted label (`"test-a":`), whatever bytes its name holds.
+                    let Some(after) = after.trim_start().strip_prefix(':') else {
+                        break;
+                    };
+                    let after = after.trim().to_string();
+                    self.define_label(&name, line);
+                    self.dwarf_label(line);
+                    self.stmt += 1;
+                    rest = after;
+                    continue;
+                }
                 let name = rest[..colon].trim();
                 if name.is_empty() || !name.chars().all(is_ident) || name.contains(' ') {
                     break;
@@ -575,6 +587,39 @@ impl Assembler<'_> {
             other => other,
         };
         match d {
+            ".weakref" => {
+                // read.c s_weakref: `ALIAS, TARGET`. A use of the alias, before or after,
+                // is a use of the target, which stays weak while nothing uses it itself.
+                let Some((alias, target)) = args.split_once(',') else {
+                    let m = format!("expected comma after \"{}\"", args.trim());
+                    self.diag(Severity::Error, line, col, m);
+                    return;
+                };
+                let (alias, target) = (alias.trim().to_string(), target.trim().to_string());
+                if self.pass == 1 && self.symbols.contains_key(&alias) {
+                    let m = format!("symbol `{alias}' is already defined");
+                    self.diag(Severity::Error, line, col, m);
+                    return;
+                }
+                // The aliases the target leads through, refused if they lead back.
+                let mut path = vec![alias.clone(), target.clone()];
+                while let Some(next) = self.weakrefs.get(&path[path.len() - 1]) {
+                    if path.len() > self.weakrefs.len() + 1 || *next == alias {
+                        path.push(next.clone());
+                        break;
+                    }
+                    path.push(next.clone());
+                }
+                if path[1..].contains(&alias) {
+                    let m = format!("{alias}: would close weakref loop: {}", path.join(" => "));
+                    self.diag(Severity::Error, line, col, m);
+                    return;
+                }
+                self.weakrefs.insert(alias.clone(), target);
+                if let Some(t) = self.weakref_target(&alias) {
+                    self.note_symbol(&t);
+                }
+            }
             ".ds" | ".ds.b" | ".ds.w" | ".ds.l" | ".ds.d" | ".ds.s" | ".ds.p" => {
                 // read.c s_space with a unit: `.ds.l 3` is 12 zero bytes.
                 let unit: i64 = match d {
@@ -1214,6 +1259,7 @@ const DIRECTIVES: &[&str] = &[
     ".uleb128",
     ".warning",
     ".weak",
+    ".weakref",
     ".word",
     ".zero",
     ".brinfo",
