@@ -337,3 +337,39 @@ fn weakref_aliases_stand_for_their_targets() {
         ]
     );
 }
+
+#[test]
+fn float_forms_of_the_dc_family() {
+    // read.c parse_one_float/hex_float/s_float_space (all/float.s): any `0LETTER` before a
+    // float, `:HEX` giving the bytes from the first, `.dcb.*` repeating one float (zero
+    // when none is given), `.ds.x` filling 12-byte units sign-extended; hex too long for
+    // the float stores nothing.
+    let source = "\t.data\n\t.single 0r1.5\n\t.single 0f:1234\n\t.double 0d:1\n\t.dc.x 0x:1_2\n\t.dcb.s 2, 0s:4321\n\t.dcb.d 1\n\t.ds.x 1, -2\n\t.single 0f:123456789\n";
+    let (bytes, warnings) = accepted(source, &Options::default(), ".data");
+    let want = words(&[
+        0x3fc0_0000,
+        0x1234_0000,
+        0x1000_0000,
+        0,
+        0x1200_0000,
+        0,
+        0,
+        0x4321_0000,
+        0x4321_0000,
+        0,
+        0,
+        0xffff_ffff,
+        0xffff_ffff,
+        0xffff_fffe,
+    ]);
+    assert_eq!(bytes, want);
+    assert_eq!(
+        warnings,
+        ["t.s:9:2: warning: floating point constant too large"]
+    );
+    // SPU's gas has no decimal extended floats.
+    assert_eq!(
+        refused("\t.data\n\t.dc.x 1.0\n"),
+        ["t.s:2:2: error: bad floating literal: Unrecognized or unsupported floating point constant"]
+    );
+}

@@ -1277,10 +1277,6 @@ pub(crate) fn testsuite_sources() -> Vec<PathBuf> {
 /// (`docs/gas-directives.md`, "gas's own testsuites": what is left and why).
 const KNOWN_DIFFERENCES: &[(&str, &str)] = &[
     (
-        "foo:\t.single\t0r1.2345e+06",
-        "all/float.s: `0r`/`0f:HEX` float forms and `.dc.x` extended floats are not read",
-    ),
-    (
         ".octa ~0x112233445566778899aabbcc0000",
         "all/octa.s: expressions are 64-bit; gas's bignums (128-bit `~`, `-`) are not",
     ),
