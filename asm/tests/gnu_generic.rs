@@ -1,7 +1,8 @@
 //! GNU as 2.40's generic behaviour that its own testsuites `gas/testsuite/gas/all` and
 //! `gas/testsuite/gas/macros` check, as `spu as` copies it (issue #31): equates defined
 //! twice, `==`, `.warning`/`.error`, `.nop`, `.string16` and kin, macro definitions and
-//! arguments, data over equates defined later, preprocessor line markers. Each case was
+//! arguments, data over equates defined later, preprocessor line markers, quoted and UTF-8
+//! symbol names, `.weakref`, the `.dc` family's float forms. Each case was
 //! checked against spu-elf-as 2.40 on the same lines (the messages by file and line; the
 //! bytes exactly); `tests/tests/gnu_differential.rs` runs the testsuites themselves.
 
