@@ -100,11 +100,13 @@ pub trait Env {
     }
 }
 
+/// Characters past ASCII are name characters, as gas's lexer takes bytes 128-255
+/// (UTF-8 names such as `he\u{202e}oll\u{202c}`).
 pub fn is_ident_start(c: char) -> bool {
-    c.is_ascii_alphabetic() || c == '_' || c == '.' || c == '$'
+    c.is_ascii_alphabetic() || c == '_' || c == '.' || c == '$' || !c.is_ascii()
 }
 pub fn is_ident(c: char) -> bool {
-    c.is_ascii_alphanumeric() || c == '_' || c == '.' || c == '$'
+    c.is_ascii_alphanumeric() || c == '_' || c == '.' || c == '$' || !c.is_ascii()
 }
 
 const OPS: &[(&str, u8)] = &[

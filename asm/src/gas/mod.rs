@@ -156,6 +156,12 @@ struct Assembler<'o> {
     /// `.symver NAME, NAME2@VERSION[, local|hidden|remove]` (final walk): the versioned
     /// names objects give symbols.
     symvers: Vec<(String, String, String)>,
+    /// `.weakref ALIAS, TARGET` (kept from the first walk, so a use before the directive
+    /// reads it too): the alias stands for its target and is never in the table.
+    weakrefs: HashMap<String, String>,
+    /// Names used in an expression by themselves, not through a weakref alias (final
+    /// walk): a target so used is a strong reference (symbols.c `S_IS_WEAKREFD`).
+    direct_uses: std::cell::RefCell<std::collections::HashSet<String>>,
     /// Names `.eqv NAME, EXPR` (`NAME == EXPR`) made with `.` in EXPR, and EXPR: gas
     /// resolves their `.` where each is used, and for the symbol table where the source
     /// ends (`dot_symbol` resolved late).
@@ -245,6 +251,8 @@ impl<'o> Assembler<'o> {
             altmacro: false,
             local_counter: 0,
             symvers: Vec::new(),
+            weakrefs: HashMap::new(),
+            direct_uses: Default::default(),
             dot_eqv: Default::default(),
             eqv_depth: Default::default(),
             equated: HashMap::new(),

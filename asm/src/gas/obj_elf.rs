@@ -2,7 +2,7 @@
 //! its flags and type, subsections, `.pushsection`/`.popsection`/`.previous`, `.comm` and
 //! `.lcomm`, and `.global`, `.weak`, `.hidden`, `.type`, `.size`.
 
-use super::symbols::{SymVal, STT_GNU_IFUNC};
+use super::symbols::{quoted_name, SymVal, STT_GNU_IFUNC};
 use super::{Assembler, Severity, LOCAL_STORE};
 use crate::lex::{split_top, Line};
 use crate::object::{SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE, SHT_NOBITS, SHT_PROGBITS};
@@ -668,6 +668,8 @@ impl Assembler<'_> {
                     if n.is_empty() {
                         continue;
                     }
+                    let quoted = quoted_name(n).filter(|(_, after)| after.trim().is_empty());
+                    let n = quoted.as_ref().map_or(n, |(name, _)| name.as_str());
                     if matches!(d, ".global" | ".globl") && self.defs.iter().any(|s| s.name == n) {
                         // symbols.c S_SET_EXTERNAL: the name is the section's own symbol.
                         self.diag(

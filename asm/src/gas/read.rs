@@ -4,7 +4,7 @@
 //! `.set`, `.include`, `.reloc`, messages.
 
 use super::macros::collect_block;
-use super::symbols::SymVal;
+use super::symbols::{quoted_name, SymVal};
 use super::{Assembler, Macro, Severity, LOCAL_STORE, MAX_EXPANDED, MAX_NESTING};
 use crate::expr::{is_ident, Val};
 use crate::lex::{bytes_as_text, read_source, split_top, strip_comment, to_lines, unquote, Line};
@@ -161,6 +161,18 @@ impl Assembler<'_> {
             let mut rest = piece.trim().to_string();
             // Labels.
             while let Some(colon) = rest.find(':') {
+                if let Some((name, after)) = quoted_name(&rest) {
+                    // A quoted label (`"test-a":`), whatever bytes its name holds.
+                    let Some(after) = after.trim_start().strip_prefix(':') else {
+                        break;
+                    };
+                    let after = after.trim().to_string();
+                    self.define_label(&name, line);
+                    self.dwarf_label(line);
+                    self.stmt += 1;
+                    rest = after;
+                    continue;
+                }
                 let name = rest[..colon].trim();
                 if name.is_empty() || !name.chars().all(is_ident) || name.contains(' ') {
                     break;
@@ -264,6 +276,56 @@ impl Assembler<'_> {
                 }
             }
         }
+    }
+
+    /// read.c parse_one_float: one float of directive D, after an optional `0LETTER`
+    /// (`0r1.5`, `0d-2e3`); `:HEX` gives its bytes from the first (`0f:1234` is
+    /// 0x12340000, hex_float), the only form of the 12-byte `.dc.x` on SPU. None after an
+    /// error or gas's warning that the hex is too long (which stores nothing).
+    fn one_float(&mut self, d: &str, t: &str, line: &Line, col: usize) -> Option<Vec<u8>> {
+        let length = float_length(d);
+        let bare = match t.as_bytes() {
+            [b'0', l, ..] if l.is_ascii_alphabetic() => &t[2..],
+            _ => t,
+        };
+        if let Some(hex) = bare.strip_prefix(':') {
+            let digits: Vec<u8> = hex
+                .bytes()
+                .filter(|&b| b != b'_')
+                .map_while(|b| (b as char).to_digit(16).map(|v| v as u8))
+                .collect();
+            if digits.len() > 2 * length {
+                let m = "floating point constant too large";
+                self.diag(Severity::Warning, line, col, m);
+                return None;
+            }
+            let mut bytes = vec![0u8; length];
+            for (i, pair) in digits.chunks(2).enumerate() {
+                bytes[i] = pair[0] << 4 | pair.get(1).copied().unwrap_or(0);
+            }
+            return Some(bytes);
+        }
+        let v: f64 = match bare.parse::<f64>() {
+            Ok(v) if length < 12 => v,
+            _ if length == 12 => {
+                let m = "bad floating literal: Unrecognized or unsupported floating point \
+                         constant";
+                self.diag(Severity::Error, line, col, m);
+                return None;
+            }
+            _ => match self.eval(t) {
+                Ok((v, _)) => v as f64,
+                Err((c, m)) => {
+                    self.diag(Severity::Error, line, col + c, m);
+                    0.0
+                }
+            },
+        };
+        Some(if length == 8 {
+            v.to_be_bytes().to_vec()
+        } else {
+            (v as f32).to_be_bytes().to_vec()
+        })
     }
 
     /// The comma-separated values of a directive's operands (0 for one in error).
@@ -575,13 +637,46 @@ impl Assembler<'_> {
             other => other,
         };
         match d {
-            ".ds" | ".ds.b" | ".ds.w" | ".ds.l" | ".ds.d" | ".ds.s" | ".ds.p" => {
+            ".weakref" => {
+                // read.c s_weakref: `ALIAS, TARGET`. A use of the alias, before or after,
+                // is a use of the target, which stays weak while nothing uses it itself.
+                let Some((alias, target)) = args.split_once(',') else {
+                    let m = format!("expected comma after \"{}\"", args.trim());
+                    self.diag(Severity::Error, line, col, m);
+                    return;
+                };
+                let (alias, target) = (alias.trim().to_string(), target.trim().to_string());
+                if self.pass == 1 && self.symbols.contains_key(&alias) {
+                    let m = format!("symbol `{alias}' is already defined");
+                    self.diag(Severity::Error, line, col, m);
+                    return;
+                }
+                // The aliases the target leads through, refused if they lead back.
+                let mut path = vec![alias.clone(), target.clone()];
+                while let Some(next) = self.weakrefs.get(&path[path.len() - 1]) {
+                    if path.len() > self.weakrefs.len() + 1 || *next == alias {
+                        path.push(next.clone());
+                        break;
+                    }
+                    path.push(next.clone());
+                }
+                if path[1..].contains(&alias) {
+                    let m = format!("{alias}: would close weakref loop: {}", path.join(" => "));
+                    self.diag(Severity::Error, line, col, m);
+                    return;
+                }
+                self.weakrefs.insert(alias.clone(), target);
+                if let Some(t) = self.weakref_target(&alias) {
+                    self.note_symbol(&t);
+                }
+            }
+            ".ds" | ".ds.b" | ".ds.w" | ".ds.l" | ".ds.d" | ".ds.s" | ".ds.p" | ".ds.x" => {
                 // read.c s_space with a unit: `.ds.l 3` is 12 zero bytes.
                 let unit: i64 = match d {
                     ".ds.b" => 1,
                     ".ds" | ".ds.w" => 2,
                     ".ds.d" => 8,
-                    ".ds.p" => 12,
+                    ".ds.p" | ".ds.x" => 12,
                     _ => 4,
                 };
                 let vals = self.data_values(args, line, col);
@@ -593,8 +688,11 @@ impl Assembler<'_> {
                 let fill = vals.get(1).copied().unwrap_or(0);
                 let mut bytes = Vec::with_capacity(n as usize);
                 for _ in 0..n / unit {
+                    // A unit wider than 8 bytes (`.ds.x`, `.ds.p`) takes the fill
+                    // sign-extended, as emit_expr writes a constant.
+                    let sign = if fill < 0 { 0xff } else { 0 };
+                    bytes.resize(bytes.len() + (unit - unit.min(8)) as usize, sign);
                     bytes.extend_from_slice(&fill.to_be_bytes()[8 - unit.min(8) as usize..]);
-                    bytes.resize(bytes.len() + (unit - unit.min(8)) as usize, 0);
                 }
                 self.emit(&bytes);
             }
@@ -901,30 +999,33 @@ impl Assembler<'_> {
                     self.emit(&b[8 - size..]);
                 }
             }
-            ".float" | ".single" | ".ffloat" | ".double" | ".dfloat" => {
+            ".float" | ".single" | ".ffloat" | ".double" | ".dfloat" | ".dc.x" => {
                 for part in split_top(args, ',') {
-                    let t = part.trim();
-                    // `0f1.5`, `0d-2e3`: gas's floating-point prefix (FLT_CHARS "dDfF").
-                    let t = match t.as_bytes() {
-                        [b'0', b'f' | b'F' | b'd' | b'D', ..] if t[2..].parse::<f64>().is_ok() => {
-                            &t[2..]
-                        }
-                        _ => t,
-                    };
-                    let v: f64 = match t.parse::<f64>() {
-                        Ok(v) => v,
-                        Err(_) => match self.eval(t) {
-                            Ok((v, _)) => v as f64,
-                            Err((c, m)) => {
-                                self.diag(Severity::Error, line, col + c, m);
-                                0.0
-                            }
-                        },
-                    };
-                    if d.contains('d') {
-                        self.emit(&v.to_be_bytes());
-                    } else {
-                        self.emit(&(v as f32).to_be_bytes());
+                    if let Some(bytes) = self.one_float(d, part.trim(), line, col) {
+                        self.emit(&bytes);
+                    }
+                }
+            }
+            ".dcb.s" | ".dcb.d" | ".dcb.x" => {
+                // read.c s_float_space: `COUNT[, FLOAT]`, the float zero when not given.
+                let (count, value) = match args.split_once(',') {
+                    Some((n, v)) => (n, Some(v.trim())),
+                    None => (args, None),
+                };
+                let count = match self.eval(count.trim()) {
+                    Ok((n, _)) => n,
+                    Err((c, m)) => {
+                        self.diag(Severity::Error, line, col + c, m);
+                        return;
+                    }
+                };
+                let one = match value {
+                    Some(v) => self.one_float(d, v, line, col),
+                    None => Some(vec![0; float_length(d)]),
+                };
+                if let Some(one) = one {
+                    for _ in 0..count.clamp(0, LOCAL_STORE as i64) {
+                        self.emit(&one);
                     }
                 }
             }
@@ -1214,6 +1315,12 @@ const DIRECTIVES: &[&str] = &[
     ".uleb128",
     ".warning",
     ".weak",
+    ".weakref",
+    ".dc.x",
+    ".dcb.s",
+    ".dcb.d",
+    ".dcb.x",
+    ".ds.x",
     ".word",
     ".zero",
     ".brinfo",
@@ -1229,6 +1336,15 @@ const DIRECTIVES: &[&str] = &[
     ".gnu_attribute",
     ".lflags",
 ];
+
+/// The bytes of one float of a float directive (`.dc.x`'s are 12, `d`'s 8, the rest 4).
+fn float_length(d: &str) -> usize {
+    match d {
+        ".dc.x" | ".dcb.x" => 12,
+        ".double" | ".dfloat" | ".dcb.d" => 8,
+        _ => 4,
+    }
+}
 
 /// Whether a statement's first word names a pseudo-op, with its dot or without (tc-spu.h's
 /// `NO_PSEUDO_DOT`): read.c reads it as the pseudo-op before looking for a macro.

@@ -95,8 +95,21 @@ pub(super) struct SymAttrs {
     pub(super) gnu_osabi: bool,
 }
 
-impl Env for Assembler<'_> {
-    fn symbol(&self, name: &str) -> Option<Val> {
+impl Assembler<'_> {
+    /// A weakref alias's final target (through aliases of aliases), if NAME is one.
+    pub(super) fn weakref_target(&self, name: &str) -> Option<String> {
+        let mut target = self.weakrefs.get(name)?;
+        for _ in 0..self.weakrefs.len() {
+            match self.weakrefs.get(target) {
+                Some(next) => target = next,
+                None => break,
+            }
+        }
+        Some(target.clone())
+    }
+
+    /// What NAME stands for in an expression, made in the chain as it is read.
+    fn symbol_value(&self, name: &str) -> Option<Val> {
         self.note_symbol(name);
         if self.dot_eqv.contains_key(name) && self.symbols.contains_key(name) {
             return self.eqv_here(name);
@@ -116,6 +129,18 @@ impl Env for Assembler<'_> {
             };
         }
         Some(self.value_of(name, self.symbols.get(name)?))
+    }
+}
+
+impl Env for Assembler<'_> {
+    fn symbol(&self, name: &str) -> Option<Val> {
+        if let Some(target) = self.weakref_target(name) {
+            return self.symbol_value(&target);
+        }
+        if self.pass == 2 {
+            self.direct_uses.borrow_mut().insert(name.to_string());
+        }
+        self.symbol_value(name)
     }
     fn dot(&self) -> Val {
         if let Some(off) = self.absolute {
@@ -442,6 +467,31 @@ impl Assembler<'_> {
                 col,
                 format!("value {:#x} truncated to {kept:#x}", v as u64),
             );
+        }
+    }
+}
+
+/// read.c `get_symbol_name`: a name in double quotes holds any characters, `\` taking
+/// the next one as it is, and quoted pieces written together make one name
+/// (`"back""slash"` is `backslash`); the name and the text after it.
+pub(super) fn quoted_name(text: &str) -> Option<(String, &str)> {
+    let mut rest = text.strip_prefix('"')?;
+    let mut name = String::new();
+    loop {
+        let mut chars = rest.char_indices();
+        loop {
+            match chars.next()? {
+                (_, '\\') => name.push(chars.next()?.1),
+                (i, '"') => {
+                    rest = &rest[i + 1..];
+                    break;
+                }
+                (_, c) => name.push(c),
+            }
+        }
+        match rest.strip_prefix('"') {
+            Some(more) => rest = more,
+            None => return Some((name, rest)),
         }
     }
 }

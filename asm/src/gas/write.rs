@@ -4,7 +4,7 @@
 //! ELF or as a relocatable object.
 
 use super::obj_elf::SectionDef;
-use super::symbols::{Link, SymVal};
+use super::symbols::{Link, SymAttrs, SymVal};
 use super::target::code_padding;
 use super::{Assembler, Diagnostic, Location, Output, Sect, Severity, LOCAL_STORE};
 use crate::expr::Val;
@@ -556,6 +556,11 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
     }
     for (d, r, _, _) in &asm.relocs {
         let mut r = r.clone();
+        if let RelocTarget::Symbol(n) = &r.target {
+            if let Some(t) = asm.weakref_target(n) {
+                r.target = RelocTarget::Symbol(t);
+            }
+        }
         if r.target == RelocTarget::Section(usize::MAX) {
             // An absolute value: against no symbol.
             r.target = RelocTarget::Symbol(String::new());
@@ -629,10 +634,12 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
                 });
                 continue;
             }
+            Link::Symbol(name) if asm.weakrefs.contains_key(&name) => continue,
             Link::Symbol(name) => name,
         };
         let attrs = asm.attrs.get(&name).cloned().unwrap_or_default();
         let Some(sym) = asm.symbols.get(&name) else {
+            let attrs = weak_through_weakref(&asm, &name, attrs);
             // Made but never defined: an undefined symbol, global (write.c), unless a
             // local label or only `.weak` named it and nothing refers to it.
             let used = referenced.contains(&name);
@@ -755,6 +762,7 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
     for name in referenced {
         if !obj.symbols.iter().any(|s| s.name == name && s.kind != 3) {
             let attrs = asm.attrs.get(&name).cloned().unwrap_or_default();
+            let attrs = weak_through_weakref(&asm, &name, attrs);
             obj.symbols.push(ObjSymbol {
                 name,
                 value: 0,
@@ -767,5 +775,30 @@ pub(super) fn object(asm: Assembler<'_>, file_name: &str) -> Object {
             });
         }
     }
+    // The source was read a byte to a character: names go out as the bytes they were
+    // written in (UTF-8 names as UTF-8).
+    for s in &mut obj.symbols {
+        s.name = display_text(&s.name);
+    }
+    for s in &mut obj.sections {
+        for r in &mut s.relocs {
+            if let RelocTarget::Symbol(n) = &mut r.target {
+                *n = display_text(n);
+            }
+        }
+    }
     obj
+}
+
+/// An undefined weakref target that no expression uses by itself and no `.globl` names
+/// is weak (symbols.c `S_IS_WEAKREFD`; write.c drops it if nothing refers to it).
+fn weak_through_weakref(asm: &Assembler<'_>, name: &str, mut attrs: SymAttrs) -> SymAttrs {
+    let targeted = asm
+        .weakrefs
+        .keys()
+        .any(|a| asm.weakref_target(a).as_deref() == Some(name));
+    if targeted && !attrs.global && !asm.direct_uses.borrow().contains(name) {
+        attrs.weak = true;
+    }
+    attrs
 }
