@@ -72,6 +72,8 @@ k_abs:          .long 0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff
 pfpass:         .long leaf_probe, 0, 0, 0     # the next leaf's prefetch pass (triangle.s)
 k_trav_to:      .long first_changed, leaf, .Ltrav_on, 0   # a step's ways (traverse.s)
 numbuf:         .space 128      # the leaf's triangles' n_d - o.n, by triangle & 7 (triangle.s)
+cullmask:       .long 0, 0, 0, 0  # the cull's culled triangles: bit 31 - j, its first + j
+cullbase:       .long 0, 0, 0, 0  # the cull's first triangle (triangle.s)
 k_grow0:        .float 0.0, 2.0, 4.0, 6.0     # the groups' first rows (triangle.s)
 k_rep:          .long 0x03030303, 0x07070707, 0x0b0b0b0b, 0x0f0f0f0f   # each word's low byte x4
 k_pc2:          .long 0x00010203, 0x04050607, 0x18191a1b, 0x80808080   # (a0, a1, b2, 0)

@@ -343,6 +343,8 @@ leaf_cull:
       ~ stqx    %rg\T\()\S, $78, %so\T\()\S
       ~ stqx    %nm\T\()\S, $75, %so\T\()\S
         .endr
+        ceqi    %cz\S, %mact\S, 0                 # culled: bit 3 - T of %gz
+        gb      %gz\S, %cz\S
         .endm
 
 # (multihint; needs no extension) the cull per group of 16 rays (two rows), four triangles
@@ -362,6 +364,9 @@ cull_pass:
         lqa     %idx, k_idx
         lqa     %rep, k_rep
         CULL_QUAD a, 0
+        shli    %cm, %gza, 28                 # (the culled ones, for .Ltri_hit's step)
+        stqa    %cm, cullmask
+        stqa    $76, cullbase
         ai      $76, $76, 4
         ai      $77, $77, -4
         cgti    %more, $77, 0
@@ -383,6 +388,11 @@ cull_pass8:
         lqa     %rep, k_rep
         CULL_QUAD a, 0
         CULL_QUAD b, 4
+        shli    %cma, %gza, 28
+        shli    %cmb, %gzb, 24
+        or      %cm, %cma, %cmb
+        stqa    %cm, cullmask
+        stqa    $76, cullbase
         hbrr    .Lcull_br8, tri_loop
 .Lcull_br8:
         br      tri_loop
@@ -493,6 +503,25 @@ tri_loop:
         lqx     $116, $115, $100
         rotqbyi $119, $116, 4
         rotqbyi $112, $116, 8
+        # the step to the next triangle the cull keeps (at most to the leaf's end), for
+        # the test loop's last pass in $112's word 1: runs of culled triangles cost no
+        # branch each; the ones it skips are counted as tri_loop counts them
+        lqa     $102, cullmask
+        lqa     $103, cullbase
+        sf      $104, $103, $66
+        ai      $104, $104, 1
+        shl     $105, $102, $104              # the culled ones after this one, from bit 31
+        nor     $105, $105, $105
+        clz     $106, $105                    # culled ones in a row
+        ai      $107, $106, 1
+        cgt     $108, $107, $67
+        selb    $118, $107, $67, $108
+        ai      $109, $118, -1
+        a       S_CULLED, S_CULLED, $109
+        a       S_TLOOK, S_TLOOK, $109
+        rotqbyi $110, $118, 12
+        fsmbi   $111, 0x0f00
+        selb    $112, $112, $110, $111        # (last, step, -, -)
         .else
         rotmi   $119, FIRST, -4
         shli    $119, $119, 6                 # byte offset of the first group
@@ -510,12 +539,15 @@ tri_loop:
         .sched  pool=59,65,78-111,113-118 scratch=66-127
 ray_loop:
         .ifdef  EXT_MULTIHINT
-        ceq     %last, $119, $112             # the last pass: the leaf's next triangle
+        ceq     %last, $119, $112             # the last pass: the leaf's next kept
+        rotqbyi %step, $112, 4                # triangle ($112's word 1: .Ltri_hit)
+        and     %inc, %last, %step
         .else
         ceqi    %last, $119, 192              # the last pass: the leaf's next triangle
+        il      %one, 1
+        and     %inc, %last, %one
         .endif
-        il      %one, 1                       # (tri_next's work, branch-free) and the
-        and     %inc, %last, %one             # branch hinted to the next triangle's
+        # (tri_next's work, branch-free) and the branch hinted to the next triangle's
         a       $66, $66, %inc                # test or, after the leaf's last, to its
         sf      $67, %inc, $67                # end: no miss at the end of a test
         ceqi    %done, $67, 0
