@@ -355,14 +355,19 @@ leaf_cull:
 # culled), which tri_loop and the test loop follow. Each lane's arithmetic is, op for op,
 # that of one triangle done alone, so the verdicts do not depend on the lanes. A pass past
 # the leaf's end fills the slots of triangles after it (no slot of the leaf's: at most 8)
-        .sched  pool=82-127 scratch=66-127
-cull_pass:
-        lqa     %plo, k_plo                   # (a 4x4 transpose's patterns)
+        # Both passes' constants: a 4x4 transpose's patterns (k_plo, k_phi, k_pa, k_pb),
+        # the lanes' numbers (k_idx) and each word's low byte made four (k_rep).
+        .macro  CULL_CONSTANTS
+        lqa     %plo, k_plo
         lqa     %phi, k_phi
         lqa     %pa, k_pa
         lqa     %pb, k_pb
         lqa     %idx, k_idx
         lqa     %rep, k_rep
+        .endm
+        .sched  pool=82-127 scratch=66-127
+cull_pass:
+        CULL_CONSTANTS
         CULL_QUAD a, 0
         shli    %cm, %gza, 28                 # (the culled ones, for .Ltri_hit's step)
         stqa    %cm, cullmask
@@ -380,12 +385,7 @@ cull_pass:
 # a leaf of more than four triangles: all of them in one pass, two quads side by side
         .sched  pool=82-127 scratch=66-127
 cull_pass8:
-        lqa     %plo, k_plo
-        lqa     %phi, k_phi
-        lqa     %pa, k_pa
-        lqa     %pb, k_pb
-        lqa     %idx, k_idx
-        lqa     %rep, k_rep
+        CULL_CONSTANTS
         CULL_QUAD a, 0
         CULL_QUAD b, 4
         shli    %cma, %gza, 28
